@@ -1,0 +1,13 @@
+#include "core/base/types.h"
+
+namespace dygslam {
+const char* ToString(TrackingState state) {
+  switch (state) {
+    case TrackingState::kNotInitialized: return "not_initialized";
+    case TrackingState::kOk: return "ok";
+    case TrackingState::kRelocalized: return "relocalized";
+    case TrackingState::kLost: return "lost";
+  }
+  return "unknown";
+}
+}  // namespace dygslam

@@ -1,0 +1,63 @@
+// TUM RGB-D / Bonn RGB-D Dynamic dataset folders:
+//   rgb.txt, depth.txt ("timestamp path" lines, '#' comments), groundtruth.txt
+//   ("timestamp tx ty tz qx qy qz qw"), optional associations.txt
+//   ("t_rgb rgb_path t_depth depth_path"). rgb/depth are associated one-to-one by nearest
+//   timestamp within max_time_difference (default 0.02 s).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "core/base/timestamp.h"
+#include "core/base/types.h"
+
+namespace dygslam {
+
+struct DatasetOptions {
+  double max_time_difference = 0.02;  // seconds, rgb <-> depth association
+  bool use_associations_file = true;  // use associations.txt when present
+  void Check() const;
+};
+
+struct RgbdFrameEntry {
+  Timestamp rgb_stamp;
+  std::string rgb_path;  // absolute
+  Timestamp depth_stamp;
+  std::string depth_path;  // absolute
+};
+
+class RgbdDataset {
+ public:
+  // Throws InputError naming the file and line for missing files, malformed lines, unsorted or
+  // duplicate timestamps.
+  static RgbdDataset Open(const std::string& directory, const DatasetOptions& options = {});
+
+  const std::string& directory() const { return directory_; }
+  size_t size() const { return frames_.size(); }
+  const RgbdFrameEntry& frame(size_t i) const { return frames_.at(i); }
+  const std::vector<RgbdFrameEntry>& frames() const { return frames_; }
+  // Number of rgb.txt entries; frames() is the subset that has a depth partner.
+  size_t num_rgb_entries() const { return num_rgb_entries_; }
+  // Index into frames() of rgb.txt entry k, or nullopt if that entry has no depth partner.
+  std::optional<size_t> FrameForRgbEntry(size_t k) const;
+
+  // CV_8UC3 BGR. Throws InputError naming the file if missing, unreadable or wrong size.
+  cv::Mat LoadRgb(size_t i, int expected_width = 0, int expected_height = 0) const;
+  // CV_16UC1 raw depth (divide by DepthMapFactor for metres). Same errors.
+  cv::Mat LoadDepth(size_t i, int expected_width = 0, int expected_height = 0) const;
+
+  bool has_groundtruth() const { return !groundtruth_path_.empty(); }
+  const std::string& groundtruth_path() const { return groundtruth_path_; }
+
+ private:
+  std::string directory_;
+  std::vector<RgbdFrameEntry> frames_;
+  std::vector<std::optional<size_t>> rgb_entry_to_frame_;
+  size_t num_rgb_entries_ = 0;
+  std::string groundtruth_path_;
+};
+
+}  // namespace dygslam

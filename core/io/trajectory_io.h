@@ -1,0 +1,17 @@
+// TUM trajectory files: "t tx ty tz qx qy qz qw", world_from_cam (camera-to-world), 8 columns.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/base/types.h"
+
+namespace dygslam {
+
+// Throws InputError naming file and line (wrong column count, non-numeric, non-finite,
+// unsorted or duplicate stamps, non-unit quaternion beyond tolerance).
+std::vector<StampedPose> ReadTumTrajectory(const std::string& path);
+// Writes atomically (temporary file + rename). Quaternions normalised, qw >= 0 not enforced.
+void WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses);
+
+}  // namespace dygslam

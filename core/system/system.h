@@ -45,4 +45,47 @@ struct FrameResult {
   StageTimes times;
 };
 
+struct SystemOptions {
+  PinholeCamera camera;
+  RgbdSensorOptions sensor;
+  // Module options live beside their algorithms; System owns them by value (see system.cc).
+  FilterMode filter_mode = FilterMode::kFull;
+  // Fixed seeds, local mapping run synchronously after each keyframe: identical output run to run.
+  bool deterministic = false;
+  // When FeedRgbdFrame gets no detections and the filter needs them, run the detector internally
+  // (concurrently with ORB extraction). Paths of the model files.
+  std::string detector_cfg, detector_weights, detector_names;
+  void Check() const;
+};
+
+class SystemImpl;
+
+class System {
+ public:
+  explicit System(const SystemOptions& options);
+  ~System();
+  System(const System&) = delete;
+  System& operator=(const System&) = delete;
+
+  // rgb: CV_8UC3 BGR. depth: CV_16UC1 raw (divided by DepthMapFactor) or CV_32FC1 metres.
+  // mask: optional CV_8UC1, nonzero = do not use features there. detections: when given, used
+  // instead of the internal detector (DDS detector component); nullptr = run the internal one if
+  // the filter mode needs it.
+  FrameResult FeedRgbdFrame(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp,
+                            const cv::Mat& mask = cv::Mat(),
+                            const std::vector<Detection>* detections = nullptr);
+
+  // Every tracked frame, world_from_cam, expressed relative to its (refined) reference keyframe.
+  std::vector<StampedPose> Trajectory() const;
+  std::vector<StampedPose> KeyframeTrajectory() const;
+  // Called (from the thread that produced it) for each new keyframe and for keyframe pose
+  // corrections (pose_update_only = true).
+  void SetKeyframeCallback(std::function<void(const KeyframeData&)> callback);
+  // Finishes local mapping; afterwards Trajectory() is final.
+  void Shutdown();
+
+ private:
+  std::unique_ptr<SystemImpl> impl_;
+};
+
 }  // namespace dygslam

@@ -1,0 +1,216 @@
+#include "core/io/dataset.h"
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/base/error.h"
+#include "core/io/association.h"
+#include "core/io/file_util.h"
+
+namespace dygslam {
+namespace fs = std::filesystem;
+
+void DatasetOptions::Check() const {
+  DYGSLAM_CHECK_OPTION(std::isfinite(max_time_difference) && max_time_difference > 0 &&
+                           max_time_difference <= 1.0,
+                       "max_time_difference");
+}
+
+namespace {
+
+struct ListEntry {
+  Timestamp stamp;
+  std::string path;  // absolute
+  int line = 0;
+};
+
+Timestamp ParseStamp(const std::string& file, int line, const std::string& text) {
+  const std::optional<Timestamp> t = Timestamp::Parse(text);
+  if (!t) throw InputError(file, line, "malformed timestamp '" + text + "'");
+  return *t;
+}
+
+std::string ResolveImage(const fs::path& directory, const std::string& file, int line,
+                         const std::string& relative) {
+  const fs::path p = fs::path(relative).is_absolute() ? fs::path(relative) : directory / relative;
+  std::error_code ec;
+  if (!fs::is_regular_file(p, ec)) {
+    throw InputError(file, line, "image file not found: " + p.string());
+  }
+  return p.lexically_normal().string();
+}
+
+void CheckOrder(const std::string& file, int line, Timestamp previous, Timestamp current,
+                bool has_previous) {
+  if (!has_previous) return;
+  if (current == previous) {
+    throw InputError(file, line, "duplicate timestamp " + current.ToString());
+  }
+  if (current < previous) {
+    throw InputError(file, line,
+                     "timestamps not sorted: " + current.ToString() + " after " +
+                         previous.ToString());
+  }
+}
+
+// rgb.txt / depth.txt: "timestamp relative_path".
+std::vector<ListEntry> ReadImageList(const fs::path& directory, const std::string& name) {
+  const std::string file = (directory / name).string();
+  std::vector<ListEntry> entries;
+  for (const TextLine& l : ReadDataLines(file)) {
+    if (l.tokens.size() != 2) {
+      throw InputError(file, l.line_number,
+                       "expected 2 columns 'timestamp path', found " +
+                           std::to_string(l.tokens.size()));
+    }
+    ListEntry e;
+    e.line = l.line_number;
+    e.stamp = ParseStamp(file, l.line_number, l.tokens[0]);
+    CheckOrder(file, l.line_number, entries.empty() ? Timestamp() : entries.back().stamp, e.stamp,
+               !entries.empty());
+    e.path = ResolveImage(directory, file, l.line_number, l.tokens[1]);
+    entries.push_back(std::move(e));
+  }
+  if (entries.empty()) throw InputError(file, 0, "no entries");
+  return entries;
+}
+
+}  // namespace
+
+RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions& options) {
+  options.Check();
+  std::error_code ec;
+  if (!fs::exists(directory, ec)) throw InputError(directory, 0, "dataset directory not found");
+  if (!fs::is_directory(directory, ec)) throw InputError(directory, 0, "not a directory");
+  const fs::path dir = fs::absolute(directory).lexically_normal();
+
+  RgbdDataset dataset;
+  dataset.directory_ = dir.string();
+  const fs::path assoc_path = dir / "associations.txt";
+  const bool use_assoc = options.use_associations_file && fs::is_regular_file(assoc_path, ec);
+  const bool has_rgb_list = fs::is_regular_file(dir / "rgb.txt", ec);
+
+  std::vector<ListEntry> rgb;
+  if (has_rgb_list || !use_assoc) rgb = ReadImageList(dir, "rgb.txt");
+
+  if (use_assoc) {
+    // "t_rgb rgb_path t_depth depth_path", sorted by rgb stamp.
+    const std::string file = assoc_path.string();
+    for (const TextLine& l : ReadDataLines(file)) {
+      if (l.tokens.size() != 4) {
+        throw InputError(file, l.line_number,
+                         "expected 4 columns 't_rgb rgb_path t_depth depth_path', found " +
+                             std::to_string(l.tokens.size()));
+      }
+      RgbdFrameEntry f;
+      f.rgb_stamp = ParseStamp(file, l.line_number, l.tokens[0]);
+      f.depth_stamp = ParseStamp(file, l.line_number, l.tokens[2]);
+      CheckOrder(file, l.line_number,
+                 dataset.frames_.empty() ? Timestamp() : dataset.frames_.back().rgb_stamp,
+                 f.rgb_stamp, !dataset.frames_.empty());
+      if (std::abs(SecondsBetween(f.rgb_stamp, f.depth_stamp)) >= options.max_time_difference) {
+        throw InputError(file, l.line_number,
+                         "rgb and depth stamps differ by more than max_time_difference");
+      }
+      f.rgb_path = ResolveImage(dir, file, l.line_number, l.tokens[1]);
+      f.depth_path = ResolveImage(dir, file, l.line_number, l.tokens[3]);
+      dataset.frames_.push_back(std::move(f));
+    }
+    if (dataset.frames_.empty()) throw InputError(file, 0, "no entries");
+    if (rgb.empty()) {
+      dataset.num_rgb_entries_ = dataset.frames_.size();
+      for (size_t i = 0; i < dataset.frames_.size(); ++i) dataset.rgb_entry_to_frame_.push_back(i);
+    } else {
+      std::map<int64_t, size_t> frame_of_stamp;
+      for (size_t i = 0; i < dataset.frames_.size(); ++i) {
+        frame_of_stamp[dataset.frames_[i].rgb_stamp.nanoseconds()] = i;
+      }
+      dataset.num_rgb_entries_ = rgb.size();
+      for (const ListEntry& e : rgb) {
+        auto it = frame_of_stamp.find(e.stamp.nanoseconds());
+        dataset.rgb_entry_to_frame_.push_back(it == frame_of_stamp.end()
+                                                  ? std::nullopt
+                                                  : std::optional<size_t>(it->second));
+      }
+    }
+  } else {
+    const std::vector<ListEntry> depth = ReadImageList(dir, "depth.txt");
+    std::vector<Timestamp> rgb_stamps, depth_stamps;
+    for (const ListEntry& e : rgb) rgb_stamps.push_back(e.stamp);
+    for (const ListEntry& e : depth) depth_stamps.push_back(e.stamp);
+    const std::vector<TimestampMatch> matches =
+        AssociateTimestamps(rgb_stamps, depth_stamps, options.max_time_difference);
+    dataset.num_rgb_entries_ = rgb.size();
+    dataset.rgb_entry_to_frame_.assign(rgb.size(), std::nullopt);
+    for (const TimestampMatch& m : matches) {
+      dataset.rgb_entry_to_frame_[m.first] = dataset.frames_.size();
+      dataset.frames_.push_back(
+          {rgb[m.first].stamp, rgb[m.first].path, depth[m.second].stamp, depth[m.second].path});
+    }
+    if (dataset.frames_.empty()) {
+      throw InputError(dir.string(), 0,
+                       "no rgb/depth pairs within " + std::to_string(options.max_time_difference) +
+                           " s (rgb.txt and depth.txt do not overlap in time)");
+    }
+  }
+  const fs::path gt = dir / "groundtruth.txt";
+  if (fs::is_regular_file(gt, ec)) dataset.groundtruth_path_ = gt.string();
+  return dataset;
+}
+
+std::optional<size_t> RgbdDataset::FrameForRgbEntry(size_t k) const {
+  if (k >= rgb_entry_to_frame_.size()) return std::nullopt;
+  return rgb_entry_to_frame_[k];
+}
+
+namespace {
+
+const char* TypeName(int type) {
+  switch (type) {
+    case CV_8UC1: return "8-bit 1-channel";
+    case CV_8UC3: return "8-bit 3-channel";
+    case CV_8UC4: return "8-bit 4-channel";
+    case CV_16UC1: return "16-bit 1-channel";
+    case CV_16UC3: return "16-bit 3-channel";
+    case CV_16UC4: return "16-bit 4-channel";
+    case CV_32FC1: return "32-bit float 1-channel";
+    default: return "unsupported pixel type";
+  }
+}
+
+cv::Mat LoadImage(const std::string& path, int expected_type, const char* what, int width,
+                  int height) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw InputError(path, 0, std::string(what) + " image not found");
+  cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (image.empty()) {
+    throw InputError(path, 0, std::string("cannot decode ") + what + " image (corrupt or not an image)");
+  }
+  if (image.type() != expected_type) {
+    throw InputError(path, 0,
+                     std::string(what) + " image must be " + TypeName(expected_type) + ", found " +
+                         TypeName(image.type()));
+  }
+  if ((width > 0 && image.cols != width) || (height > 0 && image.rows != height)) {
+    throw InputError(path, 0,
+                     std::string(what) + " image is " + std::to_string(image.cols) + "x" +
+                         std::to_string(image.rows) + ", expected " + std::to_string(width) + "x" +
+                         std::to_string(height));
+  }
+  return image;
+}
+
+}  // namespace
+
+cv::Mat RgbdDataset::LoadRgb(size_t i, int expected_width, int expected_height) const {
+  return LoadImage(frame(i).rgb_path, CV_8UC3, "rgb", expected_width, expected_height);
+}
+
+cv::Mat RgbdDataset::LoadDepth(size_t i, int expected_width, int expected_height) const {
+  return LoadImage(frame(i).depth_path, CV_16UC1, "depth", expected_width, expected_height);
+}
+
+}  // namespace dygslam

@@ -1,0 +1,71 @@
+#include "core/io/file_util.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <unistd.h>
+
+#include "core/base/error.h"
+
+namespace dygslam {
+namespace fs = std::filesystem;
+
+void WriteFileAtomically(const std::string& path, const std::string& content) {
+  const fs::path target(path);
+  const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) {
+    throw InputError(path, 0, "cannot write: directory " + dir.string() + " does not exist");
+  }
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (f == nullptr) {
+    throw InputError(path, 0, std::string("cannot write: ") + std::strerror(errno));
+  }
+  const size_t written = std::fwrite(content.data(), 1, content.size(), f);
+  const bool flushed = std::fflush(f) == 0 && ::fsync(::fileno(f)) == 0;
+  const bool closed = std::fclose(f) == 0;
+  if (written != content.size() || !flushed || !closed) {
+    std::remove(tmp.c_str());
+    throw InputError(path, 0, "cannot write: short write (disk full?)");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string reason = std::strerror(errno);
+    std::remove(tmp.c_str());
+    throw InputError(path, 0, "cannot rename temporary file into place: " + reason);
+  }
+}
+
+std::vector<TextLine> ReadDataLines(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path, 0, "file not found");
+  if (fs::is_directory(path, ec)) throw InputError(path, 0, "is a directory, expected a file");
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open file for reading");
+  std::vector<TextLine> lines;
+  std::string raw;
+  int number = 0;
+  while (std::getline(in, raw)) {
+    ++number;
+    if (!raw.empty() && raw.back() == '\r') raw.pop_back();
+    size_t first = raw.find_first_not_of(" \t");
+    if (first == std::string::npos || raw[first] == '#') continue;
+    for (char& c : raw) {
+      if (c == ',' || c == '\t') c = ' ';
+    }
+    TextLine line;
+    line.line_number = number;
+    std::istringstream tokens(raw);
+    std::string token;
+    while (tokens >> token) line.tokens.push_back(token);
+    lines.push_back(std::move(line));
+  }
+  if (in.bad()) throw InputError(path, number, "read error");
+  return lines;
+}
+
+}  // namespace dygslam

@@ -1,0 +1,81 @@
+// Trajectory accuracy with the conventions of the TUM RGB-D benchmark tools.
+//
+// ATE (evaluate_ate.py): estimate and ground truth are associated by timestamp (greedy nearest
+// one-to-one, |t_gt - (t_est + offset)| < max_time_difference), the estimate positions are aligned
+// onto the ground-truth positions with the closed-form rigid (Horn / Umeyama without scale)
+// alignment, and the per-pair translational error is ||gt - (R * est + t)||.
+//
+// RPE (evaluate_rpe.py --fixed_delta --delta 1 --delta_unit s): for every estimate pose i, j is the
+// estimate pose closest to t_i + delta (pairs whose j is the last estimate pose are skipped, as in
+// the reference script); both ends are matched to the closest ground-truth pose (skipped when
+// farther than twice the median ground-truth interval); the error is
+// (est_j^-1 est_i)^-1 (gt_j^-1 gt_i) = (est_i^-1 est_j)(gt_i^-1 gt_j)^-1, reported as translation norm and rotation angle per delta.
+// All pairs are used (no random sub-sampling).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/base/rigid3.h"
+#include "core/base/types.h"
+
+namespace dygslam {
+
+struct ErrorStatistics {
+  double rmse = 0, mean = 0, median = 0, sd = 0, min = 0, max = 0;  // sd: population
+};
+// Throws std::invalid_argument for an empty input.
+ErrorStatistics ComputeErrorStatistics(const std::vector<double>& errors);
+
+struct AteOptions {
+  double max_time_difference = 0.02;  // seconds
+  double offset = 0.0;                // seconds added to estimate stamps
+  void Check() const;
+};
+
+struct AteResult {
+  size_t num_pairs = 0;
+  ErrorStatistics error;  // metres
+  // Alignment applied to the estimate: aligned = gt_from_est * est.
+  Rigid3d gt_from_est;
+  // Per associated pair, in time order.
+  std::vector<Timestamp> gt_stamps;
+  std::vector<Timestamp> est_stamps;
+  std::vector<Eigen::Vector3d> gt_positions;
+  std::vector<Eigen::Vector3d> aligned_positions;
+  std::vector<double> errors;
+  // The whole estimate (all poses, not only associated ones) after alignment, for plots/export.
+  std::vector<StampedPose> aligned_estimate;
+};
+
+// Throws InputError if fewer than 3 pairs can be associated.
+AteResult ComputeAte(const std::vector<StampedPose>& groundtruth,
+                     const std::vector<StampedPose>& estimate, const AteOptions& options = {});
+
+// Closed-form rigid alignment minimising sum ||target_i - (R * source_i + t)||^2 (Horn 1987 /
+// Umeyama 1991 without scale). Requires >= 3 points (throws std::invalid_argument otherwise).
+Rigid3d AlignRigid(const std::vector<Eigen::Vector3d>& source,
+                   const std::vector<Eigen::Vector3d>& target);
+
+struct RpeOptions {
+  double delta = 1.0;   // seconds
+  double offset = 0.0;  // seconds added to estimate stamps
+  void Check() const;
+};
+
+struct RpeResult {
+  size_t num_pairs = 0;  // 0 when the trajectory is shorter than delta
+  double delta = 1.0;
+  // Translation error per delta (m per delta s; m/s for delta = 1 s).
+  double trans_rmse = 0, trans_mean = 0, trans_median = 0;
+  // Rotation error per delta (degrees per delta s).
+  double rot_rmse = 0, rot_mean = 0, rot_median = 0;
+  std::vector<double> trans_errors, rot_errors;  // per pair
+};
+
+RpeResult ComputeRpe(const std::vector<StampedPose>& groundtruth,
+                     const std::vector<StampedPose>& estimate, const RpeOptions& options = {});
+
+}  // namespace dygslam

@@ -1,0 +1,110 @@
+#include "components/dds/participant.h"
+
+#include <cstdlib>
+#include <stdexcept>
+
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+
+#include "core/base/error.h"
+#include "core/base/log.h"
+
+namespace dygslam::dds {
+
+using namespace eprosima::fastdds::dds;  // NOLINT
+using eprosima::fastdds::rtps::SharedMemTransportDescriptor;
+using eprosima::fastdds::rtps::UDPv4TransportDescriptor;
+
+void ParticipantOptions::Check() const {
+  DYGSLAM_CHECK_OPTION(domain_id >= 0 && domain_id <= 232, "domain_id");
+  DYGSLAM_CHECK_OPTION(!name.empty(), "participant name");
+  DYGSLAM_CHECK_OPTION(use_shm || use_udp_loopback, "transports (shm or udp)");
+  DYGSLAM_CHECK_OPTION(shm_segment_size >= (1u << 20), "shm_segment_size");
+  DYGSLAM_CHECK_OPTION(socket_buffer_size >= (64u << 10), "socket_buffer_size");
+}
+
+int DomainIdFromEnvironment(int fallback) {
+  const char* text = std::getenv("DYGSLAM_DOMAIN_ID");
+  if (text == nullptr || *text == '\0') return fallback;
+  char* end = nullptr;
+  const long value = std::strtol(text, &end, 10);
+  if (*end != '\0' || value < 0 || value > 232) {
+    throw InputError(std::string("DYGSLAM_DOMAIN_ID: expected an integer in [0, 232], got '") +
+                     text + "'");
+  }
+  return static_cast<int>(value);
+}
+
+std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& options) {
+  options.Check();
+  DomainParticipantFactory* factory = DomainParticipantFactory::get_instance();
+  DomainParticipantQos qos;
+  bool xml = false;
+  const char* profiles = std::getenv("FASTRTPS_DEFAULT_PROFILES_FILE");
+  if (options.use_xml_profile && profiles != nullptr && *profiles != '\0') {
+    if (factory->load_profiles() != ReturnCode_t::RETCODE_OK) {
+      throw InputError(std::string(profiles), 0,
+                       "FASTRTPS_DEFAULT_PROFILES_FILE: cannot load the XML profiles");
+    }
+    factory->get_default_participant_qos(qos);
+    xml = true;
+  } else {
+    qos = PARTICIPANT_QOS_DEFAULT;
+    qos.transport().use_builtin_transports = false;
+    if (options.use_shm) {
+      auto shm = std::make_shared<SharedMemTransportDescriptor>();
+      shm->segment_size(options.shm_segment_size);
+      qos.transport().user_transports.push_back(shm);
+    }
+    if (options.use_udp_loopback) {
+      auto udp = std::make_shared<UDPv4TransportDescriptor>();
+      udp->interfaceWhiteList.push_back("127.0.0.1");
+      udp->sendBufferSize = options.socket_buffer_size;
+      udp->receiveBufferSize = options.socket_buffer_size;
+      qos.transport().user_transports.push_back(udp);
+    }
+    qos.transport().send_socket_buffer_size = options.socket_buffer_size;
+    qos.transport().listen_socket_buffer_size = options.socket_buffer_size;
+  }
+  qos.name(options.name);
+
+  std::shared_ptr<Participant> result(new Participant());
+  result->domain_id_ = options.domain_id;
+  result->uses_xml_profile_ = xml;
+  result->participant_ = factory->create_participant(options.domain_id, qos);
+  if (result->participant_ == nullptr) {
+    throw std::runtime_error("Fast DDS: cannot create participant '" + options.name +
+                             "' on domain " + std::to_string(options.domain_id));
+  }
+  result->publisher_ = result->participant_->create_publisher(PUBLISHER_QOS_DEFAULT);
+  result->subscriber_ = result->participant_->create_subscriber(SUBSCRIBER_QOS_DEFAULT);
+  if (result->publisher_ == nullptr || result->subscriber_ == nullptr) {
+    throw std::runtime_error("Fast DDS: cannot create publisher/subscriber");
+  }
+  LOG_DEBUG << "participant '" << options.name << "' domain " << options.domain_id
+            << (xml ? " (XML profile)" : " (SHM + UDPv4 127.0.0.1)");
+  return result;
+}
+
+Topic* Participant::CreateTopicLocked(const std::string& name, TypeSupport type) {
+  if (participant_->find_type(type.get_type_name()) == nullptr) {
+    if (type.register_type(participant_) != ReturnCode_t::RETCODE_OK) {
+      throw std::runtime_error("Fast DDS: cannot register type " + type.get_type_name());
+    }
+  }
+  Topic* topic = participant_->create_topic(name, type.get_type_name(), TOPIC_QOS_DEFAULT);
+  if (topic == nullptr) throw std::runtime_error("Fast DDS: cannot create topic " + name);
+  topics_[name] = topic;
+  return topic;
+}
+
+Participant::~Participant() {
+  if (participant_ == nullptr) return;
+  participant_->delete_contained_entities();
+  DomainParticipantFactory::get_instance()->delete_participant(participant_);
+}
+
+}  // namespace dygslam::dds

@@ -1,0 +1,84 @@
+// Fast DDS participant factory for the dygslam components.
+//
+// Default transports (no XML profile): builtin transports off; shared memory with a 16 MiB
+// segment (640x480 RGB-D frames are ~1.5 MB; the 512 KiB default segment makes large reliable
+// samples stall) + UDPv4 restricted to 127.0.0.1 (interface whitelist) with 4 MiB socket buffers.
+// Nothing leaves the machine.
+//
+// Multi-machine use: set FASTRTPS_DEFAULT_PROFILES_FILE=/path/profiles.xml. The factory then calls
+// DomainParticipantFactory::load_profiles() and starts from get_default_participant_qos(), i.e.
+// the XML's default participant profile (is_default_profile="true") defines the transports,
+// discovery and interfaces; only the participant name is set in code. (Copying
+// PARTICIPANT_QOS_DEFAULT would silently ignore the XML.) Set ParticipantOptions::use_xml_profile
+// = false to force the loopback default even when the variable is set.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+
+namespace dygslam::dds {
+
+struct ParticipantOptions {
+  int domain_id = 0;
+  std::string name = "dygslam";
+  // Honour FASTRTPS_DEFAULT_PROFILES_FILE when it is set.
+  bool use_xml_profile = true;
+  bool use_shm = true;
+  bool use_udp_loopback = true;
+  uint32_t shm_segment_size = 16u << 20;   // bytes
+  uint32_t socket_buffer_size = 4u << 20;  // bytes, UDP send + receive
+  void Check() const;
+};
+
+// Domain id from DYGSLAM_DOMAIN_ID (0..232) if set, else `fallback`.
+int DomainIdFromEnvironment(int fallback = 0);
+
+// Owns one DomainParticipant (deleted with all its entities on destruction) and the topics
+// created on it. Thread-safe topic creation. Share it with std::shared_ptr between the readers /
+// writers that use it; they keep it alive.
+class Participant {
+ public:
+  static std::shared_ptr<Participant> Create(const ParticipantOptions& options);
+  ~Participant();
+  Participant(const Participant&) = delete;
+  Participant& operator=(const Participant&) = delete;
+
+  eprosima::fastdds::dds::DomainParticipant* get() const { return participant_; }
+  int domain_id() const { return domain_id_; }
+  bool uses_xml_profile() const { return uses_xml_profile_; }
+
+  // Registers `PubSubType` once and returns the topic `name` (created once).
+  template <class PubSubType>
+  eprosima::fastdds::dds::Topic* GetTopic(const std::string& name) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = topics_.find(name);
+    if (it != topics_.end()) return it->second;
+    eprosima::fastdds::dds::TypeSupport type(new PubSubType());
+    return CreateTopicLocked(name, type);
+  }
+
+  eprosima::fastdds::dds::Publisher* publisher() const { return publisher_; }
+  eprosima::fastdds::dds::Subscriber* subscriber() const { return subscriber_; }
+
+ private:
+  Participant() = default;
+  eprosima::fastdds::dds::Topic* CreateTopicLocked(const std::string& name,
+                                                    eprosima::fastdds::dds::TypeSupport type);
+
+  std::mutex mutex_;
+  eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
+  eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
+  eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
+  std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
+  int domain_id_ = 0;
+  bool uses_xml_profile_ = false;
+};
+
+}  // namespace dygslam::dds

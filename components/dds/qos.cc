@@ -1,0 +1,72 @@
+#include "components/dds/qos.h"
+
+namespace dygslam::dds {
+
+using namespace eprosima::fastdds::dds;  // NOLINT
+
+namespace {
+
+struct Policy {
+  bool reliable = true;
+  bool transient_local = false;
+  bool keep_all = false;
+  int depth = 1;
+};
+
+Policy PolicyFor(TopicKind kind) {
+  switch (kind) {
+    case TopicKind::kRgbdFrame:
+      return {true, false, false, kFrameHistoryDepth};
+    case TopicKind::kDetections:
+      return {true, false, false, 32};
+    case TopicKind::kCameraPose:
+      return {true, false, false, 64};
+    case TopicKind::kKeyframe:
+      return {true, true, true, 0};
+    case TopicKind::kMapUpdate:
+      return {true, true, false, 1};
+    case TopicKind::kGroundTruth:
+      return {true, true, true, 0};
+    case TopicKind::kTrajectory:
+      return {true, true, false, 2};
+    case TopicKind::kStreamStatus:
+      return {true, true, false, 16};
+  }
+  return {};
+}
+
+template <class Qos>
+void Apply(const Policy& p, Qos* qos) {
+  qos->reliability().kind = p.reliable ? RELIABLE_RELIABILITY_QOS : BEST_EFFORT_RELIABILITY_QOS;
+  qos->durability().kind =
+      p.transient_local ? TRANSIENT_LOCAL_DURABILITY_QOS : VOLATILE_DURABILITY_QOS;
+  if (p.keep_all) {
+    qos->history().kind = KEEP_ALL_HISTORY_QOS;
+  } else {
+    qos->history().kind = KEEP_LAST_HISTORY_QOS;
+    qos->history().depth = p.depth;
+  }
+  qos->resource_limits().max_samples = -1;  // unlimited (keep-all topics)
+  qos->resource_limits().max_instances = 1;
+  qos->resource_limits().max_samples_per_instance = -1;
+  qos->endpoint().history_memory_policy =
+      eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+}
+
+}  // namespace
+
+DataWriterQos WriterQos(TopicKind kind) {
+  DataWriterQos qos = DATAWRITER_QOS_DEFAULT;
+  Apply(PolicyFor(kind), &qos);
+  // Frames: the writer never waits long for a slow reader (keep-last); bound the blocking time.
+  qos.reliability().max_blocking_time = eprosima::fastrtps::Duration_t(1, 0);
+  return qos;
+}
+
+DataReaderQos ReaderQos(TopicKind kind) {
+  DataReaderQos qos = DATAREADER_QOS_DEFAULT;
+  Apply(PolicyFor(kind), &qos);
+  return qos;
+}
+
+}  // namespace dygslam::dds

@@ -1,0 +1,90 @@
+#include "components/detector_component.h"
+
+#include <chrono>
+
+#include "components/dds/participant.h"
+#include "components/dds/pubsub.h"
+#include "core/base/error.h"
+#include "core/base/log.h"
+#include "dygslam_msg/DetectionsPubSubTypes.h"
+#include "dygslam_msg/RgbdFramePubSubTypes.h"
+#include "dygslam_msg/StreamStatusPubSubTypes.h"
+
+namespace dygslam {
+
+DetectorCore::DetectorCore(const DetectorOptions& options)
+    : detector_(YoloDetector::Create(options)) {}
+
+msg::Detections DetectorCore::Process(const RgbdFrameData& frame) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<Detection> detections = detector_->Detect(frame.rgb);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return DetectionsToMsg(detections, frame.stamp, frame.seq, ms);
+}
+
+DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
+                          const DetectorOptions& options, const StopSignalPtr& stop) {
+  DetectorCore core(options);
+  DetectorStats stats;
+  BlockingQueue<msg::RgbdFrame> queue;
+  std::mutex mutex;
+  int64_t end_frames = -1;  // frames announced by END_OF_STREAM
+
+  dds::Writer<msg::DetectionsPubSubType> writer(participant, dds::topics::kDetections,
+                                                dds::TopicKind::kDetections);
+  dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
+                                                  dds::TopicKind::kStreamStatus);
+  dds::Reader<msg::RgbdFramePubSubType> frames(
+      participant, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame,
+      [&](msg::RgbdFrame&& frame) { queue.Push(std::move(frame)); });
+  dds::Reader<msg::StreamStatusPubSubType> status_reader(
+      participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
+      [&](msg::StreamStatus&& s) {
+        if (s.kind() == static_cast<uint8_t>(StreamEvent::kEndOfStream)) {
+          std::lock_guard<std::mutex> lock(mutex);
+          end_frames = static_cast<int64_t>(s.num_frames());
+        }
+      });
+
+  double total_ms = 0;
+  size_t received = 0;
+  auto idle_since = std::chrono::steady_clock::now();
+  while (!stop->requested()) {
+    std::optional<msg::RgbdFrame> sample = queue.Pop(std::chrono::milliseconds(20));
+    if (!sample) {
+      std::lock_guard<std::mutex> lock(mutex);
+      // Done when every announced frame was seen, or (frames lost) after 2 s idle past the end.
+      if (end_frames >= 0 &&
+          (static_cast<int64_t>(received) >= end_frames ||
+           std::chrono::steady_clock::now() - idle_since > std::chrono::seconds(2))) {
+        break;
+      }
+      continue;
+    }
+    ++received;
+    idle_since = std::chrono::steady_clock::now();
+    try {
+      const RgbdFrameData frame = RgbdFrameFromMsg(*sample);
+      msg::Detections out = core.Process(frame);
+      total_ms += out.inference_ms();
+      writer.Write(out);
+      ++stats.frames_processed;
+    } catch (const InputError& e) {
+      ++stats.bad_samples;
+      LOG_WARNING << "detector: dropped frame seq " << sample->header().seq() << ": " << e.what();
+    }
+  }
+  if (stats.frames_processed > 0) stats.mean_inference_ms = total_ms / stats.frames_processed;
+  msg::StreamStatus done;
+  done.kind(static_cast<uint8_t>(StreamEvent::kComponentDone));
+  done.source("detector");
+  done.num_frames(stats.frames_processed);
+  status.Write(done);
+  writer.WaitForAcknowledgments(std::chrono::milliseconds(2000));
+  LOG_INFO << "detector: " << stats.frames_processed << " frames, mean inference "
+           << stats.mean_inference_ms << " ms";
+  return stats;
+}
+
+}  // namespace dygslam

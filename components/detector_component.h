@@ -1,0 +1,40 @@
+// Detector component: RgbdFrame -> Detections (same stamp + seq as the frame).
+// Core: DetectorCore::Process (no DDS). Shell: RunDetector.
+// Every received frame is processed in arrival order (slam in --deterministic mode waits for
+// the detections of every frame; the player's back-pressure bounds the queue). Stops after the
+// END_OF_STREAM frame count has been processed, or on stop.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "components/component_common.h"
+#include "components/convert.h"
+#include "core/dynamic/yolo_detector.h"
+
+namespace dygslam {
+
+namespace dds {
+class Participant;
+}
+
+class DetectorCore {
+ public:
+  explicit DetectorCore(const DetectorOptions& options);
+  // Detections of one frame (the frame's colour image), with the inference time.
+  msg::Detections Process(const RgbdFrameData& frame);
+
+ private:
+  std::unique_ptr<YoloDetector> detector_;
+};
+
+struct DetectorStats {
+  size_t frames_processed = 0;
+  size_t bad_samples = 0;
+  double mean_inference_ms = 0;
+};
+
+DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
+                          const DetectorOptions& options, const StopSignalPtr& stop);
+
+}  // namespace dygslam

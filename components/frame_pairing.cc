@@ -1,0 +1,82 @@
+#include "components/frame_pairing.h"
+
+#include "core/base/error.h"
+#include "core/base/log.h"
+
+namespace dygslam {
+
+void PairingOptions::Check() const {
+  DYGSLAM_CHECK_OPTION(max_wait.count() >= 0, "slam.detection_wait_ms");
+  DYGSLAM_CHECK_OPTION(lost_after_misses >= 1, "slam.detector_lost_after_misses");
+}
+
+FramePairer::FramePairer(const PairingOptions& options) : options_(options) { options_.Check(); }
+
+void FramePairer::AddFrame(RgbdFrameData frame, Clock::time_point now) {
+  frames_.push_back({std::move(frame), now});
+}
+
+void FramePairer::AddDetections(Timestamp stamp, std::vector<Detection> detections) {
+  if (detector_lost_ && detector_alive_) {
+    LOG_INFO << "slam: detections are arriving again; waiting for them again";
+    detector_lost_ = false;
+    consecutive_misses_ = 0;
+  }
+  if (stamp.nanoseconds() <= last_released_stamp_) {
+    ++stats_.dropped_detections;
+    return;
+  }
+  detections_[stamp.nanoseconds()] = std::move(detections);
+}
+
+void FramePairer::SetDetectorAlive(bool alive) {
+  if (!alive && detector_alive_ && options_.needs_detections) {
+    LOG_WARNING << "slam: the detector is gone; continuing geometry-only (no boxes)";
+    if (!detector_lost_) ++stats_.lost_episodes;
+    detector_lost_ = true;
+  }
+  detector_alive_ = alive;
+}
+
+std::optional<FramePairer::Clock::time_point> FramePairer::NextDeadline() const {
+  if (frames_.empty()) return std::nullopt;
+  if (!options_.needs_detections || detector_lost_) return frames_.front().arrival;
+  if (options_.deterministic) return std::nullopt;
+  return frames_.front().arrival + options_.max_wait;
+}
+
+std::optional<PairedFrame> FramePairer::Next(Clock::time_point now) {
+  if (frames_.empty()) return std::nullopt;
+  Pending& front = frames_.front();
+  const int64_t stamp = front.frame.stamp.nanoseconds();
+  PairedFrame out;
+  auto it = detections_.find(stamp);
+  if (!options_.needs_detections) {
+    // Release as is.
+  } else if (it != detections_.end()) {
+    out.detections = std::move(it->second);
+    ++stats_.with_detections;
+    consecutive_misses_ = 0;
+  } else {
+    const bool waited_enough =
+        detector_lost_ || (!options_.deterministic && now >= front.arrival + options_.max_wait);
+    if (!waited_enough) return std::nullopt;
+    out.detections_missing = true;
+    ++stats_.missing_detections;
+    if (!detector_lost_ && ++consecutive_misses_ >= options_.lost_after_misses) {
+      LOG_WARNING << "slam: no detections for " << consecutive_misses_
+                  << " frames in a row; continuing geometry-only (no boxes)";
+      detector_lost_ = true;
+      ++stats_.lost_episodes;
+    }
+  }
+  out.frame = std::move(front.frame);
+  frames_.pop_front();
+  last_released_stamp_ = stamp;
+  // Forget detections of frames already released.
+  detections_.erase(detections_.begin(), detections_.upper_bound(stamp));
+  ++stats_.frames;
+  return out;
+}
+
+}  // namespace dygslam

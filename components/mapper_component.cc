@@ -1,0 +1,130 @@
+#include "components/mapper_component.h"
+
+#include <sstream>
+
+#include <octomap/OcTree.h>
+
+#include "components/dds/participant.h"
+#include "components/dds/pubsub.h"
+#include "core/base/error.h"
+#include "core/base/log.h"
+#include "dygslam_msg/KeyframePubSubTypes.h"
+#include "dygslam_msg/MapUpdatePubSubTypes.h"
+#include "dygslam_msg/StreamStatusPubSubTypes.h"
+
+namespace dygslam {
+
+void MapperOptions::Check() const {
+  octomap.Check();
+  DYGSLAM_CHECK_OPTION(update_every_keyframes >= 0, "mapper.update_every_keyframes");
+}
+
+MapperCore::MapperCore(const MapperOptions& options) : options_(options) { options_.Check(); }
+
+void MapperCore::Process(const KeyframeData& keyframe, const PinholeCamera& camera) {
+  if (builder_ == nullptr) {
+    if (keyframe.pose_update_only) return;  // nothing to correct yet
+    builder_ = std::make_unique<OctoMapBuilder>(camera, options_.octomap);
+  }
+  builder_->Insert(keyframe);
+  if (!keyframe.pose_update_only) ++num_keyframes_;
+  if (keyframe.stamp > newest_) newest_ = keyframe.stamp;
+}
+
+msg::MapUpdate MapperCore::MakeUpdate() {
+  msg::MapUpdate m;
+  const OctoMapStats stats = builder_->Stats();
+  const octomap::OcTree& tree = builder_->tree();
+  std::ostringstream stream;
+  tree.writeBinaryConst(stream);
+  const std::string bytes = stream.str();
+  m.header().stamp(TimeToMsg(newest_));
+  m.header().frame_id("world");
+  m.header().seq(num_keyframes_);
+  m.resolution(tree.getResolution());
+  m.num_keyframes(stats.num_keyframes);
+  m.num_leaf_nodes(stats.num_leaves);
+  m.num_occupied(stats.num_occupied_leaves);
+  m.octree_bt().assign(bytes.begin(), bytes.end());
+  return m;
+}
+
+void MapperCore::Write() {
+  if (builder_ == nullptr || options_.map_path.empty()) return;
+  builder_->WriteBinary(options_.map_path);
+}
+
+MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const MapperOptions& options,
+                      const StopSignalPtr& stop) {
+  MapperCore core(options);
+  MapperStats stats;
+  BlockingQueue<msg::Keyframe> queue;
+  std::mutex mutex;
+  bool slam_done = false;
+
+  dds::Writer<msg::MapUpdatePubSubType> updates(participant, dds::topics::kMapUpdate,
+                                                dds::TopicKind::kMapUpdate);
+  dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
+                                                  dds::TopicKind::kStreamStatus);
+  dds::Reader<msg::KeyframePubSubType> keyframes(
+      participant, dds::topics::kKeyframe, dds::TopicKind::kKeyframe,
+      [&](msg::Keyframe&& k) { queue.Push(std::move(k)); });
+  dds::Reader<msg::StreamStatusPubSubType> status_reader(
+      participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
+      [&](msg::StreamStatus&& s) {
+        if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone) && s.source() == "slam") {
+          std::lock_guard<std::mutex> lock(mutex);
+          slam_done = true;
+        }
+      });
+
+  auto publish = [&] {
+    if (!core.has_map()) return;
+    core.Write();
+    if (!options.map_path.empty()) ++stats.map_writes;
+    updates.Write(core.MakeUpdate());
+    ++stats.updates_published;
+  };
+
+  size_t since_update = 0;
+  int idle_after_done = 0;
+  while (!stop->requested()) {
+    std::optional<msg::Keyframe> sample = queue.Pop(std::chrono::milliseconds(50));
+    if (!sample) {
+      std::lock_guard<std::mutex> lock(mutex);
+      // slam's DONE is written after its last keyframe (and after waiting for acknowledgements);
+      // order is only kept per writer, so allow a short grace period (6 x 50 ms) after DONE.
+      if (slam_done && ++idle_after_done >= 6) break;
+      continue;
+    }
+    idle_after_done = 0;
+    try {
+      PinholeCamera camera;
+      const KeyframeData k = KeyframeFromMsg(*sample, &camera);
+      core.Process(k, camera);
+      ++stats.keyframes_received;
+      if (!k.pose_update_only) ++since_update;
+      if (options.update_every_keyframes > 0 &&
+          since_update >= static_cast<size_t>(options.update_every_keyframes)) {
+        publish();
+        since_update = 0;
+      }
+    } catch (const InputError& e) {
+      ++stats.bad_samples;
+      LOG_WARNING << "mapper: dropped keyframe " << sample->id() << ": " << e.what();
+    }
+  }
+  publish();
+  msg::StreamStatus done;
+  done.kind(static_cast<uint8_t>(StreamEvent::kComponentDone));
+  done.source("mapper");
+  done.num_frames(core.num_keyframes());
+  status.Write(done);
+  updates.WaitForAcknowledgments(std::chrono::milliseconds(3000));
+  status.WaitForAcknowledgments(std::chrono::milliseconds(2000));
+  LOG_INFO << "mapper: " << core.num_keyframes() << " keyframes in the map"
+           << (options.map_path.empty() ? "" : ", written to " + options.map_path);
+  return stats;
+}
+
+}  // namespace dygslam

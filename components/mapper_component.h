@@ -1,0 +1,58 @@
+// Mapper component: Keyframe -> OctoMapBuilder -> map.bt (periodically and at the end, atomic)
+// + MapUpdate (whole .bt stream + stats, transient-local keep-last 1).
+// Core: MapperCore (no DDS). Shell: RunMapper, ends after slam's COMPONENT_DONE and the keyframe
+// queue is drained (or on stop), always writing the map first.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "components/component_common.h"
+#include "components/convert.h"
+#include "dygslam_msg/MapUpdate.h"
+#include "mapping/octomap_builder.h"
+
+namespace dygslam {
+
+namespace dds {
+class Participant;
+}
+
+struct MapperOptions {
+  OctoMapOptions octomap;
+  std::string map_path = "map.bt";  // "" = do not write
+  // Write map.bt + publish MapUpdate every this many inserted keyframes (0 = only at the end).
+  int update_every_keyframes = 5;
+  void Check() const;
+};
+
+class MapperCore {
+ public:
+  explicit MapperCore(const MapperOptions& options);
+  // Inserts a keyframe (creates the builder on the first one, from the keyframe's camera).
+  void Process(const KeyframeData& keyframe, const PinholeCamera& camera);
+  bool has_map() const { return builder_ != nullptr; }
+  size_t num_keyframes() const { return num_keyframes_; }
+  // Whole map as a MapUpdate (binary .bt stream). Requires has_map().
+  msg::MapUpdate MakeUpdate();
+  // Atomic .bt write (no-op without map or path).
+  void Write();
+
+ private:
+  MapperOptions options_;
+  std::unique_ptr<OctoMapBuilder> builder_;
+  size_t num_keyframes_ = 0;
+  Timestamp newest_;
+};
+
+struct MapperStats {
+  size_t keyframes_received = 0;
+  size_t bad_samples = 0;
+  size_t updates_published = 0;
+  size_t map_writes = 0;
+};
+
+MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const MapperOptions& options,
+                      const StopSignalPtr& stop);
+
+}  // namespace dygslam

@@ -1,0 +1,181 @@
+#include "components/player.h"
+
+#include <atomic>
+#include <chrono>
+#include <thread>
+
+#include "components/dds/participant.h"
+#include "components/dds/pubsub.h"
+#include "core/base/error.h"
+#include "core/base/log.h"
+#include "core/io/trajectory_io.h"
+#include "dygslam_msg/CameraPosePubSubTypes.h"
+#include "dygslam_msg/GroundTruthPubSubTypes.h"
+#include "dygslam_msg/RgbdFramePubSubTypes.h"
+#include "dygslam_msg/StreamStatusPubSubTypes.h"
+
+namespace dygslam {
+
+void PlayerOptions::Check() const {
+  DYGSLAM_CHECK_OPTION(!dataset_dir.empty(), "player.dataset_dir");
+  camera.Check();
+  DYGSLAM_CHECK_OPTION(depth_scale > 0 && std::isfinite(depth_scale), "player.depth_scale");
+  DYGSLAM_CHECK_OPTION(rate >= 0 && std::isfinite(rate), "player.rate");
+  DYGSLAM_CHECK_OPTION(window >= 0 && window < dds::kFrameHistoryDepth, "player.window");
+  DYGSLAM_CHECK_OPTION(ack_timeout_s > 0, "player.ack_timeout_s");
+  DYGSLAM_CHECK_OPTION(wait_for_readers_s >= 0, "player.wait_for_readers_s");
+  DYGSLAM_CHECK_OPTION(expected_readers >= 0, "player.expected_readers");
+}
+
+DatasetPlayer::DatasetPlayer(const PlayerOptions& options)
+    : options_(options), dataset_(RgbdDataset::Open(options.dataset_dir)) {
+  options_.Check();
+  begin_ = std::min(options.first_frame, dataset_.size());
+  end_ = options.max_frames == 0 ? dataset_.size()
+                                 : std::min(dataset_.size(), begin_ + options.max_frames);
+}
+
+RgbdFrameData DatasetPlayer::Frame(size_t i) const {
+  if (i >= num_frames()) throw std::out_of_range("DatasetPlayer::Frame: index out of range");
+  const size_t k = begin_ + i;
+  RgbdFrameData f;
+  f.stamp = dataset_.frame(k).rgb_stamp;
+  f.seq = i;
+  f.frame_id = "camera";
+  f.camera = options_.camera;
+  f.depth_scale = options_.depth_scale;
+  f.rgb = dataset_.LoadRgb(k, options_.camera.width, options_.camera.height);
+  f.depth = dataset_.LoadDepth(k, options_.camera.width, options_.camera.height);
+  return f;
+}
+
+std::vector<StampedPose> DatasetPlayer::GroundTruth() const {
+  if (!dataset_.has_groundtruth() || num_frames() == 0) return {};
+  const Timestamp first = dataset_.frame(begin_).rgb_stamp;
+  const Timestamp last = dataset_.frame(end_ - 1).rgb_stamp;
+  const Timestamp margin = Timestamp::FromNanoseconds(100000000);  // 0.1 s
+  std::vector<StampedPose> result;
+  for (const StampedPose& p : ReadTumTrajectory(dataset_.groundtruth_path())) {
+    if (p.stamp.nanoseconds() >= first.nanoseconds() - margin.nanoseconds() &&
+        p.stamp.nanoseconds() <= last.nanoseconds() + margin.nanoseconds()) {
+      result.push_back(p);
+    }
+  }
+  return result;
+}
+
+namespace {
+
+msg::StreamStatus MakeStatus(StreamEvent event, const std::string& source, uint64_t num_frames,
+                             uint64_t seq) {
+  msg::StreamStatus s;
+  s.kind(static_cast<uint8_t>(event));
+  s.source(source);
+  s.num_frames(num_frames);
+  s.header().seq(seq);
+  s.header().frame_id("");
+  return s;
+}
+
+}  // namespace
+
+PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const PlayerOptions& options,
+                      const StopSignalPtr& stop) {
+  using Clock = std::chrono::steady_clock;
+  options.Check();
+  DatasetPlayer player(options);
+  PlayerStats stats;
+  const auto start = Clock::now();
+
+  std::mutex mutex;
+  std::condition_variable cv;
+  int64_t acked = -1;  // highest seq whose pose was received
+  bool slam_done = false;
+  dds::Writer<msg::RgbdFramePubSubType> frames(participant, dds::topics::kRgbdFrame,
+                                              dds::TopicKind::kRgbdFrame);
+  dds::Writer<msg::GroundTruthPosePubSubType> gt_writer(participant, dds::topics::kGroundTruth,
+                                                       dds::TopicKind::kGroundTruth);
+  dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
+                                                  dds::TopicKind::kStreamStatus);
+  dds::Reader<msg::CameraPosePubSubType> poses(
+      participant, dds::topics::kCameraPose, dds::TopicKind::kCameraPose,
+      [&](msg::CameraPose&& pose) {
+        {
+          std::lock_guard<std::mutex> lock(mutex);
+          acked = std::max<int64_t>(acked, static_cast<int64_t>(pose.header().seq()));
+        }
+        cv.notify_all();
+      });
+  dds::Reader<msg::StreamStatusPubSubType> status_reader(
+      participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
+      [&](msg::StreamStatus&& s) {
+        if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone) && s.source() == "slam") {
+          {
+            std::lock_guard<std::mutex> lock(mutex);
+            slam_done = true;
+          }
+          cv.notify_all();
+        }
+      });
+
+  if (options.expected_readers > 0 &&
+      !frames.WaitForReaders(options.expected_readers,
+                             std::chrono::milliseconds(
+                                 static_cast<int64_t>(options.wait_for_readers_s * 1000)))) {
+    LOG_WARNING << "player: only " << frames.matched() << " of " << options.expected_readers
+                << " frame readers after " << options.wait_for_readers_s << " s; playing anyway";
+  }
+  status.Write(MakeStatus(StreamEvent::kStarted, "player", player.num_frames(), 0));
+
+  if (options.publish_ground_truth) {
+    uint64_t seq = 0;
+    for (const StampedPose& p : player.GroundTruth()) {
+      gt_writer.Write(GroundTruthToMsg(p, seq++));
+      ++stats.ground_truth_published;
+    }
+  }
+
+  Timestamp first_stamp;
+  for (size_t i = 0; i < player.num_frames() && !stop->requested(); ++i) {
+    RgbdFrameData frame = player.Frame(i);
+    if (i == 0) first_stamp = frame.stamp;
+    if (options.rate > 0) {
+      const auto due =
+          start + std::chrono::nanoseconds(static_cast<int64_t>(
+                      (frame.stamp.nanoseconds() - first_stamp.nanoseconds()) / options.rate));
+      if (stop->WaitFor(due - Clock::now())) break;
+    }
+    if (options.window > 0 && i >= static_cast<size_t>(options.window)) {
+      const int64_t need = static_cast<int64_t>(i) - options.window;
+      const auto deadline =
+          Clock::now() + std::chrono::milliseconds(static_cast<int64_t>(options.ack_timeout_s * 1000));
+      std::unique_lock<std::mutex> lock(mutex);
+      while (acked < need && !stop->requested() && Clock::now() < deadline) {
+        cv.wait_for(lock, std::chrono::milliseconds(20));
+      }
+      if (acked < need && !stop->requested()) {
+        ++stats.ack_timeouts;
+        LOG_WARNING << "player: no acknowledgement of frame " << need << " after "
+                    << options.ack_timeout_s << " s; sending frame " << i;
+      }
+    }
+    if (stop->requested()) break;
+    if (!frames.Write(RgbdFrameToMsg(frame))) {
+      LOG_WARNING << "player: frame " << i << " was not accepted by the writer";
+      continue;
+    }
+    ++stats.frames_published;
+  }
+  const uint64_t last_seq = stats.frames_published == 0 ? 0 : stats.frames_published - 1;
+  status.Write(MakeStatus(StreamEvent::kEndOfStream, "player", stats.frames_published, last_seq));
+  LOG_INFO << "player: published " << stats.frames_published << " frames, end of stream";
+  // Stay alive (frames and ground truth remain available to late readers) until slam is done.
+  {
+    std::unique_lock<std::mutex> lock(mutex);
+    while (!slam_done && !stop->requested()) cv.wait_for(lock, std::chrono::milliseconds(50));
+  }
+  stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  return stats;
+}
+
+}  // namespace dygslam

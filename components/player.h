@@ -1,0 +1,75 @@
+// Dataset player: a TUM / Bonn folder -> RgbdFrame samples (+ ground truth + end of stream).
+//
+// Core (no DDS): DatasetPlayer loads frame i (images + intrinsics) and the ground truth.
+// Shell: PlayerComponent publishes frames either at the dataset rate (rate = 1: stamps replayed
+// in real time; 2 = twice as fast) or as fast as they are consumed (rate = 0), always with
+// back-pressure when window > 0: frame k is published only once slam has acknowledged (published
+// the CameraPose of) frame k - window, so nothing is dropped by the keep-last frame topic
+// (window must be < kFrameHistoryDepth). Then it publishes StreamStatus END_OF_STREAM
+// (num_frames, header.seq = last seq) and keeps its writers alive until slam reports done (or
+// stop is requested).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "components/component_common.h"
+#include "components/convert.h"
+#include "core/base/camera.h"
+#include "core/io/dataset.h"
+
+namespace dygslam {
+
+namespace dds {
+class Participant;
+}
+
+struct PlayerOptions {
+  std::string dataset_dir;
+  PinholeCamera camera;
+  double depth_scale = 5000.0;  // DepthMapFactor
+  // 1 = dataset rate, k = k times faster, 0 = as fast as consumed (back-pressure only).
+  double rate = 0.0;
+  // Frames [first_frame, first_frame + max_frames) (max_frames 0 = all).
+  size_t first_frame = 0;
+  size_t max_frames = 0;
+  // Back-pressure window in frames (0 = none: publish at `rate` regardless of the consumer).
+  int window = 2;
+  // Longest wait for an acknowledgement before a frame is sent anyway (seconds).
+  double ack_timeout_s = 30.0;
+  // Wait for at least one frame reader before the first frame (seconds).
+  double wait_for_readers_s = 10.0;
+  int expected_readers = 1;
+  bool publish_ground_truth = true;
+  void Check() const;
+};
+
+class DatasetPlayer {
+ public:
+  explicit DatasetPlayer(const PlayerOptions& options);
+  size_t num_frames() const { return end_ - begin_; }
+  // Frame `i` of the played range (seq = i): BGR colour, 16UC1 depth, camera, stamps.
+  RgbdFrameData Frame(size_t i) const;
+  // Ground truth within the played time span (empty if the dataset has none).
+  std::vector<StampedPose> GroundTruth() const;
+
+ private:
+  PlayerOptions options_;
+  RgbdDataset dataset_;
+  size_t begin_ = 0, end_ = 0;
+};
+
+struct PlayerStats {
+  size_t frames_published = 0;
+  size_t ack_timeouts = 0;
+  size_t ground_truth_published = 0;
+  double seconds = 0;
+};
+
+// Publishes the dataset; returns when slam reported done, or stop was requested.
+PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const PlayerOptions& options,
+                      const StopSignalPtr& stop);
+
+}  // namespace dygslam

@@ -1,0 +1,60 @@
+// Recorder component: CameraPose (online poses), Trajectory (slam's final refined trajectories)
+// and GroundTruthPose -> TUM files in output_dir, written atomically (temporary file + rename):
+//   trajectory.txt           final trajectory of every tracked frame (slam's System::Trajectory()),
+//                            or, if slam never sent it (killed / stopped), the online poses
+//   keyframes.txt            final keyframe trajectory (when received)
+//   trajectory_online.txt    poses as published per frame
+//   groundtruth.txt          ground truth as published by the player (when received)
+// Core: RecorderCore (no DDS). Shell: RunRecorder ends once both final trajectories arrived
+// after slam's COMPONENT_DONE (or 3 s after DONE without them, or on stop), always writing.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "components/component_common.h"
+#include "components/convert.h"
+
+namespace dygslam {
+
+namespace dds {
+class Participant;
+}
+
+struct RecorderOptions {
+  std::string output_dir = ".";
+  void Check() const;
+};
+
+class RecorderCore {
+ public:
+  explicit RecorderCore(const RecorderOptions& options);
+  void AddPose(const msg::CameraPose& pose);  // validates; poses without has_pose are skipped
+  void SetTrajectory(const msg::Trajectory& trajectory);
+  void AddGroundTruth(const msg::GroundTruthPose& pose);
+  bool has_final_trajectory() const { return final_frames_.has_value(); }
+  bool has_final_keyframes() const { return final_keyframes_.has_value(); }
+  size_t num_online_poses() const { return online_.size(); }
+  // Writes the files (see above). Returns the trajectory.txt path.
+  std::string Write() const;
+
+ private:
+  RecorderOptions options_;
+  std::vector<StampedPose> online_;
+  std::vector<StampedPose> ground_truth_;
+  std::optional<std::vector<StampedPose>> final_frames_, final_keyframes_;
+};
+
+struct RecorderStats {
+  size_t poses = 0;
+  size_t bad_samples = 0;
+  bool final_trajectory = false;
+  std::string trajectory_path;
+};
+
+RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
+                          const RecorderOptions& options, const StopSignalPtr& stop);
+
+}  // namespace dygslam

@@ -1,0 +1,218 @@
+#include "components/slam_component.h"
+
+#include <condition_variable>
+
+#include "components/dds/participant.h"
+#include "components/dds/pubsub.h"
+#include "core/base/error.h"
+#include "core/base/log.h"
+#include "dygslam_msg/CameraPosePubSubTypes.h"
+#include "dygslam_msg/DetectionsPubSubTypes.h"
+#include "dygslam_msg/KeyframePubSubTypes.h"
+#include "dygslam_msg/RgbdFramePubSubTypes.h"
+#include "dygslam_msg/StreamStatusPubSubTypes.h"
+#include "dygslam_msg/TrajectoryPubSubTypes.h"
+
+namespace dygslam {
+
+void SlamComponentOptions::Check() const {
+  system.Check();
+  DYGSLAM_CHECK_OPTION(detection_wait.count() >= 0, "slam.detection_wait_ms");
+  DYGSLAM_CHECK_OPTION(detector_lost_after_misses >= 1, "slam.detector_lost_after_misses");
+}
+
+bool SlamComponentOptions::NeedsDetections() const {
+  return external_detections &&
+         (system.filter_mode == FilterMode::kBoxes || system.filter_mode == FilterMode::kFull);
+}
+
+SlamCore::SlamCore(const SlamComponentOptions& options)
+    : options_(options), system_(std::make_unique<System>(options.system)) {
+  options_.Check();
+  system_->SetKeyframeCallback([this](const KeyframeData& k) {
+    std::lock_guard<std::mutex> lock(keyframes_mutex_);
+    keyframes_.push_back(k);
+  });
+}
+
+std::vector<KeyframeData> SlamCore::TakeKeyframes() {
+  std::lock_guard<std::mutex> lock(keyframes_mutex_);
+  std::vector<KeyframeData> out;
+  out.swap(keyframes_);
+  return out;
+}
+
+SlamOutput SlamCore::Process(const RgbdFrameData& frame,
+                             const std::vector<Detection>* detections) {
+  SlamOutput out;
+  cv::Mat depth = frame.depth;
+  if (depth.type() == CV_16UC1 &&
+      std::abs(frame.depth_scale - options_.system.sensor.depth_map_factor) > 1e-9) {
+    // The System divides raw depth by its own DepthMapFactor: hand it metres instead.
+    frame.depth.convertTo(depth, CV_32FC1, 1.0 / frame.depth_scale);
+  }
+  const std::vector<Detection> none;
+  const std::vector<Detection>* dets = detections;
+  if (dets == nullptr && options_.NeedsDetections()) dets = &none;  // geometry-only frame
+  out.result = system_->FeedRgbdFrame(frame.rgb, depth, frame.stamp, cv::Mat(), dets);
+  out.keyframes = TakeKeyframes();
+  return out;
+}
+
+std::vector<KeyframeData> SlamCore::Finish() {
+  if (!finished_) {
+    system_->Shutdown();
+    finished_ = true;
+  }
+  return TakeKeyframes();
+}
+
+msg::CameraPose CameraPoseToMsg(const FrameResult& r, uint64_t seq, bool detections_missing) {
+  msg::CameraPose m;
+  m.header().stamp(TimeToMsg(r.stamp));
+  m.header().frame_id("world");
+  m.header().seq(seq);
+  m.tracking_state(static_cast<uint8_t>(r.state));
+  m.has_pose(r.world_from_cam.has_value());
+  if (r.world_from_cam) m.world_from_cam(PoseToMsg(*r.world_from_cam));
+  m.is_keyframe(r.is_keyframe);
+  m.num_features(r.num_features);
+  m.num_dynamic(r.num_dynamic);
+  m.num_tracked(r.num_tracked);
+  m.detections_used(r.detections_used);
+  m.detections_missing(detections_missing);
+  m.total_ms(r.times.total_ms);
+  return m;
+}
+
+SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
+                  const SlamComponentOptions& options, const StopSignalPtr& stop) {
+  using Clock = FramePairer::Clock;
+  options.Check();
+  SlamCore core(options);
+  SlamStats stats;
+
+  PairingOptions pairing_options;
+  pairing_options.needs_detections = options.NeedsDetections();
+  pairing_options.deterministic = options.system.deterministic;
+  pairing_options.max_wait = options.detection_wait;
+  pairing_options.lost_after_misses = options.detector_lost_after_misses;
+
+  std::mutex mutex;
+  std::condition_variable cv;
+  FramePairer pairer(pairing_options);  // guarded by mutex
+  int64_t end_frames = -1;
+  size_t frames_received = 0;
+  Clock::time_point last_frame_time = Clock::now();
+  int detector_writers_seen = 0;
+
+  dds::Writer<msg::CameraPosePubSubType> pose_writer(participant, dds::topics::kCameraPose,
+                                                     dds::TopicKind::kCameraPose);
+  dds::Writer<msg::KeyframePubSubType> keyframe_writer(participant, dds::topics::kKeyframe,
+                                                       dds::TopicKind::kKeyframe);
+  dds::Writer<msg::TrajectoryPubSubType> trajectory_writer(participant, dds::topics::kTrajectory,
+                                                           dds::TopicKind::kTrajectory);
+  dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
+                                                  dds::TopicKind::kStreamStatus);
+  dds::Reader<msg::RgbdFramePubSubType> frames(
+      participant, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame,
+      [&](msg::RgbdFrame&& sample) {
+        try {
+          RgbdFrameData frame = RgbdFrameFromMsg(sample);
+          std::lock_guard<std::mutex> lock(mutex);
+          pairer.AddFrame(std::move(frame), Clock::now());
+          ++frames_received;
+          last_frame_time = Clock::now();
+        } catch (const InputError& e) {
+          std::lock_guard<std::mutex> lock(mutex);
+          ++stats.bad_samples;
+          LOG_WARNING << "slam: dropped frame seq " << sample.header().seq() << ": " << e.what();
+        }
+        cv.notify_all();
+      });
+  dds::Reader<msg::DetectionsPubSubType> detections(
+      participant, dds::topics::kDetections, dds::TopicKind::kDetections,
+      [&](msg::Detections&& sample) {
+        try {
+          std::vector<Detection> dets = DetectionsFromMsg(sample);
+          const Timestamp stamp = TimeFromMsg(sample.header().stamp(), "Detections.header.stamp");
+          std::lock_guard<std::mutex> lock(mutex);
+          pairer.AddDetections(stamp, std::move(dets));
+        } catch (const InputError& e) {
+          LOG_WARNING << "slam: dropped detections seq " << sample.header().seq() << ": "
+                      << e.what();
+        }
+        cv.notify_all();
+      });
+  dds::Reader<msg::StreamStatusPubSubType> status_reader(
+      participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
+      [&](msg::StreamStatus&& s) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (s.kind() == static_cast<uint8_t>(StreamEvent::kEndOfStream)) {
+          end_frames = static_cast<int64_t>(s.num_frames());
+        }
+        cv.notify_all();
+      });
+
+  auto publish_keyframes = [&](const std::vector<KeyframeData>& keyframes) {
+    for (const KeyframeData& k : keyframes) {
+      keyframe_writer.Write(KeyframeToMsg(k, core.camera()));
+      ++stats.keyframes_published;
+    }
+  };
+
+  while (!stop->requested()) {
+    std::optional<PairedFrame> paired;
+    {
+      std::unique_lock<std::mutex> lock(mutex);
+      // Detector liveness from the matched writers of the detections topic.
+      const int writers = detections.matched();
+      if (writers > 0) detector_writers_seen = writers;
+      pairer.SetDetectorAlive(!(detector_writers_seen > 0 && writers == 0));
+      paired = pairer.Next(Clock::now());
+      if (!paired) {
+        const bool all_in = end_frames >= 0 &&
+                            static_cast<int64_t>(frames_received + stats.bad_samples) >= end_frames;
+        const bool stale_end = end_frames >= 0 && pairer.pending_frames() == 0 &&
+                               Clock::now() - last_frame_time > std::chrono::seconds(3);
+        if ((all_in && pairer.pending_frames() == 0) || stale_end) break;
+        const auto deadline = pairer.NextDeadline();
+        auto until = Clock::now() + std::chrono::milliseconds(20);
+        if (deadline && *deadline < until) until = *deadline;
+        cv.wait_until(lock, until);
+        continue;
+      }
+    }
+    const std::vector<Detection>* dets = paired->detections ? &*paired->detections : nullptr;
+    const SlamOutput out = core.Process(paired->frame, dets);
+    ++stats.frames_processed;
+    if (out.result.world_from_cam) ++stats.frames_tracked;
+    pose_writer.Write(CameraPoseToMsg(out.result, paired->frame.seq, paired->detections_missing));
+    publish_keyframes(out.keyframes);
+  }
+
+  publish_keyframes(core.Finish());
+  trajectory_writer.Write(TrajectoryToMsg(core.Trajectory(), false));
+  trajectory_writer.Write(TrajectoryToMsg(core.KeyframeTrajectory(), true));
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    stats.pairing = pairer.stats();
+    stats.detector_lost = pairer.detector_lost() || stats.pairing.lost_episodes > 0;
+  }
+  msg::StreamStatus done;
+  done.kind(static_cast<uint8_t>(StreamEvent::kComponentDone));
+  done.source("slam");
+  done.num_frames(stats.frames_processed);
+  status.Write(done);
+  // Let reliable readers (mapper, recorder) get everything before the writers go away.
+  keyframe_writer.WaitForAcknowledgments(std::chrono::milliseconds(10000));
+  trajectory_writer.WaitForAcknowledgments(std::chrono::milliseconds(5000));
+  status.WaitForAcknowledgments(std::chrono::milliseconds(2000));
+  LOG_INFO << "slam: " << stats.frames_processed << " frames (" << stats.frames_tracked
+           << " tracked), " << stats.keyframes_published << " keyframe messages; detections: "
+           << stats.pairing.with_detections << " paired, " << stats.pairing.missing_detections
+           << " missing" << (stats.detector_lost ? " (detector lost: geometry-only frames)" : "");
+  return stats;
+}
+
+}  // namespace dygslam

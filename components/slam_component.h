@@ -1,0 +1,79 @@
+// Slam component: RgbdFrame (+ Detections) -> CameraPose per frame, Keyframe on each new keyframe
+// / pose correction, the final Trajectory (frames and keyframes) at the end.
+//
+// Core: SlamCore (no DDS) wraps dygslam::System. Shell: RunSlam pairs frames with detections by
+// stamp (FramePairer: --deterministic waits for every frame's detections; normal mode waits at
+// most detection_wait and counts misses; a dead detector -> geometry-only, reported in the stats
+// and in CameraPose.detections_missing). Ends when END_OF_STREAM's frame count has been processed
+// (or 3 s after END_OF_STREAM without new frames, or on stop): System::Shutdown(), final
+// trajectories published, StreamStatus COMPONENT_DONE "slam".
+#pragma once
+
+#include <chrono>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "components/component_common.h"
+#include "components/convert.h"
+#include "components/frame_pairing.h"
+#include "core/system/system.h"
+
+namespace dygslam {
+
+namespace dds {
+class Participant;
+}
+
+struct SlamComponentOptions {
+  SystemOptions system;
+  // Take detections from the detector component (true) or let System run its own detector
+  // (false; then System needs the model paths).
+  bool external_detections = true;
+  std::chrono::milliseconds detection_wait{150};
+  int detector_lost_after_misses = 5;
+  void Check() const;
+  bool NeedsDetections() const;
+};
+
+struct SlamOutput {
+  FrameResult result;
+  std::vector<KeyframeData> keyframes;  // emitted while processing this frame (or before)
+};
+
+class SlamCore {
+ public:
+  explicit SlamCore(const SlamComponentOptions& options);
+  // detections == nullptr: no external detections (the System runs its own if it needs them and
+  // external_detections is false; otherwise the frame goes on without boxes).
+  SlamOutput Process(const RgbdFrameData& frame, const std::vector<Detection>* detections);
+  // Shutdown + final keyframe corrections.
+  std::vector<KeyframeData> Finish();
+  std::vector<StampedPose> Trajectory() const { return system_->Trajectory(); }
+  std::vector<StampedPose> KeyframeTrajectory() const { return system_->KeyframeTrajectory(); }
+  const PinholeCamera& camera() const { return options_.system.camera; }
+
+ private:
+  std::vector<KeyframeData> TakeKeyframes();
+  SlamComponentOptions options_;
+  std::unique_ptr<System> system_;
+  std::mutex keyframes_mutex_;
+  std::vector<KeyframeData> keyframes_;
+  bool finished_ = false;
+};
+
+msg::CameraPose CameraPoseToMsg(const FrameResult& result, uint64_t seq, bool detections_missing);
+
+struct SlamStats {
+  PairingStats pairing;
+  size_t frames_processed = 0;
+  size_t frames_tracked = 0;
+  size_t keyframes_published = 0;
+  size_t bad_samples = 0;
+  bool detector_lost = false;
+};
+
+SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
+                  const SlamComponentOptions& options, const StopSignalPtr& stop);
+
+}  // namespace dygslam

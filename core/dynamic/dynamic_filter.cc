@@ -1,0 +1,416 @@
+#include "core/dynamic/dynamic_filter.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include <opencv2/calib3d.hpp>
+
+namespace dygslam {
+
+const char* ToString(DynamicFilterMode mode) {
+  switch (mode) {
+    case DynamicFilterMode::kNone: return "none";
+    case DynamicFilterMode::kBoxes: return "boxes";
+    case DynamicFilterMode::kGeometry: return "geometry";
+    case DynamicFilterMode::kFull: return "full";
+  }
+  return "unknown";
+}
+
+DynamicFilterMode ParseDynamicFilterMode(const std::string& text) {
+  if (text == "none") return DynamicFilterMode::kNone;
+  if (text == "boxes") return DynamicFilterMode::kBoxes;
+  if (text == "geometry") return DynamicFilterMode::kGeometry;
+  if (text == "full") return DynamicFilterMode::kFull;
+  throw InvalidOptions("invalid option DynamicFilter.mode: '" + text +
+                       "' (expected none | boxes | geometry | full)");
+}
+
+void DynamicFilterOptions::Check() const {
+  DYGSLAM_CHECK_OPTION(c1 > 0 && std::isfinite(c1), "DynamicFilter.c1");
+  DYGSLAM_CHECK_OPTION(std::isfinite(alpha), "DynamicFilter.alpha");
+  DYGSLAM_CHECK_OPTION(q >= 0 && std::isfinite(q), "DynamicFilter.q");
+  DYGSLAM_CHECK_OPTION(r > 0 && std::isfinite(r), "DynamicFilter.r");
+  DYGSLAM_CHECK_OPTION(p_init >= 0 && p_init <= 1, "DynamicFilter.p_init");
+  DYGSLAM_CHECK_OPTION(c2 >= 0 && std::isfinite(c2), "DynamicFilter.c2");
+  DYGSLAM_CHECK_OPTION(delta > 0 && std::isfinite(delta), "DynamicFilter.delta");
+  DYGSLAM_CHECK_OPTION(threshold >= 0 && threshold <= 1, "DynamicFilter.threshold");
+  DYGSLAM_CHECK_OPTION(initial_variance > 0 && std::isfinite(initial_variance),
+                       "DynamicFilter.initial_variance");
+  DYGSLAM_CHECK_OPTION(box_margin >= 0 && std::isfinite(box_margin), "DynamicFilter.box_margin");
+  DYGSLAM_CHECK_OPTION(search_radius > 0 && search_radius <= 1000, "DynamicFilter.search_radius");
+  DYGSLAM_CHECK_OPTION(max_hamming >= 0 && max_hamming <= 256, "DynamicFilter.max_hamming");
+  DYGSLAM_CHECK_OPTION(ratio > 0 && ratio <= 1, "DynamicFilter.ratio");
+  DYGSLAM_CHECK_OPTION(fundamental_threshold > 0 && std::isfinite(fundamental_threshold),
+                       "DynamicFilter.fundamental_threshold");
+  DYGSLAM_CHECK_OPTION(fundamental_confidence > 0 && fundamental_confidence < 1,
+                       "DynamicFilter.fundamental_confidence");
+  DYGSLAM_CHECK_OPTION(fundamental_max_iters > 0, "DynamicFilter.fundamental_max_iters");
+  DYGSLAM_CHECK_OPTION(min_fundamental_matches >= 8, "DynamicFilter.min_fundamental_matches");
+  DYGSLAM_CHECK_OPTION(homography_inlier_ratio > 0 && homography_inlier_ratio <= 2,
+                       "DynamicFilter.homography_inlier_ratio");
+}
+
+std::vector<uint8_t> FilterResult::DynamicFlags() const {
+  std::vector<uint8_t> flags(features.size());
+  for (size_t i = 0; i < features.size(); ++i) flags[i] = features[i].is_dynamic ? 1 : 0;
+  return flags;
+}
+
+double EpipolarDistance(const cv::Matx33d& f, const cv::Point2d& p_prev, const cv::Point2d& p_t) {
+  const cv::Vec3d line = f * cv::Vec3d(p_prev.x, p_prev.y, 1.0);  // eq. 3: l_t = F p_t-1
+  const double norm = std::sqrt(line[0] * line[0] + line[1] * line[1]);
+  if (norm < 1e-12) return std::numeric_limits<double>::infinity();
+  return std::abs(line[0] * p_t.x + line[1] * p_t.y + line[2]) / norm;  // eq. 4
+}
+
+double GeometryProbability(double distance, double c1, double alpha) {
+  return 1.0 / (1.0 + c1 * std::exp(-(distance - alpha)));  // eq. 5
+}
+
+KalmanProbability KalmanPredict(const KalmanProbability& previous_posterior, double q) {
+  return {previous_posterior.p, previous_posterior.variance + q};  // eqs. 6-7
+}
+
+KalmanProbability KalmanUpdate(const KalmanProbability& previous_posterior, double observation,
+                               double q, double r) {
+  const KalmanProbability prior = KalmanPredict(previous_posterior, q);
+  const double gain = prior.variance / (prior.variance + r);  // eq. 8
+  return {prior.p + gain * (observation - prior.p),            // eq. 9 (standard update)
+          (1.0 - gain) * prior.variance};                      // eq. 10
+}
+
+double ExpansionWeight(double distance, double c2, double delta) {
+  return distance <= delta ? c2 * std::exp(-distance / delta) : 0.0;  // eq. 12
+}
+
+int HammingDistance256(const uint8_t* a, const uint8_t* b) {
+  int dist = 0;
+  for (int k = 0; k < 4; ++k) {
+    uint64_t x, y;
+    std::memcpy(&x, a + 8 * k, 8);
+    std::memcpy(&y, b + 8 * k, 8);
+    dist += __builtin_popcountll(x ^ y);
+  }
+  return dist;
+}
+
+bool InAnyBox(const cv::Point2f& p, const std::vector<Detection>& detections, double margin) {
+  for (const Detection& d : detections) {
+    if (p.x >= d.box.x - margin && p.x <= d.box.x + d.box.width + margin &&
+        p.y >= d.box.y - margin && p.y <= d.box.y + d.box.height + margin)
+      return true;
+  }
+  return false;
+}
+
+DynamicFilter::DynamicFilter(const DynamicFilterOptions& options) : options_(options) {
+  options_.Check();
+}
+
+void DynamicFilter::Reset() {
+  has_prev_ = false;
+  prev_points_.clear();
+  prev_geom_points_.clear();
+  prev_octaves_.clear();
+  prev_descriptors_.release();
+  prev_states_.clear();
+}
+
+std::vector<int> DynamicFilter::MatchToPrevious(const std::vector<cv::KeyPoint>& keypoints,
+                                                const cv::Mat& descriptors) const {
+  const int n_cur = static_cast<int>(keypoints.size());
+  const int n_prev = static_cast<int>(prev_points_.size());
+  std::vector<int> matches(n_cur, -1);
+  if (n_cur == 0 || n_prev == 0) return matches;
+
+  // Grid over the previous frame with cells of search_radius: a window is at most 3x3 cells.
+  const float cell = static_cast<float>(options_.search_radius);
+  float max_x = 0, max_y = 0;
+  for (const cv::Point2f& p : prev_points_) {
+    max_x = std::max(max_x, p.x);
+    max_y = std::max(max_y, p.y);
+  }
+  const int grid_w = static_cast<int>(max_x / cell) + 1, grid_h = static_cast<int>(max_y / cell) + 1;
+  std::vector<int> cell_start(grid_w * grid_h + 1, 0), cell_items(n_prev);
+  auto cell_of = [&](const cv::Point2f& p) {
+    const int cx = std::clamp(static_cast<int>(p.x / cell), 0, grid_w - 1);
+    const int cy = std::clamp(static_cast<int>(p.y / cell), 0, grid_h - 1);
+    return cy * grid_w + cx;
+  };
+  for (const cv::Point2f& p : prev_points_) ++cell_start[cell_of(p) + 1];
+  for (int c = 0; c < grid_w * grid_h; ++c) cell_start[c + 1] += cell_start[c];
+  {
+    std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
+    for (int j = 0; j < n_prev; ++j) cell_items[fill[cell_of(prev_points_[j])]++] = j;
+  }
+
+  const float r2 = cell * cell;
+  const int max_oct = options_.max_octave_difference;
+  std::vector<int> best_prev_dist(n_prev, std::numeric_limits<int>::max());
+  std::vector<int> best_prev_cur(n_prev, -1);
+  std::vector<int> best_dist(n_cur, std::numeric_limits<int>::max());
+  for (int i = 0; i < n_cur; ++i) {
+    const cv::Point2f& p = keypoints[i].pt;
+    const uint8_t* d_cur = descriptors.ptr<uint8_t>(i);
+    const int cx = static_cast<int>(std::floor(p.x / cell)), cy = static_cast<int>(std::floor(p.y / cell));
+    int best = std::numeric_limits<int>::max(), second = std::numeric_limits<int>::max(), best_j = -1;
+    for (int gy = std::max(cy - 1, 0); gy <= std::min(cy + 1, grid_h - 1); ++gy) {
+      for (int gx = std::max(cx - 1, 0); gx <= std::min(cx + 1, grid_w - 1); ++gx) {
+        const int c = gy * grid_w + gx;
+        for (int k = cell_start[c]; k < cell_start[c + 1]; ++k) {
+          const int j = cell_items[k];
+          const float dx = prev_points_[j].x - p.x, dy = prev_points_[j].y - p.y;
+          if (dx * dx + dy * dy > r2) continue;
+          if (max_oct >= 0 && std::abs(prev_octaves_[j] - keypoints[i].octave) > max_oct) continue;
+          const int d = HammingDistance256(d_cur, prev_descriptors_.ptr<uint8_t>(j));
+          if (d < best) {
+            second = best;
+            best = d;
+            best_j = j;
+          } else if (d < second) {
+            second = d;
+          }
+          if (d < best_prev_dist[j]) {
+            best_prev_dist[j] = d;
+            best_prev_cur[j] = i;
+          }
+        }
+      }
+    }
+    if (best_j < 0 || best > options_.max_hamming) continue;
+    if (second != std::numeric_limits<int>::max() && best >= options_.ratio * second) continue;
+    matches[i] = best_j;
+    best_dist[i] = best;
+  }
+  // Mutual best; without it, keep only the best current feature per previous feature.
+  for (int i = 0; i < n_cur; ++i) {
+    const int j = matches[i];
+    if (j < 0) continue;
+    if (options_.mutual_best) {
+      if (best_prev_cur[j] != i) matches[i] = -1;
+    }
+  }
+  if (!options_.mutual_best) {
+    std::vector<int> owner(n_prev, -1);
+    for (int i = 0; i < n_cur; ++i) {
+      const int j = matches[i];
+      if (j < 0) continue;
+      if (owner[j] < 0 || best_dist[i] < best_dist[owner[j]]) {
+        if (owner[j] >= 0) matches[owner[j]] = -1;
+        owner[j] = i;
+      } else {
+        matches[i] = -1;
+      }
+    }
+  }
+  return matches;
+}
+
+FilterResult DynamicFilter::Process(const FilterInput& input) {
+  using Clock = std::chrono::steady_clock;
+  const auto ms_since = [](Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  };
+  const std::vector<cv::KeyPoint>& kps = input.keypoints;
+  const int n = static_cast<int>(kps.size());
+  if (input.descriptors.rows != n)
+    throw InputError("DynamicFilter::Process: " + std::to_string(input.descriptors.rows) +
+                     " descriptor rows for " + std::to_string(n) + " keypoints");
+  if (n > 0 && (input.descriptors.type() != CV_8UC1 || input.descriptors.cols != 32))
+    throw InputError("DynamicFilter::Process: descriptors must be CV_8UC1 N x 32 (ORB)");
+  if (input.undistorted_points != nullptr && static_cast<int>(input.undistorted_points->size()) != n)
+    throw InputError("DynamicFilter::Process: undistorted_points size differs from keypoints");
+
+  const DynamicFilterOptions& o = options_;
+  FilterResult result;
+  result.num_features = n;
+  result.features.resize(n);
+  if (o.mode == DynamicFilterMode::kNone) return result;
+
+  for (int i = 0; i < n; ++i) {
+    FeatureStatus& f = result.features[i];
+    f.in_dynamic_region = o.mode == DynamicFilterMode::kGeometry ||
+                          InAnyBox(kps[i].pt, input.detections, o.box_margin);
+    result.num_in_dynamic_region += f.in_dynamic_region;
+  }
+  if (o.mode == DynamicFilterMode::kBoxes) {
+    for (FeatureStatus& f : result.features) {
+      f.probability = f.in_dynamic_region ? 1.0 : 0.0;
+      f.is_dynamic = f.in_dynamic_region;
+      result.num_dynamic += f.is_dynamic;
+    }
+    return result;
+  }
+
+  std::vector<cv::Point2f> geom(n);
+  for (int i = 0; i < n; ++i) geom[i] = input.undistorted_points ? (*input.undistorted_points)[i] : kps[i].pt;
+
+  // b. Matching to the previous frame.
+  auto t0 = Clock::now();
+  std::vector<int> matches = has_prev_ ? MatchToPrevious(kps, input.descriptors) : std::vector<int>(n, -1);
+  result.matching_ms = ms_since(t0);
+
+  t0 = Clock::now();
+  std::vector<KalmanProbability> posterior(n);
+  std::vector<char> has_posterior(n, 0);
+  if (has_prev_) {
+    std::vector<cv::Point2f> prev_static, cur_static, prev_all, cur_all;
+    for (int i = 0; i < n; ++i) {
+      const int j = matches[i];
+      if (j < 0) continue;
+      result.features[i].prev_match = j;
+      ++result.num_matched;
+      prev_all.push_back(prev_geom_points_[j]);
+      cur_all.push_back(geom[i]);
+      if (result.features[i].in_dynamic_region) {
+        ++result.num_matched_dynamic_region;
+      } else {
+        prev_static.push_back(prev_geom_points_[j]);
+        cur_static.push_back(geom[i]);
+      }
+    }
+    // c. Fundamental matrix from the static region (GC-RANSAC).
+    const std::vector<cv::Point2f>* f_prev = &prev_static;
+    const std::vector<cv::Point2f>* f_cur = &cur_static;
+    if (static_cast<int>(prev_static.size()) < o.min_fundamental_matches) {
+      f_prev = &prev_all;
+      f_cur = &cur_all;
+      result.used_all_matches_for_f = true;
+    }
+    result.num_static_matches_used_for_f = static_cast<int>(f_prev->size());
+    cv::Matx33d fundamental;
+    cv::Matx33d homography = cv::Matx33d::eye();
+    bool f_ok = false;
+    int f_inliers = 0;
+    if (static_cast<int>(f_prev->size()) >= o.min_fundamental_matches) {
+      cv::Mat f;
+      try {
+        f = cv::findFundamentalMat(*f_prev, *f_cur, cv::USAC_ACCURATE, o.fundamental_threshold,
+                                   o.fundamental_confidence, o.fundamental_max_iters, cv::noArray());
+      } catch (const cv::Exception&) {
+        f.release();
+      }
+      if (f.rows == 3 && f.cols == 3) {
+        f.convertTo(f, CV_64F);
+        if (cv::checkRange(f) && cv::norm(f) > 0) {
+          f_ok = true;
+          fundamental = cv::Matx33d(f);
+          result.fundamental = f;
+          // Inliers under eq. 4 (one-sided distance).
+          for (size_t k = 0; k < f_prev->size(); ++k)
+            f_inliers += EpipolarDistance(fundamental, (*f_prev)[k], (*f_cur)[k]) <= o.fundamental_threshold;
+          result.num_f_inliers = f_inliers;
+        }
+      }
+      if (o.use_homography_for_degenerate) {
+        // Degenerate motion check: does a homography explain the matches as well as F?
+        const double h_thr = 2.0 * o.fundamental_threshold;  // transfer error is 2-D
+        cv::Mat h;
+        try {
+          h = cv::findHomography(*f_prev, *f_cur, cv::USAC_ACCURATE, h_thr, cv::noArray(),
+                                 o.fundamental_max_iters, o.fundamental_confidence);
+        } catch (const cv::Exception&) {
+          h.release();
+        }
+        if (h.rows == 3 && h.cols == 3 && cv::checkRange(h)) {
+          h.convertTo(h, CV_64F);
+          const cv::Matx33d hm(h);
+          int h_inliers = 0;
+          for (size_t k = 0; k < f_prev->size(); ++k) {
+            const cv::Vec3d x = hm * cv::Vec3d((*f_prev)[k].x, (*f_prev)[k].y, 1.0);
+            if (std::abs(x[2]) < 1e-12) continue;
+            h_inliers += std::hypot(x[0] / x[2] - (*f_cur)[k].x, x[1] / x[2] - (*f_cur)[k].y) <= h_thr;
+          }
+          result.num_h_inliers = h_inliers;
+          // H replaces F when it explains the matches as well as F, or, when F had to be fitted
+          // on all matches (moving objects included: with the small baseline of consecutive
+          // frames a 7-dof F absorbs a rigidly moving object), when H explains most matches.
+          const bool as_good_as_f = !f_ok || h_inliers >= o.homography_inlier_ratio * f_inliers;
+          const bool dominant_in_contaminated =
+              result.used_all_matches_for_f &&
+              h_inliers >= o.homography_dominant_fraction * static_cast<double>(f_prev->size());
+          if (h_inliers >= o.min_fundamental_matches && (as_good_as_f || dominant_in_contaminated)) {
+            result.used_homography = true;
+            homography = hm;
+          }
+        }
+      }
+    }
+    result.motion_model_ok = f_ok || result.used_homography;
+
+    // d + e. Observation and Kalman update for matched dynamic-region features.
+    for (int i = 0; i < n; ++i) {
+      FeatureStatus& fs = result.features[i];
+      const int j = matches[i];
+      if (!fs.in_dynamic_region || j < 0) continue;
+      const KalmanProbability prior_post = prev_states_[j].valid
+                                               ? prev_states_[j].posterior
+                                               : KalmanProbability{o.p_init, o.initial_variance};
+      if (result.motion_model_ok) {
+        double d;
+        if (result.used_homography) {
+          const cv::Vec3d x = homography * cv::Vec3d(prev_geom_points_[j].x, prev_geom_points_[j].y, 1.0);
+          d = std::abs(x[2]) < 1e-12 ? std::numeric_limits<double>::infinity()
+                                     : std::hypot(x[0] / x[2] - geom[i].x, x[1] / x[2] - geom[i].y);
+        } else {
+          d = EpipolarDistance(fundamental, prev_geom_points_[j], geom[i]);
+        }
+        fs.has_observation = true;
+        fs.epipolar_distance = d;
+        posterior[i] = KalmanUpdate(prior_post, GeometryProbability(d, o.c1, o.alpha), o.q, o.r);
+      } else {
+        posterior[i] = KalmanPredict(prior_post, o.q);
+      }
+      has_posterior[i] = 1;
+    }
+  }
+
+  // f. Expansion to unmatched dynamic-region features (eqs. 11-12).
+  std::vector<int> matched_dyn;
+  for (int i = 0; i < n; ++i)
+    if (has_posterior[i]) matched_dyn.push_back(i);
+  const double delta2 = o.delta * o.delta;
+  std::vector<State> states(n);
+  for (int i = 0; i < n; ++i) {
+    FeatureStatus& fs = result.features[i];
+    if (!fs.in_dynamic_region) continue;
+    if (has_posterior[i]) {
+      fs.probability = posterior[i].p;
+      states[i] = {true, posterior[i]};
+    } else {
+      double p = o.p_init;
+      for (int m : matched_dyn) {
+        const double dx = kps[m].pt.x - kps[i].pt.x, dy = kps[m].pt.y - kps[i].pt.y;
+        const double d2 = dx * dx + dy * dy;
+        if (d2 > delta2) continue;
+        p += ExpansionWeight(std::sqrt(d2), o.c2, o.delta) * (posterior[m].p - o.p_init);
+      }
+      fs.probability = std::clamp(p, 0.0, 1.0);
+      states[i] = {true, {fs.probability, o.initial_variance}};
+    }
+    // g. Decision. Geometry mode has no information on the first frame: keep everything.
+    const bool informed = has_prev_ || o.mode == DynamicFilterMode::kFull;
+    fs.is_dynamic = informed && fs.probability > o.threshold;
+    result.num_dynamic += fs.is_dynamic;
+  }
+  result.probability_ms = ms_since(t0);
+
+  // Remember this frame.
+  has_prev_ = true;
+  prev_points_.resize(n);
+  prev_octaves_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    prev_points_[i] = kps[i].pt;
+    prev_octaves_[i] = kps[i].octave;
+  }
+  prev_geom_points_ = std::move(geom);
+  input.descriptors.copyTo(prev_descriptors_);
+  prev_states_ = std::move(states);
+  return result;
+}
+
+}  // namespace dygslam

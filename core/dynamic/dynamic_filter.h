@@ -1,0 +1,201 @@
+// The dynamic-feature filter of DYG-SLAM (paper sec. 2): detector boxes split the features into a
+// static and a dynamic region; features are matched to the previous frame; a fundamental matrix
+// is estimated from static-region matches with GC-RANSAC (cv::USAC_ACCURATE); every matched
+// dynamic-region feature gets a geometry probability from its epipolar distance (eqs. 4-5), fused
+// over frames with a scalar Kalman filter carried through the matches (eqs. 6-10); the
+// probability is spread to unmatched dynamic-region features (eqs. 11-12); features with
+// probability > threshold are dynamic and are dropped before tracking.
+//
+//   DynamicFilter filter(options);
+//   FilterResult r = filter.Process(FilterInput(keypoints, descriptors, detections));
+//   for (size_t i = 0; i < keypoints.size(); ++i) if (!r.features[i].is_dynamic) keep(i);
+//
+// Choices the paper leaves open (documented here, options in DynamicFilterOptions):
+// - Matching: consecutive frames only, candidates within `search_radius` px of the same position
+//   (grid lookup), |octave difference| <= max_octave_difference, Hamming <= max_hamming, Lowe
+//   ratio, mutual best.
+// - Kalman initialisation: a matched feature whose previous feature carried no state starts
+//   from P+ = p_init, Q+ = initial_variance. The update is the standard
+//   P+ = P- + K (z - P-) (eq. 9 of the paper text is a typesetting error).
+// - State carried to the next frame: every dynamic-region feature (matched: its Kalman
+//   posterior; unmatched: its expanded probability with variance initial_variance).
+//   Static-region features carry no state.
+// - Expansion (eq. 11): the sum is over matched dynamic-region features within delta; it is not
+//   normalised, so the result is clamped to [0, 1].
+// - Too few static matches for F (< min_fundamental_matches): F is estimated from all matches
+//   (the moving object then takes part, GC-RANSAC still treats it as outliers when it is the
+//   minority); if there are still too few, or neither F nor H can be estimated, there is no
+//   observation: the matched features only run the prediction step (P- kept, variance grows)
+//   and `result.motion_model_ok` is false.
+// - Degenerate motion (camera (nearly) not translating, or a planar scene): when a homography
+//   explains the static matches as well as F (>= homography_inlier_ratio of F's inliers), the
+//   epipolar distance is meaningless (any epipole fits) and the transfer distance |p_t - H p_t-1|
+//   replaces eq. 4. When F had to be fitted on all matches (geometry mode, fallback), a rigidly
+//   moving object is absorbed by the 7-dof F at the small baseline of consecutive frames (seen
+//   on generated data: movers at 0.35 px from F); then H is used when it explains at least
+//   homography_dominant_fraction of the matches. Disable with use_homography_for_degenerate.
+// - First frame (no previous frame): full/boxes: dynamic-region features get p_init (so they are
+//   dynamic with the paper's p_init = 0.6 > 0.5); geometry mode: nothing is marked dynamic.
+//
+// Coordinates: `keypoints` are in the (distorted) image in which the boxes were detected; they
+// are used for the region test, matching and expansion distances. If `undistorted_points` is
+// given (same size), it is used for F and the epipolar distances (recommended with lens
+// distortion); otherwise the keypoint positions are used.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "core/base/error.h"
+#include "core/base/types.h"
+
+namespace dygslam {
+
+// Mirrors dygslam::FilterMode (core/system/system.h) without depending on the system layer.
+enum class DynamicFilterMode {
+  kNone,      // nothing removed
+  kBoxes,     // every feature inside a dynamic box removed (Crowd-SLAM-like)
+  kGeometry,  // no detector: the whole image is the dynamic region, F from all matches
+  kFull,      // the paper: boxes + geometry probability + Kalman + expansion
+};
+const char* ToString(DynamicFilterMode mode);
+// "none" | "boxes" | "geometry" | "full"; throws InvalidOptions otherwise.
+DynamicFilterMode ParseDynamicFilterMode(const std::string& text);
+
+struct DynamicFilterOptions {
+  DynamicFilterMode mode = DynamicFilterMode::kFull;
+
+  // Paper parameters (sec. 3): C1, alpha, Q, R, P_init, C2, delta and the 0.5 threshold.
+  double c1 = 2.0;
+  double alpha = 0.4;  // px
+  double q = 0.09;     // state-transition variance
+  double r = 1.0;      // observation variance
+  double p_init = 0.6;
+  double c2 = 1.0;
+  double delta = 60.0;  // px
+  double threshold = 0.5;
+  // Posterior variance of a feature first seen in the dynamic region (no prior state).
+  double initial_variance = 1.0;
+
+  // Boxes are grown by this many pixels on each side for the region test.
+  double box_margin = 0.0;
+
+  // Matching to the previous frame.
+  double search_radius = 48.0;   // px
+  int max_hamming = 50;          // bits (of 256)
+  double ratio = 0.8;            // best < ratio * second best (within the window)
+  bool mutual_best = true;
+  int max_octave_difference = 1;  // < 0: no octave constraint
+
+  // Fundamental matrix (cv::findFundamentalMat with cv::USAC_ACCURATE = GC-RANSAC).
+  double fundamental_threshold = 1.0;  // px (epipolar distance)
+  double fundamental_confidence = 0.99;
+  int fundamental_max_iters = 1000;
+  int min_fundamental_matches = 15;
+  bool use_homography_for_degenerate = true;
+  double homography_inlier_ratio = 0.95;
+  // When F is fitted on all matches (geometry mode, or too few static matches), H is used when
+  // its inliers are at least this fraction of the matches.
+  double homography_dominant_fraction = 0.6;
+
+  void Check() const;
+};
+
+// Non-owning view of one frame's features; valid for the duration of Process().
+struct FilterInput {
+  FilterInput(const std::vector<cv::KeyPoint>& keypoints_in, const cv::Mat& descriptors_in,
+              const std::vector<Detection>& detections_in)
+      : keypoints(keypoints_in), descriptors(descriptors_in), detections(detections_in) {}
+  const std::vector<cv::KeyPoint>& keypoints;  // level-0 pixel coordinates
+  const cv::Mat& descriptors;                   // CV_8UC1, N x 32 (ORB)
+  const std::vector<Detection>& detections;     // dynamic-object boxes (all treated as dynamic)
+  // Optional, same size as keypoints: undistorted positions for F / epipolar distances.
+  const std::vector<cv::Point2f>* undistorted_points = nullptr;
+};
+
+struct FeatureStatus {
+  bool in_dynamic_region = false;
+  int prev_match = -1;      // index of the matched feature in the previous frame, -1 if none
+  bool has_observation = false;  // an epipolar observation z was computed (eqs. 4-5)
+  double epipolar_distance = -1;  // px, eq. 4 (or homography transfer distance), -1 if none
+  double probability = 0;   // final geometry probability (0 for static-region features)
+  bool is_dynamic = false;
+  bool matched() const { return prev_match >= 0; }
+};
+
+struct FilterResult {
+  std::vector<FeatureStatus> features;
+  int num_features = 0;
+  int num_in_dynamic_region = 0;
+  int num_matched = 0;            // all matches to the previous frame
+  int num_matched_dynamic_region = 0;
+  int num_static_matches_used_for_f = 0;
+  int num_f_inliers = 0;          // under eq. 4 with fundamental_threshold
+  int num_h_inliers = 0;          // homography transfer error <= 2 x fundamental_threshold
+  // A motion model (F, or H for degenerate motion) was estimated; false: prediction only.
+  bool motion_model_ok = false;
+  bool used_homography = false;   // degenerate motion: transfer distance instead of eq. 4
+  bool used_all_matches_for_f = false;
+  int num_dynamic = 0;
+  cv::Mat fundamental;  // 3x3 CV_64F (p_t^T F p_t-1 = 0), empty if none
+  double matching_ms = 0;
+  double probability_ms = 0;  // F estimation + epipolar probability + Kalman + expansion
+  // Per-feature flags in the layout of KeyframeData::keypoint_dynamic.
+  std::vector<uint8_t> DynamicFlags() const;
+};
+
+// Eq. 4: distance (px) of p_t to the epipolar line F p_prev (p_t^T F p_prev = 0).
+double EpipolarDistance(const cv::Matx33d& fundamental, const cv::Point2d& p_prev, const cv::Point2d& p_t);
+// Eq. 5: 1 / (1 + c1 exp(-(d - alpha))).
+double GeometryProbability(double distance, double c1, double alpha);
+
+// One step of the scalar Kalman filter of eqs. 6-10.
+struct KalmanProbability {
+  double p = 0;  // posterior probability
+  double variance = 0;
+};
+KalmanProbability KalmanUpdate(const KalmanProbability& previous_posterior, double observation,
+                               double q, double r);
+KalmanProbability KalmanPredict(const KalmanProbability& previous_posterior, double q);
+// Eq. 12.
+double ExpansionWeight(double distance, double c2, double delta);
+
+// Hamming distance of two 32-byte ORB descriptors.
+int HammingDistance256(const uint8_t* a, const uint8_t* b);
+
+class DynamicFilter {
+ public:
+  explicit DynamicFilter(const DynamicFilterOptions& options);
+
+  // Classifies the features of frame t and remembers them as the previous frame for t+1.
+  // Throws InputError when descriptors and keypoints disagree (rows, type, 32 bytes).
+  FilterResult Process(const FilterInput& input);
+  // Forget the previous frame (e.g. after tracking loss or a sequence change).
+  void Reset();
+
+  const DynamicFilterOptions& options() const { return options_; }
+  bool has_previous_frame() const { return has_prev_; }
+
+ private:
+  struct State {
+    bool valid = false;
+    KalmanProbability posterior;
+  };
+  std::vector<int> MatchToPrevious(const std::vector<cv::KeyPoint>& keypoints,
+                                   const cv::Mat& descriptors) const;
+
+  DynamicFilterOptions options_;
+  bool has_prev_ = false;
+  std::vector<cv::Point2f> prev_points_;        // keypoint positions (matching)
+  std::vector<cv::Point2f> prev_geom_points_;   // undistorted if given (F)
+  std::vector<int> prev_octaves_;
+  cv::Mat prev_descriptors_;
+  std::vector<State> prev_states_;
+};
+
+// Whether `point` lies in any box (grown by `margin` px).
+bool InAnyBox(const cv::Point2f& point, const std::vector<Detection>& detections, double margin);
+
+}  // namespace dygslam

@@ -1,0 +1,45 @@
+// Per-pixel dynamic mask of a keyframe for the map (KeyframeData::dynamic_mask): the detector
+// boxes refined by depth, plus disks around the features the filter judged dynamic. The map then
+// leaves the people out without deleting the wall behind them.
+//
+// Inside each box the object's depth is estimated as
+//   - the median depth of the dynamic features inside the box (>= min_features_for_depth), else
+//   - the box's foreground depth: the nearest depth d whose band [d, d + depth_band] holds at
+//     least foreground_min_fraction of the box's valid depth pixels;
+// and the box pixels whose depth is within [object - depth_band, object + depth_band] are masked,
+// as are the box pixels without depth (they carry nothing for the map anyway). A box without any
+// valid depth is masked entirely. Finally the mask is dilated by dilation_px and disks of
+// feature_radius px are drawn around every dynamic feature that has no depth or whose depth is
+// within depth_band of its box's object depth (features outside boxes: always).
+#pragma once
+
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "core/base/error.h"
+#include "core/base/types.h"
+
+namespace dygslam {
+
+struct DynamicMaskOptions {
+  double depth_band = 0.5;  // m, half-width of the object depth band (a person is ~0.3-0.5 m deep)
+  int min_features_for_depth = 3;
+  double foreground_min_fraction = 0.15;
+  double histogram_bin = 0.05;  // m
+  int dilation_px = 3;
+  int feature_radius = 8;  // px
+  double box_margin = 0.0;  // px added on each side of the boxes
+  void Check() const;
+};
+
+// depth: CV_32FC1 metres (0 or non-finite = no measurement) or empty (then the boxes are masked
+// entirely). keypoint_dynamic: same size as keypoints (1 = dynamic) or empty. Returns CV_8UC1 of
+// `image_size` (or depth's size if not empty), 255 = dynamic.
+cv::Mat ComputeDynamicMask(const cv::Size& image_size, const cv::Mat& depth,
+                           const std::vector<Detection>& detections,
+                           const std::vector<cv::KeyPoint>& keypoints,
+                           const std::vector<uint8_t>& keypoint_dynamic,
+                           const DynamicMaskOptions& options = DynamicMaskOptions());
+
+}  // namespace dygslam

@@ -1,0 +1,268 @@
+#include "core/dynamic/yolo_detector.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "tests/support/test_support.h"
+
+namespace dygslam {
+namespace {
+namespace fs = std::filesystem;
+
+std::string RequireModels() {
+  const std::string dir = testing::ModelsDir();
+  return dir;
+}
+
+#define DYGSLAM_REQUIRE_MODELS(var)                                                      \
+  const std::string var = RequireModels();                                               \
+  if (var.empty()) {                                                                     \
+    if (std::getenv("DYGSLAM_REQUIRE_DATA") != nullptr) FAIL() << "models dir missing"; \
+    GTEST_SKIP() << "models directory not found (set DYGSLAM_MODELS_DIR)";               \
+  }
+
+// Path of the `index`-th image entry (0-based, comments skipped) of <dataset>/rgb.txt.
+std::string RgbEntry(const std::string& dataset, int index) {
+  std::ifstream in(dataset + "/rgb.txt");
+  std::string line;
+  int k = 0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (k++ == index) {
+      std::istringstream ss(line);
+      std::string stamp, rel;
+      ss >> stamp >> rel;
+      return dataset + "/" + rel;
+    }
+  }
+  return "";
+}
+
+void ExpectThrowsNaming(const std::function<void()>& fn, const std::string& needle,
+                        const std::string& also = "") {
+  try {
+    fn();
+    ADD_FAILURE() << "no exception; expected one naming " << needle;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    if (!also.empty()) {
+      EXPECT_NE(std::string(e.what()).find(also), std::string::npos) << e.what();
+    }
+    std::printf("  error: %s\n", e.what());
+  }
+}
+
+TEST(DarknetCfg, ExpectedWeightSizesMatchShippedFiles) {
+  DYGSLAM_REQUIRE_MODELS(models);
+  for (const char* name : {"yolo-fastest-1.1", "yolo-fastest-1.1-xl", "yolo-fastest-1.1_body"}) {
+    const DetectorOptions o = DetectorOptionsForModel(name, models);
+    const DarknetCfgInfo info = ParseDarknetCfg(o.cfg_path);
+    const int64_t size = static_cast<int64_t>(fs::file_size(o.weights_path));
+    // Header of 16 or 20 bytes.
+    EXPECT_TRUE(size == 20 + 4 * info.num_parameters || size == 16 + 4 * info.num_parameters)
+        << name << ": file " << size << " params " << info.num_parameters;
+  }
+  // YOLOv3-tiny: the official weights file has 35,434,956 bytes (20-byte header).
+  const DarknetCfgInfo tiny = ParseDarknetCfg(DetectorOptionsForModel("yolov3-tiny", models).cfg_path);
+  EXPECT_EQ(20 + 4 * tiny.num_parameters, 35434956);
+  EXPECT_EQ(tiny.num_classes, 80);
+  EXPECT_EQ(tiny.num_conv_layers, 13);
+  const DarknetCfgInfo cyti = ParseDarknetCfg(DetectorOptionsForModel("CYTI", models).cfg_path);
+  EXPECT_EQ(cyti.num_classes, 1);
+  EXPECT_EQ(cyti.input_width, 160);
+}
+
+TEST(DarknetCfg, MalformedCfgNamesFileAndLine) {
+  const std::string dir = testing::MakeTempDir("cfg");
+  const std::string cfg = dir + "/bad.cfg";
+  {
+    std::ofstream(cfg) << "[net]\nwidth=320\n[convolutional]\nfilters=abc\n";
+  }
+  ExpectThrowsNaming([&] { ParseDarknetCfg(cfg); }, cfg + ":3");
+  {
+    std::ofstream(cfg) << "[net]\n[convolutional]\nfilters=8\n[mystery]\n";
+  }
+  ExpectThrowsNaming([&] { ParseDarknetCfg(cfg); }, cfg + ":4", "mystery");
+  {
+    std::ofstream(cfg) << "";
+  }
+  ExpectThrowsNaming([&] { ParseDarknetCfg(cfg); }, cfg);
+  ExpectThrowsNaming([&] { ParseDarknetCfg(dir + "/absent.cfg"); }, dir + "/absent.cfg", "not found");
+}
+
+TEST(YoloDetectorOptions, Check) {
+  DetectorOptions o;
+  o.cfg_path = "a.cfg";
+  o.weights_path = "a.weights";
+  o.names_path = "a.names";
+  EXPECT_NO_THROW(o.Check());
+  o.input_width = 300;
+  EXPECT_THROW(o.Check(), InvalidOptions);
+  o.input_width = 320;
+  o.confidence_threshold = 0;
+  EXPECT_THROW(o.Check(), InvalidOptions);
+  o.confidence_threshold = 0.3f;
+  o.dynamic_classes.clear();
+  EXPECT_THROW(o.Check(), InvalidOptions);
+  EXPECT_THROW(DetectorOptionsForModel("no-such-model", testing::MakeTempDir("models")), InputError);
+}
+
+class ShippedModels : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(ShippedModels, PeopleFrameHasPersonEmptyFrameHasNone) {
+  DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
+  DYGSLAM_REQUIRE_MODELS(models);
+  DetectorOptions o = DetectorOptionsForModel(GetParam(), models);
+  auto detector = YoloDetector::Create(o);
+  const cv::Mat people = cv::imread(RgbEntry(dataset, 250), cv::IMREAD_COLOR);
+  const cv::Mat empty = cv::imread(RgbEntry(dataset, 10), cv::IMREAD_COLOR);
+  ASSERT_FALSE(people.empty());
+  ASSERT_FALSE(empty.empty());
+  const std::vector<Detection> on_people = detector->Detect(people);
+  const std::vector<Detection> on_empty = detector->Detect(empty);
+  std::printf("%s: %zu boxes on entry 250, %zu on entry 10\n", GetParam(), on_people.size(),
+              on_empty.size());
+  for (const Detection& d : on_people)
+    std::printf("  %s %.2f [%.0f %.0f %.0f %.0f]\n", d.label.c_str(), d.score, d.box.x, d.box.y,
+                d.box.width, d.box.height);
+  ASSERT_GE(on_people.size(), 1u);
+  EXPECT_TRUE(on_empty.empty());
+  for (const Detection& d : on_people) {
+    EXPECT_EQ(d.label, "person");  // "body" is aliased to "person"
+    EXPECT_TRUE(detector->IsDynamicClass(d.class_id));
+    EXPECT_GE(d.box.x, 0.f);
+    EXPECT_GE(d.box.y, 0.f);
+    EXPECT_LE(d.box.x + d.box.width, people.cols + 1e-3f);
+    EXPECT_LE(d.box.y + d.box.height, people.rows + 1e-3f);
+    // Person-shaped and of plausible size for a person 1-4 m away.
+    EXPECT_GT(d.box.height, 60.f);
+    EXPECT_GE(d.score, o.confidence_threshold);
+  }
+  // 416 input also works (anchors scale with the input).
+  o.input_width = o.input_height = 416;
+  auto detector416 = YoloDetector::Create(o);
+  EXPECT_GE(detector416->Detect(people).size(), 1u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Dynamic, ShippedModels,
+                         ::testing::Values("yolo-fastest-1.1", "yolo-fastest-1.1-xl",
+                                           "yolo-fastest-1.1_body"),
+                         [](const ::testing::TestParamInfo<const char*>& info) {
+                           std::string s = info.param;
+                           for (char& c : s)
+                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+                           return s;
+                         });
+
+TEST(YoloDetectorFiles, MissingAndCorruptFilesNameTheFile) {
+  DYGSLAM_REQUIRE_MODELS(models);
+  const DetectorOptions good = DetectorOptionsForModel("yolo-fastest-1.1_body", models);
+  const std::string dir = testing::MakeTempDir("det_files");
+
+  DetectorOptions o = good;
+  o.cfg_path = dir + "/missing.cfg";
+  ExpectThrowsNaming([&] { YoloDetector::Create(o); }, o.cfg_path, "not found");
+
+  o = good;
+  o.weights_path = dir + "/missing.weights";
+  ExpectThrowsNaming([&] { YoloDetector::Create(o); }, o.weights_path, "not found");
+
+  o = good;
+  o.names_path = dir + "/missing.names";
+  ExpectThrowsNaming([&] { YoloDetector::Create(o); }, o.names_path, "not found");
+
+  // Truncated weights.
+  {
+    std::ifstream in(good.weights_path, std::ios::binary);
+    std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream(dir + "/half.weights", std::ios::binary).write(bytes.data(), bytes.size() / 2);
+    std::ofstream(dir + "/tiny.weights", std::ios::binary).write(bytes.data(), 7);
+  }
+  o = good;
+  o.weights_path = dir + "/half.weights";
+  ExpectThrowsNaming([&] { YoloDetector::Create(o); }, o.weights_path, "truncated");
+  o.weights_path = dir + "/tiny.weights";
+  ExpectThrowsNaming([&] { YoloDetector::Create(o); }, o.weights_path, "header");
+
+  // Weights of another model (COCO Yolo-Fastest weights with the body cfg).
+  o = good;
+  o.weights_path = DetectorOptionsForModel("yolo-fastest-1.1-xl", models).weights_path;
+  EXPECT_THROW(YoloDetector::Create(o), InputError);
+
+  // Names without the dynamic class; names count not matching the cfg.
+  {
+    std::ofstream(dir + "/dog.names") << "dog\n";
+    std::ofstream(dir + "/two.names") << "body\nperson\n";
+  }
+  o = good;
+  o.names_path = dir + "/dog.names";
+  ExpectThrowsNaming([&] { YoloDetector::Create(o); }, o.names_path, "person");
+  o.names_path = dir + "/two.names";
+  ExpectThrowsNaming([&] { YoloDetector::Create(o); }, o.names_path, "declares 1");
+  // Without the alias, "body" is not a person.
+  o = good;
+  o.class_aliases.clear();
+  ExpectThrowsNaming([&] { YoloDetector::Create(o); }, o.names_path, "person");
+
+  // Corrupt cfg (garbage bytes).
+  {
+    std::ofstream(dir + "/garbage.cfg", std::ios::binary) << "\x01\x02 not a cfg \xff";
+  }
+  o = good;
+  o.cfg_path = dir + "/garbage.cfg";
+  ExpectThrowsNaming([&] { YoloDetector::Create(o); }, o.cfg_path);
+}
+
+// YOLOv3-tiny / CYTI (weights not available offline): the cfg, the weights size check and the
+// standard two-[yolo]-layer output path, with a generated weights file of the exact size.
+void WriteGeneratedWeights(const std::string& path, int64_t num_parameters) {
+  std::ofstream out(path, std::ios::binary);
+  const int32_t header[3] = {0, 2, 0};
+  const uint64_t seen = 0;
+  out.write(reinterpret_cast<const char*>(header), sizeof(header));
+  out.write(reinterpret_cast<const char*>(&seen), sizeof(seen));
+  std::vector<float> values(static_cast<size_t>(num_parameters), 0.01f);
+  out.write(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(float));
+}
+
+TEST(YoloDetectorFiles, Yolov3TinyCfgRunsWithGeneratedWeights) {
+  DYGSLAM_REQUIRE_MODELS(models);
+  const std::string dir = testing::MakeTempDir("tiny");
+  for (const char* name : {"yolov3-tiny", "CYTI"}) {
+    DetectorOptions o = DetectorOptionsForModel(name, models);
+    // The real weights are absent here: the error names the file.
+    if (!fs::exists(o.weights_path)) {
+      ExpectThrowsNaming([&] { YoloDetector::Create(o); }, o.weights_path, "not found");
+    }
+    const DarknetCfgInfo info = ParseDarknetCfg(o.cfg_path);
+    o.weights_path = dir + "/" + name + ".weights";
+    WriteGeneratedWeights(o.weights_path, info.num_parameters);
+    auto detector = YoloDetector::Create(o);
+    EXPECT_EQ(static_cast<int>(detector->class_names().size()), info.num_classes);
+    cv::Mat image(480, 640, CV_8UC3);
+    cv::randu(image, 0, 255);
+    const std::vector<Detection> dets = detector->Detect(image);
+    for (const Detection& d : dets) {
+      EXPECT_TRUE(detector->IsDynamicClass(d.class_id));
+      EXPECT_GE(d.box.x, 0.f);
+      EXPECT_LE(d.box.x + d.box.width, 640.f + 1e-3f);
+    }
+    std::printf("%s with generated weights: %zu boxes (meaningless values, path check only)\n", name,
+                dets.size());
+  }
+}
+
+TEST(YoloDetectorFiles, BadImage) {
+  DYGSLAM_REQUIRE_MODELS(models);
+  auto detector = YoloDetector::Create(DetectorOptionsForModel("yolo-fastest-1.1", models));
+  EXPECT_THROW(detector->Detect(cv::Mat()), InputError);
+  EXPECT_THROW(detector->Detect(cv::Mat(10, 10, CV_8UC1)), InputError);
+}
+
+}  // namespace
+}  // namespace dygslam

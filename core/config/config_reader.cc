@@ -1,0 +1,383 @@
+#include "core/config/config_reader.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+namespace dygslam {
+
+struct ConfigReader::Impl {
+  std::string path;
+  YAML::Node root;  // a map (possibly empty)
+};
+
+namespace {
+
+struct Hit {
+  YAML::Node value;
+  int line = 0;  // 1-based line of the key
+};
+
+// All entries of `node` (a map) that spell `key`, flat or nested at any dot.
+void FindAll(const YAML::Node& node, const std::string& key, std::vector<Hit>* hits) {
+  if (!node.IsMap()) return;
+  for (const auto& entry : node) {
+    if (!entry.first.IsScalar()) continue;
+    const std::string& k = entry.first.Scalar();
+    if (k == key) {
+      hits->push_back({entry.second, entry.first.Mark().line + 1});
+    } else if (key.size() > k.size() && key.compare(0, k.size(), k) == 0 && key[k.size()] == '.') {
+      FindAll(entry.second, key.substr(k.size() + 1), hits);
+    }
+  }
+}
+
+void CollectKeys(const YAML::Node& node, const std::string& prefix, std::vector<std::string>* out) {
+  if (!node.IsMap()) return;
+  for (const auto& entry : node) {
+    if (!entry.first.IsScalar()) continue;
+    const std::string key = prefix.empty() ? entry.first.Scalar() : prefix + "." + entry.first.Scalar();
+    // An OpenCV matrix is a leaf value, not a section.
+    if (entry.second.IsMap() && entry.second.Tag() != "tag:yaml.org,2002:opencv-matrix") {
+      CollectKeys(entry.second, key, out);
+    } else {
+      out->push_back(key);
+    }
+  }
+}
+
+std::string Trim(const std::string& s) {
+  const size_t b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return "";
+  const size_t e = s.find_last_not_of(" \t");
+  return s.substr(b, e - b + 1);
+}
+
+std::string Lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+// Strips OpenCV's "%YAML:1.0" directive (not valid YAML 1.2 for yaml-cpp), keeping line numbers.
+std::string Preprocess(const std::string& text) {
+  size_t start = 0;
+  // Skip a UTF-8 byte order mark.
+  if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) start = 3;
+  const size_t eol = text.find('\n', start);
+  const std::string first = text.substr(start, eol == std::string::npos ? std::string::npos : eol - start);
+  if (first.rfind("%YAML", 0) == 0) {
+    return eol == std::string::npos ? std::string() : text.substr(eol);
+  }
+  return text.substr(start);
+}
+
+// Typed conversion; `fail` throws with the key and line.
+template <typename Fail>
+double ParseDouble(const YAML::Node& node, const Fail& fail) {
+  if (!node.IsScalar()) fail("expected a number, found a " + std::string(node.IsMap() ? "map" : "sequence"));
+  const std::string text = Trim(node.Scalar());
+  const std::string lower = Lower(text);
+  const std::string unsigned_lower = (!lower.empty() && (lower[0] == '-' || lower[0] == '+')) ? lower.substr(1) : lower;
+  if (unsigned_lower == ".nan" || unsigned_lower == ".inf" || unsigned_lower == "nan" ||
+      unsigned_lower == "inf" || unsigned_lower == "infinity") {
+    fail("value must be a finite number, found '" + text + "'");
+  }
+  const char* begin = text.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(begin, &end);
+  if (text.empty() || end == begin || *end != '\0') fail("expected a number, found '" + text + "'");
+  if (!std::isfinite(v) || errno == ERANGE) fail("value must be a finite number, found '" + text + "'");
+  return v;
+}
+
+template <typename Fail>
+int64_t ParseInt(const YAML::Node& node, int64_t lo, int64_t hi, const Fail& fail) {
+  if (!node.IsScalar()) fail("expected an integer, found a " + std::string(node.IsMap() ? "map" : "sequence"));
+  const std::string text = Trim(node.Scalar());
+  const char* begin = text.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const long long v = std::strtoll(begin, &end, 10);
+  if (text.empty() || end == begin || *end != '\0') {
+    // Accept "1000.0" style integral floats (OpenCV writes some ints that way), nothing else.
+    char* fend = nullptr;
+    const double d = std::strtod(begin, &fend);
+    if (!text.empty() && fend != begin && *fend == '\0' && std::isfinite(d) && d == std::floor(d) &&
+        std::abs(d) < 9e15) {
+      if (d < double(lo) || d > double(hi)) fail("integer out of range: '" + text + "'");
+      return static_cast<int64_t>(d);
+    }
+    fail("expected an integer, found '" + text + "'");
+  }
+  if (errno == ERANGE || v < lo || v > hi) fail("integer out of range: '" + text + "'");
+  return v;
+}
+
+template <typename Fail>
+bool ParseBool(const YAML::Node& node, const Fail& fail) {
+  if (!node.IsScalar()) fail("expected true/false");
+  const std::string text = Lower(Trim(node.Scalar()));
+  if (text == "true" || text == "yes" || text == "on" || text == "1") return true;
+  if (text == "false" || text == "no" || text == "off" || text == "0") return false;
+  fail("expected true/false (or 1/0), found '" + node.Scalar() + "'");
+  return false;
+}
+
+template <typename T>
+struct Converter;
+
+template <>
+struct Converter<double> {
+  template <typename F>
+  static double Convert(const YAML::Node& n, const F& fail) { return ParseDouble(n, fail); }
+};
+template <>
+struct Converter<float> {
+  template <typename F>
+  static float Convert(const YAML::Node& n, const F& fail) {
+    const double v = ParseDouble(n, fail);
+    if (std::abs(v) > std::numeric_limits<float>::max()) fail("value out of float range");
+    return static_cast<float>(v);
+  }
+};
+template <>
+struct Converter<int> {
+  template <typename F>
+  static int Convert(const YAML::Node& n, const F& fail) {
+    return static_cast<int>(ParseInt(n, std::numeric_limits<int>::min(), std::numeric_limits<int>::max(), fail));
+  }
+};
+template <>
+struct Converter<int64_t> {
+  template <typename F>
+  static int64_t Convert(const YAML::Node& n, const F& fail) {
+    return ParseInt(n, std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::max(), fail);
+  }
+};
+template <>
+struct Converter<bool> {
+  template <typename F>
+  static bool Convert(const YAML::Node& n, const F& fail) { return ParseBool(n, fail); }
+};
+template <>
+struct Converter<std::string> {
+  template <typename F>
+  static std::string Convert(const YAML::Node& n, const F& fail) {
+    if (!n.IsScalar()) fail("expected a string");
+    return n.Scalar();
+  }
+};
+
+// A sequence, a single scalar (one element), or an !!opencv-matrix (its `data`).
+template <typename E>
+struct Converter<std::vector<E>> {
+  template <typename F>
+  static std::vector<E> Convert(const YAML::Node& n, const F& fail) {
+    YAML::Node seq = n;
+    if (n.IsMap()) {
+      if (!n["data"]) fail("expected a list (or an !!opencv-matrix with 'data')");
+      seq = n["data"];
+    }
+    std::vector<E> out;
+    if (seq.IsScalar()) {
+      out.push_back(Converter<E>::Convert(seq, fail));
+      return out;
+    }
+    if (!seq.IsSequence()) fail("expected a list");
+    size_t i = 0;
+    for (const auto& item : seq) {
+      const auto item_fail = [&](const std::string& m) { fail("element " + std::to_string(i) + ": " + m); };
+      out.push_back(Converter<E>::Convert(item, item_fail));
+      ++i;
+    }
+    if (n.IsMap() && n["rows"] && n["cols"]) {
+      const int64_t rows = ParseInt(n["rows"], 0, 1 << 20, fail);
+      const int64_t cols = ParseInt(n["cols"], 0, 1 << 20, fail);
+      if (static_cast<size_t>(rows * cols) != out.size()) {
+        fail("opencv-matrix has " + std::to_string(out.size()) + " values, expected rows*cols = " +
+             std::to_string(rows * cols));
+      }
+    }
+    return out;
+  }
+};
+
+}  // namespace
+
+ConfigReader::ConfigReader() {
+  auto impl = std::make_shared<Impl>();
+  impl->root = YAML::Node(YAML::NodeType::Map);
+  impl_ = std::move(impl);
+}
+
+ConfigReader::ConfigReader(std::shared_ptr<const Impl> impl, std::string prefix)
+    : impl_(std::move(impl)), prefix_(std::move(prefix)) {}
+
+ConfigReader ConfigReader::FromString(const std::string& text, const std::string& name) {
+  auto impl = std::make_shared<Impl>();
+  impl->path = name;
+  try {
+    impl->root = YAML::Load(Preprocess(text));
+  } catch (const YAML::Exception& e) {
+    throw InputError(name, e.mark.line >= 0 ? e.mark.line + 1 : 0, "malformed YAML: " + e.msg);
+  }
+  if (!impl->root || impl->root.IsNull()) {
+    impl->root = YAML::Node(YAML::NodeType::Map);
+  } else if (!impl->root.IsMap()) {
+    throw InputError(name, impl->root.Mark().line + 1, "top level must be a map of 'key: value' entries");
+  }
+  return ConfigReader(std::move(impl), "");
+}
+
+ConfigReader ConfigReader::FromFile(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(path, 0, "settings file not found");
+  if (std::filesystem::is_directory(path, ec)) throw InputError(path, 0, "is a directory, expected a settings file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, "cannot open settings file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return FromString(text.str(), path);
+}
+
+const std::string& ConfigReader::path() const { return impl_->path; }
+
+std::string ConfigReader::FullKey(const std::string& key) const {
+  return prefix_.empty() ? key : prefix_ + "." + key;
+}
+
+ConfigReader ConfigReader::Section(const std::string& name) const {
+  return ConfigReader(impl_, FullKey(name));
+}
+
+// The single entry for `full_key` (line 0 when absent); a key given twice is an error.
+namespace {
+struct ConfigLookup {
+  static Hit Find(const std::string& path, const YAML::Node& root, const std::string& full_key) {
+    std::vector<Hit> hits;
+    FindAll(root, full_key, &hits);
+    if (hits.size() > 1) {
+      throw InputError(path, hits[1].line,
+                       "key '" + full_key + "' is given more than once (also on line " +
+                           std::to_string(hits[0].line) + ")");
+    }
+    if (hits.empty()) return Hit{};
+    return hits[0];
+  }
+};
+}  // namespace
+
+bool ConfigReader::Has(const std::string& key) const {
+  const Hit h = ConfigLookup::Find(impl_->path, impl_->root, FullKey(key));
+  return h.line > 0 && !h.value.IsNull();
+}
+
+int ConfigReader::LineOf(const std::string& key) const {
+  return ConfigLookup::Find(impl_->path, impl_->root, FullKey(key)).line;
+}
+
+std::vector<std::string> ConfigReader::Keys() const {
+  std::vector<std::string> all;
+  CollectKeys(impl_->root, "", &all);
+  if (prefix_.empty()) return all;
+  std::vector<std::string> out;
+  for (const std::string& k : all) {
+    if (k.size() > prefix_.size() && k.compare(0, prefix_.size(), prefix_) == 0 && k[prefix_.size()] == '.') {
+      out.push_back(k);
+    }
+  }
+  return out;
+}
+
+void ConfigReader::Fail(const std::string& key, const std::string& message) const {
+  const std::string full = FullKey(key);
+  int line = 0;
+  try {
+    line = LineOf(key);
+  } catch (const InputError&) {
+  }
+  throw InputError(impl_->path, line, "key '" + full + "': " + message);
+}
+
+void ConfigReader::FailInvalidOptions(const InvalidOptions& e) const {
+  // DYGSLAM_CHECK_OPTION: "invalid option <name>: requires <condition>".
+  const std::string message = e.what();
+  const std::string head = "invalid option ";
+  std::string name;
+  if (message.rfind(head, 0) == 0) {
+    const size_t colon = message.find(": ", head.size());
+    name = message.substr(head.size(), colon == std::string::npos ? std::string::npos : colon - head.size());
+  }
+  int line = 0;
+  if (!name.empty()) {
+    for (const std::string& candidate : {name, FullKey(name)}) {
+      try {
+        line = ConfigLookup::Find(impl_->path, impl_->root, candidate).line;
+      } catch (const InputError&) {
+      }
+      if (line > 0) break;
+    }
+  }
+  if (name.empty()) throw InputError(impl_->path, line, message);
+  const size_t requires_at = message.find("requires ");
+  const std::string condition =
+      requires_at == std::string::npos ? message : message.substr(requires_at);
+  throw InputError(impl_->path, line, "key '" + name + "': invalid value (" + condition + ")");
+}
+
+template <typename T>
+bool ConfigReader::ReadIfPresent(const std::string& key, T* value) const {
+  const std::string full = FullKey(key);
+  const Hit h = ConfigLookup::Find(impl_->path, impl_->root, full);
+  if (h.line <= 0 || h.value.IsNull()) return false;
+  const auto fail = [&](const std::string& m) -> void {
+    throw InputError(impl_->path, h.line, "key '" + full + "': " + m);
+  };
+  *value = Converter<T>::Convert(h.value, fail);
+  return true;
+}
+
+template <typename T>
+T ConfigReader::Get(const std::string& key, const T& default_value) const {
+  T value = default_value;
+  ReadIfPresent(key, &value);
+  return value;
+}
+
+template <typename T>
+T ConfigReader::Require(const std::string& key) const {
+  T value{};
+  if (!ReadIfPresent(key, &value)) {
+    const int line = LineOf(key);
+    throw InputError(impl_->path, line,
+                     line > 0 ? "key '" + FullKey(key) + "' has no value (required)"
+                              : "missing required key '" + FullKey(key) + "'");
+  }
+  return value;
+}
+
+#define DYGSLAM_CONFIG_INSTANTIATE(T)                                            \
+  template bool ConfigReader::ReadIfPresent<T>(const std::string&, T*) const;   \
+  template T ConfigReader::Get<T>(const std::string&, const T&) const;          \
+  template T ConfigReader::Require<T>(const std::string&) const;
+
+DYGSLAM_CONFIG_INSTANTIATE(double)
+DYGSLAM_CONFIG_INSTANTIATE(float)
+DYGSLAM_CONFIG_INSTANTIATE(int)
+DYGSLAM_CONFIG_INSTANTIATE(int64_t)
+DYGSLAM_CONFIG_INSTANTIATE(bool)
+DYGSLAM_CONFIG_INSTANTIATE(std::string)
+DYGSLAM_CONFIG_INSTANTIATE(std::vector<std::string>)
+DYGSLAM_CONFIG_INSTANTIATE(std::vector<double>)
+DYGSLAM_CONFIG_INSTANTIATE(std::vector<int>)
+
+}  // namespace dygslam

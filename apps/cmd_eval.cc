@@ -1,0 +1,213 @@
+// dygslam eval GROUNDTRUTH ESTIMATE [--json] [--plot FILE.png]: ATE / RPE with the TUM benchmark
+// conventions (core/eval/trajectory_eval.h).
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "apps/command.h"
+#include "core/base/error.h"
+#include "core/eval/trajectory_eval.h"
+#include "core/io/file_util.h"
+#include "core/io/trajectory_io.h"
+
+namespace dygslam::cli {
+namespace {
+namespace fs = std::filesystem;
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof(buf), "\\u%04x", c);
+          out += buf;
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out + "\"";
+}
+
+std::string JsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[40];
+  std::snprintf(buf, sizeof(buf), "%.12g", v);
+  return buf;
+}
+
+std::string ShellQuote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) {
+    if (c == '\'') {
+      out += "'\\''";
+    } else {
+      out += c;
+    }
+  }
+  return out + "'";
+}
+
+double ParseSeconds(const ArgParser& p, const std::string& option) {
+  const std::string text = p.Get(option);
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(v)) {
+    throw InvalidOptions("--" + option + ": expected seconds, got '" + text + "'");
+  }
+  return v;
+}
+
+// Writes the per-pair data and runs scripts/plot_trajectory.py. Returns true when the PNG was
+// written; prints why not otherwise.
+bool Plot(const std::string& png, const std::string& title, const AteResult& ate) {
+  const fs::path out_dir = fs::path(png).parent_path().empty() ? fs::path(".") : fs::path(png).parent_path();
+  std::error_code ec;
+  if (!fs::is_directory(out_dir, ec)) {
+    throw InputError(png, 0, "cannot write plot: directory " + out_dir.string() + " does not exist");
+  }
+  const std::string script = ScriptsDir() + "/plot_trajectory.py";
+  if (!fs::is_regular_file(script, ec)) {
+    std::cerr << "dygslam eval: plot skipped: " << script << " not found (set DYGSLAM_SCRIPTS_DIR)\n";
+    return false;
+  }
+  const fs::path data = fs::temp_directory_path() / ("dygslam_plot_" + std::to_string(::getpid()) + ".txt");
+  std::ostringstream text;
+  text << "# t gt_x gt_y gt_z est_x est_y est_z error (aligned estimate, metres)\n";
+  char line[256];
+  for (size_t i = 0; i < ate.num_pairs; ++i) {
+    const auto& g = ate.gt_positions[i];
+    const auto& e = ate.aligned_positions[i];
+    std::snprintf(line, sizeof(line), "%s %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n",
+                  ate.gt_stamps[i].ToString().c_str(), g.x(), g.y(), g.z(), e.x(), e.y(), e.z(),
+                  ate.errors[i]);
+    text << line;
+  }
+  WriteFileAtomically(data.string(), text.str());
+  const std::string cmd = "python3 " + ShellQuote(script) + " --data " + ShellQuote(data.string()) +
+                          " --out " + ShellQuote(png) + " --title " + ShellQuote(title);
+  const int status = std::system(cmd.c_str());
+  fs::remove(data, ec);
+  const int code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+  if (code == 0) return true;
+  if (code == 3) {
+    std::cerr << "dygslam eval: plot skipped: python3-matplotlib is not installed "
+                 "(apt-get install python3-matplotlib)\n";
+  } else if (code == 127) {
+    std::cerr << "dygslam eval: plot skipped: python3 not found\n";
+  } else {
+    std::cerr << "dygslam eval: plot failed (" << script << " exit code " << code << ")\n";
+  }
+  return false;
+}
+
+int RunEval(const std::vector<std::string>& args) {
+  ArgParser p("eval", "GROUNDTRUTH ESTIMATE [--json] [--plot FILE.png]",
+              "Absolute trajectory error (ATE: timestamp association within 0.02 s, rigid SE(3)\n"
+              "alignment of the estimate onto the ground truth, no scale) and relative pose error\n"
+              "(RPE over 1 s), with the conventions of the TUM RGB-D benchmark tools. Both files are\n"
+              "TUM trajectories: 't tx ty tz qx qy qz qw' (world_from_cam).");
+  p.AddPositional("GROUNDTRUTH", "ground-truth trajectory (e.g. DATASET/groundtruth.txt)");
+  p.AddPositional("ESTIMATE", "estimated trajectory (e.g. out/trajectory.txt)");
+  p.AddFlag("json", "print one JSON object instead of text");
+  p.AddOption("plot", "FILE.png", "draw ground truth vs aligned estimate (top view) and ATE over time");
+  p.AddOption("max-diff", "SECONDS", "maximum timestamp difference for association", "0.02");
+  p.AddOption("offset", "SECONDS", "time offset added to the estimate stamps", "0");
+  p.AddOption("delta", "SECONDS", "RPE interval", "1");
+  p.AddOption("save-aligned", "FILE", "write the aligned estimate as a TUM trajectory");
+  if (!p.Parse(args)) return p.exit_code();
+
+  const std::string gt_path = p.Positional("GROUNDTRUTH");
+  const std::string est_path = p.Positional("ESTIMATE");
+  const std::vector<StampedPose> gt = ReadTumTrajectory(gt_path);
+  const std::vector<StampedPose> est = ReadTumTrajectory(est_path);
+  if (est.empty()) throw InputError(est_path, 0, "estimate has no poses");
+  if (gt.empty()) throw InputError(gt_path, 0, "ground truth has no poses");
+
+  AteOptions ate_options;
+  ate_options.max_time_difference = ParseSeconds(p, "max-diff");
+  ate_options.offset = ParseSeconds(p, "offset");
+  RpeOptions rpe_options;
+  rpe_options.delta = ParseSeconds(p, "delta");
+  rpe_options.offset = ate_options.offset;
+  const AteResult ate = ComputeAte(gt, est, ate_options);
+  const RpeResult rpe = ComputeRpe(gt, est, rpe_options);
+
+  if (p.Has("save-aligned")) WriteTumTrajectory(p.Get("save-aligned"), ate.aligned_estimate);
+  bool plotted = false;
+  if (p.Has("plot")) {
+    plotted = Plot(p.Get("plot"), fs::path(est_path).filename().string() + " vs " +
+                                      fs::path(gt_path).filename().string(),
+                   ate);
+  }
+
+  const double coverage = static_cast<double>(ate.num_pairs) / static_cast<double>(gt.size());
+  if (p.Flag("json")) {
+    const bool has_rpe = rpe.num_pairs > 0;
+    const auto rpe_value = [&](double v) { return has_rpe ? JsonNumber(v) : std::string("null"); };
+    const Eigen::Quaterniond& q = ate.gt_from_est.rotation;
+    const Eigen::Vector3d& t = ate.gt_from_est.translation;
+    std::ostringstream j;
+    j << "{\"groundtruth\": " << JsonString(gt_path) << ", \"estimate\": " << JsonString(est_path)
+      << ", \"gt_poses\": " << gt.size() << ", \"est_poses\": " << est.size()
+      << ", \"pairs\": " << ate.num_pairs << ", \"gt_coverage\": " << JsonNumber(coverage)
+      << ", \"ate_rmse\": " << JsonNumber(ate.error.rmse) << ", \"ate_mean\": " << JsonNumber(ate.error.mean)
+      << ", \"ate_median\": " << JsonNumber(ate.error.median) << ", \"ate_sd\": " << JsonNumber(ate.error.sd)
+      << ", \"ate_min\": " << JsonNumber(ate.error.min) << ", \"ate_max\": " << JsonNumber(ate.error.max)
+      << ", \"rpe_delta\": " << JsonNumber(rpe.delta) << ", \"rpe_pairs\": " << rpe.num_pairs
+      << ", \"rpe_trans_rmse\": " << rpe_value(rpe.trans_rmse)
+      << ", \"rpe_trans_mean\": " << rpe_value(rpe.trans_mean)
+      << ", \"rpe_trans_median\": " << rpe_value(rpe.trans_median)
+      << ", \"rpe_rot_rmse\": " << rpe_value(rpe.rot_rmse)
+      << ", \"rpe_rot_mean\": " << rpe_value(rpe.rot_mean)
+      << ", \"rpe_rot_median\": " << rpe_value(rpe.rot_median)
+      << ", \"gt_from_est\": {\"tx\": " << JsonNumber(t.x()) << ", \"ty\": " << JsonNumber(t.y())
+      << ", \"tz\": " << JsonNumber(t.z()) << ", \"qx\": " << JsonNumber(q.x())
+      << ", \"qy\": " << JsonNumber(q.y()) << ", \"qz\": " << JsonNumber(q.z())
+      << ", \"qw\": " << JsonNumber(q.w()) << "}"
+      << ", \"plot\": " << (plotted ? JsonString(p.Get("plot")) : std::string("null")) << "}\n";
+    std::cout << j.str();
+    return 0;
+  }
+  char buf[512];
+  std::cout << "ground truth: " << gt_path << " (" << gt.size() << " poses)\n"
+            << "estimate:     " << est_path << " (" << est.size() << " poses)\n";
+  std::snprintf(buf, sizeof(buf),
+                "ATE  pairs %zu (%.1f%% of ground truth), rigid SE(3) alignment, metres\n"
+                "     rmse %.6f  mean %.6f  median %.6f  sd %.6f  min %.6f  max %.6f\n",
+                ate.num_pairs, 100.0 * coverage, ate.error.rmse, ate.error.mean, ate.error.median,
+                ate.error.sd, ate.error.min, ate.error.max);
+  std::cout << buf;
+  if (rpe.num_pairs > 0) {
+    std::snprintf(buf, sizeof(buf),
+                  "RPE  pairs %zu, delta %g s\n"
+                  "     translation (m per %g s)   rmse %.6f  mean %.6f  median %.6f\n"
+                  "     rotation (deg per %g s)    rmse %.6f  mean %.6f  median %.6f\n",
+                  rpe.num_pairs, rpe.delta, rpe.delta, rpe.trans_rmse, rpe.trans_mean,
+                  rpe.trans_median, rpe.delta, rpe.rot_rmse, rpe.rot_mean, rpe.rot_median);
+    std::cout << buf;
+  } else {
+    std::cout << "RPE  n/a (estimate shorter than the " << rpe.delta << " s interval)\n";
+  }
+  if (plotted) std::cout << "plot: " << p.Get("plot") << "\n";
+  return 0;
+}
+
+const CommandRegistrar kRegistrar({"eval", "evaluate a trajectory against ground truth (ATE/RPE)", RunEval});
+
+}  // namespace
+}  // namespace dygslam::cli

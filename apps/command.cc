@@ -1,0 +1,184 @@
+#include "apps/command.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include <unistd.h>
+
+namespace dygslam::cli {
+namespace {
+std::map<std::string, Command>& MutableCommands() {
+  static std::map<std::string, Command> commands;
+  return commands;
+}
+}  // namespace
+
+const std::map<std::string, Command>& Commands() { return MutableCommands(); }
+
+void RegisterCommand(Command command) {
+  const std::string name = command.name;
+  MutableCommands()[name] = std::move(command);
+}
+
+const std::vector<std::string>& PlannedCommands() {
+  static const std::vector<std::string> names = {"run", "eval", "synth", "map", "bench", "version", "help"};
+  return names;
+}
+
+std::string ScriptsDir() {
+  namespace fs = std::filesystem;
+  if (const char* env = std::getenv("DYGSLAM_SCRIPTS_DIR"); env != nullptr && *env != '\0') return env;
+  std::error_code ec;
+#ifdef DYGSLAM_SOURCE_SCRIPTS_DIR
+  if (fs::is_directory(DYGSLAM_SOURCE_SCRIPTS_DIR, ec)) return DYGSLAM_SOURCE_SCRIPTS_DIR;
+#endif
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const fs::path installed = exe.parent_path() / "../share/dygslam/scripts";
+    if (fs::is_directory(installed, ec)) return fs::canonical(installed, ec).string();
+  }
+  return "scripts";
+}
+
+ArgParser::ArgParser(std::string command, std::string usage, std::string description)
+    : command_(std::move(command)), usage_(std::move(usage)), description_(std::move(description)) {}
+
+void ArgParser::AddPositional(const std::string& name, const std::string& help) {
+  positionals_.insert(positionals_.begin() + num_required_, {name, help});
+  ++num_required_;
+}
+
+void ArgParser::AddOptionalPositional(const std::string& name, const std::string& help) {
+  positionals_.emplace_back(name, help);
+}
+
+void ArgParser::AddOption(const std::string& name, const std::string& value_name,
+                          const std::string& help, const std::string& default_value) {
+  options_.push_back({name, value_name, help, default_value, false});
+}
+
+void ArgParser::AddFlag(const std::string& name, const std::string& help) {
+  options_.push_back({name, "", help, "", true});
+}
+
+std::string ArgParser::Usage() const {
+  std::ostringstream out;
+  out << "usage: dygslam " << command_ << " " << usage_ << "\n";
+  if (!description_.empty()) out << "\n" << description_ << "\n";
+  if (!positionals_.empty()) {
+    out << "\narguments:\n";
+    for (const auto& [name, help] : positionals_) {
+      std::string left = "  " + name;
+      left.resize(std::max<size_t>(left.size() + 2, 26), ' ');
+      out << left << help << "\n";
+    }
+  }
+  out << "\noptions:\n";
+  for (const Spec& s : options_) {
+    std::string left = "  --" + s.name + (s.is_flag ? "" : " " + s.value_name);
+    left.resize(std::max<size_t>(left.size() + 2, 26), ' ');
+    out << left << s.help;
+    if (!s.default_value.empty()) out << " (default: " << s.default_value << ")";
+    out << "\n";
+  }
+  out << "  --help                  show this help\n";
+  return out.str();
+}
+
+int ArgParser::UsageError(const std::string& message) const {
+  std::cerr << "dygslam " << command_ << ": " << message << "\n"
+            << "usage: dygslam " << command_ << " " << usage_ << "\n"
+            << "(dygslam " << command_ << " --help for details)\n";
+  return 2;
+}
+
+bool ArgParser::Parse(const std::vector<std::string>& args) {
+  positional_values_.clear();
+  option_values_.clear();
+  size_t next_positional = 0;
+  bool only_positionals = false;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (!only_positionals && (a == "--help" || a == "-h")) {
+      std::cout << Usage();
+      exit_code_ = 0;
+      return false;
+    }
+    if (!only_positionals && a == "--") {
+      only_positionals = true;
+      continue;
+    }
+    if (!only_positionals && a.size() > 2 && a.compare(0, 2, "--") == 0) {
+      std::string name = a.substr(2), value;
+      bool has_value = false;
+      if (const size_t eq = name.find('='); eq != std::string::npos) {
+        value = name.substr(eq + 1);
+        name = name.substr(0, eq);
+        has_value = true;
+      }
+      const Spec* spec = nullptr;
+      for (const Spec& s : options_) {
+        if (s.name == name) spec = &s;
+      }
+      if (spec == nullptr) {
+        exit_code_ = UsageError("unknown option --" + name);
+        return false;
+      }
+      if (spec->is_flag) {
+        if (has_value) {
+          exit_code_ = UsageError("option --" + name + " takes no value");
+          return false;
+        }
+        option_values_[name] = "1";
+        continue;
+      }
+      if (!has_value) {
+        if (i + 1 >= args.size()) {
+          exit_code_ = UsageError("option --" + name + " needs a value (" + spec->value_name + ")");
+          return false;
+        }
+        value = args[++i];
+      }
+      option_values_[name] = value;
+      continue;
+    }
+    if (next_positional >= positionals_.size()) {
+      exit_code_ = UsageError("unexpected argument '" + a + "'");
+      return false;
+    }
+    positional_values_[positionals_[next_positional++].first] = a;
+  }
+  if (next_positional < num_required_) {
+    exit_code_ = UsageError("missing argument " + positionals_[next_positional].first);
+    return false;
+  }
+  exit_code_ = 0;
+  return true;
+}
+
+std::string ArgParser::Positional(const std::string& name) const {
+  auto it = positional_values_.find(name);
+  return it == positional_values_.end() ? "" : it->second;
+}
+
+bool ArgParser::HasPositional(const std::string& name) const {
+  return positional_values_.count(name) > 0;
+}
+
+bool ArgParser::Has(const std::string& option) const { return option_values_.count(option) > 0; }
+
+std::string ArgParser::Get(const std::string& option) const {
+  auto it = option_values_.find(option);
+  if (it != option_values_.end()) return it->second;
+  for (const Spec& s : options_) {
+    if (s.name == option) return s.default_value;
+  }
+  return "";
+}
+
+bool ArgParser::Flag(const std::string& flag) const { return Has(flag); }
+
+}  // namespace dygslam::cli

@@ -1,0 +1,94 @@
+// The `dygslam` command line: one executable, one file per subcommand.
+//
+// A subcommand lives in apps/cmd_<name>.cc and registers itself:
+//
+//   namespace dygslam::cli {
+//   namespace {
+//   int RunEval(const std::vector<std::string>& args) {
+//     ArgParser p("eval", "GROUNDTRUTH ESTIMATE [--json] [--plot FILE.png]", "Prints ATE / RPE.");
+//     p.AddFlag("json", "print one JSON object");
+//     p.AddOption("plot", "FILE.png", "draw trajectories and ATE over time");
+//     if (!p.Parse(args)) return p.exit_code();   // --help (0) or a usage error (2)
+//     ...
+//     return 0;
+//   }
+//   const CommandRegistrar kRegistrar({"eval", "evaluate a trajectory (ATE/RPE)", RunEval});
+//   }  // namespace
+//   }  // namespace dygslam::cli
+//
+// apps/CMakeLists.txt globs cmd_*.cc into the executable. The dispatcher (dygslam.cc) catches
+// InputError / InvalidOptions (exit 1, message names the file/line/key) and knows the planned
+// commands, so a missing one says "not available yet in this build" (exit 2).
+// Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error / unavailable command.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace dygslam::cli {
+
+struct Command {
+  std::string name;
+  std::string summary;  // one line for `dygslam help`
+  std::function<int(const std::vector<std::string>& args)> run;  // args after the command name
+};
+
+// Registered commands, by name.
+const std::map<std::string, Command>& Commands();
+void RegisterCommand(Command command);
+
+struct CommandRegistrar {
+  explicit CommandRegistrar(Command command) { RegisterCommand(std::move(command)); }
+};
+
+// Minimal option parser: positionals, `--name value`, `--name=value`, boolean `--flag`, `--help`.
+class ArgParser {
+ public:
+  // usage: the part after "dygslam <command> " (e.g. "GROUNDTRUTH ESTIMATE [--json]").
+  ArgParser(std::string command, std::string usage, std::string description);
+
+  void AddPositional(const std::string& name, const std::string& help);  // required, in order
+  void AddOptionalPositional(const std::string& name, const std::string& help);
+  void AddOption(const std::string& name, const std::string& value_name, const std::string& help,
+                 const std::string& default_value = "");
+  void AddFlag(const std::string& name, const std::string& help);
+
+  // False on --help (usage printed to stdout, exit_code() 0) or on a usage error (message and
+  // usage printed to stderr, exit_code() 2).
+  bool Parse(const std::vector<std::string>& args);
+  int exit_code() const { return exit_code_; }
+
+  std::string Positional(const std::string& name) const;  // "" if an optional one is absent
+  bool HasPositional(const std::string& name) const;
+  bool Has(const std::string& option) const;  // option given (or flag set)
+  std::string Get(const std::string& option) const;  // value or default
+  bool Flag(const std::string& flag) const;
+  std::string Usage() const;
+  // Prints "dygslam <command>: <message>" + usage hint to stderr; returns 2.
+  int UsageError(const std::string& message) const;
+
+ private:
+  struct Spec {
+    std::string name, value_name, help, default_value;
+    bool is_flag = false;
+  };
+  std::string command_, usage_, description_;
+  std::vector<std::pair<std::string, std::string>> positionals_;  // name, help
+  size_t num_required_ = 0;
+  std::vector<Spec> options_;
+  std::map<std::string, std::string> positional_values_;
+  std::map<std::string, std::string> option_values_;
+  int exit_code_ = 0;
+};
+
+// The names the dispatcher knows (implemented or planned), in help order.
+const std::vector<std::string>& PlannedCommands();
+
+// Directory of the helper scripts (scripts/): $DYGSLAM_SCRIPTS_DIR, else the source tree's
+// scripts/ baked in at build time, else ../share/dygslam/scripts next to the executable.
+std::string ScriptsDir();
+
+}  // namespace dygslam::cli

@@ -1,0 +1,101 @@
+// dygslam: dispatcher of the command line (subcommands register themselves, see command.h).
+#include <algorithm>
+#include <exception>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "apps/command.h"
+#include "core/base/error.h"
+
+#ifndef DYGSLAM_VERSION
+#define DYGSLAM_VERSION "unknown"
+#endif
+
+namespace dygslam::cli {
+namespace {
+
+const char* kPlannedSummaries[][2] = {
+    {"run", "run SLAM on a TUM/Bonn dataset folder"},
+    {"eval", "evaluate a trajectory against ground truth (ATE/RPE)"},
+    {"synth", "generate a synthetic dynamic RGB-D sequence"},
+    {"map", "build a static map from keyframes"},
+    {"bench", "time the pipeline stages"},
+    {"version", "print the version"},
+    {"help", "list the commands"},
+};
+
+void PrintHelp(std::ostream& out) {
+  out << "dygslam " << DYGSLAM_VERSION
+      << " - RGB-D SLAM for dynamic scenes\n\n"
+         "usage: dygslam <command> [arguments] [--help]\n\ncommands:\n";
+  for (const auto& entry : kPlannedSummaries) {
+    const std::string name = entry[0];
+    std::string summary = entry[1];
+    if (auto it = Commands().find(name); it != Commands().end()) summary = it->second.summary;
+    const bool available = name == "help" || name == "version" || Commands().count(name) > 0;
+    std::string left = "  " + name;
+    left.resize(12, ' ');
+    out << left << summary << (available ? "" : "  (not available in this build)") << "\n";
+  }
+  for (const auto& [name, command] : Commands()) {
+    const auto& planned = PlannedCommands();
+    if (std::find(planned.begin(), planned.end(), name) != planned.end()) continue;
+    std::string left = "  " + name;
+    left.resize(12, ' ');
+    out << left << command.summary << "\n";
+  }
+  out << "\nRun 'dygslam <command> --help' for the options of a command.\n"
+         "  dygslam run DATASET_DIR [--config FILE] [--filter none|boxes|geometry|full]\n"
+         "              [--frames FIRST:LAST] [--out DIR] [--deterministic]\n"
+         "  dygslam eval GROUNDTRUTH ESTIMATE [--json] [--plot FILE.png]\n";
+}
+
+int Dispatch(const std::vector<std::string>& argv) {
+  if (argv.empty()) {
+    PrintHelp(std::cerr);
+    return 2;
+  }
+  const std::string& name = argv[0];
+  const std::vector<std::string> args(argv.begin() + 1, argv.end());
+  if (name == "help" || name == "--help" || name == "-h") {
+    if (!args.empty() && Commands().count(args[0])) {
+      return Commands().at(args[0]).run({"--help"});
+    }
+    PrintHelp(std::cout);
+    return 0;
+  }
+  if (name == "version" || name == "--version") {
+    std::cout << "dygslam " << DYGSLAM_VERSION << "\n";
+    return 0;
+  }
+  auto it = Commands().find(name);
+  if (it == Commands().end()) {
+    const auto& planned = PlannedCommands();
+    if (std::find(planned.begin(), planned.end(), name) != planned.end()) {
+      std::cerr << "dygslam " << name << ": not available yet in this build\n";
+      return 2;
+    }
+    std::cerr << "dygslam: unknown command '" << name << "' (see 'dygslam help')\n";
+    return 2;
+  }
+  try {
+    return it->second.run(args);
+  } catch (const InputError& e) {
+    std::cerr << "dygslam " << name << ": error: " << e.what() << "\n";
+    return 1;
+  } catch (const InvalidOptions& e) {
+    std::cerr << "dygslam " << name << ": error: " << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "dygslam " << name << ": internal error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace
+}  // namespace dygslam::cli
+
+int main(int argc, char** argv) {
+  return dygslam::cli::Dispatch(std::vector<std::string>(argv + 1, argv + argc));
+}

@@ -1,0 +1,203 @@
+// Occupancy map (OctoMap) of the static scene, built from the keyframes the SLAM emits.
+//
+//   OctoMapBuilder builder(camera, options);
+//   builder.Insert(keyframe);                 // static part of the keyframe, free space ray-cast
+//   builder.UpdatePoses({{id, world_from_cam}, ...});   // after loop closure / BA
+//   builder.Remove(id);                       // culled keyframe
+//   builder.WriteBinary("map.bt");  builder.WriteFull("map.ot");
+//
+// What goes in: every valid depth pixel (min_range <= depth, finite) that is not dynamic, i.e. not
+// inside the dilated KeyframeData::dynamic_mask and not within dynamic_keypoint_radius_px of a
+// keypoint flagged in KeyframeData::keypoint_dynamic. Pixels are sampled with pixel_stride,
+// back-projected with the pinhole model (depth is the z coordinate; the depth image is assumed
+// registered and undistorted, as in TUM/Bonn), and reduced by a voxel grid (centroid per cell) in
+// the camera frame. The cloud is transformed by world_from_cam and inserted with
+// octomap::OcTree::insertPointCloud from the camera centre, so the cells along each beam are
+// updated as free and the end cell as occupied; beams longer than max_range clear space up to
+// max_range only.
+//
+// Pose corrections: the builder keeps each keyframe's downsampled static cloud (camera frame,
+// a few thousand points) and its pose. The OcTree is a cache derived from them. When
+// UpdatePoses() moves a keyframe by more than the rebuild threshold (the displacement of a point
+// at max_range: |dt| + angle * max_range > rebuild_displacement, default half a voxel), or a
+// keyframe is removed, the tree is marked stale and rebuilt from scratch from all stored
+// keyframes (in their original insertion order) the next time it is read. Why a full rebuild and
+// not "subtract the old scan, add the new one": OctoMap's log-odds updates are clamped
+// (clamping_min/max) and each scan gives occupied cells priority over free ones, so a scan's
+// contribution cannot be subtracted exactly; a rebuild is exact, deterministic and, with
+// downsampled clouds, cheap (a few ms per keyframe). Corrections below the threshold only update
+// the stored pose (the cells would move by less than half a voxel) and are applied with the
+// next rebuild. Several corrections in a row (loop closure + culling) cost one rebuild, because
+// the rebuild is deferred until the map is read (tree(), Stats(), Write*()) or Sync() is called.
+//
+// Not thread-safe: one owner thread calls all methods.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "core/base/camera.h"
+#include "core/base/rigid3.h"
+#include "core/base/types.h"
+
+namespace octomap {
+class OcTree;
+}
+
+namespace dygslam {
+
+struct OctoMapOptions {
+  // Leaf size in metres.
+  double resolution = 0.05;
+  // Depth beyond max_range: free space is cleared up to max_range, no occupied end cell.
+  // Kinect-class depth noise grows ~quadratically; 4 m keeps it below ~4 cm.
+  double max_range = 4.0;
+  // Depth below this is no measurement (Kinect v1/v2 and Xtion cannot see closer than ~0.4 m).
+  double min_range = 0.3;
+  // OctoMap sensor model (its defaults).
+  double prob_hit = 0.7;
+  double prob_miss = 0.4;
+  double clamping_min = 0.12;
+  double clamping_max = 0.97;
+  double occupancy_threshold = 0.5;
+  // Use every pixel_stride-th pixel in u and v (1 = all).
+  int pixel_stride = 2;
+  // Voxel-grid filter (centroid per cell, camera frame) before insertion, in metres. A value
+  // <= 0 means "same as resolution"; to disable it set use_voxel_filter = false.
+  double voxel_filter_size = 0.0;
+  bool use_voxel_filter = true;
+  // Leave out dynamic pixels (dynamic_mask and dynamic keypoints). false = the 'no filter'
+  // baseline: every valid depth pixel goes in.
+  bool use_dynamic_mask = true;
+  // Grow dynamic_mask by this many pixels (elliptic kernel) before use: mask edges and the depth
+  // edges of people do not line up exactly.
+  int dynamic_mask_dilation_px = 5;
+  // Disk around each keypoint flagged dynamic that is left out, in pixels (0 = ignore flags).
+  int dynamic_keypoint_radius_px = 8;
+  // OctoMap: skip the inner-node update per scan and do it once before the tree is read.
+  bool lazy_eval = true;
+  // OctoMap: discretise the scan into cells before ray casting (fewer rays, coarser).
+  bool discretize = false;
+  // Rebuild when a pose correction moves a point at max_range by more than this (metres).
+  // <= 0 means half a voxel.
+  double rebuild_displacement = 0.0;
+
+  double EffectiveVoxelFilterSize() const {
+    return voxel_filter_size > 0 ? voxel_filter_size : resolution;
+  }
+  double EffectiveRebuildDisplacement() const {
+    return rebuild_displacement > 0 ? rebuild_displacement : 0.5 * resolution;
+  }
+  void Check() const;
+};
+
+struct OctoMapStats {
+  size_t num_keyframes = 0;
+  size_t num_stored_points = 0;     // static points kept for rebuilds (all keyframes)
+  size_t num_leaves = 0;            // leaves of the (pruned) tree
+  size_t num_occupied_leaves = 0;
+  size_t num_free_leaves = 0;
+  // The same in cells of `resolution` (a pruned leaf of size 2^k * res counts 8^k).
+  uint64_t num_occupied_voxels = 0;
+  uint64_t num_free_voxels = 0;
+  size_t memory_bytes = 0;          // octomap::OcTree::memoryUsage()
+  size_t num_insertions = 0;        // octree insertions (incremental + during rebuilds)
+  size_t num_rebuilds = 0;
+  double last_insert_ms = 0;        // last incremental Insert() (filtering + ray casting)
+  double median_insert_ms = 0;      // over incremental Insert() calls
+  double last_rebuild_ms = 0;
+};
+
+// Result of preparing one keyframe (exposed for tests and tools).
+struct StaticCloud {
+  std::vector<Eigen::Vector3f> points_cam;  // downsampled, camera frame
+  size_t num_valid_pixels = 0;              // sampled pixels with usable depth
+  size_t num_dynamic_pixels = 0;            // of those, left out as dynamic
+};
+
+class OctoMapBuilder {
+ public:
+  // Throws InvalidOptions if camera or options fail Check().
+  OctoMapBuilder(const PinholeCamera& camera, const OctoMapOptions& options = {});
+  ~OctoMapBuilder();
+  OctoMapBuilder(const OctoMapBuilder&) = delete;
+  OctoMapBuilder& operator=(const OctoMapBuilder&) = delete;
+
+  // Inserts the static part of a keyframe. If keyframe.pose_update_only, or the id is already
+  // known and depth is empty, only its pose is updated (as UpdatePoses). If the id is known and
+  // depth is given, the keyframe is replaced. Throws InputError on depth/mask of the wrong type
+  // or size, or a non-finite pose (the message names the keyframe id and the field).
+  void Insert(const KeyframeData& keyframe);
+
+  // Sets the poses of known keyframes (unknown ids are ignored; returns how many were known).
+  // Schedules a full rebuild if any keyframe moved by more than the rebuild threshold.
+  size_t UpdatePoses(const std::map<int64_t, Rigid3d>& world_from_cam);
+
+  // Removes a keyframe's contribution (schedules a rebuild). Returns false if unknown.
+  bool Remove(int64_t keyframe_id);
+
+  // Brings the tree up to date (rebuild if scheduled, inner nodes if lazy).
+  void Sync();
+  bool rebuild_pending() const { return rebuild_pending_; }
+
+  // The map, synchronised first.
+  const octomap::OcTree& tree();
+  OctoMapStats Stats();
+
+  bool Contains(int64_t keyframe_id) const { return keyframes_.count(keyframe_id) > 0; }
+  std::vector<int64_t> KeyframeIds() const;
+  // Stored pose of a keyframe; throws std::out_of_range if unknown.
+  const Rigid3d& Pose(int64_t keyframe_id) const;
+
+  // Atomic writes (temporary file in the same directory + rename). Throws InputError naming the
+  // file on failure. .bt = max-likelihood binary, .ot = full probabilities.
+  void WriteBinary(const std::string& path);
+  void WriteFull(const std::string& path);
+
+  const OctoMapOptions& options() const { return options_; }
+  const PinholeCamera& camera() const { return camera_; }
+
+  // Filtering + back-projection + voxel grid of one keyframe, without touching the map.
+  StaticCloud ExtractStaticCloud(const KeyframeData& keyframe) const;
+
+ private:
+  struct StoredKeyframe {
+    uint64_t sequence = 0;  // insertion order
+    Rigid3d world_from_cam;
+    Rigid3d inserted_world_from_cam;  // pose the tree currently reflects
+    std::vector<Eigen::Vector3f> points_cam;
+  };
+
+  void InsertIntoTree(const StoredKeyframe& keyframe);
+  void Rebuild();
+  void ResetTree();
+  bool NeedsRebuild(const Rigid3d& a, const Rigid3d& b) const;
+
+  PinholeCamera camera_;
+  OctoMapOptions options_;
+  std::unique_ptr<octomap::OcTree> tree_;
+  std::map<int64_t, StoredKeyframe> keyframes_;
+  uint64_t next_sequence_ = 0;
+  bool rebuild_pending_ = false;
+  bool inner_dirty_ = false;
+  std::vector<double> insert_ms_;
+  double last_insert_ms_ = 0;
+  double last_rebuild_ms_ = 0;
+  size_t num_insertions_ = 0;
+  size_t num_rebuilds_ = 0;
+};
+
+// Atomic writers / reader for any OcTree (same formats as the builder's).
+void WriteOctoMapBinary(const octomap::OcTree& tree, const std::string& path);
+void WriteOctoMapFull(const octomap::OcTree& tree, const std::string& path);
+// Reads .bt (binary) or .ot (full); the format is taken from the file header, not the suffix.
+// Throws InputError naming the file if it is missing, unreadable or not an OcTree.
+std::unique_ptr<octomap::OcTree> ReadOctoMap(const std::string& path);
+
+}  // namespace dygslam

@@ -52,6 +52,10 @@ void DynamicFilterOptions::Check() const {
   DYGSLAM_CHECK_OPTION(min_fundamental_matches >= 8, "DynamicFilter.min_fundamental_matches");
   DYGSLAM_CHECK_OPTION(homography_inlier_ratio > 0 && homography_inlier_ratio <= 2,
                        "DynamicFilter.homography_inlier_ratio");
+  DYGSLAM_CHECK_OPTION(homography_threshold_scale > 0 && homography_threshold_scale <= 10,
+                       "DynamicFilter.homography_threshold_scale");
+  DYGSLAM_CHECK_OPTION(homography_dominant_fraction > 0 && homography_dominant_fraction <= 1,
+                       "DynamicFilter.homography_dominant_fraction");
 }
 
 std::vector<uint8_t> FilterResult::DynamicFlags() const {
@@ -308,7 +312,9 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
       }
       if (o.use_homography_for_degenerate) {
         // Degenerate motion check: does a homography explain the matches as well as F?
-        const double h_thr = 2.0 * o.fundamental_threshold;  // transfer error is 2-D
+        // The transfer error is 2-D, the epipolar distance 1-D: for the same Gaussian noise the
+        // same inlier probability (95 %) needs a threshold 2.45 / 1.96 = 1.25 times larger.
+        const double h_thr = o.homography_threshold_scale * o.fundamental_threshold;
         cv::Mat h;
         try {
           h = cv::findHomography(*f_prev, *f_cur, cv::USAC_ACCURATE, h_thr, cv::noArray(),

@@ -96,6 +96,8 @@ struct DynamicFilterOptions {
   int min_fundamental_matches = 15;
   bool use_homography_for_degenerate = true;
   double homography_inlier_ratio = 0.95;
+  // Inlier threshold of H (transfer error, px) = this x fundamental_threshold.
+  double homography_threshold_scale = 1.25;
   // When F is fitted on all matches (geometry mode, or too few static matches), H is used when
   // its inliers are at least this fraction of the matches.
   double homography_dominant_fraction = 0.6;
@@ -133,7 +135,7 @@ struct FilterResult {
   int num_matched_dynamic_region = 0;
   int num_static_matches_used_for_f = 0;
   int num_f_inliers = 0;          // under eq. 4 with fundamental_threshold
-  int num_h_inliers = 0;          // homography transfer error <= 2 x fundamental_threshold
+  int num_h_inliers = 0;  // transfer error <= homography_threshold_scale x fundamental_threshold
   // A motion model (F, or H for degenerate motion) was estimated; false: prediction only.
   bool motion_model_ok = false;
   bool used_homography = false;   // degenerate motion: transfer distance instead of eq. 4

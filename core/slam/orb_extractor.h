@@ -2,6 +2,8 @@
 // grid cell, quadtree distribution per level, intensity-centroid orientation, steered BRIEF.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -23,6 +25,55 @@ struct OrbExtractorOptions {
     DYGSLAM_CHECK_OPTION(ini_th_fast > 0 && ini_th_fast < 255, "ORBextractor.iniThFAST");
     DYGSLAM_CHECK_OPTION(min_th_fast > 0 && min_th_fast <= ini_th_fast, "ORBextractor.minThFAST");
   }
+};
+
+}  // namespace dygslam
+
+namespace dygslam {
+
+// 256-bit binary descriptor.
+using Descriptor = std::array<uint64_t, 4>;
+
+inline int HammingDistance(const Descriptor& a, const Descriptor& b) {
+  return __builtin_popcountll(a[0] ^ b[0]) + __builtin_popcountll(a[1] ^ b[1]) +
+         __builtin_popcountll(a[2] ^ b[2]) + __builtin_popcountll(a[3] ^ b[3]);
+}
+
+struct OrbFeatures {
+  // Level-0 pixel coordinates in the (distorted) input image; octave = pyramid level,
+  // angle in degrees, size = patch diameter at level 0, response = FAST score.
+  std::vector<cv::KeyPoint> keypoints;
+  std::vector<Descriptor> descriptors;
+  // Same descriptors as an N x 32 CV_8UC1 matrix view (for OpenCV matchers / DDS).
+  cv::Mat DescriptorMatrix() const;
+};
+
+class OrbExtractor {
+ public:
+  explicit OrbExtractor(const OrbExtractorOptions& options);
+
+  // gray: CV_8UC1. mask (optional, CV_8UC1): features are not detected where mask != 0.
+  OrbFeatures Extract(const cv::Mat& gray, const cv::Mat& mask = cv::Mat()) const;
+
+  const OrbExtractorOptions& options() const { return options_; }
+  double scale(int level) const { return scales_[level]; }
+  double sigma2(int level) const { return sigma2_[level]; }
+  double inv_sigma2(int level) const { return 1.0 / sigma2_[level]; }
+  int num_levels() const { return options_.num_levels; }
+  const std::vector<double>& scales() const { return scales_; }
+
+  // Pixel pairs of the binary test pattern (fixed, generated from a seed; see .cc).
+  static const std::vector<std::array<cv::Point2f, 2>>& Pattern();
+
+ private:
+  void DistributeQuadtree(std::vector<cv::KeyPoint>& candidates, const cv::Rect& area, int target,
+                          std::vector<cv::KeyPoint>* kept) const;
+
+  OrbExtractorOptions options_;
+  std::vector<double> scales_;
+  std::vector<double> sigma2_;
+  std::vector<int> features_per_level_;
+  std::vector<int> umax_;  // half-width of the circular patch per row
 };
 
 }  // namespace dygslam

@@ -14,6 +14,9 @@
 
 #include "core/base/camera.h"
 #include "core/base/types.h"
+#include "core/slam/local_mapping.h"
+#include "core/slam/orb_extractor.h"
+#include "core/slam/tracking.h"
 
 namespace dygslam {
 
@@ -48,7 +51,9 @@ struct FrameResult {
 struct SystemOptions {
   PinholeCamera camera;
   RgbdSensorOptions sensor;
-  // Module options live beside their algorithms; System owns them by value (see system.cc).
+  OrbExtractorOptions orb;
+  TrackingOptions tracking;
+  LocalMappingOptions local_mapping;
   FilterMode filter_mode = FilterMode::kFull;
   // Fixed seeds, local mapping run synchronously after each keyframe: identical output run to run.
   bool deterministic = false;

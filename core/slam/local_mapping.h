@@ -1,0 +1,94 @@
+// Local mapping: for each new keyframe — cull recent map points, triangulate new points with
+// covisible keyframes, fuse duplicates, local bundle adjustment, cull redundant keyframes.
+// Runs in its own thread, or synchronously (deterministic mode) when the tracker calls
+// ProcessPending().
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "core/slam/map.h"
+#include "core/slam/matcher.h"
+#include "core/slam/optimizer.h"
+
+namespace dygslam {
+
+struct LocalMappingOptions {
+  int triangulation_neighbors = 10;
+  int fusion_neighbors = 10;
+  int fusion_second_neighbors = 5;
+  double fusion_radius_px = 3.0;
+  double min_found_ratio = 0.25;
+  double redundancy_ratio = 0.9;  // keyframe culled if this share of its points is seen >= 3 times elsewhere
+  int redundancy_observations = 3;
+  bool cull_keyframes = true;
+  OptimizerOptions optimizer;
+  MatcherOptions matcher;
+  void Check() const {
+    DYGSLAM_CHECK_OPTION(triangulation_neighbors >= 1, "LocalMapping.triangulation_neighbors");
+    DYGSLAM_CHECK_OPTION(redundancy_ratio > 0 && redundancy_ratio <= 1, "LocalMapping.redundancy_ratio");
+    optimizer.Check();
+    matcher.Check();
+  }
+};
+
+struct LocalMappingStats {
+  int keyframes_processed = 0;
+  int points_triangulated = 0;
+  int points_culled = 0;
+  int keyframes_culled = 0;
+  double total_ms = 0;
+  std::vector<double> per_keyframe_ms;
+};
+
+class LocalMapper {
+ public:
+  LocalMapper(std::shared_ptr<Map> map, const LocalMappingOptions& options, bool threaded);
+  ~LocalMapper();
+
+  void InsertKeyFrame(std::shared_ptr<KeyFrame> kf);
+  // Processes queued keyframes in the caller's thread (deterministic mode).
+  void ProcessPending();
+  bool Idle() const { return idle_.load(); }
+  size_t QueueSize() const;
+  void InterruptBA() { abort_ba_ = true; }
+  // Waits until the queue is empty and the current keyframe is done, then stops the thread.
+  void Finish();
+  // Called after each processed keyframe with the ids of keyframes whose pose BA changed.
+  void SetPosesChangedCallback(std::function<void(const std::vector<int64_t>&)> callback);
+  LocalMappingStats stats() const;
+
+ private:
+  void Run();
+  void Process(const std::shared_ptr<KeyFrame>& kf);
+  void CullRecentPoints(const std::shared_ptr<KeyFrame>& kf);
+  void CreateNewMapPoints(const std::shared_ptr<KeyFrame>& kf);
+  void FuseWithNeighbors(const std::shared_ptr<KeyFrame>& kf);
+  void CullKeyFrames(const std::shared_ptr<KeyFrame>& kf);
+
+  std::shared_ptr<Map> map_;
+  LocalMappingOptions options_;
+  Matcher matcher_;
+  bool threaded_;
+  mutable std::mutex queue_mutex_;
+  std::condition_variable queue_cv_;
+  std::condition_variable done_cv_;
+  std::deque<std::shared_ptr<KeyFrame>> queue_;
+  bool stop_ = false;
+  bool busy_ = false;
+  std::atomic<bool> idle_{true};
+  std::atomic<bool> abort_ba_{false};
+  std::list<std::shared_ptr<MapPoint>> recent_points_;  // local mapping thread only
+  std::function<void(const std::vector<int64_t>&)> poses_changed_;
+  mutable std::mutex stats_mutex_;
+  LocalMappingStats stats_;
+  std::thread thread_;
+};
+
+}  // namespace dygslam

@@ -1,0 +1,134 @@
+// Map points, keyframes, covisibility graph.
+//
+// Concurrency: tracking and local mapping share the map. Every read or write of a keyframe's or
+// map point's mutable state (pose, position, observations, connections, flags) happens while
+// holding Map::mutex() — a single map lock, held briefly by each thread (local bundle adjustment
+// copies its problem out and solves without the lock). Immutable feature data of keyframes
+// (keypoints, descriptors, depth) can be read without it. Objects are shared via shared_ptr;
+// nothing is deleted while another thread may hold it.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/base/rigid3.h"
+#include "core/base/timestamp.h"
+#include "core/slam/frame.h"
+#include "core/slam/orb_extractor.h"
+
+namespace dygslam {
+
+class KeyFrame;
+
+class MapPoint {
+ public:
+  MapPoint(int64_t id, const Eigen::Vector3d& position, int64_t first_kf_id)
+      : id(id), position(position), first_kf_id(first_kf_id) {}
+
+  const int64_t id;
+  Eigen::Vector3d position;
+  Descriptor descriptor{};
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // mean viewing direction (unit)
+  double min_distance = 0, max_distance = 0;          // scale-invariance distances
+  std::map<int64_t, int> observations;                // keyframe id -> keypoint index
+  int64_t ref_kf_id = -1;
+  const int64_t first_kf_id;
+  int visible_count = 1;  // times predicted visible in a tracked frame
+  int found_count = 1;    // times actually matched
+  bool bad = false;
+  std::shared_ptr<MapPoint> replaced_by;
+
+  // Tracking scratch (tracking thread only).
+  int64_t last_frame_seen = -1;
+  int64_t track_reference_for_frame = -1;
+  bool track_in_view = false;
+  double track_proj_x = 0, track_proj_y = 0, track_proj_xr = 0, track_view_cos = 0;
+  int track_scale_level = 0;
+  // Local mapping scratch.
+  int64_t fuse_candidate_for_kf = -1;
+  int64_t ba_local_for_kf = -1;
+
+  int NumObservations() const { return static_cast<int>(observations.size()); }
+  double FoundRatio() const { return static_cast<double>(found_count) / visible_count; }
+  int PredictScale(double distance, const CameraGeometry& g) const;
+};
+
+class KeyFrame {
+ public:
+  KeyFrame(int64_t id, const Frame& frame);
+
+  const int64_t id;
+  const int64_t frame_id;
+  const Timestamp stamp;
+  const std::shared_ptr<const CameraGeometry> geometry;
+  const std::vector<cv::KeyPoint> keypoints;
+  const std::vector<cv::KeyPoint> undistorted;
+  const std::vector<Descriptor> descriptors;
+  const std::vector<float> depth;
+  const std::vector<float> u_right;
+  const FeatureGrid grid;
+
+  // Mutable state, guarded by Map::mutex().
+  Rigid3d cam_from_world;
+  std::vector<std::shared_ptr<MapPoint>> map_points;
+  std::map<int64_t, int> connection_weights;  // covisible keyframe id -> shared points
+  std::vector<int64_t> ordered_connections;   // by weight, descending
+  int64_t parent_id = -1;
+  bool bad = false;
+  bool not_erase = false;
+  Rigid3d cam_from_parent;  // set when culled: this keyframe relative to its parent
+  // Local mapping scratch.
+  int64_t ba_local_for_kf = -1, ba_fixed_for_kf = -1, fuse_target_for_kf = -1;
+  int64_t track_reference_for_frame = -1;
+
+  size_t size() const { return keypoints.size(); }
+  Eigen::Vector3d CameraCenter() const { return cam_from_world.Inverse().translation; }
+  std::vector<int64_t> BestCovisibles(int n) const;
+  int NumTrackedPoints(int min_observations) const;
+  Eigen::Vector3d UnprojectWorld(size_t i) const;
+};
+
+class Map {
+ public:
+  std::mutex& mutex() const { return mutex_; }
+
+  int64_t NextKeyFrameId() { return next_kf_id_++; }
+  int64_t NextMapPointId() { return next_point_id_++; }
+
+  void AddKeyFrame(const std::shared_ptr<KeyFrame>& kf);
+  void AddMapPoint(const std::shared_ptr<MapPoint>& mp);
+  std::shared_ptr<KeyFrame> GetKeyFrame(int64_t id) const;  // including culled ones
+  const std::map<int64_t, std::shared_ptr<KeyFrame>>& keyframes() const { return keyframes_; }
+  const std::map<int64_t, std::shared_ptr<MapPoint>>& map_points() const { return points_; }
+  size_t NumKeyFrames() const { return keyframes_.size(); }
+  size_t NumMapPoints() const { return points_.size(); }
+
+  // Observation bookkeeping.
+  void AddObservation(const std::shared_ptr<MapPoint>& mp, const std::shared_ptr<KeyFrame>& kf, int idx);
+  void EraseObservation(const std::shared_ptr<MapPoint>& mp, int64_t kf_id);
+  void SetBad(const std::shared_ptr<MapPoint>& mp);
+  // Replaces `mp` by `other` in every keyframe that observes it.
+  void Replace(const std::shared_ptr<MapPoint>& mp, const std::shared_ptr<MapPoint>& other);
+  void UpdateNormalAndDepth(MapPoint& mp) const;
+  void ComputeDistinctiveDescriptor(MapPoint& mp) const;
+  // Recomputes covisibility weights of kf (and its neighbours' links to it).
+  void UpdateConnections(const std::shared_ptr<KeyFrame>& kf);
+  // Culls a keyframe: detaches observations, re-links children to a parent.
+  void SetBad(const std::shared_ptr<KeyFrame>& kf);
+  // cam_from_world of any keyframe ever created (culled ones via their parent chain).
+  Rigid3d ResolvedPose(int64_t kf_id) const;
+
+ private:
+  mutable std::mutex mutex_;
+  int64_t next_kf_id_ = 0, next_point_id_ = 0;
+  std::map<int64_t, std::shared_ptr<KeyFrame>> keyframes_;  // active
+  std::map<int64_t, std::shared_ptr<KeyFrame>> culled_;
+  std::map<int64_t, std::shared_ptr<MapPoint>> points_;
+};
+
+}  // namespace dygslam

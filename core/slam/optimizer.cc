@@ -1,0 +1,244 @@
+#include "core/slam/optimizer.h"
+
+#include <cmath>
+#include <map>
+#include <set>
+
+#include <ceres/ceres.h>
+
+#include "core/slam/cost_functions.h"
+
+namespace dygslam {
+namespace {
+
+ProjectionModel ModelOf(const CameraGeometry& g) {
+  return {g.camera.fx, g.camera.fy, g.camera.cx, g.camera.cy, g.bf};
+}
+
+class AbortCallback : public ceres::IterationCallback {
+ public:
+  explicit AbortCallback(const std::atomic<bool>* abort) : abort_(abort) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    return (abort_ && abort_->load()) ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const std::atomic<bool>* abort_;
+};
+
+}  // namespace
+
+int OptimizePose(Frame& frame, const OptimizerOptions& options) {
+  const CameraGeometry& g = *frame.geometry;
+  const ProjectionModel model = ModelOf(g);
+  struct Obs {
+    size_t idx;
+    Eigen::Vector3d point;
+    bool stereo;
+  };
+  std::vector<Obs> obs;
+  for (size_t i = 0; i < frame.size(); ++i) {
+    const auto& mp = frame.map_points[i];
+    if (!mp) continue;
+    frame.outlier[i] = 0;
+    obs.push_back({i, mp->position, frame.u_right[i] >= 0});
+  }
+  if (obs.size() < 3) return 0;
+
+  double pose[7];
+  PoseToParameters(frame.cam_from_world, pose);
+  const double delta_mono = std::sqrt(options.chi2_mono), delta_stereo = std::sqrt(options.chi2_stereo);
+  int inliers = 0;
+  for (int round = 0; round < options.pose_rounds; ++round) {
+    ceres::Problem::Options problem_options;
+    problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(problem_options);
+    PoseManifold manifold;
+    problem.AddParameterBlock(pose, 7, &manifold);
+    const bool robust = round < options.pose_rounds - 1;  // last round without the kernel
+    int added = 0;
+    for (const Obs& o : obs) {
+      if (frame.outlier[o.idx]) continue;
+      const cv::KeyPoint& kp = frame.undistorted[o.idx];
+      const double sqrt_info = std::sqrt(g.inv_sigma2[kp.octave]);
+      ceres::CostFunction* cost;
+      if (o.stereo) {
+        cost = new StereoPoseCost(Eigen::Vector3d(kp.pt.x, kp.pt.y, frame.u_right[o.idx]), o.point, sqrt_info, model);
+      } else {
+        cost = new MonoPoseCost(Eigen::Vector2d(kp.pt.x, kp.pt.y), o.point, sqrt_info, model);
+      }
+      problem.AddResidualBlock(cost, robust ? new ceres::HuberLoss(o.stereo ? delta_stereo : delta_mono) : nullptr, pose);
+      ++added;
+    }
+    if (added < 3) break;
+    ceres::Solver::Options solver_options;
+    solver_options.linear_solver_type = ceres::DENSE_QR;
+    solver_options.max_num_iterations = options.pose_iterations;
+    solver_options.num_threads = 1;
+    solver_options.minimizer_progress_to_stdout = false;
+    solver_options.logging_type = ceres::SILENT;
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &problem, &summary);
+
+    // Classify every observation (including earlier outliers) with the current pose.
+    const Rigid3d cam_from_world = PoseFromParameters(pose);
+    inliers = 0;
+    for (const Obs& o : obs) {
+      const cv::KeyPoint& kp = frame.undistorted[o.idx];
+      const Eigen::Vector3d p = cam_from_world * o.point;
+      double chi2;
+      bool bad_depth = p.z() <= 0;
+      if (!bad_depth) {
+        const double u = model.fx * p.x() / p.z() + model.cx, v = model.fy * p.y() / p.z() + model.cy;
+        chi2 = (u - kp.pt.x) * (u - kp.pt.x) + (v - kp.pt.y) * (v - kp.pt.y);
+        if (o.stereo) {
+          const double ur = u - model.bf / p.z();
+          chi2 += (ur - frame.u_right[o.idx]) * (ur - frame.u_right[o.idx]);
+        }
+        chi2 *= g.inv_sigma2[kp.octave];
+      }
+      const bool is_outlier = bad_depth || chi2 > (o.stereo ? options.chi2_stereo : options.chi2_mono);
+      frame.outlier[o.idx] = is_outlier ? 1 : 0;
+      if (!is_outlier) ++inliers;
+    }
+    if (inliers < 10) break;
+  }
+  frame.cam_from_world = PoseFromParameters(pose);
+  return inliers;
+}
+
+void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf, const OptimizerOptions& options,
+                           const std::atomic<bool>* abort, bool deterministic) {
+  struct ObsCopy {
+    int64_t kf_id;
+    int64_t point_id;
+    Eigen::Vector3d measurement;
+    double sqrt_info;
+    bool stereo;
+  };
+  std::map<int64_t, std::array<double, 7>> poses;  // local and fixed
+  std::set<int64_t> fixed;
+  std::map<int64_t, Eigen::Vector3d> points;
+  std::vector<ObsCopy> observations;
+  ProjectionModel model;
+  {
+    std::lock_guard<std::mutex> lock(map.mutex());
+    if (kf->bad) return;
+    model = ModelOf(*kf->geometry);
+    std::vector<std::shared_ptr<KeyFrame>> local = {kf};
+    for (int64_t id : kf->ordered_connections) {
+      auto other = map.GetKeyFrame(id);
+      if (other && !other->bad) local.push_back(other);
+    }
+    for (const auto& k : local) PoseToParameters(k->cam_from_world, poses[k->id].data());
+    std::map<int64_t, std::shared_ptr<MapPoint>> local_points;
+    for (const auto& k : local) {
+      for (const auto& mp : k->map_points) {
+        if (mp && !mp->bad) local_points[mp->id] = mp;
+      }
+    }
+    for (const auto& [pid, mp] : local_points) {
+      points[pid] = mp->position;
+      for (const auto& [obs_kf_id, idx] : mp->observations) {
+        auto obs_kf = map.GetKeyFrame(obs_kf_id);
+        if (!obs_kf || obs_kf->bad) continue;
+        if (!poses.count(obs_kf_id)) {
+          PoseToParameters(obs_kf->cam_from_world, poses[obs_kf_id].data());
+          fixed.insert(obs_kf_id);
+        }
+        const cv::KeyPoint& kp = obs_kf->undistorted[idx];
+        const bool stereo = obs_kf->u_right[idx] >= 0;
+        observations.push_back({obs_kf_id, pid,
+                                Eigen::Vector3d(kp.pt.x, kp.pt.y, stereo ? obs_kf->u_right[idx] : 0.0),
+                                std::sqrt(obs_kf->geometry->inv_sigma2[kp.octave]), stereo});
+      }
+    }
+    // Gauge: if no keyframe outside the local window observes the points, fix the oldest one.
+    if (poses.count(map.keyframes().begin()->first)) fixed.insert(map.keyframes().begin()->first);
+    if (fixed.empty()) fixed.insert(poses.begin()->first);  // oldest local keyframe
+  }
+  if (observations.empty()) return;
+
+  std::vector<uint8_t> outlier(observations.size(), 0);
+  const double delta_mono = std::sqrt(options.chi2_mono), delta_stereo = std::sqrt(options.chi2_stereo);
+  AbortCallback abort_callback(abort);
+  auto solve = [&](int iterations, bool robust) {
+    ceres::Problem::Options problem_options;
+    problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(problem_options);
+    PoseManifold manifold;
+    for (size_t k = 0; k < observations.size(); ++k) {
+      if (outlier[k]) continue;
+      const ObsCopy& o = observations[k];
+      double* pose = poses[o.kf_id].data();
+      double* point = points[o.point_id].data();
+      ceres::CostFunction* cost =
+          o.stereo ? static_cast<ceres::CostFunction*>(new StereoBACost(o.measurement, o.sqrt_info, model))
+                   : new MonoBACost(o.measurement.head<2>(), o.sqrt_info, model);
+      problem.AddResidualBlock(cost, robust ? new ceres::HuberLoss(o.stereo ? delta_stereo : delta_mono) : nullptr,
+                               pose, point);
+    }
+    for (auto& [id, pose] : poses) {
+      if (!problem.HasParameterBlock(pose.data())) continue;
+      problem.SetManifold(pose.data(), &manifold);
+      if (fixed.count(id)) problem.SetParameterBlockConstant(pose.data());
+    }
+    ceres::Solver::Options solver_options;
+    solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
+    solver_options.max_num_iterations = iterations;
+    solver_options.num_threads = 1;
+    solver_options.logging_type = ceres::SILENT;
+    if (!deterministic) solver_options.callbacks.push_back(&abort_callback);
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &problem, &summary);
+  };
+  auto classify = [&]() {
+    for (size_t k = 0; k < observations.size(); ++k) {
+      const ObsCopy& o = observations[k];
+      const Rigid3d cw = PoseFromParameters(poses[o.kf_id].data());
+      const Eigen::Vector3d p = cw * points[o.point_id];
+      if (p.z() <= 0) {
+        outlier[k] = 1;
+        continue;
+      }
+      const double u = model.fx * p.x() / p.z() + model.cx, v = model.fy * p.y() / p.z() + model.cy;
+      double chi2 = (u - o.measurement.x()) * (u - o.measurement.x()) + (v - o.measurement.y()) * (v - o.measurement.y());
+      if (o.stereo) {
+        const double ur = u - model.bf / p.z();
+        chi2 += (ur - o.measurement.z()) * (ur - o.measurement.z());
+      }
+      chi2 *= o.sqrt_info * o.sqrt_info;
+      outlier[k] = chi2 > (o.stereo ? options.chi2_stereo : options.chi2_mono) ? 1 : 0;
+    }
+  };
+  solve(options.ba_iterations_first, true);
+  if (!(abort && abort->load() && !deterministic)) {
+    classify();
+    solve(options.ba_iterations_second, false);
+  }
+  classify();
+
+  std::lock_guard<std::mutex> lock(map.mutex());
+  // Drop outlier observations, then write back poses and points.
+  for (size_t k = 0; k < observations.size(); ++k) {
+    if (!outlier[k]) continue;
+    const ObsCopy& o = observations[k];
+    auto it = map.map_points().find(o.point_id);
+    if (it == map.map_points().end()) continue;
+    auto mp = it->second;
+    map.EraseObservation(mp, o.kf_id);
+  }
+  for (const auto& [id, pose] : poses) {
+    if (fixed.count(id)) continue;
+    auto k = map.GetKeyFrame(id);
+    if (k && !k->bad) k->cam_from_world = PoseFromParameters(pose.data());
+  }
+  for (const auto& [pid, position] : points) {
+    auto it = map.map_points().find(pid);
+    if (it == map.map_points().end()) continue;
+    it->second->position = position;
+    map.UpdateNormalAndDepth(*it->second);
+  }
+}
+
+}  // namespace dygslam

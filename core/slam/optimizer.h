@@ -1,0 +1,37 @@
+// Pose-only optimisation and local bundle adjustment with Ceres (robust Huber kernel,
+// outlier-rejection rounds with chi-square thresholds as in ORB-SLAM2's RGB-D mode).
+#pragma once
+
+#include <atomic>
+#include <memory>
+
+#include "core/slam/frame.h"
+#include "core/slam/map.h"
+
+namespace dygslam {
+
+struct OptimizerOptions {
+  int pose_rounds = 4;
+  int pose_iterations = 10;
+  double chi2_mono = 5.991;    // 95 % with 2 dof
+  double chi2_stereo = 7.815;  // 95 % with 3 dof
+  int ba_iterations_first = 5;
+  int ba_iterations_second = 10;
+  void Check() const {
+    DYGSLAM_CHECK_OPTION(pose_rounds >= 1, "Optimizer.pose_rounds");
+    DYGSLAM_CHECK_OPTION(pose_iterations >= 1, "Optimizer.pose_iterations");
+  }
+};
+
+// Optimises frame.cam_from_world against its matched map points (frame.map_points); sets
+// frame.outlier. Map point positions are read by the caller's thread: hold the map lock.
+// Returns the number of inliers.
+int OptimizePose(Frame& frame, const OptimizerOptions& options);
+
+// Local BA around `kf`: it and its covisible keyframes are optimised with every point they see;
+// other keyframes seeing those points are fixed. Takes the map lock only to copy the problem in
+// and to write the result back. `abort` may be set by tracking to stop early.
+void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf, const OptimizerOptions& options,
+                           const std::atomic<bool>* abort, bool deterministic);
+
+}  // namespace dygslam

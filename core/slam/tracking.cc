@@ -1,0 +1,450 @@
+#include "core/slam/tracking.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include <opencv2/calib3d.hpp>
+
+namespace dygslam {
+
+Tracker::Tracker(const TrackingOptions& options, std::shared_ptr<Map> map, LocalMapper& local_mapper,
+                 bool deterministic)
+    : options_(options),
+      map_(std::move(map)),
+      local_mapper_(local_mapper),
+      matcher_(options.matcher),
+      deterministic_(deterministic) {
+  options_.Check();
+}
+
+TrackResult Tracker::Track(Frame frame) {
+  TrackResult result;
+  ++frames_seen_;
+  {
+    std::unique_lock<std::mutex> lock(map_->mutex());
+    if (!initialized_) {
+      if (Initialize(frame, &result)) {
+        initialized_ = true;
+        last_frame_ = frame;
+      }
+    } else {
+      bool ok = false;
+      bool relocalized = false;
+      if (!lost_) {
+        PrepareLastFrame();
+        if (velocity_ && frame.id > last_relocalization_frame_id_ + 1) ok = TrackWithMotionModel(frame);
+        if (!ok) ok = TrackReferenceKeyFrame(frame);
+      }
+      if (!ok) {
+        ok = Relocalize(frame);
+        relocalized = ok;
+      }
+      if (ok) ok = TrackLocalMap(frame);
+      if (ok) {
+        lost_ = false;
+        result.state = relocalized ? TrackingState::kRelocalized : TrackingState::kOk;
+        result.cam_from_world = frame.cam_from_world;
+        result.num_inliers = last_inliers_;
+        velocity_ = last_frame_.has_pose ? std::optional<Rigid3d>(frame.cam_from_world * last_frame_.cam_from_world.Inverse())
+                                         : std::nullopt;
+        // Points matched as outliers are dropped before the frame becomes "last".
+        for (size_t i = 0; i < frame.size(); ++i) {
+          if (frame.outlier[i]) frame.map_points[i] = nullptr;
+        }
+        if (NeedNewKeyFrame(frame)) result.new_keyframe = CreateKeyFrame(frame);
+        records_.push_back({frame.stamp, reference_kf_->id,
+                            frame.cam_from_world * reference_kf_->cam_from_world.Inverse(), result.state});
+        last_frame_ = frame;
+      } else {
+        lost_ = true;
+        velocity_.reset();
+        result.state = TrackingState::kLost;
+        records_.push_back({frame.stamp, -1, Rigid3d(), TrackingState::kLost});
+        frame.has_pose = false;
+        last_frame_ = frame;
+      }
+    }
+  }
+  if (result.new_keyframe) {
+    local_mapper_.InsertKeyFrame(result.new_keyframe);
+    if (deterministic_) local_mapper_.ProcessPending();
+  }
+  return result;
+}
+
+bool Tracker::Initialize(Frame& frame, TrackResult* result) {
+  int with_depth = 0;
+  for (float d : frame.depth) with_depth += d > 0;
+  if (with_depth < options_.init_min_features) {
+    result->state = TrackingState::kNotInitialized;
+    records_.push_back({frame.stamp, -1, Rigid3d(), TrackingState::kNotInitialized});
+    return false;
+  }
+  frame.cam_from_world = Rigid3d::Identity();
+  frame.has_pose = true;
+  auto kf = std::make_shared<KeyFrame>(map_->NextKeyFrameId(), frame);
+  map_->AddKeyFrame(kf);
+  for (size_t i = 0; i < frame.size(); ++i) {
+    if (frame.depth[i] <= 0) continue;
+    auto mp = std::make_shared<MapPoint>(map_->NextMapPointId(), frame.UnprojectWorld(i), kf->id);
+    mp->ref_kf_id = kf->id;
+    map_->AddObservation(mp, kf, static_cast<int>(i));
+    map_->ComputeDistinctiveDescriptor(*mp);
+    map_->UpdateNormalAndDepth(*mp);
+    map_->AddMapPoint(mp);
+    frame.map_points[i] = mp;
+  }
+  reference_kf_ = kf;
+  last_kf_ = kf;
+  last_kf_frame_id_ = frame.id;
+  local_keyframes_ = {kf};
+  result->state = TrackingState::kOk;
+  result->cam_from_world = frame.cam_from_world;
+  result->new_keyframe = kf;
+  result->num_inliers = static_cast<int>(map_->NumMapPoints());
+  records_.push_back({frame.stamp, kf->id, Rigid3d::Identity(), TrackingState::kOk});
+  return true;
+}
+
+void Tracker::PrepareLastFrame() {
+  // Follow replaced points, drop culled ones, refresh the pose from the reference keyframe and
+  // add temporary "visual odometry" points from the last frame's depth (close points first).
+  for (auto& mp : last_frame_.map_points) {
+    if (!mp) continue;
+    int guard = 0;
+    while (mp && mp->replaced_by && guard++ < 100) mp = mp->replaced_by;
+    if (mp && mp->bad) mp = nullptr;
+  }
+  if (!records_.empty() && records_.back().ref_kf_id >= 0) {
+    const TrajectoryRecord& r = records_.back();
+    last_frame_.cam_from_world = r.cam_from_ref * map_->ResolvedPose(r.ref_kf_id);
+  }
+  std::vector<std::pair<float, size_t>> by_depth;
+  for (size_t i = 0; i < last_frame_.size(); ++i) {
+    if (last_frame_.depth[i] > 0) by_depth.push_back({last_frame_.depth[i], i});
+  }
+  std::sort(by_depth.begin(), by_depth.end());
+  int added = 0;
+  for (const auto& [d, i] : by_depth) {
+    const auto& mp = last_frame_.map_points[i];
+    if (!mp || mp->NumObservations() < 1) {
+      auto temp = std::make_shared<MapPoint>(-1, last_frame_.UnprojectWorld(i), -1);
+      temp->descriptor = last_frame_.descriptors[i];
+      temp->observations.clear();
+      last_frame_.map_points[i] = temp;
+      last_frame_.outlier[i] = 0;
+    }
+    ++added;
+    if (d > last_frame_.geometry->close_depth && added > options_.new_points_min) break;
+  }
+}
+
+int Tracker::DiscardOutliers(Frame& frame) {
+  int real = 0;
+  for (size_t i = 0; i < frame.size(); ++i) {
+    if (!frame.map_points[i]) continue;
+    if (frame.outlier[i]) {
+      frame.map_points[i] = nullptr;
+      frame.outlier[i] = 0;
+    } else if (frame.map_points[i]->NumObservations() > 0) {
+      ++real;
+    }
+  }
+  return real;
+}
+
+bool Tracker::TrackWithMotionModel(Frame& frame) {
+  frame.cam_from_world = *velocity_ * last_frame_.cam_from_world;
+  frame.has_pose = true;
+  std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+  int matches = matcher_.SearchByProjection(frame, last_frame_, options_.motion_radius_px);
+  if (matches < options_.motion_min_matches) {
+    std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+    matches = matcher_.SearchByProjection(frame, last_frame_, 2 * options_.motion_radius_px);
+  }
+  if (matches < options_.motion_min_matches) return false;
+  OptimizePose(frame, options_.optimizer);
+  return DiscardOutliers(frame) >= options_.min_inliers;
+}
+
+bool Tracker::TrackReferenceKeyFrame(Frame& frame) {
+  if (!reference_kf_ || reference_kf_->bad) {
+    if (map_->keyframes().empty()) return false;
+    reference_kf_ = map_->keyframes().rbegin()->second;
+  }
+  std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+  const int matches = matcher_.SearchByDescriptors(*reference_kf_, frame, 0.7);
+  if (matches < 15) return false;
+  frame.cam_from_world = last_frame_.has_pose ? last_frame_.cam_from_world : reference_kf_->cam_from_world;
+  frame.has_pose = true;
+  OptimizePose(frame, options_.optimizer);
+  return DiscardOutliers(frame) >= options_.min_inliers;
+}
+
+bool Tracker::Relocalize(Frame& frame) {
+  const CameraGeometry& g = *frame.geometry;
+  // Rank keyframes by descriptor matches (no vocabulary: brute force on the map points).
+  std::vector<std::pair<int, std::shared_ptr<KeyFrame>>> ranked;
+  for (const auto& [id, kf] : map_->keyframes()) {
+    Frame probe = frame;
+    std::fill(probe.map_points.begin(), probe.map_points.end(), nullptr);
+    const int n = matcher_.SearchByDescriptors(*kf, probe, 0.75);
+    if (n >= 15) ranked.push_back({n, kf});
+  }
+  std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  if (static_cast<int>(ranked.size()) > options_.relocalization_candidates) ranked.resize(options_.relocalization_candidates);
+  const cv::Mat k = g.camera.K();
+  for (const auto& [score, kf] : ranked) {
+    std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+    std::fill(frame.outlier.begin(), frame.outlier.end(), 0);
+    matcher_.SearchByDescriptors(*kf, frame, 0.75);
+    std::vector<cv::Point3f> object;
+    std::vector<cv::Point2f> image;
+    std::vector<size_t> index;
+    for (size_t i = 0; i < frame.size(); ++i) {
+      const auto& mp = frame.map_points[i];
+      if (!mp) continue;
+      object.emplace_back(float(mp->position.x()), float(mp->position.y()), float(mp->position.z()));
+      image.push_back(frame.undistorted[i].pt);
+      index.push_back(i);
+    }
+    if (object.size() < 15) continue;
+    cv::Mat rvec, tvec;
+    std::vector<int> inliers;
+    cv::setRNGSeed(static_cast<int>(frame.id));
+    const bool solved = cv::solvePnPRansac(object, image, k, cv::noArray(), rvec, tvec, false, 200, 4.0f, 0.99,
+                                           inliers, cv::SOLVEPNP_EPNP);
+    if (!solved || inliers.size() < 10) continue;
+    cv::Mat rmat;
+    cv::Rodrigues(rvec, rmat);
+    Eigen::Matrix3d r;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) r(a, b) = rmat.at<double>(a, b);
+    frame.cam_from_world = Rigid3d(r, Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
+    frame.has_pose = true;
+    std::vector<uint8_t> keep(frame.size(), 0);
+    for (int in : inliers) keep[index[in]] = 1;
+    for (size_t i = 0; i < frame.size(); ++i)
+      if (!keep[i]) frame.map_points[i] = nullptr;
+    int good = OptimizePose(frame, options_.optimizer);
+    if (good < 10) continue;
+    DiscardOutliers(frame);
+    if (good < options_.relocalized_min_inliers) {
+      std::set<const MapPoint*> found;
+      for (const auto& mp : frame.map_points)
+        if (mp) found.insert(mp.get());
+      matcher_.SearchByProjection(frame, *kf, found, 10, 100);
+      good = OptimizePose(frame, options_.optimizer);
+      DiscardOutliers(frame);
+    }
+    if (good >= options_.relocalized_min_inliers) {
+      last_relocalization_frame_id_ = frame.id;
+      reference_kf_ = kf;
+      return true;
+    }
+  }
+  std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+  frame.has_pose = false;
+  return false;
+}
+
+void Tracker::UpdateLocalMap(Frame& frame) {
+  // Keyframes that see the frame's points, plus their best covisible neighbours.
+  std::map<int64_t, int> counter;
+  for (size_t i = 0; i < frame.size(); ++i) {
+    const auto& mp = frame.map_points[i];
+    if (!mp) continue;
+    if (mp->bad) {
+      frame.map_points[i] = nullptr;
+      continue;
+    }
+    for (const auto& [kf_id, idx] : mp->observations) counter[kf_id]++;
+  }
+  local_keyframes_.clear();
+  int best = 0;
+  std::shared_ptr<KeyFrame> best_kf;
+  for (const auto& [kf_id, n] : counter) {
+    auto kf = map_->GetKeyFrame(kf_id);
+    if (!kf || kf->bad) continue;
+    if (n > best) {
+      best = n;
+      best_kf = kf;
+    }
+    local_keyframes_.push_back(kf);
+    kf->track_reference_for_frame = frame.id;
+  }
+  const size_t direct = local_keyframes_.size();
+  for (size_t k = 0; k < direct && static_cast<int>(local_keyframes_.size()) < options_.local_keyframes_max; ++k) {
+    for (int64_t id : local_keyframes_[k]->BestCovisibles(10)) {
+      auto n = map_->GetKeyFrame(id);
+      if (!n || n->bad || n->track_reference_for_frame == frame.id) continue;
+      n->track_reference_for_frame = frame.id;
+      local_keyframes_.push_back(n);
+      break;
+    }
+  }
+  if (best_kf) reference_kf_ = best_kf;
+  local_points_.clear();
+  for (const auto& kf : local_keyframes_) {
+    for (const auto& mp : kf->map_points) {
+      if (!mp || mp->bad || mp->track_reference_for_frame == frame.id) continue;
+      mp->track_reference_for_frame = frame.id;
+      local_points_.push_back(mp);
+    }
+  }
+}
+
+bool Tracker::TrackLocalMap(Frame& frame) {
+  UpdateLocalMap(frame);
+  const CameraGeometry& g = *frame.geometry;
+  for (const auto& mp : frame.map_points) {
+    if (!mp) continue;
+    mp->visible_count++;
+    mp->last_frame_seen = frame.id;
+    mp->track_in_view = false;
+  }
+  const Eigen::Vector3d center = frame.CameraCenter();
+  int to_match = 0;
+  for (const auto& mp : local_points_) {
+    if (mp->last_frame_seen == frame.id) continue;
+    mp->track_in_view = false;
+    const Eigen::Vector3d p = frame.cam_from_world * mp->position;
+    if (p.z() <= 0) continue;
+    const double inv_z = 1.0 / p.z();
+    const double u = g.camera.fx * p.x() * inv_z + g.camera.cx;
+    const double v = g.camera.fy * p.y() * inv_z + g.camera.cy;
+    if (!g.InBounds(u, v)) continue;
+    const Eigen::Vector3d po = mp->position - center;
+    const double dist = po.norm();
+    if (dist < 0.8 * mp->min_distance || dist > 1.2 * mp->max_distance) continue;
+    const double view_cos = po.dot(mp->normal) / dist;
+    if (view_cos < 0.5) continue;
+    mp->track_in_view = true;
+    mp->track_proj_x = u;
+    mp->track_proj_y = v;
+    mp->track_proj_xr = u - g.bf * inv_z;
+    mp->track_view_cos = view_cos;
+    mp->track_scale_level = mp->PredictScale(dist, g);
+    mp->visible_count++;
+    ++to_match;
+  }
+  if (to_match > 0) {
+    const double radius = frame.id < last_relocalization_frame_id_ + 2 ? 5.0 : 1.0;
+    matcher_.SearchByProjection(frame, local_points_, radius);
+  }
+  OptimizePose(frame, options_.optimizer);
+  int inliers = 0;
+  for (size_t i = 0; i < frame.size(); ++i) {
+    const auto& mp = frame.map_points[i];
+    if (!mp) continue;
+    if (frame.outlier[i]) {
+      frame.map_points[i] = nullptr;
+      frame.outlier[i] = 0;
+      continue;
+    }
+    mp->found_count++;
+    if (mp->NumObservations() > 0) ++inliers;
+  }
+  last_inliers_ = inliers;
+  const int needed = frame.id < last_relocalization_frame_id_ + options_.max_frames_between_keyframes
+                         ? options_.relocalized_min_inliers
+                         : options_.local_map_min_inliers;
+  return inliers >= needed || (inliers >= options_.local_map_min_inliers && last_relocalization_frame_id_ < 0);
+}
+
+bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
+  const int64_t kfs = static_cast<int64_t>(map_->NumKeyFrames());
+  if (frame.id < last_relocalization_frame_id_ + options_.max_frames_between_keyframes &&
+      kfs > options_.max_frames_between_keyframes)
+    return false;
+  // ORB-SLAM2 counts an RGB-D observation twice; here each keyframe observation counts once.
+  const int min_obs = kfs <= 2 ? 1 : 2;
+  const int ref_matches = reference_kf_->NumTrackedPoints(min_obs);
+  const bool mapper_idle = local_mapper_.Idle();
+  int tracked_close = 0, untracked_close = 0;
+  const double close = frame.geometry->close_depth;
+  for (size_t i = 0; i < frame.size(); ++i) {
+    if (frame.depth[i] <= 0 || frame.depth[i] >= close) continue;
+    if (frame.map_points[i] && !frame.outlier[i]) {
+      ++tracked_close;
+    } else {
+      ++untracked_close;
+    }
+  }
+  const bool need_close = tracked_close < options_.close_tracked_min && untracked_close > options_.close_untracked_min;
+  const double ratio = kfs < 2 ? 0.4 : options_.ref_ratio;
+  const bool c1a = frame.id >= last_kf_frame_id_ + options_.max_frames_between_keyframes;
+  const bool c1b = mapper_idle;
+  const bool c1c = last_inliers_ < ref_matches * 0.25 || need_close;
+  const bool c2 = (last_inliers_ < ref_matches * ratio || need_close) && last_inliers_ > 15;
+  if (!((c1a || c1b || c1c) && c2)) return false;
+  if (mapper_idle || deterministic_) return true;
+  local_mapper_.InterruptBA();
+  return local_mapper_.QueueSize() < 3;
+}
+
+std::shared_ptr<KeyFrame> Tracker::CreateKeyFrame(Frame& frame) {
+  auto kf = std::make_shared<KeyFrame>(map_->NextKeyFrameId(), frame);
+  map_->AddKeyFrame(kf);
+  // Observations of the points tracked in this frame.
+  for (size_t i = 0; i < kf->size(); ++i) {
+    const auto& mp = kf->map_points[i];
+    if (!mp) continue;
+    if (mp->bad || mp->NumObservations() == 0 || mp->observations.count(kf->id)) {
+      kf->map_points[i] = nullptr;  // temporary or culled point
+      continue;
+    }
+    map_->AddObservation(mp, kf, static_cast<int>(i));
+    map_->UpdateNormalAndDepth(*mp);
+    map_->ComputeDistinctiveDescriptor(*mp);
+  }
+  // New points from depth: all close ones, at least new_points_min in total.
+  std::vector<std::pair<float, size_t>> by_depth;
+  for (size_t i = 0; i < kf->size(); ++i) {
+    if (kf->depth[i] > 0) by_depth.push_back({kf->depth[i], i});
+  }
+  std::sort(by_depth.begin(), by_depth.end());
+  int created = 0, considered = 0;
+  for (const auto& [d, i] : by_depth) {
+    if (!kf->map_points[i]) {
+      auto mp = std::make_shared<MapPoint>(map_->NextMapPointId(), kf->UnprojectWorld(i), kf->id);
+      mp->ref_kf_id = kf->id;
+      map_->AddObservation(mp, kf, static_cast<int>(i));
+      map_->ComputeDistinctiveDescriptor(*mp);
+      map_->UpdateNormalAndDepth(*mp);
+      map_->AddMapPoint(mp);
+      frame.map_points[i] = mp;
+      ++created;
+    }
+    ++considered;
+    if (d > frame.geometry->close_depth && considered > options_.new_points_min) break;
+  }
+  for (size_t i = 0; i < kf->size(); ++i) frame.map_points[i] = kf->map_points[i];
+  map_->UpdateConnections(kf);
+  reference_kf_ = kf;
+  last_kf_ = kf;
+  last_kf_frame_id_ = frame.id;
+  return kf;
+}
+
+std::vector<StampedPose> Tracker::Trajectory() const {
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  std::vector<StampedPose> out;
+  for (const auto& r : records_) {
+    if (!HasPose(r.state) || r.ref_kf_id < 0) continue;
+    const Rigid3d cam_from_world = r.cam_from_ref * map_->ResolvedPose(r.ref_kf_id);
+    out.push_back({r.stamp, cam_from_world.Inverse()});
+  }
+  return out;
+}
+
+std::vector<StampedPose> Tracker::KeyframeTrajectory() const {
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  std::vector<StampedPose> out;
+  for (const auto& [id, kf] : map_->keyframes()) out.push_back({kf->stamp, kf->cam_from_world.Inverse()});
+  return out;
+}
+
+}  // namespace dygslam

@@ -1,0 +1,105 @@
+// Tracking: motion-model and reference-keyframe tracking, local-map tracking, keyframe decision,
+// relocalization. One Tracker per camera stream; called from one thread.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "core/base/types.h"
+#include "core/slam/frame.h"
+#include "core/slam/local_mapping.h"
+#include "core/slam/map.h"
+#include "core/slam/matcher.h"
+#include "core/slam/optimizer.h"
+
+namespace dygslam {
+
+struct TrackingOptions {
+  int init_min_features = 300;       // features with depth needed to initialise
+  double motion_radius_px = 7.0;     // projection search radius (x scale) for the motion model
+  int motion_min_matches = 20;
+  int min_inliers = 10;              // motion model / reference keyframe
+  int local_map_min_inliers = 30;
+  int relocalized_min_inliers = 50;
+  int max_frames_between_keyframes = 30;  // usually the frame rate
+  double ref_ratio = 0.75;
+  int close_tracked_min = 100;
+  int close_untracked_min = 70;
+  int new_points_min = 100;          // new keyframe: at least this many points from depth
+  int local_keyframes_max = 80;
+  int relocalization_candidates = 5;
+  OptimizerOptions optimizer;
+  MatcherOptions matcher;
+  void Check() const {
+    DYGSLAM_CHECK_OPTION(init_min_features > 0, "Tracking.init_min_features");
+    DYGSLAM_CHECK_OPTION(motion_radius_px > 0, "Tracking.motion_radius_px");
+    DYGSLAM_CHECK_OPTION(ref_ratio > 0 && ref_ratio <= 1, "Tracking.ref_ratio");
+    DYGSLAM_CHECK_OPTION(max_frames_between_keyframes >= 1, "Tracking.max_frames_between_keyframes");
+    optimizer.Check();
+    matcher.Check();
+  }
+};
+
+struct TrackResult {
+  TrackingState state = TrackingState::kNotInitialized;
+  std::optional<Rigid3d> cam_from_world;
+  std::shared_ptr<KeyFrame> new_keyframe;  // set when this frame became a keyframe
+  int num_inliers = 0;
+};
+
+// A frame's pose stored relative to its reference keyframe, so the trajectory follows the
+// keyframes that bundle adjustment refines.
+struct TrajectoryRecord {
+  Timestamp stamp;
+  int64_t ref_kf_id = -1;
+  Rigid3d cam_from_ref;
+  TrackingState state = TrackingState::kNotInitialized;
+};
+
+class Tracker {
+ public:
+  Tracker(const TrackingOptions& options, std::shared_ptr<Map> map, LocalMapper& local_mapper,
+          bool deterministic);
+
+  TrackResult Track(Frame frame);
+
+  // World poses of all tracked frames (resolved through current keyframe poses).
+  std::vector<StampedPose> Trajectory() const;
+  std::vector<StampedPose> KeyframeTrajectory() const;
+  const std::vector<TrajectoryRecord>& records() const { return records_; }
+
+ private:
+  bool Initialize(Frame& frame, TrackResult* result);
+  void PrepareLastFrame();
+  bool TrackWithMotionModel(Frame& frame);
+  bool TrackReferenceKeyFrame(Frame& frame);
+  bool Relocalize(Frame& frame);
+  bool TrackLocalMap(Frame& frame);
+  void UpdateLocalMap(Frame& frame);
+  bool NeedNewKeyFrame(const Frame& frame) const;
+  std::shared_ptr<KeyFrame> CreateKeyFrame(Frame& frame);
+  int DiscardOutliers(Frame& frame);
+
+  TrackingOptions options_;
+  std::shared_ptr<Map> map_;
+  LocalMapper& local_mapper_;
+  Matcher matcher_;
+  bool deterministic_;
+  int64_t frames_seen_ = 0;
+
+  bool initialized_ = false;
+  bool lost_ = false;
+  Frame last_frame_;
+  std::optional<Rigid3d> velocity_;  // cam_from_world(t) * world_from_cam(t-1)
+  std::shared_ptr<KeyFrame> reference_kf_;
+  std::shared_ptr<KeyFrame> last_kf_;
+  int64_t last_kf_frame_id_ = -1;
+  int64_t last_relocalization_frame_id_ = -1000;
+  int last_inliers_ = 0;
+  std::vector<std::shared_ptr<KeyFrame>> local_keyframes_;
+  std::vector<std::shared_ptr<MapPoint>> local_points_;
+  std::vector<TrajectoryRecord> records_;
+};
+
+}  // namespace dygslam

@@ -1,0 +1,188 @@
+#include "core/system/system.h"
+
+#include <chrono>
+#include <mutex>
+
+#include <opencv2/imgproc.hpp>
+
+#include "core/base/error.h"
+#include "core/base/log.h"
+#include "core/slam/frame.h"
+#include "core/slam/local_mapping.h"
+#include "core/slam/tracking.h"
+
+namespace dygslam {
+namespace {
+double MsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+const char* ToString(FilterMode mode) {
+  switch (mode) {
+    case FilterMode::kNone: return "none";
+    case FilterMode::kBoxes: return "boxes";
+    case FilterMode::kGeometry: return "geometry";
+    case FilterMode::kFull: return "full";
+  }
+  return "unknown";
+}
+
+FilterMode ParseFilterMode(const std::string& text) {
+  if (text == "none") return FilterMode::kNone;
+  if (text == "boxes") return FilterMode::kBoxes;
+  if (text == "geometry") return FilterMode::kGeometry;
+  if (text == "full") return FilterMode::kFull;
+  throw InvalidOptions("invalid filter mode '" + text + "': expected none|boxes|geometry|full");
+}
+
+void SystemOptions::Check() const {
+  camera.Check();
+  sensor.Check();
+  orb.Check();
+  tracking.Check();
+  local_mapping.Check();
+}
+
+class SystemImpl {
+ public:
+  explicit SystemImpl(const SystemOptions& options)
+      : options_(options),
+        extractor_(options.orb),
+        geometry_(std::make_shared<CameraGeometry>(CameraGeometry::Create(options.camera, options.sensor, extractor_))),
+        map_(std::make_shared<Map>()),
+        local_mapper_(map_, options.local_mapping, !options.deterministic),
+        tracker_(options.tracking, map_, local_mapper_, options.deterministic) {}
+
+  FrameResult Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp, const cv::Mat& mask,
+                   const std::vector<Detection>* detections);
+
+  std::vector<StampedPose> Trajectory() const { return tracker_.Trajectory(); }
+  std::vector<StampedPose> KeyframeTrajectory() const { return tracker_.KeyframeTrajectory(); }
+  void SetKeyframeCallback(std::function<void(const KeyframeData&)> cb) {
+    std::lock_guard<std::mutex> lock(callback_mutex_);
+    keyframe_callback_ = std::move(cb);
+  }
+  void Shutdown() { local_mapper_.Finish(); }
+
+ private:
+  SystemOptions options_;
+  OrbExtractor extractor_;
+  std::shared_ptr<const CameraGeometry> geometry_;
+  std::shared_ptr<Map> map_;
+  LocalMapper local_mapper_;
+  Tracker tracker_;
+  int64_t next_frame_id_ = 0;
+  Timestamp last_stamp_;
+  bool has_last_stamp_ = false;
+  std::mutex callback_mutex_;
+  std::function<void(const KeyframeData&)> keyframe_callback_;
+};
+
+FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp, const cv::Mat& mask,
+                             const std::vector<Detection>* detections) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const PinholeCamera& cam = options_.camera;
+  if (rgb.empty() || (rgb.type() != CV_8UC3 && rgb.type() != CV_8UC1))
+    throw InputError("rgb image: expected CV_8UC3 (or CV_8UC1), got type " + std::to_string(rgb.type()));
+  if (rgb.cols != cam.width || rgb.rows != cam.height)
+    throw InputError("rgb image: size " + std::to_string(rgb.cols) + "x" + std::to_string(rgb.rows) +
+                     " does not match Camera.width/height " + std::to_string(cam.width) + "x" + std::to_string(cam.height));
+  if (depth.empty() || (depth.type() != CV_16UC1 && depth.type() != CV_32FC1))
+    throw InputError("depth image: expected CV_16UC1 or CV_32FC1");
+  if (depth.size() != rgb.size()) throw InputError("depth image: size differs from the rgb image");
+  if (has_last_stamp_ && stamp <= last_stamp_)
+    throw InputError("frame stamp " + stamp.ToString() + " is not after the previous frame " + last_stamp_.ToString());
+  last_stamp_ = stamp;
+  has_last_stamp_ = true;
+
+  FrameResult result;
+  result.stamp = stamp;
+  cv::Mat gray;
+  if (rgb.channels() == 3) {
+    cv::cvtColor(rgb, gray, cv::COLOR_BGR2GRAY);
+  } else {
+    gray = rgb;
+  }
+  cv::Mat depth_m;
+  if (depth.type() == CV_16UC1) {
+    depth.convertTo(depth_m, CV_32F, 1.0 / options_.sensor.depth_map_factor);
+  } else {
+    depth_m = depth;
+  }
+  const auto t_orb = std::chrono::steady_clock::now();
+  OrbFeatures features = extractor_.Extract(gray, mask);
+  result.times.orb_extraction_ms = MsSince(t_orb);
+  result.num_features = static_cast<int>(features.keypoints.size());
+
+  // Dynamic filter: box removal when detections are given (full filter wired in the dynamic module).
+  std::vector<uint8_t> dynamic(features.keypoints.size(), 0);
+  if (options_.filter_mode == FilterMode::kBoxes && detections) {
+    result.detections_used = true;
+    for (size_t i = 0; i < features.keypoints.size(); ++i) {
+      for (const Detection& d : *detections) {
+        if (d.box.contains(features.keypoints[i].pt)) dynamic[i] = 1;
+      }
+    }
+  }
+  OrbFeatures kept;
+  for (size_t i = 0; i < features.keypoints.size(); ++i) {
+    if (dynamic[i]) continue;
+    kept.keypoints.push_back(features.keypoints[i]);
+    kept.descriptors.push_back(features.descriptors[i]);
+  }
+  int num_dynamic = 0;
+  for (uint8_t d : dynamic) num_dynamic += d;
+  result.num_dynamic = num_dynamic;
+
+  const auto t_track = std::chrono::steady_clock::now();
+  Frame frame(next_frame_id_++, stamp, std::move(kept), depth_m, geometry_);
+  TrackResult tracked = tracker_.Track(std::move(frame));
+  result.times.tracking_ms = MsSince(t_track);
+  result.state = tracked.state;
+  if (tracked.cam_from_world) result.world_from_cam = tracked.cam_from_world->Inverse();
+  result.num_tracked = tracked.num_inliers;
+  result.is_keyframe = tracked.new_keyframe != nullptr;
+  if (tracked.new_keyframe) {
+    std::function<void(const KeyframeData&)> cb;
+    {
+      std::lock_guard<std::mutex> lock(callback_mutex_);
+      cb = keyframe_callback_;
+    }
+    if (cb) {
+      KeyframeData data;
+      data.id = tracked.new_keyframe->id;
+      data.stamp = stamp;
+      data.world_from_cam = *result.world_from_cam;
+      data.rgb = rgb;
+      data.depth = depth_m;
+      data.dynamic_mask = cv::Mat::zeros(rgb.size(), CV_8UC1);
+      data.keypoints = features.keypoints;
+      data.keypoint_dynamic = dynamic;
+      if (detections) data.detections = *detections;
+      cb(data);
+    }
+  }
+  result.times.total_ms = MsSince(t_start);
+  return result;
+}
+
+System::System(const SystemOptions& options) {
+  options.Check();
+  impl_ = std::make_unique<SystemImpl>(options);
+}
+System::~System() {
+  if (impl_) impl_->Shutdown();
+}
+FrameResult System::FeedRgbdFrame(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp, const cv::Mat& mask,
+                                  const std::vector<Detection>* detections) {
+  return impl_->Feed(rgb, depth, stamp, mask, detections);
+}
+std::vector<StampedPose> System::Trajectory() const { return impl_->Trajectory(); }
+std::vector<StampedPose> System::KeyframeTrajectory() const { return impl_->KeyframeTrajectory(); }
+void System::SetKeyframeCallback(std::function<void(const KeyframeData&)> callback) {
+  impl_->SetKeyframeCallback(std::move(callback));
+}
+void System::Shutdown() { impl_->Shutdown(); }
+
+}  // namespace dygslam

@@ -1,5 +1,8 @@
 // dygslam eval GROUNDTRUTH ESTIMATE [--json] [--plot FILE.png]: ATE / RPE with the TUM benchmark
 // conventions (core/eval/trajectory_eval.h).
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -8,9 +11,6 @@
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include "apps/command.h"
 #include "core/base/error.h"
@@ -26,10 +26,18 @@ std::string JsonString(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
       default:
         if (static_cast<unsigned char>(c) < 0x20) {
           char buf[8];
@@ -75,17 +83,21 @@ double ParseSeconds(const ArgParser& p, const std::string& option) {
 // Writes the per-pair data and runs scripts/plot_trajectory.py. Returns true when the PNG was
 // written; prints why not otherwise.
 bool Plot(const std::string& png, const std::string& title, const AteResult& ate) {
-  const fs::path out_dir = fs::path(png).parent_path().empty() ? fs::path(".") : fs::path(png).parent_path();
+  const fs::path out_dir =
+      fs::path(png).parent_path().empty() ? fs::path(".") : fs::path(png).parent_path();
   std::error_code ec;
   if (!fs::is_directory(out_dir, ec)) {
-    throw InputError(png, 0, "cannot write plot: directory " + out_dir.string() + " does not exist");
+    throw InputError(png, 0,
+                     "cannot write plot: directory " + out_dir.string() + " does not exist");
   }
   const std::string script = ScriptsDir() + "/plot_trajectory.py";
   if (!fs::is_regular_file(script, ec)) {
-    std::cerr << "dygslam eval: plot skipped: " << script << " not found (set DYGSLAM_SCRIPTS_DIR)\n";
+    std::cerr << "dygslam eval: plot skipped: " << script
+              << " not found (set DYGSLAM_SCRIPTS_DIR)\n";
     return false;
   }
-  const fs::path data = fs::temp_directory_path() / ("dygslam_plot_" + std::to_string(::getpid()) + ".txt");
+  const fs::path data =
+      fs::temp_directory_path() / ("dygslam_plot_" + std::to_string(::getpid()) + ".txt");
   std::ostringstream text;
   text << "# t gt_x gt_y gt_z est_x est_y est_z error (aligned estimate, metres)\n";
   char line[256];
@@ -116,15 +128,17 @@ bool Plot(const std::string& png, const std::string& title, const AteResult& ate
 }
 
 int RunEval(const std::vector<std::string>& args) {
-  ArgParser p("eval", "GROUNDTRUTH ESTIMATE [--json] [--plot FILE.png]",
-              "Absolute trajectory error (ATE: timestamp association within 0.02 s, rigid SE(3)\n"
-              "alignment of the estimate onto the ground truth, no scale) and relative pose error\n"
-              "(RPE over 1 s), with the conventions of the TUM RGB-D benchmark tools. Both files are\n"
-              "TUM trajectories: 't tx ty tz qx qy qz qw' (world_from_cam).");
+  ArgParser p(
+      "eval", "GROUNDTRUTH ESTIMATE [--json] [--plot FILE.png]",
+      "Absolute trajectory error (ATE: timestamp association within 0.02 s, rigid SE(3)\n"
+      "alignment of the estimate onto the ground truth, no scale) and relative pose error\n"
+      "(RPE over 1 s), with the conventions of the TUM RGB-D benchmark tools. Both files are\n"
+      "TUM trajectories: 't tx ty tz qx qy qz qw' (world_from_cam).");
   p.AddPositional("GROUNDTRUTH", "ground-truth trajectory (e.g. DATASET/groundtruth.txt)");
   p.AddPositional("ESTIMATE", "estimated trajectory (e.g. out/trajectory.txt)");
   p.AddFlag("json", "print one JSON object instead of text");
-  p.AddOption("plot", "FILE.png", "draw ground truth vs aligned estimate (top view) and ATE over time");
+  p.AddOption("plot", "FILE.png",
+              "draw ground truth vs aligned estimate (top view) and ATE over time");
   p.AddOption("max-diff", "SECONDS", "maximum timestamp difference for association", "0.02");
   p.AddOption("offset", "SECONDS", "time offset added to the estimate stamps", "0");
   p.AddOption("delta", "SECONDS", "RPE interval", "1");
@@ -150,9 +164,10 @@ int RunEval(const std::vector<std::string>& args) {
   if (p.Has("save-aligned")) WriteTumTrajectory(p.Get("save-aligned"), ate.aligned_estimate);
   bool plotted = false;
   if (p.Has("plot")) {
-    plotted = Plot(p.Get("plot"), fs::path(est_path).filename().string() + " vs " +
-                                      fs::path(gt_path).filename().string(),
-                   ate);
+    plotted = Plot(
+        p.Get("plot"),
+        fs::path(est_path).filename().string() + " vs " + fs::path(gt_path).filename().string(),
+        ate);
   }
 
   const double coverage = static_cast<double>(ate.num_pairs) / static_cast<double>(gt.size());
@@ -165,9 +180,12 @@ int RunEval(const std::vector<std::string>& args) {
     j << "{\"groundtruth\": " << JsonString(gt_path) << ", \"estimate\": " << JsonString(est_path)
       << ", \"gt_poses\": " << gt.size() << ", \"est_poses\": " << est.size()
       << ", \"pairs\": " << ate.num_pairs << ", \"gt_coverage\": " << JsonNumber(coverage)
-      << ", \"ate_rmse\": " << JsonNumber(ate.error.rmse) << ", \"ate_mean\": " << JsonNumber(ate.error.mean)
-      << ", \"ate_median\": " << JsonNumber(ate.error.median) << ", \"ate_sd\": " << JsonNumber(ate.error.sd)
-      << ", \"ate_min\": " << JsonNumber(ate.error.min) << ", \"ate_max\": " << JsonNumber(ate.error.max)
+      << ", \"ate_rmse\": " << JsonNumber(ate.error.rmse)
+      << ", \"ate_mean\": " << JsonNumber(ate.error.mean)
+      << ", \"ate_median\": " << JsonNumber(ate.error.median)
+      << ", \"ate_sd\": " << JsonNumber(ate.error.sd)
+      << ", \"ate_min\": " << JsonNumber(ate.error.min)
+      << ", \"ate_max\": " << JsonNumber(ate.error.max)
       << ", \"rpe_delta\": " << JsonNumber(rpe.delta) << ", \"rpe_pairs\": " << rpe.num_pairs
       << ", \"rpe_trans_rmse\": " << rpe_value(rpe.trans_rmse)
       << ", \"rpe_trans_mean\": " << rpe_value(rpe.trans_mean)
@@ -207,7 +225,8 @@ int RunEval(const std::vector<std::string>& args) {
   return 0;
 }
 
-const CommandRegistrar kRegistrar({"eval", "evaluate a trajectory against ground truth (ATE/RPE)", RunEval});
+const CommandRegistrar kRegistrar({"eval", "evaluate a trajectory against ground truth (ATE/RPE)",
+                                   RunEval});
 
 }  // namespace
 }  // namespace dygslam::cli

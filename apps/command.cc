@@ -1,12 +1,12 @@
 #include "apps/command.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
-
-#include <unistd.h>
 
 namespace dygslam::cli {
 namespace {
@@ -24,13 +24,15 @@ void RegisterCommand(Command command) {
 }
 
 const std::vector<std::string>& PlannedCommands() {
-  static const std::vector<std::string> names = {"run", "eval", "synth", "map", "bench", "version", "help"};
+  static const std::vector<std::string> names = {"run",   "eval",    "synth", "map",
+                                                 "bench", "version", "help"};
   return names;
 }
 
 std::string ScriptsDir() {
   namespace fs = std::filesystem;
-  if (const char* env = std::getenv("DYGSLAM_SCRIPTS_DIR"); env != nullptr && *env != '\0') return env;
+  if (const char* env = std::getenv("DYGSLAM_SCRIPTS_DIR"); env != nullptr && *env != '\0')
+    return env;
   std::error_code ec;
 #ifdef DYGSLAM_SOURCE_SCRIPTS_DIR
   if (fs::is_directory(DYGSLAM_SOURCE_SCRIPTS_DIR, ec)) return DYGSLAM_SOURCE_SCRIPTS_DIR;
@@ -44,7 +46,9 @@ std::string ScriptsDir() {
 }
 
 ArgParser::ArgParser(std::string command, std::string usage, std::string description)
-    : command_(std::move(command)), usage_(std::move(usage)), description_(std::move(description)) {}
+    : command_(std::move(command)),
+      usage_(std::move(usage)),
+      description_(std::move(description)) {}
 
 void ArgParser::AddPositional(const std::string& name, const std::string& help) {
   positionals_.insert(positionals_.begin() + num_required_, {name, help});

@@ -32,7 +32,7 @@ namespace dygslam::cli {
 
 struct Command {
   std::string name;
-  std::string summary;  // one line for `dygslam help`
+  std::string summary;                                           // one line for `dygslam help`
   std::function<int(const std::vector<std::string>& args)> run;  // args after the command name
 };
 
@@ -63,7 +63,7 @@ class ArgParser {
 
   std::string Positional(const std::string& name) const;  // "" if an optional one is absent
   bool HasPositional(const std::string& name) const;
-  bool Has(const std::string& option) const;  // option given (or flag set)
+  bool Has(const std::string& option) const;         // option given (or flag set)
   std::string Get(const std::string& option) const;  // value or default
   bool Flag(const std::string& flag) const;
   std::string Usage() const;

@@ -1,5 +1,7 @@
 #include "core/config/config_reader.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -9,8 +11,6 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
-
-#include <yaml-cpp/yaml.h>
 
 namespace dygslam {
 
@@ -44,7 +44,8 @@ void CollectKeys(const YAML::Node& node, const std::string& prefix, std::vector<
   if (!node.IsMap()) return;
   for (const auto& entry : node) {
     if (!entry.first.IsScalar()) continue;
-    const std::string key = prefix.empty() ? entry.first.Scalar() : prefix + "." + entry.first.Scalar();
+    const std::string key =
+        prefix.empty() ? entry.first.Scalar() : prefix + "." + entry.first.Scalar();
     // An OpenCV matrix is a leaf value, not a section.
     if (entry.second.IsMap() && entry.second.Tag() != "tag:yaml.org,2002:opencv-matrix") {
       CollectKeys(entry.second, key, out);
@@ -72,7 +73,8 @@ std::string Preprocess(const std::string& text) {
   // Skip a UTF-8 byte order mark.
   if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) start = 3;
   const size_t eol = text.find('\n', start);
-  const std::string first = text.substr(start, eol == std::string::npos ? std::string::npos : eol - start);
+  const std::string first =
+      text.substr(start, eol == std::string::npos ? std::string::npos : eol - start);
   if (first.rfind("%YAML", 0) == 0) {
     return eol == std::string::npos ? std::string() : text.substr(eol);
   }
@@ -82,10 +84,12 @@ std::string Preprocess(const std::string& text) {
 // Typed conversion; `fail` throws with the key and line.
 template <typename Fail>
 double ParseDouble(const YAML::Node& node, const Fail& fail) {
-  if (!node.IsScalar()) fail("expected a number, found a " + std::string(node.IsMap() ? "map" : "sequence"));
+  if (!node.IsScalar())
+    fail("expected a number, found a " + std::string(node.IsMap() ? "map" : "sequence"));
   const std::string text = Trim(node.Scalar());
   const std::string lower = Lower(text);
-  const std::string unsigned_lower = (!lower.empty() && (lower[0] == '-' || lower[0] == '+')) ? lower.substr(1) : lower;
+  const std::string unsigned_lower =
+      (!lower.empty() && (lower[0] == '-' || lower[0] == '+')) ? lower.substr(1) : lower;
   if (unsigned_lower == ".nan" || unsigned_lower == ".inf" || unsigned_lower == "nan" ||
       unsigned_lower == "inf" || unsigned_lower == "infinity") {
     fail("value must be a finite number, found '" + text + "'");
@@ -95,13 +99,15 @@ double ParseDouble(const YAML::Node& node, const Fail& fail) {
   errno = 0;
   const double v = std::strtod(begin, &end);
   if (text.empty() || end == begin || *end != '\0') fail("expected a number, found '" + text + "'");
-  if (!std::isfinite(v) || errno == ERANGE) fail("value must be a finite number, found '" + text + "'");
+  if (!std::isfinite(v) || errno == ERANGE)
+    fail("value must be a finite number, found '" + text + "'");
   return v;
 }
 
 template <typename Fail>
 int64_t ParseInt(const YAML::Node& node, int64_t lo, int64_t hi, const Fail& fail) {
-  if (!node.IsScalar()) fail("expected an integer, found a " + std::string(node.IsMap() ? "map" : "sequence"));
+  if (!node.IsScalar())
+    fail("expected an integer, found a " + std::string(node.IsMap() ? "map" : "sequence"));
   const std::string text = Trim(node.Scalar());
   const char* begin = text.c_str();
   char* end = nullptr;
@@ -138,7 +144,9 @@ struct Converter;
 template <>
 struct Converter<double> {
   template <typename F>
-  static double Convert(const YAML::Node& n, const F& fail) { return ParseDouble(n, fail); }
+  static double Convert(const YAML::Node& n, const F& fail) {
+    return ParseDouble(n, fail);
+  }
 };
 template <>
 struct Converter<float> {
@@ -153,20 +161,24 @@ template <>
 struct Converter<int> {
   template <typename F>
   static int Convert(const YAML::Node& n, const F& fail) {
-    return static_cast<int>(ParseInt(n, std::numeric_limits<int>::min(), std::numeric_limits<int>::max(), fail));
+    return static_cast<int>(
+        ParseInt(n, std::numeric_limits<int>::min(), std::numeric_limits<int>::max(), fail));
   }
 };
 template <>
 struct Converter<int64_t> {
   template <typename F>
   static int64_t Convert(const YAML::Node& n, const F& fail) {
-    return ParseInt(n, std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::max(), fail);
+    return ParseInt(n, std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::max(),
+                    fail);
   }
 };
 template <>
 struct Converter<bool> {
   template <typename F>
-  static bool Convert(const YAML::Node& n, const F& fail) { return ParseBool(n, fail); }
+  static bool Convert(const YAML::Node& n, const F& fail) {
+    return ParseBool(n, fail);
+  }
 };
 template <>
 struct Converter<std::string> {
@@ -195,7 +207,9 @@ struct Converter<std::vector<E>> {
     if (!seq.IsSequence()) fail("expected a list");
     size_t i = 0;
     for (const auto& item : seq) {
-      const auto item_fail = [&](const std::string& m) { fail("element " + std::to_string(i) + ": " + m); };
+      const auto item_fail = [&](const std::string& m) {
+        fail("element " + std::to_string(i) + ": " + m);
+      };
       out.push_back(Converter<E>::Convert(item, item_fail));
       ++i;
     }
@@ -203,8 +217,8 @@ struct Converter<std::vector<E>> {
       const int64_t rows = ParseInt(n["rows"], 0, 1 << 20, fail);
       const int64_t cols = ParseInt(n["cols"], 0, 1 << 20, fail);
       if (static_cast<size_t>(rows * cols) != out.size()) {
-        fail("opencv-matrix has " + std::to_string(out.size()) + " values, expected rows*cols = " +
-             std::to_string(rows * cols));
+        fail("opencv-matrix has " + std::to_string(out.size()) +
+             " values, expected rows*cols = " + std::to_string(rows * cols));
       }
     }
     return out;
@@ -233,7 +247,8 @@ ConfigReader ConfigReader::FromString(const std::string& text, const std::string
   if (!impl->root || impl->root.IsNull()) {
     impl->root = YAML::Node(YAML::NodeType::Map);
   } else if (!impl->root.IsMap()) {
-    throw InputError(name, impl->root.Mark().line + 1, "top level must be a map of 'key: value' entries");
+    throw InputError(name, impl->root.Mark().line + 1,
+                     "top level must be a map of 'key: value' entries");
   }
   return ConfigReader(std::move(impl), "");
 }
@@ -241,7 +256,8 @@ ConfigReader ConfigReader::FromString(const std::string& text, const std::string
 ConfigReader ConfigReader::FromFile(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path, 0, "settings file not found");
-  if (std::filesystem::is_directory(path, ec)) throw InputError(path, 0, "is a directory, expected a settings file");
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(path, 0, "is a directory, expected a settings file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, 0, "cannot open settings file");
   std::ostringstream text;
@@ -291,7 +307,8 @@ std::vector<std::string> ConfigReader::Keys() const {
   if (prefix_.empty()) return all;
   std::vector<std::string> out;
   for (const std::string& k : all) {
-    if (k.size() > prefix_.size() && k.compare(0, prefix_.size(), prefix_) == 0 && k[prefix_.size()] == '.') {
+    if (k.size() > prefix_.size() && k.compare(0, prefix_.size(), prefix_) == 0 &&
+        k[prefix_.size()] == '.') {
       out.push_back(k);
     }
   }
@@ -315,7 +332,8 @@ void ConfigReader::FailInvalidOptions(const InvalidOptions& e) const {
   std::string name;
   if (message.rfind(head, 0) == 0) {
     const size_t colon = message.find(": ", head.size());
-    name = message.substr(head.size(), colon == std::string::npos ? std::string::npos : colon - head.size());
+    name = message.substr(head.size(),
+                          colon == std::string::npos ? std::string::npos : colon - head.size());
   }
   int line = 0;
   if (!name.empty()) {
@@ -365,9 +383,9 @@ T ConfigReader::Require(const std::string& key) const {
   return value;
 }
 
-#define DYGSLAM_CONFIG_INSTANTIATE(T)                                            \
-  template bool ConfigReader::ReadIfPresent<T>(const std::string&, T*) const;   \
-  template T ConfigReader::Get<T>(const std::string&, const T&) const;          \
+#define DYGSLAM_CONFIG_INSTANTIATE(T)                                         \
+  template bool ConfigReader::ReadIfPresent<T>(const std::string&, T*) const; \
+  template T ConfigReader::Get<T>(const std::string&, const T&) const;        \
   template T ConfigReader::Require<T>(const std::string&) const;
 
 DYGSLAM_CONFIG_INSTANTIATE(double)

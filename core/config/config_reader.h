@@ -17,8 +17,9 @@
 //
 // Supported T: double, float, int, int64_t, bool, std::string, std::vector<std::string>,
 // std::vector<double> (a sequence or an !!opencv-matrix's data), std::vector<int>.
-// Numbers must be finite; ints must be integral and in range; bools are true/false/yes/no/on/off/1/0.
-// Every error is a dygslam::InputError naming "file:line" and the full key.
+// Numbers must be finite; ints must be integral and in range; bools are
+// true/false/yes/no/on/off/1/0. Every error is a dygslam::InputError naming "file:line" and the
+// full key.
 #pragma once
 
 #include <memory>

@@ -1,10 +1,10 @@
 #include "core/config/config_reader.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 #include "tests/support/test_support.h"
 
@@ -19,7 +19,8 @@ void ExpectInputError(F&& f, std::initializer_list<std::string> needles) {
     ADD_FAILURE() << "expected InputError";
   } catch (const InputError& e) {
     for (const std::string& n : needles) {
-      EXPECT_NE(std::string(e.what()).find(n), std::string::npos) << "'" << n << "' not in: " << e.what();
+      EXPECT_NE(std::string(e.what()).find(n), std::string::npos)
+          << "'" << n << "' not in: " << e.what();
     }
   }
 }
@@ -88,7 +89,8 @@ TEST(ConfigReader, ReadsFlatNestedAndOpenCvStyle) {
 
 TEST(ConfigReader, MissingRequiredKeyNamesKeyAndFile) {
   const ConfigReader r = ConfigReader::FromString("Camera.fx: 1\nEmpty:\n", "cam.yaml");
-  ExpectInputError([&] { r.Require<double>("Camera.fy"); }, {"cam.yaml", "missing required key 'Camera.fy'"});
+  ExpectInputError([&] { r.Require<double>("Camera.fy"); },
+                   {"cam.yaml", "missing required key 'Camera.fy'"});
   ExpectInputError([&] { r.Require<double>("Empty"); }, {"cam.yaml:2", "'Empty'", "no value"});
   ExpectInputError([&] { r.Section("Camera").Require<double>("cx"); }, {"'Camera.cx'"});
 }
@@ -98,9 +100,11 @@ TEST(ConfigReader, BadValuesNameKeyAndLine) {
       "a: 1\nCamera.fx: abc\nnan_value: .nan\ninf_value: -.inf\nplain_nan: nan\n"
       "i: 3.5\nbig: 99999999999\nflag: maybe\nlist: {x: 1}\nhuge: 1e999\n",
       "bad.yaml");
-  ExpectInputError([&] { r.Require<double>("Camera.fx"); }, {"bad.yaml:2", "'Camera.fx'", "expected a number"});
+  ExpectInputError([&] { r.Require<double>("Camera.fx"); },
+                   {"bad.yaml:2", "'Camera.fx'", "expected a number"});
   ExpectInputError([&] { r.Get<double>("Camera.fx", 1.0); }, {"bad.yaml:2", "'Camera.fx'"});
-  ExpectInputError([&] { r.Require<double>("nan_value"); }, {"bad.yaml:3", "'nan_value'", "finite"});
+  ExpectInputError([&] { r.Require<double>("nan_value"); },
+                   {"bad.yaml:3", "'nan_value'", "finite"});
   ExpectInputError([&] { r.Require<double>("inf_value"); }, {"bad.yaml:4", "finite"});
   ExpectInputError([&] { r.Require<float>("plain_nan"); }, {"bad.yaml:5", "finite"});
   ExpectInputError([&] { r.Require<int>("i"); }, {"bad.yaml:6", "'i'", "expected an integer"});
@@ -109,12 +113,14 @@ TEST(ConfigReader, BadValuesNameKeyAndLine) {
   ExpectInputError([&] { r.Require<bool>("flag"); }, {"bad.yaml:8", "'flag'", "true/false"});
   ExpectInputError([&] { r.Require<double>("list"); }, {"bad.yaml:9", "found a map"});
   ExpectInputError([&] { r.Require<double>("huge"); }, {"bad.yaml:10", "finite"});
-  ExpectInputError([&] { r.Fail("a", "custom problem"); }, {"bad.yaml:1", "key 'a': custom problem"});
+  ExpectInputError([&] { r.Fail("a", "custom problem"); },
+                   {"bad.yaml:1", "key 'a': custom problem"});
 }
 
 TEST(ConfigReader, KeyGivenTwiceIsAnError) {
   const ConfigReader r = ConfigReader::FromString("Camera.fx: 1\nCamera:\n  fx: 2\n", "dup.yaml");
-  ExpectInputError([&] { r.Require<double>("Camera.fx"); }, {"dup.yaml:3", "more than once", "line 1"});
+  ExpectInputError([&] { r.Require<double>("Camera.fx"); },
+                   {"dup.yaml:3", "more than once", "line 1"});
 }
 
 TEST(ConfigReader, MalformedYamlNamesLine) {
@@ -122,7 +128,8 @@ TEST(ConfigReader, MalformedYamlNamesLine) {
                    {"broken.yaml:", "malformed YAML"});
   ExpectInputError([] { ConfigReader::FromString("a: 1\n  b: 2\n", "indent.yaml"); },
                    {"indent.yaml:2", "malformed YAML"});
-  ExpectInputError([] { ConfigReader::FromString("- 1\n- 2\n", "list.yaml"); }, {"list.yaml:1", "top level"});
+  ExpectInputError([] { ConfigReader::FromString("- 1\n- 2\n", "list.yaml"); },
+                   {"list.yaml:1", "top level"});
   EXPECT_FALSE(ConfigReader::FromString("", "empty.yaml").Has("x"));
 }
 
@@ -132,16 +139,20 @@ TEST(ConfigReader, FileErrors) {
   const std::string dir = testing::MakeTempDir("config");
   ExpectInputError([&] { ConfigReader::FromFile(dir); }, {"is a directory"});
   std::ofstream(dir + "/s.yaml") << "%YAML:1.0\nx: 2\ny: [\n";
-  ExpectInputError([&] { ConfigReader::FromFile(dir + "/s.yaml"); }, {dir + "/s.yaml:", "malformed"});
+  ExpectInputError([&] { ConfigReader::FromFile(dir + "/s.yaml"); },
+                   {dir + "/s.yaml:", "malformed"});
 }
 
 struct ThresholdOptions {
   double threshold = 0.5;
-  void Check() const { DYGSLAM_CHECK_OPTION(threshold > 0 && threshold < 1, "DynamicFilter.threshold"); }
+  void Check() const {
+    DYGSLAM_CHECK_OPTION(threshold > 0 && threshold < 1, "DynamicFilter.threshold");
+  }
 };
 
 TEST(ConfigReader, CheckOptionsNamesFileLineAndKey) {
-  const ConfigReader r = ConfigReader::FromString("x: 0\nDynamicFilter:\n  threshold: 1.5\n", "opts.yaml");
+  const ConfigReader r =
+      ConfigReader::FromString("x: 0\nDynamicFilter:\n  threshold: 1.5\n", "opts.yaml");
   ThresholdOptions o;
   const ConfigReader s = r.Section("DynamicFilter");
   EXPECT_TRUE(s.ReadIfPresent("threshold", &o.threshold));

@@ -37,7 +37,9 @@ Settings ReadSettings(ConfigReader reader) {
 
 }  // namespace
 
-Settings LoadSettings(const std::string& path) { return ReadSettings(ConfigReader::FromFile(path)); }
+Settings LoadSettings(const std::string& path) {
+  return ReadSettings(ConfigReader::FromFile(path));
+}
 
 Settings ParseSettings(const std::string& text, const std::string& name) {
   return ReadSettings(ConfigReader::FromString(text, name));

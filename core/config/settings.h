@@ -19,8 +19,9 @@ struct Settings {
 };
 
 // Reads ORB-SLAM2's keys:
-//   required: Camera.fx, Camera.fy, Camera.cx, Camera.cy, Camera.k1, Camera.k2, Camera.p1, Camera.p2
-//   optional (default): Camera.k3 (0), Camera.width (640), Camera.height (480), Camera.fps (30),
+//   required: Camera.fx, Camera.fy, Camera.cx, Camera.cy, Camera.k1, Camera.k2, Camera.p1,
+//   Camera.p2 optional (default): Camera.k3 (0), Camera.width (640), Camera.height (480),
+//   Camera.fps (30),
 //     Camera.bf (40), ThDepth (40), DepthMapFactor (5000), ORBextractor.nFeatures (1000),
 //     ORBextractor.scaleFactor (1.2), ORBextractor.nLevels (8), ORBextractor.iniThFAST (20),
 //     ORBextractor.minThFAST (7)

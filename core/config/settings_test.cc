@@ -1,10 +1,10 @@
 #include "core/config/settings.h"
 
+#include <gtest/gtest.h>
+
 #include <cstdlib>
 #include <fstream>
 #include <string>
-
-#include <gtest/gtest.h>
 
 namespace dygslam {
 namespace {
@@ -21,7 +21,8 @@ void ExpectInputError(F&& f, std::initializer_list<std::string> needles) {
     ADD_FAILURE() << "expected InputError";
   } catch (const InputError& e) {
     for (const std::string& n : needles) {
-      EXPECT_NE(std::string(e.what()).find(n), std::string::npos) << "'" << n << "' not in: " << e.what();
+      EXPECT_NE(std::string(e.what()).find(n), std::string::npos)
+          << "'" << n << "' not in: " << e.what();
     }
   }
 }

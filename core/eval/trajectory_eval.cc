@@ -1,10 +1,9 @@
 #include "core/eval/trajectory_eval.h"
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
-
-#include <Eigen/SVD>
 
 #include "core/base/error.h"
 #include "core/io/association.h"
@@ -109,16 +108,14 @@ AteResult ComputeAte(const std::vector<StampedPose>& groundtruth,
   RequireSorted(groundtruth, "ground truth");
   RequireSorted(estimate, "estimate");
   // evaluate_ate.py: associate(first=ground truth, second=estimate, offset, max_difference).
-  const std::vector<TimestampMatch> matches =
-      AssociateTimestamps(StampsOf(groundtruth), StampsOf(estimate), options.max_time_difference,
-                          options.offset);
+  const std::vector<TimestampMatch> matches = AssociateTimestamps(
+      StampsOf(groundtruth), StampsOf(estimate), options.max_time_difference, options.offset);
   if (matches.size() < 3) {
-    throw InputError("ATE: only " + std::to_string(matches.size()) +
-                     " ground-truth/estimate pairs within " +
-                     std::to_string(options.max_time_difference) + " s (" +
-                     std::to_string(groundtruth.size()) + " ground-truth poses, " +
-                     std::to_string(estimate.size()) +
-                     " estimated poses); need at least 3. Wrong files or time base?");
+    throw InputError(
+        "ATE: only " + std::to_string(matches.size()) + " ground-truth/estimate pairs within " +
+        std::to_string(options.max_time_difference) + " s (" + std::to_string(groundtruth.size()) +
+        " ground-truth poses, " + std::to_string(estimate.size()) +
+        " estimated poses); need at least 3. Wrong files or time base?");
   }
   AteResult r;
   r.num_pairs = matches.size();
@@ -169,9 +166,9 @@ RpeResult ComputeRpe(const std::vector<StampedPose>& groundtruth,
         std::abs(double(gt_ns[gj] - (est_ns[j] + offset_ns))) > gt_max_difference_ns) {
       continue;
     }
-    const Rigid3d est_rel =
-        estimate[i].world_from_cam.Inverse() * estimate[j].world_from_cam;
-    const Rigid3d gt_rel = groundtruth[gi].world_from_cam.Inverse() * groundtruth[gj].world_from_cam;
+    const Rigid3d est_rel = estimate[i].world_from_cam.Inverse() * estimate[j].world_from_cam;
+    const Rigid3d gt_rel =
+        groundtruth[gi].world_from_cam.Inverse() * groundtruth[gj].world_from_cam;
     // evaluate_rpe.py: ominus(ominus(est_j, est_i), ominus(gt_j, gt_i)) with ominus(a, b) = a^-1 b,
     // i.e. error = (est_j^-1 est_i)^-1 (gt_j^-1 gt_i) = est_rel * gt_rel^-1.
     const Rigid3d error = est_rel * gt_rel.Inverse();

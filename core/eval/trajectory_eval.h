@@ -9,14 +9,13 @@
 // estimate pose closest to t_i + delta (pairs whose j is the last estimate pose are skipped, as in
 // the reference script); both ends are matched to the closest ground-truth pose (skipped when
 // farther than twice the median ground-truth interval); the error is
-// (est_j^-1 est_i)^-1 (gt_j^-1 gt_i) = (est_i^-1 est_j)(gt_i^-1 gt_j)^-1, reported as translation norm and rotation angle per delta.
-// All pairs are used (no random sub-sampling).
+// (est_j^-1 est_i)^-1 (gt_j^-1 gt_i) = (est_i^-1 est_j)(gt_i^-1 gt_j)^-1, reported as translation
+// norm and rotation angle per delta. All pairs are used (no random sub-sampling).
 #pragma once
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/base/rigid3.h"
 #include "core/base/types.h"

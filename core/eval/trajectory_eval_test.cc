@@ -1,9 +1,9 @@
 #include "core/eval/trajectory_eval.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "core/base/error.h"
 
@@ -17,7 +17,8 @@ std::vector<StampedPose> MakePath(int n, int64_t dt_ns = 40'000'000) {
     const double t = i * dt_ns * 1e-9;
     StampedPose p;
     p.stamp = Timestamp::FromNanoseconds(1'000'000'000'000'000'000LL + i * dt_ns);
-    p.world_from_cam.translation = Eigen::Vector3d(2 * std::cos(0.3 * t), 1.5 * std::sin(0.3 * t), 0.1 * t);
+    p.world_from_cam.translation =
+        Eigen::Vector3d(2 * std::cos(0.3 * t), 1.5 * std::sin(0.3 * t), 0.1 * t);
     p.world_from_cam.rotation = Eigen::AngleAxisd(0.3 * t, Eigen::Vector3d::UnitZ()) *
                                 Eigen::AngleAxisd(0.2 * std::sin(t), Eigen::Vector3d::UnitX());
     poses.push_back(p);
@@ -26,8 +27,9 @@ std::vector<StampedPose> MakePath(int n, int64_t dt_ns = 40'000'000) {
 }
 
 Rigid3d SomeTransform() {
-  return Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(1.1, Eigen::Vector3d(0.3, -0.5, 0.8).normalized())),
-                 Eigen::Vector3d(3.0, -7.5, 1.25));
+  return Rigid3d(
+      Eigen::Quaterniond(Eigen::AngleAxisd(1.1, Eigen::Vector3d(0.3, -0.5, 0.8).normalized())),
+      Eigen::Vector3d(3.0, -7.5, 1.25));
 }
 
 TEST(ErrorStatistics, MatchesHandComputedValues) {
@@ -67,7 +69,9 @@ TEST(Ate, RigidTransformIsRemoved) {
   EXPECT_LT((r.gt_from_est.translation - expected.translation).norm(), 1e-9);
   EXPECT_LT(r.gt_from_est.rotation.angularDistance(expected.rotation), 1e-9);
   ASSERT_EQ(r.aligned_estimate.size(), est.size());
-  EXPECT_LT((r.aligned_estimate[17].world_from_cam.translation - gt[17].world_from_cam.translation).norm(), 1e-9);
+  EXPECT_LT((r.aligned_estimate[17].world_from_cam.translation - gt[17].world_from_cam.translation)
+                .norm(),
+            1e-9);
   // RPE is invariant to a global rigid transform.
   const RpeResult rpe = ComputeRpe(gt, est);
   EXPECT_LT(rpe.trans_rmse, 1e-9);
@@ -95,18 +99,21 @@ TEST(Ate, IsotropicNoiseGivesExpectedRmse) {
 TEST(Ate, AssociatesWithinMaxDifference) {
   const auto gt = MakePath(100);
   std::vector<StampedPose> est = gt;
-  for (StampedPose& p : est) p.stamp = Timestamp::FromNanoseconds(p.stamp.nanoseconds() + 15'000'000);
+  for (StampedPose& p : est)
+    p.stamp = Timestamp::FromNanoseconds(p.stamp.nanoseconds() + 15'000'000);
   EXPECT_EQ(ComputeAte(gt, est).num_pairs, 100u);  // 15 ms < 20 ms
   AteOptions o;
   o.offset = -0.015;
   EXPECT_LT(ComputeAte(gt, est, o).error.rmse, 1e-12);
-  for (StampedPose& p : est) p.stamp = Timestamp::FromNanoseconds(p.stamp.nanoseconds() + 10'000'000);
+  for (StampedPose& p : est)
+    p.stamp = Timestamp::FromNanoseconds(p.stamp.nanoseconds() + 10'000'000);
   // 25 ms from one neighbour, 15 ms from the next: each estimate pairs with the next gt pose.
   const AteResult shifted = ComputeAte(gt, est);
   EXPECT_EQ(shifted.num_pairs, 99u);
   EXPECT_EQ(shifted.gt_stamps[0], gt[1].stamp);
   est = gt;
-  for (StampedPose& p : est) p.stamp = Timestamp::FromNanoseconds(p.stamp.nanoseconds() + 20'000'000);
+  for (StampedPose& p : est)
+    p.stamp = Timestamp::FromNanoseconds(p.stamp.nanoseconds() + 20'000'000);
   // Exactly 20 ms from both neighbours: outside the strict bound.
   EXPECT_THROW(ComputeAte(gt, est), InputError);
 }
@@ -129,8 +136,9 @@ TEST(Rpe, ConstantYawDriftGivesThatRatePerSecond) {
   std::vector<StampedPose> est = gt;
   for (int i = 0; i < n; ++i) {
     const double t = i * 0.04;
-    const Rigid3d drift(Eigen::Quaterniond(Eigen::AngleAxisd(rate_deg * M_PI / 180 * t, Eigen::Vector3d::UnitZ())),
-                        Eigen::Vector3d::Zero());
+    const Rigid3d drift(
+        Eigen::Quaterniond(Eigen::AngleAxisd(rate_deg * M_PI / 180 * t, Eigen::Vector3d::UnitZ())),
+        Eigen::Vector3d::Zero());
     est[i].world_from_cam = drift * gt[i].world_from_cam;
   }
   const RpeResult r = ComputeRpe(gt, est);

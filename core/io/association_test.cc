@@ -1,11 +1,11 @@
 #include "core/io/association.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cstdlib>
 #include <random>
 #include <set>
-
-#include <gtest/gtest.h>
 
 namespace dygslam {
 namespace {

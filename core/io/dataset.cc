@@ -3,7 +3,6 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
-
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/base/error.h"
@@ -14,9 +13,9 @@ namespace dygslam {
 namespace fs = std::filesystem;
 
 void DatasetOptions::Check() const {
-  DYGSLAM_CHECK_OPTION(std::isfinite(max_time_difference) && max_time_difference > 0 &&
-                           max_time_difference <= 1.0,
-                       "max_time_difference");
+  DYGSLAM_CHECK_OPTION(
+      std::isfinite(max_time_difference) && max_time_difference > 0 && max_time_difference <= 1.0,
+      "max_time_difference");
 }
 
 namespace {
@@ -50,9 +49,9 @@ void CheckOrder(const std::string& file, int line, Timestamp previous, Timestamp
     throw InputError(file, line, "duplicate timestamp " + current.ToString());
   }
   if (current < previous) {
-    throw InputError(file, line,
-                     "timestamps not sorted: " + current.ToString() + " after " +
-                         previous.ToString());
+    throw InputError(
+        file, line,
+        "timestamps not sorted: " + current.ToString() + " after " + previous.ToString());
   }
 }
 
@@ -62,9 +61,9 @@ std::vector<ListEntry> ReadImageList(const fs::path& directory, const std::strin
   std::vector<ListEntry> entries;
   for (const TextLine& l : ReadDataLines(file)) {
     if (l.tokens.size() != 2) {
-      throw InputError(file, l.line_number,
-                       "expected 2 columns 'timestamp path', found " +
-                           std::to_string(l.tokens.size()));
+      throw InputError(
+          file, l.line_number,
+          "expected 2 columns 'timestamp path', found " + std::to_string(l.tokens.size()));
     }
     ListEntry e;
     e.line = l.line_number;
@@ -131,9 +130,8 @@ RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions
       dataset.num_rgb_entries_ = rgb.size();
       for (const ListEntry& e : rgb) {
         auto it = frame_of_stamp.find(e.stamp.nanoseconds());
-        dataset.rgb_entry_to_frame_.push_back(it == frame_of_stamp.end()
-                                                  ? std::nullopt
-                                                  : std::optional<size_t>(it->second));
+        dataset.rgb_entry_to_frame_.push_back(
+            it == frame_of_stamp.end() ? std::nullopt : std::optional<size_t>(it->second));
       }
     }
   } else {
@@ -170,24 +168,34 @@ namespace {
 
 const char* TypeName(int type) {
   switch (type) {
-    case CV_8UC1: return "8-bit 1-channel";
-    case CV_8UC3: return "8-bit 3-channel";
-    case CV_8UC4: return "8-bit 4-channel";
-    case CV_16UC1: return "16-bit 1-channel";
-    case CV_16UC3: return "16-bit 3-channel";
-    case CV_16UC4: return "16-bit 4-channel";
-    case CV_32FC1: return "32-bit float 1-channel";
-    default: return "unsupported pixel type";
+    case CV_8UC1:
+      return "8-bit 1-channel";
+    case CV_8UC3:
+      return "8-bit 3-channel";
+    case CV_8UC4:
+      return "8-bit 4-channel";
+    case CV_16UC1:
+      return "16-bit 1-channel";
+    case CV_16UC3:
+      return "16-bit 3-channel";
+    case CV_16UC4:
+      return "16-bit 4-channel";
+    case CV_32FC1:
+      return "32-bit float 1-channel";
+    default:
+      return "unsupported pixel type";
   }
 }
 
 cv::Mat LoadImage(const std::string& path, int expected_type, const char* what, int width,
                   int height) {
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw InputError(path, 0, std::string(what) + " image not found");
+  if (!fs::is_regular_file(path, ec))
+    throw InputError(path, 0, std::string(what) + " image not found");
   cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
   if (image.empty()) {
-    throw InputError(path, 0, std::string("cannot decode ") + what + " image (corrupt or not an image)");
+    throw InputError(path, 0,
+                     std::string("cannot decode ") + what + " image (corrupt or not an image)");
   }
   if (image.type() != expected_type) {
     throw InputError(path, 0,

@@ -5,11 +5,10 @@
 //   timestamp within max_time_difference (default 0.02 s).
 #pragma once
 
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "core/base/timestamp.h"
 #include "core/base/types.h"

@@ -1,11 +1,11 @@
 #include "core/io/dataset.h"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
-#include <set>
-
-#include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
 
 #include "core/base/error.h"
 #include "tests/support/test_support.h"
@@ -155,7 +155,8 @@ TEST_F(SmallDataset, WrongImageSizeOrType) {
     d.LoadDepth(2);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("must be 16-bit 1-channel"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("must be 16-bit 1-channel"), std::string::npos)
+        << e.what();
   }
   WriteText(d.frame(3).rgb_path, "not a png");
   try {

@@ -35,9 +35,9 @@ std::vector<StampedPose> ReadTumTrajectory(const std::string& path) {
   std::vector<StampedPose> poses;
   for (const TextLine& l : ReadDataLines(path)) {
     if (l.tokens.size() != 8) {
-      throw InputError(path, l.line_number,
-                       "expected 8 columns 't tx ty tz qx qy qz qw', found " +
-                           std::to_string(l.tokens.size()));
+      throw InputError(
+          path, l.line_number,
+          "expected 8 columns 't tx ty tz qx qy qz qw', found " + std::to_string(l.tokens.size()));
     }
     const std::optional<Timestamp> stamp = Timestamp::Parse(l.tokens[0]);
     if (!stamp) throw InputError(path, l.line_number, "malformed timestamp '" + l.tokens[0] + "'");
@@ -75,8 +75,9 @@ void WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>&
   for (size_t i = 0; i < poses.size(); ++i) {
     const StampedPose& p = poses[i];
     if (!p.world_from_cam.AllFinite()) {
-      throw InputError(path, 0, "pose " + std::to_string(i) + " at " + p.stamp.ToString() +
-                                    " is not finite; refusing to write");
+      throw InputError(path, 0,
+                       "pose " + std::to_string(i) + " at " + p.stamp.ToString() +
+                           " is not finite; refusing to write");
     }
     if (i > 0 && p.stamp <= poses[i - 1].stamp) {
       throw InputError(path, 0, "poses not strictly sorted by timestamp at " + p.stamp.ToString());

@@ -1,13 +1,12 @@
 #include "core/io/trajectory_io.h"
 
+#include <gtest/gtest.h>
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
-
-#include <unistd.h>
-
-#include <gtest/gtest.h>
 
 #include "core/base/error.h"
 #include "tests/support/test_support.h"
@@ -53,8 +52,10 @@ TEST(TrajectoryIo, RoundTripKeepsValuesAndStamps) {
   ASSERT_EQ(back.size(), poses.size());
   for (size_t i = 0; i < poses.size(); ++i) {
     EXPECT_EQ(back[i].stamp, poses[i].stamp);
-    EXPECT_LT((back[i].world_from_cam.translation - poses[i].world_from_cam.translation).norm(), 1e-9);
-    EXPECT_LT(back[i].world_from_cam.rotation.angularDistance(poses[i].world_from_cam.rotation), 1e-9);
+    EXPECT_LT((back[i].world_from_cam.translation - poses[i].world_from_cam.translation).norm(),
+              1e-9);
+    EXPECT_LT(back[i].world_from_cam.rotation.angularDistance(poses[i].world_from_cam.rotation),
+              1e-9);
   }
   // Every data line has exactly 8 columns.
   std::ifstream in(path);

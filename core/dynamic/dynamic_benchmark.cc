@@ -1,4 +1,5 @@
-// Benchmark of the dynamic-object stage on Bonn RGB-D frames (not a test; speed is never pass/fail):
+// Benchmark of the dynamic-object stage on Bonn RGB-D frames (not a test; speed is never
+// pass/fail):
 //   1. detector time per model and input size, with OpenCV's default threads and with 1 thread;
 //   2. detector (1 thread) concurrently with ORB extraction on another thread vs sequentially;
 //   3. the dynamic filter per frame (matching, probability) over the sequence with detections.
@@ -8,18 +9,17 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
-#include <sstream>
-#include <string>
-#include <thread>
-#include <vector>
-
 #include <opencv2/core/utility.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include "core/base/paths.h"
 #include "core/dynamic/dynamic_filter.h"
@@ -67,41 +67,47 @@ int main(int argc, char** argv) {
   bool filter_only = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--frames" && i + 1 < argc) frames = std::stoi(argv[++i]);
-    else if (a == "--annotate" && i + 1 < argc) annotate = argv[++i];
-    else if (a == "--filter-only") filter_only = true;
-    else dataset = a;
+    if (a == "--frames" && i + 1 < argc)
+      frames = std::stoi(argv[++i]);
+    else if (a == "--annotate" && i + 1 < argc)
+      annotate = argv[++i];
+    else if (a == "--filter-only")
+      filter_only = true;
+    else
+      dataset = a;
   }
   const std::vector<std::string> files = RgbFiles(dataset);
   frames = std::min<int>(frames, files.size());
   std::vector<cv::Mat> images;
   for (int k = 0; k < frames; ++k) images.push_back(cv::imread(files[k], cv::IMREAD_COLOR));
-  std::printf("dataset %s, %d frames, OpenCV threads %d\n", dataset.c_str(), frames, cv::getNumThreads());
+  std::printf("dataset %s, %d frames, OpenCV threads %d\n", dataset.c_str(), frames,
+              cv::getNumThreads());
   const int default_threads = cv::getNumThreads();
 
   // 1. Detector time per model / input / threads on 40 frames with people (from entry 200).
   const int first = std::min(200, frames - 1), count = std::min(40, frames - first);
   if (!filter_only)
-  for (const char* model : {"yolo-fastest-1.1", "yolo-fastest-1.1-xl", "yolo-fastest-1.1_body"}) {
-    for (int size : {320, 416}) {
-      for (int threads : {default_threads, 1}) {
-        cv::setNumThreads(threads);
-        DetectorOptions o = DetectorOptionsForModel(model);
-        o.input_width = o.input_height = size;
-        auto det = YoloDetector::Create(o);
-        det->Detect(images[first]);  // warm-up
-        std::vector<double> t;
-        int boxes = 0;
-        for (int k = first; k < first + count; ++k) {
-          const auto t0 = Clock::now();
-          boxes += det->Detect(images[k]).size();
-          t.push_back(Ms(t0, Clock::now()));
+    for (const char* model : {"yolo-fastest-1.1", "yolo-fastest-1.1-xl", "yolo-fastest-1.1_body"}) {
+      for (int size : {320, 416}) {
+        for (int threads : {default_threads, 1}) {
+          cv::setNumThreads(threads);
+          DetectorOptions o = DetectorOptionsForModel(model);
+          o.input_width = o.input_height = size;
+          auto det = YoloDetector::Create(o);
+          det->Detect(images[first]);  // warm-up
+          std::vector<double> t;
+          int boxes = 0;
+          for (int k = first; k < first + count; ++k) {
+            const auto t0 = Clock::now();
+            boxes += det->Detect(images[k]).size();
+            t.push_back(Ms(t0, Clock::now()));
+          }
+          std::printf(
+              "detector %-22s %dx%d threads %d: median %.1f ms mean %.1f ms, %.2f boxes/frame\n",
+              model, size, size, threads, Median(t), Mean(t), double(boxes) / count);
         }
-        std::printf("detector %-22s %dx%d threads %d: median %.1f ms mean %.1f ms, %.2f boxes/frame\n",
-                    model, size, size, threads, Median(t), Mean(t), double(boxes) / count);
       }
     }
-  }
 
   // 2. Concurrency: detector on a worker thread (1 OpenCV thread) while the main thread extracts
   // ORB features, vs the two one after the other.
@@ -131,9 +137,10 @@ int main(int argc, char** argv) {
       worker.join();
       par.push_back(Ms(t0, Clock::now()));
     }
-    std::printf("concurrency (1 OpenCV thread): ORB %.1f ms + detector %.1f ms sequential %.1f ms, "
-                "concurrent %.1f ms (medians)\n",
-                Median(orb_t), Median(det_t), Median(seq), Median(par));
+    std::printf(
+        "concurrency (1 OpenCV thread): ORB %.1f ms + detector %.1f ms sequential %.1f ms, "
+        "concurrent %.1f ms (medians)\n",
+        Median(orb_t), Median(det_t), Median(seq), Median(par));
     cv::setNumThreads(default_threads);
   }
 
@@ -156,20 +163,26 @@ int main(int argc, char** argv) {
       const std::vector<Detection> dets = det->Detect(images[k]);
       const FilterResult r = filter.Process(FilterInput(kps, desc, dets));
       if (k == 0) continue;
-      if (std::getenv("DYN_DEBUG") && mode == DynamicFilterMode::kFull && !dets.empty() && k % 10 == 0) {
+      if (std::getenv("DYN_DEBUG") && mode == DynamicFilterMode::kFull && !dets.empty() &&
+          k % 10 == 0) {
         std::vector<double> d;
         int unmatched = 0, dyn = 0;
         for (const FeatureStatus& f : r.features) {
           if (!f.in_dynamic_region) continue;
-          if (f.has_observation) d.push_back(f.epipolar_distance);
-          else ++unmatched;
+          if (f.has_observation)
+            d.push_back(f.epipolar_distance);
+          else
+            ++unmatched;
           dyn += f.is_dynamic;
         }
         std::sort(d.begin(), d.end());
-        std::printf("k %d region %d obs %zu unmatched %d dyn %d  d p25 %.2f p50 %.2f p75 %.2f p90 %.2f  F-in %d/%d H %d\n", k,
-                    r.num_in_dynamic_region, d.size(), unmatched, dyn, d.empty() ? -1 : d[d.size() / 4],
-                    d.empty() ? -1 : d[d.size() / 2], d.empty() ? -1 : d[3 * d.size() / 4], d.empty() ? -1 : d[9 * d.size() / 10],
-                    r.num_f_inliers, r.num_static_matches_used_for_f, r.used_homography);
+        std::printf(
+            "k %d region %d obs %zu unmatched %d dyn %d  d p25 %.2f p50 %.2f p75 %.2f p90 %.2f  "
+            "F-in %d/%d H %d\n",
+            k, r.num_in_dynamic_region, d.size(), unmatched, dyn, d.empty() ? -1 : d[d.size() / 4],
+            d.empty() ? -1 : d[d.size() / 2], d.empty() ? -1 : d[3 * d.size() / 4],
+            d.empty() ? -1 : d[9 * d.size() / 10], r.num_f_inliers, r.num_static_matches_used_for_f,
+            r.used_homography);
       }
       match_ms.push_back(r.matching_ms);
       prob_ms.push_back(r.probability_ms);
@@ -187,7 +200,7 @@ int main(int argc, char** argv) {
         for (const Detection& d : dets) cv::rectangle(vis, d.box, cv::Scalar(0, 0, 255), 2);
         for (size_t i = 0; i < kps.size(); ++i) {
           const FeatureStatus& f = r.features[i];
-          const cv::Scalar c = f.is_dynamic ? cv::Scalar(0, 0, 255)
+          const cv::Scalar c = f.is_dynamic          ? cv::Scalar(0, 0, 255)
                                : f.in_dynamic_region ? cv::Scalar(0, 255, 255)
                                                      : cv::Scalar(0, 255, 0);
           cv::circle(vis, kps[i].pt, 3, c, cv::FILLED);
@@ -228,13 +241,14 @@ int main(int argc, char** argv) {
       }
     }
     const int n = static_cast<int>(match_ms.size());
-    std::printf("filter %-8s over %d frames: matching median %.2f ms (mean %.2f), probability median "
-                "%.2f ms (mean %.2f); %.0f matches/frame, motion model %.0f %% (H %.0f %%); on %d "
-                "frames with a dynamic region: %.0f features in it, %.0f dynamic, %.0f kept\n",
-                ToString(mode), n, Median(match_ms), Mean(match_ms), Median(prob_ms), Mean(prob_ms),
-                matched / n, 100 * model_ok / n, 100 * homography / n, people_frames,
-                region / std::max(1, people_frames), dynamic / std::max(1, people_frames),
-                in_region_kept / std::max(1, people_frames));
+    std::printf(
+        "filter %-8s over %d frames: matching median %.2f ms (mean %.2f), probability median "
+        "%.2f ms (mean %.2f); %.0f matches/frame, motion model %.0f %% (H %.0f %%); on %d "
+        "frames with a dynamic region: %.0f features in it, %.0f dynamic, %.0f kept\n",
+        ToString(mode), n, Median(match_ms), Mean(match_ms), Median(prob_ms), Mean(prob_ms),
+        matched / n, 100 * model_ok / n, 100 * homography / n, people_frames,
+        region / std::max(1, people_frames), dynamic / std::max(1, people_frames),
+        in_region_kept / std::max(1, people_frames));
   }
   return 0;
 }

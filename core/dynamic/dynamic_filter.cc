@@ -5,17 +5,20 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-
 #include <opencv2/calib3d.hpp>
 
 namespace dygslam {
 
 const char* ToString(DynamicFilterMode mode) {
   switch (mode) {
-    case DynamicFilterMode::kNone: return "none";
-    case DynamicFilterMode::kBoxes: return "boxes";
-    case DynamicFilterMode::kGeometry: return "geometry";
-    case DynamicFilterMode::kFull: return "full";
+    case DynamicFilterMode::kNone:
+      return "none";
+    case DynamicFilterMode::kBoxes:
+      return "boxes";
+    case DynamicFilterMode::kGeometry:
+      return "geometry";
+    case DynamicFilterMode::kFull:
+      return "full";
   }
   return "unknown";
 }
@@ -83,8 +86,8 @@ KalmanProbability KalmanUpdate(const KalmanProbability& previous_posterior, doub
                                double q, double r) {
   const KalmanProbability prior = KalmanPredict(previous_posterior, q);
   const double gain = prior.variance / (prior.variance + r);  // eq. 8
-  return {prior.p + gain * (observation - prior.p),            // eq. 9 (standard update)
-          (1.0 - gain) * prior.variance};                      // eq. 10
+  return {prior.p + gain * (observation - prior.p),           // eq. 9 (standard update)
+          (1.0 - gain) * prior.variance};                     // eq. 10
 }
 
 double ExpansionWeight(double distance, double c2, double delta) {
@@ -138,7 +141,8 @@ std::vector<int> DynamicFilter::MatchToPrevious(const std::vector<cv::KeyPoint>&
     max_x = std::max(max_x, p.x);
     max_y = std::max(max_y, p.y);
   }
-  const int grid_w = static_cast<int>(max_x / cell) + 1, grid_h = static_cast<int>(max_y / cell) + 1;
+  const int grid_w = static_cast<int>(max_x / cell) + 1,
+            grid_h = static_cast<int>(max_y / cell) + 1;
   std::vector<int> cell_start(grid_w * grid_h + 1, 0), cell_items(n_prev);
   auto cell_of = [&](const cv::Point2f& p) {
     const int cx = std::clamp(static_cast<int>(p.x / cell), 0, grid_w - 1);
@@ -160,8 +164,10 @@ std::vector<int> DynamicFilter::MatchToPrevious(const std::vector<cv::KeyPoint>&
   for (int i = 0; i < n_cur; ++i) {
     const cv::Point2f& p = keypoints[i].pt;
     const uint8_t* d_cur = descriptors.ptr<uint8_t>(i);
-    const int cx = static_cast<int>(std::floor(p.x / cell)), cy = static_cast<int>(std::floor(p.y / cell));
-    int best = std::numeric_limits<int>::max(), second = std::numeric_limits<int>::max(), best_j = -1;
+    const int cx = static_cast<int>(std::floor(p.x / cell)),
+              cy = static_cast<int>(std::floor(p.y / cell));
+    int best = std::numeric_limits<int>::max(), second = std::numeric_limits<int>::max(),
+        best_j = -1;
     for (int gy = std::max(cy - 1, 0); gy <= std::min(cy + 1, grid_h - 1); ++gy) {
       for (int gx = std::max(cx - 1, 0); gx <= std::min(cx + 1, grid_w - 1); ++gx) {
         const int c = gy * grid_w + gx;
@@ -226,7 +232,8 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
                      " descriptor rows for " + std::to_string(n) + " keypoints");
   if (n > 0 && (input.descriptors.type() != CV_8UC1 || input.descriptors.cols != 32))
     throw InputError("DynamicFilter::Process: descriptors must be CV_8UC1 N x 32 (ORB)");
-  if (input.undistorted_points != nullptr && static_cast<int>(input.undistorted_points->size()) != n)
+  if (input.undistorted_points != nullptr &&
+      static_cast<int>(input.undistorted_points->size()) != n)
     throw InputError("DynamicFilter::Process: undistorted_points size differs from keypoints");
 
   const DynamicFilterOptions& o = options_;
@@ -251,11 +258,13 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
   }
 
   std::vector<cv::Point2f> geom(n);
-  for (int i = 0; i < n; ++i) geom[i] = input.undistorted_points ? (*input.undistorted_points)[i] : kps[i].pt;
+  for (int i = 0; i < n; ++i)
+    geom[i] = input.undistorted_points ? (*input.undistorted_points)[i] : kps[i].pt;
 
   // b. Matching to the previous frame.
   auto t0 = Clock::now();
-  std::vector<int> matches = has_prev_ ? MatchToPrevious(kps, input.descriptors) : std::vector<int>(n, -1);
+  std::vector<int> matches =
+      has_prev_ ? MatchToPrevious(kps, input.descriptors) : std::vector<int>(n, -1);
   result.matching_ms = ms_since(t0);
 
   t0 = Clock::now();
@@ -294,7 +303,8 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
       cv::Mat f;
       try {
         f = cv::findFundamentalMat(*f_prev, *f_cur, cv::USAC_ACCURATE, o.fundamental_threshold,
-                                   o.fundamental_confidence, o.fundamental_max_iters, cv::noArray());
+                                   o.fundamental_confidence, o.fundamental_max_iters,
+                                   cv::noArray());
       } catch (const cv::Exception&) {
         f.release();
       }
@@ -306,7 +316,8 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
           result.fundamental = f;
           // Inliers under eq. 4 (one-sided distance).
           for (size_t k = 0; k < f_prev->size(); ++k)
-            f_inliers += EpipolarDistance(fundamental, (*f_prev)[k], (*f_cur)[k]) <= o.fundamental_threshold;
+            f_inliers +=
+                EpipolarDistance(fundamental, (*f_prev)[k], (*f_cur)[k]) <= o.fundamental_threshold;
           result.num_f_inliers = f_inliers;
         }
       }
@@ -329,7 +340,8 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
           for (size_t k = 0; k < f_prev->size(); ++k) {
             const cv::Vec3d x = hm * cv::Vec3d((*f_prev)[k].x, (*f_prev)[k].y, 1.0);
             if (std::abs(x[2]) < 1e-12) continue;
-            h_inliers += std::hypot(x[0] / x[2] - (*f_cur)[k].x, x[1] / x[2] - (*f_cur)[k].y) <= h_thr;
+            h_inliers +=
+                std::hypot(x[0] / x[2] - (*f_cur)[k].x, x[1] / x[2] - (*f_cur)[k].y) <= h_thr;
           }
           result.num_h_inliers = h_inliers;
           // H replaces F when it explains the matches as well as F, or, when F had to be fitted
@@ -339,7 +351,8 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
           const bool dominant_in_contaminated =
               result.used_all_matches_for_f &&
               h_inliers >= o.homography_dominant_fraction * static_cast<double>(f_prev->size());
-          if (h_inliers >= o.min_fundamental_matches && (as_good_as_f || dominant_in_contaminated)) {
+          if (h_inliers >= o.min_fundamental_matches &&
+              (as_good_as_f || dominant_in_contaminated)) {
             result.used_homography = true;
             homography = hm;
           }
@@ -359,7 +372,8 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
       if (result.motion_model_ok) {
         double d;
         if (result.used_homography) {
-          const cv::Vec3d x = homography * cv::Vec3d(prev_geom_points_[j].x, prev_geom_points_[j].y, 1.0);
+          const cv::Vec3d x =
+              homography * cv::Vec3d(prev_geom_points_[j].x, prev_geom_points_[j].y, 1.0);
           d = std::abs(x[2]) < 1e-12 ? std::numeric_limits<double>::infinity()
                                      : std::hypot(x[0] / x[2] - geom[i].x, x[1] / x[2] - geom[i].y);
         } else {

@@ -43,10 +43,9 @@
 // distortion); otherwise the keypoint positions are used.
 #pragma once
 
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "core/base/error.h"
 #include "core/base/types.h"
@@ -83,9 +82,9 @@ struct DynamicFilterOptions {
   double box_margin = 0.0;
 
   // Matching to the previous frame.
-  double search_radius = 48.0;   // px
-  int max_hamming = 50;          // bits (of 256)
-  double ratio = 0.8;            // best < ratio * second best (within the window)
+  double search_radius = 48.0;  // px
+  int max_hamming = 50;         // bits (of 256)
+  double ratio = 0.8;           // best < ratio * second best (within the window)
   bool mutual_best = true;
   int max_octave_difference = 1;  // < 0: no octave constraint
 
@@ -111,18 +110,18 @@ struct FilterInput {
               const std::vector<Detection>& detections_in)
       : keypoints(keypoints_in), descriptors(descriptors_in), detections(detections_in) {}
   const std::vector<cv::KeyPoint>& keypoints;  // level-0 pixel coordinates
-  const cv::Mat& descriptors;                   // CV_8UC1, N x 32 (ORB)
-  const std::vector<Detection>& detections;     // dynamic-object boxes (all treated as dynamic)
+  const cv::Mat& descriptors;                  // CV_8UC1, N x 32 (ORB)
+  const std::vector<Detection>& detections;    // dynamic-object boxes (all treated as dynamic)
   // Optional, same size as keypoints: undistorted positions for F / epipolar distances.
   const std::vector<cv::Point2f>* undistorted_points = nullptr;
 };
 
 struct FeatureStatus {
   bool in_dynamic_region = false;
-  int prev_match = -1;      // index of the matched feature in the previous frame, -1 if none
-  bool has_observation = false;  // an epipolar observation z was computed (eqs. 4-5)
+  int prev_match = -1;            // index of the matched feature in the previous frame, -1 if none
+  bool has_observation = false;   // an epipolar observation z was computed (eqs. 4-5)
   double epipolar_distance = -1;  // px, eq. 4 (or homography transfer distance), -1 if none
-  double probability = 0;   // final geometry probability (0 for static-region features)
+  double probability = 0;         // final geometry probability (0 for static-region features)
   bool is_dynamic = false;
   bool matched() const { return prev_match >= 0; }
 };
@@ -131,14 +130,14 @@ struct FilterResult {
   std::vector<FeatureStatus> features;
   int num_features = 0;
   int num_in_dynamic_region = 0;
-  int num_matched = 0;            // all matches to the previous frame
+  int num_matched = 0;  // all matches to the previous frame
   int num_matched_dynamic_region = 0;
   int num_static_matches_used_for_f = 0;
-  int num_f_inliers = 0;          // under eq. 4 with fundamental_threshold
+  int num_f_inliers = 0;  // under eq. 4 with fundamental_threshold
   int num_h_inliers = 0;  // transfer error <= homography_threshold_scale x fundamental_threshold
   // A motion model (F, or H for degenerate motion) was estimated; false: prediction only.
   bool motion_model_ok = false;
-  bool used_homography = false;   // degenerate motion: transfer distance instead of eq. 4
+  bool used_homography = false;  // degenerate motion: transfer distance instead of eq. 4
   bool used_all_matches_for_f = false;
   int num_dynamic = 0;
   cv::Mat fundamental;  // 3x3 CV_64F (p_t^T F p_t-1 = 0), empty if none
@@ -149,7 +148,8 @@ struct FilterResult {
 };
 
 // Eq. 4: distance (px) of p_t to the epipolar line F p_prev (p_t^T F p_prev = 0).
-double EpipolarDistance(const cv::Matx33d& fundamental, const cv::Point2d& p_prev, const cv::Point2d& p_t);
+double EpipolarDistance(const cv::Matx33d& fundamental, const cv::Point2d& p_prev,
+                        const cv::Point2d& p_t);
 // Eq. 5: 1 / (1 + c1 exp(-(d - alpha))).
 double GeometryProbability(double distance, double c1, double alpha);
 
@@ -190,8 +190,8 @@ class DynamicFilter {
 
   DynamicFilterOptions options_;
   bool has_prev_ = false;
-  std::vector<cv::Point2f> prev_points_;        // keypoint positions (matching)
-  std::vector<cv::Point2f> prev_geom_points_;   // undistorted if given (F)
+  std::vector<cv::Point2f> prev_points_;       // keypoint positions (matching)
+  std::vector<cv::Point2f> prev_geom_points_;  // undistorted if given (F)
   std::vector<int> prev_octaves_;
   cv::Mat prev_descriptors_;
   std::vector<State> prev_states_;

@@ -1,13 +1,13 @@
 #include "core/dynamic/dynamic_filter.h"
 
-#include <cmath>
-#include <cstdio>
-#include <random>
+#include <gtest/gtest.h>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-#include <gtest/gtest.h>
+#include <cmath>
+#include <cstdio>
 #include <opencv2/calib3d.hpp>
+#include <random>
 
 #include "core/base/rigid3.h"
 
@@ -41,7 +41,7 @@ TEST(DynamicFormulas, KalmanOverThreeFrames) {
   const double expected_var[3] = {0.5215311004784688, 0.3794721059350969, 0.3194835097848617};
   for (int k = 0; k < 3; ++k) {
     const KalmanProbability predicted = KalmanPredict(s, 0.09);
-    EXPECT_DOUBLE_EQ(predicted.p, s.p);  // eq. 6
+    EXPECT_DOUBLE_EQ(predicted.p, s.p);                         // eq. 6
     EXPECT_NEAR(predicted.variance, s.variance + 0.09, 1e-12);  // eq. 7
     s = KalmanUpdate(s, z[k], 0.09, 1.0);
     EXPECT_NEAR(s.p, expected_p[k], 1e-12) << "frame " << k;
@@ -55,7 +55,8 @@ TEST(DynamicFormulas, ExpansionWeightsEq11And12) {
   EXPECT_EQ(ExpansionWeight(60.01, 1.0, 60), 0.0);
   // Two neighbours at 30 px (P = 0.9) and 45 px (P = 0.2), one at 70 px (ignored).
   const double p = 0.6 + ExpansionWeight(30, 1, 60) * (0.9 - 0.6) +
-                   ExpansionWeight(45, 1, 60) * (0.2 - 0.6) + ExpansionWeight(70, 1, 60) * (1.0 - 0.6);
+                   ExpansionWeight(45, 1, 60) * (0.2 - 0.6) +
+                   ExpansionWeight(70, 1, 60) * (1.0 - 0.6);
   EXPECT_NEAR(p, 0.5930125768173841, 1e-12);
 }
 
@@ -141,9 +142,9 @@ TEST(DynamicGeometry, UsacAccurateFindsKnownFundamental) {
   const Camera cam;
   // Two views 0.25 m apart with 4 degrees of yaw; 20 % of the points moved independently.
   const Rigid3d c1 = CamFromWorldAt(0);
-  const Rigid3d c2 =
-      Rigid3d(Eigen::Matrix3d(Eigen::AngleAxisd(0.07, Eigen::Vector3d::UnitY())), Eigen::Vector3d(0.2, 0.05, 0.1))
-          .Inverse();
+  const Rigid3d c2 = Rigid3d(Eigen::Matrix3d(Eigen::AngleAxisd(0.07, Eigen::Vector3d::UnitY())),
+                             Eigen::Vector3d(0.2, 0.05, 0.1))
+                         .Inverse();
   const cv::Matx33d f_true = TrueFundamental(cam, c2 * c1.Inverse());
   std::vector<cv::Point2f> p1, p2;
   std::vector<bool> moved;
@@ -151,7 +152,8 @@ TEST(DynamicGeometry, UsacAccurateFindsKnownFundamental) {
   while (p1.size() < 400) {
     const Eigen::Vector3d x(ux(rng), uy(rng), uz(rng));
     const bool mv = u01(rng) < 0.2;
-    const Eigen::Vector3d x2 = mv ? Eigen::Vector3d(x + Eigen::Vector3d(um(rng), um(rng), um(rng))) : x;
+    const Eigen::Vector3d x2 =
+        mv ? Eigen::Vector3d(x + Eigen::Vector3d(um(rng), um(rng), um(rng))) : x;
     cv::Point2f a, b;
     if (!cam.Project(c1 * x, &a) || !cam.Project(c2 * x2, &b)) continue;
     // Noise-free check of eq. 4 with the true F.
@@ -181,9 +183,10 @@ TEST(DynamicGeometry, UsacAccurateFindsKnownFundamental) {
       static_inliers += mask.at<uint8_t>(static_cast<int>(i)) != 0;
     }
   }
-  std::printf("USAC_ACCURATE: static mean epipolar distance %.3f px, static inliers %d/%d, "
-              "moved far %d/%d, moved inliers %d\n",
-              static_sum / static_n, static_inliers, static_n, moved_far, moved_n, moved_inliers);
+  std::printf(
+      "USAC_ACCURATE: static mean epipolar distance %.3f px, static inliers %d/%d, "
+      "moved far %d/%d, moved inliers %d\n",
+      static_sum / static_n, static_inliers, static_n, moved_far, moved_n, moved_inliers);
   EXPECT_LT(static_sum / static_n, 0.6);
   EXPECT_GT(static_inliers, 0.85 * static_n);
   EXPECT_GT(moved_far, 0.8 * moved_n);
@@ -240,7 +243,8 @@ class SequenceGenerator {
     cv::Rect2f box;
     bool have_box = false;
     for (const Track& t : tracks_) {
-      const Eigen::Vector3d x = t.moving ? Eigen::Vector3d(t.point + k * person_velocity_) : t.point;
+      const Eigen::Vector3d x =
+          t.moving ? Eigen::Vector3d(t.point + k * person_velocity_) : t.point;
       cv::Point2f uv;
       if (!camera_.Project(cam_from_world * x, &uv)) continue;
       uv.x += static_cast<float>(noise(rng_));
@@ -300,11 +304,16 @@ Score RunSequence(DynamicFilterMode mode, SequenceGenerator* gen, int frames, in
     EXPECT_EQ(r.features.size(), f.keypoints.size());
     match_ms += r.matching_ms;
     if (std::getenv("DYN_DEBUG")) {
-      double dd = 0; int nd = 0;
+      double dd = 0;
+      int nd = 0;
       for (size_t i = 0; i < f.keypoints.size(); ++i)
-        if (f.truth_dynamic[i] && r.features[i].has_observation) { dd += r.features[i].epipolar_distance; ++nd; }
-      std::printf("mode %s k %d matched %d F %d H %d usedH %d allF %d mean mover d %.2f (%d)\n", ToString(mode), k,
-                  r.num_matched, r.num_f_inliers, r.num_h_inliers, r.used_homography, r.used_all_matches_for_f, nd ? dd / nd : -1.0, nd);
+        if (f.truth_dynamic[i] && r.features[i].has_observation) {
+          dd += r.features[i].epipolar_distance;
+          ++nd;
+        }
+      std::printf("mode %s k %d matched %d F %d H %d usedH %d allF %d mean mover d %.2f (%d)\n",
+                  ToString(mode), k, r.num_matched, r.num_f_inliers, r.num_h_inliers,
+                  r.used_homography, r.used_all_matches_for_f, nd ? dd / nd : -1.0, nd);
     }
     prob_ms += r.probability_ms;
     if (k < skip) continue;
@@ -326,9 +335,10 @@ Score RunSequence(DynamicFilterMode mode, SequenceGenerator* gen, int frames, in
 }
 
 void Report(const char* name, const Score& s) {
-  std::printf("%-28s precision %.3f recall %.3f  static-in-box kept %d/%d (%.2f)  tp %d fp %d fn %d\n",
-              name, s.precision(), s.recall(), s.static_in_box_kept, s.static_in_box,
-              s.static_in_box_kept_ratio(), s.tp, s.fp, s.fn);
+  std::printf(
+      "%-28s precision %.3f recall %.3f  static-in-box kept %d/%d (%.2f)  tp %d fp %d fn %d\n",
+      name, s.precision(), s.recall(), s.static_in_box_kept, s.static_in_box,
+      s.static_in_box_kept_ratio(), s.tp, s.fp, s.fn);
 }
 
 TEST(DynamicFilterSequence, FullModeRemovesMovingKeepsStatic) {
@@ -419,7 +429,7 @@ TEST(DynamicFilterSteps, FirstFrameAndExpansionAndKalmanChain) {
     for (const auto& p : base) kps.emplace_back(p + shift, 31.f);
     kps.emplace_back(cv::Point2f(345, 270) + shift, 31.f);  // A (static, in box)
     kps.emplace_back(cv::Point2f(390, 310) + shift, 31.f);  // B (static, in box)
-    kps.emplace_back(cv::Point2f(360, 300), 31.f);           // C (new every frame)
+    kps.emplace_back(cv::Point2f(360, 300), 31.f);          // C (new every frame)
     cv::Mat desc = bg_desc.clone();
     desc.push_back(RandomDescriptors(1, &rng));
     const FilterResult r = filter.Process(FilterInput(kps, desc, dets));
@@ -439,7 +449,8 @@ TEST(DynamicFilterSteps, FirstFrameAndExpansionAndKalmanChain) {
     EXPECT_FALSE(c.matched());
     ASSERT_TRUE(a.has_observation);
     // Kalman chain: the posterior of A in frame k-1 is its prior in frame k.
-    expected_a = KalmanUpdate(expected_a, GeometryProbability(a.epipolar_distance, 2.0, 0.4), 0.09, 1.0);
+    expected_a =
+        KalmanUpdate(expected_a, GeometryProbability(a.epipolar_distance, 2.0, 0.4), 0.09, 1.0);
     EXPECT_NEAR(a.probability, expected_a.p, 1e-9) << "frame " << k;
     EXPECT_LT(a.epipolar_distance, 1.0);
     EXPECT_FALSE(a.is_dynamic);

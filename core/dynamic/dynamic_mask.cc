@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 namespace dygslam {
@@ -12,7 +11,8 @@ void DynamicMaskOptions::Check() const {
   DYGSLAM_CHECK_OPTION(min_features_for_depth >= 1, "DynamicMask.min_features_for_depth");
   DYGSLAM_CHECK_OPTION(foreground_min_fraction > 0 && foreground_min_fraction <= 1,
                        "DynamicMask.foreground_min_fraction");
-  DYGSLAM_CHECK_OPTION(histogram_bin > 0 && std::isfinite(histogram_bin), "DynamicMask.histogram_bin");
+  DYGSLAM_CHECK_OPTION(histogram_bin > 0 && std::isfinite(histogram_bin),
+                       "DynamicMask.histogram_bin");
   DYGSLAM_CHECK_OPTION(dilation_px >= 0 && dilation_px <= 100, "DynamicMask.dilation_px");
   DYGSLAM_CHECK_OPTION(feature_radius >= 0 && feature_radius <= 200, "DynamicMask.feature_radius");
   DYGSLAM_CHECK_OPTION(box_margin >= 0 && std::isfinite(box_margin), "DynamicMask.box_margin");

@@ -13,9 +13,8 @@
 // within depth_band of its box's object depth (features outside boxes: always).
 #pragma once
 
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "core/base/error.h"
 #include "core/base/types.h"
@@ -28,7 +27,7 @@ struct DynamicMaskOptions {
   double foreground_min_fraction = 0.15;
   double histogram_bin = 0.05;  // m
   int dilation_px = 3;
-  int feature_radius = 8;  // px
+  int feature_radius = 8;   // px
   double box_margin = 0.0;  // px added on each side of the boxes
   void Check() const;
 };

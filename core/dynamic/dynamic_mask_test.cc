@@ -1,6 +1,7 @@
 #include "core/dynamic/dynamic_mask.h"
 
 #include <gtest/gtest.h>
+
 #include <opencv2/imgproc.hpp>
 
 namespace dygslam {
@@ -12,7 +13,8 @@ struct Scene {
   cv::Mat person = cv::Mat(480, 640, CV_8UC1, cv::Scalar(0));
   std::vector<Detection> detections;
   Scene() {
-    cv::ellipse(person, cv::Point(300, 260), cv::Size(60, 150), 0, 0, 360, cv::Scalar(255), cv::FILLED);
+    cv::ellipse(person, cv::Point(300, 260), cv::Size(60, 150), 0, 0, 360, cv::Scalar(255),
+                cv::FILLED);
     depth.setTo(1.6f, person);
     Detection d;
     d.box = cv::Rect2f(230, 100, 140, 330);
@@ -82,7 +84,8 @@ TEST(DynamicMask, FeatureDisksAndNoDepth) {
   EXPECT_EQ(mask.at<uint8_t>(400, 600), 0);
   // Without depth the whole box is dynamic.
   o.dilation_px = 0;
-  const cv::Mat boxes_only = ComputeDynamicMask(cv::Size(640, 480), cv::Mat(), s.detections, {}, {}, o);
+  const cv::Mat boxes_only =
+      ComputeDynamicMask(cv::Size(640, 480), cv::Mat(), s.detections, {}, {}, o);
   EXPECT_EQ(cv::countNonZero(boxes_only), 140 * 330);
   EXPECT_THROW(ComputeDynamicMask(cv::Size(640, 480), cv::Mat(480, 640, CV_16UC1), {}, {}, {}),
                InputError);

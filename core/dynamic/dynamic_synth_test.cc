@@ -1,8 +1,8 @@
 // The filter on the synthetic RGB-D room (core/synth): ORB features, ground-truth boxes, precision
 // and recall of dynamic-feature removal against the ground-truth dynamic masks.
-#include <cstdio>
-
 #include <gtest/gtest.h>
+
+#include <cstdio>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -19,7 +19,7 @@ struct Counts {
 };
 
 Counts RunFilter(const SyntheticScene& scene, const std::vector<SyntheticFrame>& frames,
-           DynamicFilterMode mode, double* matching_ms, double* probability_ms) {
+                 DynamicFilterMode mode, double* matching_ms, double* probability_ms) {
   DynamicFilterOptions options;
   options.mode = mode;
   DynamicFilter filter(options);
@@ -38,7 +38,8 @@ Counts RunFilter(const SyntheticScene& scene, const std::vector<SyntheticFrame>&
     constexpr float kPad = 30.f;
     std::vector<Detection> boxes = f.boxes;
     for (Detection& d : boxes) {
-      d.box = cv::Rect2f(d.box.x - kPad, d.box.y - kPad, d.box.width + 2 * kPad, d.box.height + 2 * kPad) &
+      d.box = cv::Rect2f(d.box.x - kPad, d.box.y - kPad, d.box.width + 2 * kPad,
+                         d.box.height + 2 * kPad) &
               cv::Rect2f(0, 0, static_cast<float>(f.rgb.cols), static_cast<float>(f.rgb.rows));
     }
     const FilterResult r = filter.Process(FilterInput(kps, desc, boxes));
@@ -48,15 +49,28 @@ Counts RunFilter(const SyntheticScene& scene, const std::vector<SyntheticFrame>&
       double ds = 0, dd = 0;
       int ns = 0, nd = 0, nsb = 0, nsm = 0;
       for (size_t i = 0; i < kps.size(); ++i) {
-        const bool truth = f.dynamic_mask.at<uint8_t>(cvRound(kps[i].pt.y), cvRound(kps[i].pt.x)) != 0;
+        const bool truth =
+            f.dynamic_mask.at<uint8_t>(cvRound(kps[i].pt.y), cvRound(kps[i].pt.x)) != 0;
         const FeatureStatus& s = r.features[i];
-        if (!truth && s.in_dynamic_region) { ++nsb; nsm += s.matched(); }
+        if (!truth && s.in_dynamic_region) {
+          ++nsb;
+          nsm += s.matched();
+        }
         if (!s.has_observation) continue;
-        if (truth) { dd += s.epipolar_distance; ++nd; } else { ds += s.epipolar_distance; ++ns; }
+        if (truth) {
+          dd += s.epipolar_distance;
+          ++nd;
+        } else {
+          ds += s.epipolar_distance;
+          ++ns;
+        }
       }
-      std::printf("k %zu feats %d region %d matched %d (dyn-region %d) Fin %d Hin %d usedH %d  static-in-box %d matched %d d %.2f (%d)  mover d %.2f (%d)\n",
-                  k, r.num_features, r.num_in_dynamic_region, r.num_matched, r.num_matched_dynamic_region,
-                  r.num_f_inliers, r.num_h_inliers, r.used_homography, nsb, nsm, ns ? ds / ns : -1., ns, nd ? dd / nd : -1., nd);
+      std::printf(
+          "k %zu feats %d region %d matched %d (dyn-region %d) Fin %d Hin %d usedH %d  "
+          "static-in-box %d matched %d d %.2f (%d)  mover d %.2f (%d)\n",
+          k, r.num_features, r.num_in_dynamic_region, r.num_matched, r.num_matched_dynamic_region,
+          r.num_f_inliers, r.num_h_inliers, r.used_homography, nsb, nsm, ns ? ds / ns : -1., ns,
+          nd ? dd / nd : -1., nd);
     }
     if (k < 2) continue;  // let the Kalman filter settle
     for (size_t i = 0; i < kps.size(); ++i) {
@@ -67,7 +81,8 @@ Counts RunFilter(const SyntheticScene& scene, const std::vector<SyntheticFrame>&
       constexpr int kClear = 12;
       const cv::Rect image(0, 0, f.rgb.cols, f.rgb.rows);
       const cv::Rect win = cv::Rect(p.x - 1, p.y - 1, 3, 3) & image;
-      const cv::Rect wide = cv::Rect(p.x - kClear, p.y - kClear, 2 * kClear + 1, 2 * kClear + 1) & image;
+      const cv::Rect wide =
+          cv::Rect(p.x - kClear, p.y - kClear, 2 * kClear + 1, 2 * kClear + 1) & image;
       const bool truth = cv::countNonZero(f.dynamic_mask(win)) == win.area();
       if (!truth && cv::countNonZero(f.dynamic_mask(wide)) != 0) continue;
       const bool pred = r.features[i].is_dynamic;
@@ -101,8 +116,9 @@ TEST(DynamicFilterSynthetic, RemovesMovingObjectFeatures) {
   const Counts full = RunFilter(scene, frames, DynamicFilterMode::kFull, &m_full, &p_full);
   const Counts boxes = RunFilter(scene, frames, DynamicFilterMode::kBoxes, &m_boxes, &p_boxes);
   for (const auto& [name, c] : {std::pair<const char*, Counts>{"full", full}, {"boxes", boxes}}) {
-    std::printf("synthetic %-5s precision %.3f recall %.3f  static-in-box kept %d/%d  tp %d fp %d fn %d\n",
-                name, c.precision(), c.recall(), c.static_in_box_kept, c.static_in_box, c.tp, c.fp, c.fn);
+    std::printf(
+        "synthetic %-5s precision %.3f recall %.3f  static-in-box kept %d/%d  tp %d fp %d fn %d\n",
+        name, c.precision(), c.recall(), c.static_in_box_kept, c.static_in_box, c.tp, c.fp, c.fn);
   }
   std::printf("synthetic full: matching %.2f ms, probability %.2f ms per frame\n", m_full, p_full);
   ASSERT_GT(full.tp + full.fn, 100) << "too few features on the moving objects to measure";

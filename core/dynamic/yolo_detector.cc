@@ -5,11 +5,10 @@
 #include <filesystem>
 #include <fstream>
 #include <numeric>
-#include <sstream>
-
 #include <opencv2/core/utility.hpp>
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "core/base/log.h"
 #include "core/base/paths.h"
@@ -44,7 +43,8 @@ std::string Trim(const std::string& s) {
 void RequireReadableFile(const std::string& path, const char* what) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, 0, std::string(what) + " file not found");
-  if (!fs::is_regular_file(path, ec)) throw InputError(path, 0, std::string(what) + " is not a regular file");
+  if (!fs::is_regular_file(path, ec))
+    throw InputError(path, 0, std::string(what) + " is not a regular file");
   std::ifstream f(path, std::ios::binary);
   if (!f) throw InputError(path, 0, std::string("cannot open ") + what + " file");
 }
@@ -73,11 +73,13 @@ std::vector<CfgSection> ReadCfgSections(const std::string& path) {
       continue;
     }
     const auto eq = line.find('=');
-    if (eq == std::string::npos) throw InputError(path, line_no, "expected key=value, got '" + line + "'");
+    if (eq == std::string::npos)
+      throw InputError(path, line_no, "expected key=value, got '" + line + "'");
     if (sections.empty()) throw InputError(path, line_no, "key=value before the first [section]");
     sections.back().values[Trim(line.substr(0, eq))] = Trim(line.substr(eq + 1));
   }
-  if (sections.empty()) throw InputError(path, 0, "Darknet cfg has no sections (empty or not a cfg)");
+  if (sections.empty())
+    throw InputError(path, 0, "Darknet cfg has no sections (empty or not a cfg)");
   if (sections.front().type != "net" && sections.front().type != "network")
     throw InputError(path, sections.front().line, "Darknet cfg must start with [net]");
   return sections;
@@ -92,7 +94,8 @@ int GetInt(const std::string& path, const CfgSection& s, const std::string& key,
     if (pos != it->second.size()) throw std::invalid_argument("trailing");
     return v;
   } catch (const std::exception&) {
-    throw InputError(path, s.line, "[" + s.type + "] " + key + "=" + it->second + " is not an integer");
+    throw InputError(path, s.line,
+                     "[" + s.type + "] " + key + "=" + it->second + " is not an integer");
   }
 }
 
@@ -108,7 +111,8 @@ std::vector<int> GetIntList(const std::string& path, const CfgSection& s, const 
     try {
       out.push_back(std::stoi(item));
     } catch (const std::exception&) {
-      throw InputError(path, s.line, "[" + s.type + "] " + key + "=" + it->second + " is not a list of integers");
+      throw InputError(path, s.line,
+                       "[" + s.type + "] " + key + "=" + it->second + " is not a list of integers");
     }
   }
   if (out.empty()) throw InputError(path, s.line, "[" + s.type + "] " + key + "= is empty");
@@ -148,8 +152,9 @@ DarknetCfgInfo ParseDarknetCfg(const std::string& cfg_path) {
     auto layer_ref = [&](int ref) {
       const int abs = ref < 0 ? index + ref : ref;
       if (abs < 0 || abs >= index)
-        throw InputError(cfg_path, s.line, "[" + s.type + "] refers to layer " + std::to_string(ref) +
-                                               " which does not precede layer " + std::to_string(index));
+        throw InputError(cfg_path, s.line,
+                         "[" + s.type + "] refers to layer " + std::to_string(ref) +
+                             " which does not precede layer " + std::to_string(index));
       return abs;
     };
     if (s.type == "convolutional" || s.type == "conv") {
@@ -158,8 +163,9 @@ DarknetCfgInfo ParseDarknetCfg(const std::string& cfg_path) {
       const int groups = GetInt(cfg_path, s, "groups", 1);
       const bool bn = GetInt(cfg_path, s, "batch_normalize", 0) != 0;
       if (filters <= 0 || size <= 0 || groups <= 0 || channels % groups != 0)
-        throw InputError(cfg_path, s.line, "[convolutional] with invalid filters/size/groups for " +
-                                               std::to_string(channels) + " input channels");
+        throw InputError(cfg_path, s.line,
+                         "[convolutional] with invalid filters/size/groups for " +
+                             std::to_string(channels) + " input channels");
       info.num_parameters += int64_t{filters} * (bn ? 4 : 1);
       info.num_parameters += int64_t{filters} * (channels / groups) * size * size;
       ++info.num_conv_layers;
@@ -169,7 +175,8 @@ DarknetCfgInfo ParseDarknetCfg(const std::string& cfg_path) {
       int sum = 0;
       for (int r : refs) sum += out_channels[layer_ref(r)];
       const int groups = GetInt(cfg_path, s, "groups", 1);
-      if (groups <= 0 || sum % groups != 0) throw InputError(cfg_path, s.line, "[route] invalid groups");
+      if (groups <= 0 || sum % groups != 0)
+        throw InputError(cfg_path, s.line, "[route] invalid groups");
       channels = sum / groups;
     } else if (s.type == "shortcut") {
       layer_ref(GetInt(cfg_path, s, "from", -1));
@@ -191,14 +198,16 @@ DarknetCfgInfo ParseDarknetCfg(const std::string& cfg_path) {
     }
     out_channels.push_back(channels);
   }
-  if (info.num_conv_layers == 0) throw InputError(cfg_path, 0, "Darknet cfg has no [convolutional] layer");
+  if (info.num_conv_layers == 0)
+    throw InputError(cfg_path, 0, "Darknet cfg has no [convolutional] layer");
   return info;
 }
 
 DetectorOptions DetectorOptionsForModel(const std::string& name, const std::string& models_dir_in) {
   const std::string models_dir = models_dir_in.empty() ? ModelsDir() : models_dir_in;
   if (models_dir.empty())
-    throw InputError("models directory not found (set DYGSLAM_MODELS_DIR) while resolving model '" + name + "'");
+    throw InputError("models directory not found (set DYGSLAM_MODELS_DIR) while resolving model '" +
+                     name + "'");
   struct Known {
     const char* name;
     const char* dir;
@@ -209,11 +218,13 @@ DetectorOptions DetectorOptionsForModel(const std::string& name, const std::stri
   static const Known kKnown[] = {
       {"yolo-fastest-1.1", "yolo-fastest-1.1_coco", "yolo-fastest-1.1", "coco.names", 320},
       {"yolo-fastest-1.1-xl", "yolo-fastest-1.1_coco", "yolo-fastest-1.1-xl", "coco.names", 320},
-      {"yolo-fastest-1.1_body", "yolo-fastest-1.1_body", "yolo-fastest-1.1_body", "body.names", 320},
+      {"yolo-fastest-1.1_body", "yolo-fastest-1.1_body", "yolo-fastest-1.1_body", "body.names",
+       320},
       {"body", "yolo-fastest-1.1_body", "yolo-fastest-1.1_body", "body.names", 320},
       {"yolov3-tiny", "yolov3-tiny", "yolov3-tiny", "coco.names", 416},
       {"CYTI", "crowd-slam-CYTI-yolov3-tiny-crowdhuman_cfg-only", "CYTI", "CYTI.names", 160},
-      {"crowd-slam-CYTI", "crowd-slam-CYTI-yolov3-tiny-crowdhuman_cfg-only", "CYTI", "CYTI.names", 160},
+      {"crowd-slam-CYTI", "crowd-slam-CYTI-yolov3-tiny-crowdhuman_cfg-only", "CYTI", "CYTI.names",
+       160},
   };
   DetectorOptions options;
   for (const Known& k : kKnown) {
@@ -236,15 +247,20 @@ DetectorOptions DetectorOptionsForModel(const std::string& name, const std::stri
     if (e.path().extension() == ".names") names.push_back(e.path());
   }
   if (cfgs.size() != 1)
-    throw InputError(dir.string(), 0, "expected exactly one .cfg in model directory, found " + std::to_string(cfgs.size()));
+    throw InputError(
+        dir.string(), 0,
+        "expected exactly one .cfg in model directory, found " + std::to_string(cfgs.size()));
   if (names.size() != 1)
-    throw InputError(dir.string(), 0, "expected exactly one .names in model directory, found " + std::to_string(names.size()));
+    throw InputError(
+        dir.string(), 0,
+        "expected exactly one .names in model directory, found " + std::to_string(names.size()));
   options.cfg_path = cfgs[0].string();
   options.weights_path = fs::path(cfgs[0]).replace_extension(".weights").string();
   options.names_path = names[0].string();
   const DarknetCfgInfo info = ParseDarknetCfg(options.cfg_path);
   if (info.input_width > 0 && info.input_width % 32 == 0) options.input_width = info.input_width;
-  if (info.input_height > 0 && info.input_height % 32 == 0) options.input_height = info.input_height;
+  if (info.input_height > 0 && info.input_height % 32 == 0)
+    options.input_height = info.input_height;
   return options;
 }
 
@@ -285,7 +301,8 @@ std::unique_ptr<YoloDetector> YoloDetector::Create(const DetectorOptions& option
                        std::string(actual < expected ? "Darknet weights file is truncated or"
                                                      : "Darknet weights file is too large:") +
                            " does not belong to " + options.cfg_path + ": " +
-                           std::to_string(actual) + " bytes, the cfg needs " + std::to_string(expected));
+                           std::to_string(actual) + " bytes, the cfg needs " +
+                           std::to_string(expected));
   }
 
   std::unique_ptr<YoloDetector> det(new YoloDetector(options));
@@ -309,8 +326,10 @@ std::unique_ptr<YoloDetector> YoloDetector::Create(const DetectorOptions& option
     std::string wanted;
     for (const auto& c : options.dynamic_classes) wanted += (wanted.empty() ? "" : ", ") + c;
     throw InputError(options.names_path, 0,
-                     "none of the dynamic classes {" + wanted + "} is in the class names file "
-                     "(after aliases); first class is '" + det->class_names_.front() + "'");
+                     "none of the dynamic classes {" + wanted +
+                         "} is in the class names file "
+                         "(after aliases); first class is '" +
+                         det->class_names_.front() + "'");
   }
 
   if (options.num_threads > 0) cv::setNumThreads(options.num_threads);
@@ -322,7 +341,8 @@ std::unique_ptr<YoloDetector> YoloDetector::Create(const DetectorOptions& option
                          ": " + e.what());
   }
   if (det->impl_->net.empty())
-    throw InputError(options.cfg_path, 0, "OpenCV loaded an empty network (weights " + options.weights_path + ")");
+    throw InputError(options.cfg_path, 0,
+                     "OpenCV loaded an empty network (weights " + options.weights_path + ")");
   det->impl_->net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
   det->impl_->net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
   det->impl_->output_names = det->impl_->net.getUnconnectedOutLayersNames();
@@ -378,7 +398,8 @@ std::vector<Detection> YoloDetector::Detect(const cv::Mat& bgr) {
   const cv::Rect2d image_rect(0, 0, width, height);
   for (auto& [cls, cls_boxes] : boxes) {
     std::vector<int> keep;
-    cv::dnn::NMSBoxes(cls_boxes, scores[cls], options_.confidence_threshold, options_.nms_threshold, keep);
+    cv::dnn::NMSBoxes(cls_boxes, scores[cls], options_.confidence_threshold, options_.nms_threshold,
+                      keep);
     for (int k : keep) {
       const cv::Rect2d clipped = cls_boxes[k] & image_rect;
       if (clipped.width <= 0 || clipped.height <= 0) continue;

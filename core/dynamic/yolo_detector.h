@@ -26,10 +26,9 @@
 
 #include <map>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "core/base/error.h"
 #include "core/base/types.h"
@@ -64,11 +63,13 @@ struct DetectorOptions {
 //   "yolo-fastest-1.1", "yolo-fastest-1.1-xl"  (dir yolo-fastest-1.1_coco)
 //   "yolo-fastest-1.1_body" (alias "body")     (dir yolo-fastest-1.1_body)
 //   "yolov3-tiny"                              (dir yolov3-tiny; weights from the Darknet release)
-//   "CYTI" (alias "crowd-slam-CYTI")           (dir crowd-slam-CYTI-yolov3-tiny-crowdhuman_cfg-only)
+//   "CYTI" (alias "crowd-slam-CYTI")           (dir
+//   crowd-slam-CYTI-yolov3-tiny-crowdhuman_cfg-only)
 // Any other name: <models_dir>/<name>/ with exactly one .cfg, the .weights of the same stem and
 // one .names file. Throws InputError when the model directory or its cfg is not found. The
 // returned options have the model's recommended input size. Files are validated by Create().
-DetectorOptions DetectorOptionsForModel(const std::string& name, const std::string& models_dir = "");
+DetectorOptions DetectorOptionsForModel(const std::string& name,
+                                        const std::string& models_dir = "");
 
 // What a Darknet cfg declares: the number of float parameters its .weights file must hold after
 // the header (biases, batch-norm scales/means/variances and kernels of every [convolutional]

@@ -1,12 +1,12 @@
 #include "core/dynamic/yolo_detector.h"
 
+#include <gtest/gtest.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <random>
-
-#include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <random>
 
 #include "tests/support/test_support.h"
 
@@ -19,11 +19,11 @@ std::string RequireModels() {
   return dir;
 }
 
-#define DYGSLAM_REQUIRE_MODELS(var)                                                      \
-  const std::string var = RequireModels();                                               \
-  if (var.empty()) {                                                                     \
+#define DYGSLAM_REQUIRE_MODELS(var)                                                     \
+  const std::string var = RequireModels();                                              \
+  if (var.empty()) {                                                                    \
     if (std::getenv("DYGSLAM_REQUIRE_DATA") != nullptr) FAIL() << "models dir missing"; \
-    GTEST_SKIP() << "models directory not found (set DYGSLAM_MODELS_DIR)";               \
+    GTEST_SKIP() << "models directory not found (set DYGSLAM_MODELS_DIR)";              \
   }
 
 // Path of the `index`-th image entry (0-based, comments skipped) of <dataset>/rgb.txt.
@@ -68,7 +68,8 @@ TEST(DarknetCfg, ExpectedWeightSizesMatchShippedFiles) {
         << name << ": file " << size << " params " << info.num_parameters;
   }
   // YOLOv3-tiny: the official weights file has 35,434,956 bytes (20-byte header).
-  const DarknetCfgInfo tiny = ParseDarknetCfg(DetectorOptionsForModel("yolov3-tiny", models).cfg_path);
+  const DarknetCfgInfo tiny =
+      ParseDarknetCfg(DetectorOptionsForModel("yolov3-tiny", models).cfg_path);
   EXPECT_EQ(20 + 4 * tiny.num_parameters, 35434956);
   EXPECT_EQ(tiny.num_classes, 80);
   EXPECT_EQ(tiny.num_conv_layers, 13);
@@ -80,19 +81,14 @@ TEST(DarknetCfg, ExpectedWeightSizesMatchShippedFiles) {
 TEST(DarknetCfg, MalformedCfgNamesFileAndLine) {
   const std::string dir = testing::MakeTempDir("cfg");
   const std::string cfg = dir + "/bad.cfg";
-  {
-    std::ofstream(cfg) << "[net]\nwidth=320\n[convolutional]\nfilters=abc\n";
-  }
+  { std::ofstream(cfg) << "[net]\nwidth=320\n[convolutional]\nfilters=abc\n"; }
   ExpectThrowsNaming([&] { ParseDarknetCfg(cfg); }, cfg + ":3");
-  {
-    std::ofstream(cfg) << "[net]\n[convolutional]\nfilters=8\n[mystery]\n";
-  }
+  { std::ofstream(cfg) << "[net]\n[convolutional]\nfilters=8\n[mystery]\n"; }
   ExpectThrowsNaming([&] { ParseDarknetCfg(cfg); }, cfg + ":4", "mystery");
-  {
-    std::ofstream(cfg) << "";
-  }
+  { std::ofstream(cfg) << ""; }
   ExpectThrowsNaming([&] { ParseDarknetCfg(cfg); }, cfg);
-  ExpectThrowsNaming([&] { ParseDarknetCfg(dir + "/absent.cfg"); }, dir + "/absent.cfg", "not found");
+  ExpectThrowsNaming([&] { ParseDarknetCfg(dir + "/absent.cfg"); }, dir + "/absent.cfg",
+                     "not found");
 }
 
 TEST(YoloDetectorOptions, Check) {
@@ -109,7 +105,8 @@ TEST(YoloDetectorOptions, Check) {
   o.confidence_threshold = 0.3f;
   o.dynamic_classes.clear();
   EXPECT_THROW(o.Check(), InvalidOptions);
-  EXPECT_THROW(DetectorOptionsForModel("no-such-model", testing::MakeTempDir("models")), InputError);
+  EXPECT_THROW(DetectorOptionsForModel("no-such-model", testing::MakeTempDir("models")),
+               InputError);
 }
 
 class ShippedModels : public ::testing::TestWithParam<const char*> {};
@@ -210,9 +207,7 @@ TEST(YoloDetectorFiles, MissingAndCorruptFilesNameTheFile) {
   ExpectThrowsNaming([&] { YoloDetector::Create(o); }, o.names_path, "person");
 
   // Corrupt cfg (garbage bytes).
-  {
-    std::ofstream(dir + "/garbage.cfg", std::ios::binary) << "\x01\x02 not a cfg \xff";
-  }
+  { std::ofstream(dir + "/garbage.cfg", std::ios::binary) << "\x01\x02 not a cfg \xff"; }
   o = good;
   o.cfg_path = dir + "/garbage.cfg";
   ExpectThrowsNaming([&] { YoloDetector::Create(o); }, o.cfg_path);
@@ -252,8 +247,8 @@ TEST(YoloDetectorFiles, Yolov3TinyCfgRunsWithGeneratedWeights) {
       EXPECT_GE(d.box.x, 0.f);
       EXPECT_LE(d.box.x + d.box.width, 640.f + 1e-3f);
     }
-    std::printf("%s with generated weights: %zu boxes (meaningless values, path check only)\n", name,
-                dets.size());
+    std::printf("%s with generated weights: %zu boxes (meaningless values, path check only)\n",
+                name, dets.size());
   }
 }
 

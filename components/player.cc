@@ -30,14 +30,17 @@ void PlayerOptions::Check() const {
 DatasetPlayer::DatasetPlayer(const PlayerOptions& options)
     : options_(options), dataset_(RgbdDataset::Open(options.dataset_dir)) {
   options_.Check();
-  begin_ = std::min(options.first_frame, dataset_.size());
-  end_ = options.max_frames == 0 ? dataset_.size()
-                                 : std::min(dataset_.size(), begin_ + options.max_frames);
+  const size_t last = options.last_entry == 0
+                          ? dataset_.num_rgb_entries()
+                          : std::min(options.last_entry, dataset_.num_rgb_entries());
+  for (size_t k = options.first_entry; k < last; ++k) {
+    if (const auto index = dataset_.FrameForRgbEntry(k)) indices_.push_back(*index);
+  }
 }
 
 RgbdFrameData DatasetPlayer::Frame(size_t i) const {
   if (i >= num_frames()) throw std::out_of_range("DatasetPlayer::Frame: index out of range");
-  const size_t k = begin_ + i;
+  const size_t k = indices_[i];
   RgbdFrameData f;
   f.stamp = dataset_.frame(k).rgb_stamp;
   f.seq = i;
@@ -51,8 +54,8 @@ RgbdFrameData DatasetPlayer::Frame(size_t i) const {
 
 std::vector<StampedPose> DatasetPlayer::GroundTruth() const {
   if (!dataset_.has_groundtruth() || num_frames() == 0) return {};
-  const Timestamp first = dataset_.frame(begin_).rgb_stamp;
-  const Timestamp last = dataset_.frame(end_ - 1).rgb_stamp;
+  const Timestamp first = dataset_.frame(indices_.front()).rgb_stamp;
+  const Timestamp last = dataset_.frame(indices_.back()).rgb_stamp;
   const Timestamp margin = Timestamp::FromNanoseconds(100000000);  // 0.1 s
   std::vector<StampedPose> result;
   for (const StampedPose& p : ReadTumTrajectory(dataset_.groundtruth_path())) {

@@ -32,9 +32,10 @@ struct PlayerOptions {
   double depth_scale = 5000.0;  // DepthMapFactor
   // 1 = dataset rate, k = k times faster, 0 = as fast as consumed (back-pressure only).
   double rate = 0.0;
-  // Frames [first_frame, first_frame + max_frames) (max_frames 0 = all).
-  size_t first_frame = 0;
-  size_t max_frames = 0;
+  // rgb.txt entries [first_entry, last_entry) (last_entry 0 = all), as `dygslam run --frames`;
+  // entries without a depth partner are skipped.
+  size_t first_entry = 0;
+  size_t last_entry = 0;
   // Back-pressure window in frames (0 = none: publish at `rate` regardless of the consumer).
   int window = 2;
   // Longest wait for an acknowledgement before a frame is sent anyway (seconds).
@@ -49,7 +50,7 @@ struct PlayerOptions {
 class DatasetPlayer {
  public:
   explicit DatasetPlayer(const PlayerOptions& options);
-  size_t num_frames() const { return end_ - begin_; }
+  size_t num_frames() const { return indices_.size(); }
   // Frame `i` of the played range (seq = i): BGR colour, 16UC1 depth, camera, stamps.
   RgbdFrameData Frame(size_t i) const;
   // Ground truth within the played time span (empty if the dataset has none).
@@ -58,7 +59,7 @@ class DatasetPlayer {
  private:
   PlayerOptions options_;
   RgbdDataset dataset_;
-  size_t begin_ = 0, end_ = 0;
+  std::vector<size_t> indices_;  // dataset frame index of each played frame
 };
 
 struct PlayerStats {

@@ -1,0 +1,94 @@
+// Hidden subcommand: dygslam component <player|detector|slam|mapper|recorder|bench-transport> ...
+// Runs one DDS component in this process (what `RunPipeline` with processes = true spawns; also
+// usable by hand, one terminal per component, e.g. to run the mapper on another machine with
+// FASTRTPS_DEFAULT_PROFILES_FILE). SIGINT / SIGTERM: the component flushes and exits 0.
+// Compiled only when the DDS components are built (dygslam_components defines
+// DYGSLAM_HAVE_COMPONENTS for its users).
+#ifdef DYGSLAM_HAVE_COMPONENTS
+#include <iostream>
+#include <tuple>
+
+#include "apps/command.h"
+#include "components/bench_transport.h"
+#include "components/pipeline.h"
+#include "core/base/error.h"
+#include "core/config/settings.h"
+#include "core/config/system_config.h"
+
+namespace dygslam::cli {
+namespace {
+
+std::pair<size_t, size_t> ParseEntryRange(const std::string& text) {
+  const auto colon = text.find(':');
+  if (colon == std::string::npos) throw InvalidOptions("--frames: expected FIRST:LAST, got '" + text + "'");
+  auto parse = [&](const std::string& s) -> size_t {
+    if (s.empty()) return 0;
+    for (char c : s)
+      if (c < '0' || c > '9') throw InvalidOptions("--frames: not a non-negative integer: '" + s + "'");
+    return std::stoul(s);
+  };
+  return {parse(text.substr(0, colon)), parse(text.substr(colon + 1))};
+}
+
+int RunComponentCommand(const std::vector<std::string>& args) {
+  if (!args.empty() && args[0] == "bench-transport") {
+    return RunBenchTransportCommand(std::vector<std::string>(args.begin() + 1, args.end()));
+  }
+  ArgParser p("component",
+              "NAME --dataset DIR --config FILE [--out DIR] [--filter MODE] [--frames FIRST:LAST] "
+              "[--deterministic] [--domain N] ...",
+              "Runs one pipeline component (player | detector | slam | mapper | recorder) as its own\n"
+              "process over Fast DDS, or `bench-transport` (see `dygslam component bench-transport --help`).");
+  p.AddPositional("NAME", "player | detector | slam | mapper | recorder | bench-transport");
+  p.AddOption("dataset", "DIR", "dataset folder (player)");
+  p.AddOption("config", "FILE", "settings YAML (camera, sensor, modules)");
+  p.AddOption("out", "DIR", "output folder (recorder, mapper)", "out/run");
+  p.AddOption("filter", "MODE", "none | boxes | geometry | full", "full");
+  p.AddOption("frames", "FIRST:LAST", "rgb.txt entries [FIRST, LAST) (player)", "0:");
+  p.AddOption("rate", "R", "player: 0 = as fast as consumed, 1 = real time", "0");
+  p.AddOption("window", "N", "player back-pressure window in frames", "2");
+  p.AddOption("detection-wait-ms", "MS", "slam: longest wait for a frame's detections", "150");
+  p.AddOption("detector-model", "NAME", "detector model (DetectorOptionsForModel)", "yolo-fastest-1.1");
+  p.AddOption("detector-cfg", "FILE", "detector Darknet cfg (overrides --detector-model)");
+  p.AddOption("detector-weights", "FILE", "detector weights");
+  p.AddOption("detector-names", "FILE", "detector class names");
+  p.AddOption("domain", "N", "DDS domain id (default DYGSLAM_DOMAIN_ID or 0)", "-1");
+  p.AddFlag("deterministic", "slam waits for every frame's detections; synchronous local mapping");
+  p.AddFlag("no-detector", "no detector component (slam runs the System's own detector)");
+  p.AddFlag("no-mapper", "no mapper component");
+  if (!p.Parse(args)) return p.exit_code();
+
+  PipelineOptions o;
+  o.dataset_dir = p.Get("dataset");
+  o.output_dir = p.Get("out");
+  o.settings_path = p.Get("config");
+  if (o.settings_path.empty()) return p.UsageError("--config is required");
+  if (o.dataset_dir.empty()) o.dataset_dir = "-";  // only the player reads it
+  o.system = SystemOptionsFromSettings(LoadSettings(o.settings_path));
+  o.system.filter_mode = ParseFilterMode(p.Get("filter"));
+  o.system.deterministic = p.Flag("deterministic");
+  if (p.Has("detector-cfg")) {
+    o.system.detector.cfg_path = p.Get("detector-cfg");
+    o.system.detector.weights_path = p.Get("detector-weights");
+    o.system.detector.names_path = p.Get("detector-names");
+  }
+  o.detector_model = p.Get("detector-model");
+  std::tie(o.first_entry, o.last_entry) = ParseEntryRange(p.Get("frames"));
+  o.rate = std::stod(p.Get("rate"));
+  o.window = std::stoi(p.Get("window"));
+  o.detection_wait = std::chrono::milliseconds(std::stoi(p.Get("detection-wait-ms")));
+  o.domain_id = std::stoi(p.Get("domain"));
+  o.run_detector = !p.Flag("no-detector");
+  o.run_mapper = !p.Flag("no-mapper");
+
+  auto stop = std::make_shared<StopSignal>();
+  SignalStopper signals(stop);
+  return RunComponent(p.Positional("NAME"), o, stop);
+}
+
+const CommandRegistrar kRegistrar({"component", "(internal) run one DDS pipeline component",
+                                   RunComponentCommand});
+
+}  // namespace
+}  // namespace dygslam::cli
+#endif  // DYGSLAM_HAVE_COMPONENTS

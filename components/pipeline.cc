@@ -1,0 +1,317 @@
+#include "components/pipeline.h"
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <thread>
+
+#include "components/dds/participant.h"
+#include "components/dds/qos.h"
+#include "components/detector_component.h"
+#include "components/mapper_component.h"
+#include "components/player.h"
+#include "components/recorder.h"
+#include "components/slam_component.h"
+#include "core/base/error.h"
+#include "core/base/log.h"
+
+namespace dygslam {
+
+namespace fs = std::filesystem;
+
+// ---------------------------------------------------------------------------------------------
+// Signals.
+
+namespace {
+volatile std::sig_atomic_t g_signal = 0;
+extern "C" void OnStopSignal(int sig) { g_signal = sig; }
+}  // namespace
+
+struct SignalStopper::Impl {
+  StopSignalPtr stop;
+  std::atomic<bool> quit{false};
+  std::atomic<bool> signaled{false};
+  std::thread watcher;
+  struct sigaction old_int {}, old_term {};
+};
+
+SignalStopper::SignalStopper(StopSignalPtr stop) : impl_(std::make_unique<Impl>()) {
+  impl_->stop = std::move(stop);
+  g_signal = 0;
+  struct sigaction sa {};
+  sa.sa_handler = OnStopSignal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, &impl_->old_int);
+  sigaction(SIGTERM, &sa, &impl_->old_term);
+  Impl* impl = impl_.get();
+  impl_->watcher = std::thread([impl] {
+    while (!impl->quit.load()) {
+      if (g_signal != 0) {
+        impl->signaled = true;
+        LOG_INFO << "signal " << static_cast<int>(g_signal) << ": stopping, flushing outputs";
+        impl->stop->Request();
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+}
+
+SignalStopper::~SignalStopper() {
+  impl_->quit = true;
+  impl_->watcher.join();
+  sigaction(SIGINT, &impl_->old_int, nullptr);
+  sigaction(SIGTERM, &impl_->old_term, nullptr);
+}
+
+bool SignalStopper::signaled() const { return impl_->signaled.load(); }
+
+// ---------------------------------------------------------------------------------------------
+// Options.
+
+void PipelineOptions::Check() const {
+  DYGSLAM_CHECK_OPTION(!dataset_dir.empty(), "dataset_dir");
+  DYGSLAM_CHECK_OPTION(!output_dir.empty(), "output_dir");
+  system.Check();
+  DYGSLAM_CHECK_OPTION(rate >= 0, "rate");
+  DYGSLAM_CHECK_OPTION(window >= 0 && window < dds::kFrameHistoryDepth, "window");
+  DYGSLAM_CHECK_OPTION(detection_wait.count() >= 0, "detection_wait_ms");
+  DYGSLAM_CHECK_OPTION(domain_id >= -1 && domain_id <= 232, "domain_id");
+  DYGSLAM_CHECK_OPTION(!processes || !settings_path.empty(),
+                       "settings_path (required with --processes: the children re-read it)");
+  DYGSLAM_CHECK_OPTION(last_entry == 0 || last_entry > first_entry, "frames (empty range)");
+}
+
+bool PipelineOptions::NeedsDetectorComponent() const {
+  return run_detector &&
+         (system.filter_mode == FilterMode::kBoxes || system.filter_mode == FilterMode::kFull);
+}
+
+namespace {
+
+int DomainId(const PipelineOptions& options) {
+  return options.domain_id >= 0 ? options.domain_id : dds::DomainIdFromEnvironment(0);
+}
+
+std::string Number(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.17g", v);
+  return buf;
+}
+
+DetectorOptions DetectorOptionsFor(const PipelineOptions& options) {
+  DetectorOptions d;
+  if (!options.system.detector.cfg_path.empty()) {
+    d = options.system.detector;
+  } else {
+    d = DetectorOptionsForModel(options.detector_model);
+    d.confidence_threshold = options.system.detector.confidence_threshold;
+  }
+  // One OpenCV thread: the detector shares the 2 cores with slam; same count in both modes so
+  // single- and multi-process runs compute identical detections.
+  d.num_threads = 1;
+  return d;
+}
+
+}  // namespace
+
+std::vector<std::string> ComponentArgs(const PipelineOptions& o) {
+  std::vector<std::string> a = {
+      "--dataset", o.dataset_dir, "--out", o.output_dir, "--config", o.settings_path,
+      "--filter", ToString(o.system.filter_mode), "--detector-model", o.detector_model,
+      "--frames", std::to_string(o.first_entry) + ":" + (o.last_entry ? std::to_string(o.last_entry) : ""),
+      "--rate", Number(o.rate), "--window", std::to_string(o.window),
+      "--detection-wait-ms", std::to_string(o.detection_wait.count()),
+      "--domain", std::to_string(DomainId(o))};
+  if (o.system.deterministic) a.push_back("--deterministic");
+  if (!o.run_detector) a.push_back("--no-detector");
+  if (!o.run_mapper) a.push_back("--no-mapper");
+  if (!o.system.detector.cfg_path.empty()) {
+    a.insert(a.end(), {"--detector-cfg", o.system.detector.cfg_path, "--detector-weights",
+                       o.system.detector.weights_path, "--detector-names", o.system.detector.names_path});
+  }
+  return a;
+}
+
+namespace {
+
+int RunComponentOn(const std::string& name, const PipelineOptions& options,
+                   std::shared_ptr<dds::Participant> participant, const StopSignalPtr& stop) {
+  if (name == "player") {
+    PlayerOptions p;
+    p.dataset_dir = options.dataset_dir;
+    p.camera = options.system.camera;
+    p.depth_scale = options.system.sensor.depth_map_factor;
+    p.rate = options.rate;
+    p.first_entry = options.first_entry;
+    p.last_entry = options.last_entry;
+    p.window = options.window;
+    p.expected_readers = options.NeedsDetectorComponent() ? 2 : 1;
+    RunPlayer(participant, p, stop);
+    return 0;
+  }
+  if (name == "detector") {
+    RunDetector(participant, DetectorOptionsFor(options), stop);
+    return 0;
+  }
+  if (name == "slam") {
+    SlamComponentOptions s;
+    s.system = options.system;
+    s.external_detections = options.run_detector;
+    s.detection_wait = options.detection_wait;
+    RunSlam(participant, s, stop);
+    return 0;
+  }
+  if (name == "mapper") {
+    MapperOptions m;
+    m.map_path = (fs::path(options.output_dir) / "map.bt").string();
+    fs::create_directories(options.output_dir);
+    RunMapper(participant, m, stop);
+    return 0;
+  }
+  if (name == "recorder") {
+    RecorderOptions r;
+    r.output_dir = options.output_dir;
+    RunRecorder(participant, r, stop);
+    return 0;
+  }
+  throw InvalidOptions("unknown component '" + name +
+                       "' (player | detector | slam | mapper | recorder)");
+}
+
+std::shared_ptr<dds::Participant> MakeParticipant(const PipelineOptions& options,
+                                                  const std::string& name) {
+  dds::ParticipantOptions p;
+  p.domain_id = DomainId(options);
+  p.name = "dygslam_" + name;
+  return dds::Participant::Create(p);
+}
+
+std::vector<std::string> ComponentNames(const PipelineOptions& options) {
+  // Consumers first, the player last.
+  std::vector<std::string> names = {"recorder"};
+  if (options.run_mapper) names.push_back("mapper");
+  names.push_back("slam");
+  if (options.NeedsDetectorComponent()) names.push_back("detector");
+  names.push_back("player");
+  return names;
+}
+
+int RunSingleProcess(const PipelineOptions& options, const StopSignalPtr& stop) {
+  auto participant = MakeParticipant(options, "pipeline");
+  std::map<std::string, int> codes;
+  std::mutex mutex;
+  std::vector<std::thread> threads;
+  for (const std::string& name : ComponentNames(options)) {
+    threads.emplace_back([&, name] {
+      int code = 1;
+      try {
+        code = RunComponentOn(name, options, participant, stop);
+      } catch (const std::exception& e) {
+        LOG_ERROR << name << ": " << e.what();
+        stop->Request();  // one component failed: stop the others (they flush)
+      }
+      std::lock_guard<std::mutex> lock(mutex);
+      codes[name] = code;
+    });
+  }
+  for (std::thread& t : threads) t.join();
+  int result = 0;
+  for (const auto& [name, code] : codes) {
+    if (code != 0) result = 1;
+  }
+  return result;
+}
+
+int RunProcesses(const PipelineOptions& options, const StopSignalPtr& stop) {
+  const std::string exe = options.executable.empty() ? fs::read_symlink("/proc/self/exe").string()
+                                                     : options.executable;
+  const std::vector<std::string> args = ComponentArgs(options);
+  std::map<pid_t, std::string> children;
+  for (const std::string& name : ComponentNames(options)) {
+    std::vector<std::string> argv = {exe, "component", name};
+    argv.insert(argv.end(), args.begin(), args.end());
+    std::vector<char*> cargv;
+    for (std::string& s : argv) cargv.push_back(s.data());
+    cargv.push_back(nullptr);
+    const pid_t pid = fork();
+    if (pid < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
+    if (pid == 0) {
+      execv(exe.c_str(), cargv.data());
+      std::_Exit(127);
+    }
+    children[pid] = name;
+    LOG_INFO << "started component " << name << " (pid " << pid << ")";
+  }
+  int result = 0;
+  bool forwarded = false;
+  auto stop_time = std::chrono::steady_clock::time_point::max();
+  bool slam_or_recorder_failed = false;
+  while (!children.empty()) {
+    int status = 0;
+    const pid_t pid = waitpid(-1, &status, WNOHANG);
+    if (pid > 0) {
+      const std::string name = children.count(pid) ? children[pid] : "?";
+      children.erase(pid);
+      const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+      if (!ok) {
+        LOG_WARNING << "component " << name << " (pid " << pid << ") "
+                    << (WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
+                                            : "exited with " + std::to_string(WEXITSTATUS(status)));
+        if (name == "slam" || name == "recorder" || name == "mapper") slam_or_recorder_failed = true;
+      }
+      // The run is over when the recorder (and mapper) have written their outputs.
+      bool outputs_done = true;
+      for (const auto& [p, n] : children) {
+        if (n == "recorder" || n == "mapper") outputs_done = false;
+      }
+      if (outputs_done && !forwarded) {
+        stop->Request();
+      }
+      continue;
+    }
+    if (stop->requested() && !forwarded) {
+      for (const auto& [p, n] : children) kill(p, SIGTERM);
+      forwarded = true;
+      stop_time = std::chrono::steady_clock::now();
+    }
+    if (forwarded && std::chrono::steady_clock::now() - stop_time > std::chrono::seconds(30)) {
+      for (const auto& [p, n] : children) {
+        LOG_WARNING << "component " << n << " did not stop; killing it";
+        kill(p, SIGKILL);
+      }
+      stop_time = std::chrono::steady_clock::time_point::max();
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  if (slam_or_recorder_failed) result = 1;
+  return result;
+}
+
+}  // namespace
+
+int RunComponent(const std::string& name, const PipelineOptions& options,
+                 const StopSignalPtr& stop) {
+  options.Check();
+  return RunComponentOn(name, options, MakeParticipant(options, name), stop);
+}
+
+int RunPipeline(const PipelineOptions& options) {
+  options.Check();
+  fs::create_directories(options.output_dir);
+  auto stop = std::make_shared<StopSignal>();
+  SignalStopper signals(stop);
+  const int code = options.processes ? RunProcesses(options, stop) : RunSingleProcess(options, stop);
+  if (signals.signaled()) {
+    LOG_INFO << "stopped by signal; outputs flushed";
+  }
+  return code;
+}
+
+}  // namespace dygslam

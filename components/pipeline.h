@@ -1,0 +1,78 @@
+// The whole pipeline over DDS: player -> detector -> slam -> mapper + recorder.
+//
+//   PipelineOptions options;  options.dataset_dir = ...; options.system = SystemOptionsFromSettings(..);
+//   options.settings_path = ...;   // re-read by the child processes in --processes mode
+//   int code = RunPipeline(options);
+//
+// Single-process mode (default): every component runs on its own thread in this process, all on
+// one DomainParticipant (Fast DDS intra-process delivery; no serialisation between components).
+// Multi-process mode (processes = true): each component is a child process
+// `<executable> component <name> <args>` (fork + exec of the same dygslam binary; the arguments
+// are ComponentArgs()), all on the same domain; the runner waits for them and stops them at the
+// end of data.
+// End of data: the player announces END_OF_STREAM; slam finishes, publishes the final
+// trajectories and COMPONENT_DONE; mapper and recorder write map.bt / trajectory.txt /
+// keyframes.txt atomically and exit.
+// SIGINT / SIGTERM: every component stops, flushes what it has (the recorder writes the final
+// trajectory if slam managed to send it, else the online poses; the mapper writes the map) and
+// RunPipeline returns 0. In multi-process mode the signal is forwarded (SIGTERM) to the children.
+// Outputs in output_dir: trajectory.txt, keyframes.txt, trajectory_online.txt, groundtruth.txt,
+// map.bt (if run_mapper).
+#pragma once
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "components/component_common.h"
+#include "core/system/system.h"
+
+namespace dygslam {
+
+struct PipelineOptions {
+  std::string dataset_dir;
+  std::string output_dir = "out/run";
+  // Settings file of `system` (children of --processes re-read it with the same flags).
+  std::string settings_path;
+  SystemOptions system;  // camera, sensor, filter mode, deterministic, ...
+  // Detector component model (DetectorOptionsForModel) unless system.detector.cfg_path is set.
+  std::string detector_model = "yolo-fastest-1.1";
+  size_t first_entry = 0, last_entry = 0;  // rgb.txt entries [first, last), last 0 = all
+  double rate = 0;                          // player: 0 = as fast as consumed, 1 = real time
+  int window = 2;                           // player back-pressure window
+  std::chrono::milliseconds detection_wait{150};
+  bool processes = false;
+  bool run_detector = true;  // detector component (filter modes boxes/full); false: System's own
+  bool run_mapper = true;
+  int domain_id = -1;        // -1: DYGSLAM_DOMAIN_ID or 0
+  std::string executable;    // --processes: the dygslam binary (default /proc/self/exe)
+  void Check() const;
+  bool NeedsDetectorComponent() const;
+};
+
+// Arguments after "dygslam component <name>" that reproduce `options` in a child process.
+std::vector<std::string> ComponentArgs(const PipelineOptions& options);
+
+// Runs one component in this process until it finishes or `stop` (used by
+// `dygslam component <name>` and by the single-process mode). name: player | detector | slam |
+// mapper | recorder. Returns 0 on success.
+int RunComponent(const std::string& name, const PipelineOptions& options,
+                 const StopSignalPtr& stop);
+
+int RunPipeline(const PipelineOptions& options);
+
+// Turns SIGINT / SIGTERM into stop->Request() while alive (one watcher per process).
+class SignalStopper {
+ public:
+  explicit SignalStopper(StopSignalPtr stop);
+  ~SignalStopper();
+  SignalStopper(const SignalStopper&) = delete;
+  SignalStopper& operator=(const SignalStopper&) = delete;
+  bool signaled() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace dygslam

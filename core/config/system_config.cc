@@ -1,5 +1,7 @@
 #include "core/config/system_config.h"
 
+#include "core/base/error.h"
+
 namespace dygslam {
 
 SystemOptions SystemOptionsFromSettings(const Settings& settings) {
@@ -21,6 +23,54 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   mapping.ReadIfPresent("cull_keyframes", &options.local_mapping.cull_keyframes);
   mapping.ReadIfPresent("redundancy_ratio", &options.local_mapping.redundancy_ratio);
   mapping.CheckOptions(options.local_mapping);
+
+  // DynamicFilter: the paper's parameters (defaults in DynamicFilterOptions).
+  const ConfigReader filter = root.Section("DynamicFilter");
+  std::string mode;
+  if (filter.ReadIfPresent("mode", &mode)) {
+    try {
+      options.filter_mode = ParseFilterMode(mode);
+    } catch (const InvalidOptions& e) {
+      filter.Fail("mode", e.what());
+    }
+  }
+  DynamicFilterOptions& f = options.filter;
+  filter.ReadIfPresent("C1", &f.c1);
+  filter.ReadIfPresent("alpha", &f.alpha);
+  filter.ReadIfPresent("Q", &f.q);
+  filter.ReadIfPresent("R", &f.r);
+  filter.ReadIfPresent("P_init", &f.p_init);
+  filter.ReadIfPresent("C2", &f.c2);
+  filter.ReadIfPresent("delta", &f.delta);
+  filter.ReadIfPresent("threshold", &f.threshold);
+  filter.ReadIfPresent("box_margin", &f.box_margin);
+  filter.ReadIfPresent("search_radius", &f.search_radius);
+  filter.ReadIfPresent("max_hamming", &f.max_hamming);
+  filter.ReadIfPresent("fundamental_threshold", &f.fundamental_threshold);
+  filter.CheckOptions(f);
+
+  // Detector: a shipped model by name, or explicit Darknet files.
+  const ConfigReader detector = root.Section("Detector");
+  std::string model = "yolo-fastest-1.1";
+  detector.ReadIfPresent("model", &model);
+  if (detector.Has("cfg")) {
+    options.detector.cfg_path = detector.Require<std::string>("cfg");
+    options.detector.weights_path = detector.Require<std::string>("weights");
+    options.detector.names_path = detector.Require<std::string>("names");
+  } else {
+    try {
+      options.detector = DetectorOptionsForModel(model);
+    } catch (const InputError& e) {
+      // Resolved lazily: a run without detection (filter none/geometry) needs no model.
+      options.detector = DetectorOptions();
+    }
+  }
+  detector.ReadIfPresent("input_width", &options.detector.input_width);
+  detector.ReadIfPresent("input_height", &options.detector.input_height);
+  detector.ReadIfPresent("confidence_threshold", &options.detector.confidence_threshold);
+  detector.ReadIfPresent("nms_threshold", &options.detector.nms_threshold);
+  std::vector<std::string> classes;
+  if (detector.ReadIfPresent("dynamic_classes", &classes)) options.detector.dynamic_classes = classes;
   return options;
 }
 

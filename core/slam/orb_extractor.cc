@@ -216,8 +216,8 @@ OrbFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& mask) cons
 
     // Orientation by intensity centroid on the unblurred level image.
     for (cv::KeyPoint& kp : kept) {
-      const int cx = static_cast<int>(std::lround(kp.pt.x));
-      const int cy = static_cast<int>(std::lround(kp.pt.y));
+      const int cx = cvRound(kp.pt.x);
+      const int cy = cvRound(kp.pt.y);
       const uint8_t* center = level_img.ptr<uint8_t>(cy) + cx;
       const int step = static_cast<int>(level_img.step1());
       int m01 = 0, m10 = 0;
@@ -243,19 +243,18 @@ OrbFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& mask) cons
     for (cv::KeyPoint& kp : kept) {
       const float a = kp.angle * static_cast<float>(M_PI / 180.0);
       const float ca = std::cos(a), sa = std::sin(a);
-      const int cx = static_cast<int>(std::lround(kp.pt.x));
-      const int cy = static_cast<int>(std::lround(kp.pt.y));
+      const int cx = cvRound(kp.pt.x);
+      const int cy = cvRound(kp.pt.y);
       Descriptor desc{0, 0, 0, 0};
+      // Rotated test offsets as row/column offsets into the blurred image.
+      const int step = static_cast<int>(blurred.step1());
+      const uint8_t* center = blurred.ptr<uint8_t>(cy) + cx;
       for (int bit = 0; bit < 256; ++bit) {
         const cv::Point2f& p = pattern[bit][0];
         const cv::Point2f& q = pattern[bit][1];
-        const int px = cx + static_cast<int>(std::lround(ca * p.x - sa * p.y));
-        const int py = cy + static_cast<int>(std::lround(sa * p.x + ca * p.y));
-        const int qx = cx + static_cast<int>(std::lround(ca * q.x - sa * q.y));
-        const int qy = cy + static_cast<int>(std::lround(sa * q.x + ca * q.y));
-        if (blurred.at<uint8_t>(py, px) < blurred.at<uint8_t>(qy, qx)) {
-          desc[bit >> 6] |= (1ULL << (bit & 63));
-        }
+        const int p_off = cvRound(sa * p.x + ca * p.y) * step + cvRound(ca * p.x - sa * p.y);
+        const int q_off = cvRound(sa * q.x + ca * q.y) * step + cvRound(ca * q.x - sa * q.y);
+        if (center[p_off] < center[q_off]) desc[bit >> 6] |= (1ULL << (bit & 63));
       }
       kp.octave = level;
       kp.size = 31.0f * scale;

@@ -1,8 +1,10 @@
 #include "core/system/system.h"
 
 #include <chrono>
+#include <future>
 #include <mutex>
 
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/base/error.h"
@@ -42,7 +44,25 @@ void SystemOptions::Check() const {
   orb.Check();
   tracking.Check();
   local_mapping.Check();
+  filter.Check();
 }
+
+namespace {
+DynamicFilterMode ToDynamicMode(FilterMode mode) {
+  switch (mode) {
+    case FilterMode::kNone: return DynamicFilterMode::kNone;
+    case FilterMode::kBoxes: return DynamicFilterMode::kBoxes;
+    case FilterMode::kGeometry: return DynamicFilterMode::kGeometry;
+    case FilterMode::kFull: return DynamicFilterMode::kFull;
+  }
+  return DynamicFilterMode::kNone;
+}
+DynamicFilterOptions FilterOptionsOf(const SystemOptions& options) {
+  DynamicFilterOptions f = options.filter;
+  f.mode = ToDynamicMode(options.filter_mode);
+  return f;
+}
+}  // namespace
 
 class SystemImpl {
  public:
@@ -52,7 +72,8 @@ class SystemImpl {
         geometry_(std::make_shared<CameraGeometry>(CameraGeometry::Create(options.camera, options.sensor, extractor_))),
         map_(std::make_shared<Map>()),
         local_mapper_(map_, options.local_mapping, !options.deterministic),
-        tracker_(options.tracking, map_, local_mapper_, options.deterministic) {}
+        tracker_(options.tracking, map_, local_mapper_, options.deterministic),
+        filter_(FilterOptionsOf(options)) {}
 
   FrameResult Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp, const cv::Mat& mask,
                    const std::vector<Detection>* detections);
@@ -72,6 +93,8 @@ class SystemImpl {
   std::shared_ptr<Map> map_;
   LocalMapper local_mapper_;
   Tracker tracker_;
+  DynamicFilter filter_;
+  std::unique_ptr<YoloDetector> detector_;  // created on first use
   int64_t next_frame_id_ = 0;
   Timestamp last_stamp_;
   bool has_last_stamp_ = false;
@@ -110,30 +133,60 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   } else {
     depth_m = depth;
   }
+  // Detection runs on another thread while ORB features are extracted.
+  std::vector<Detection> own_detections;
+  std::future<std::vector<Detection>> detection_job;
+  double detection_ms = 0;
+  const bool need_detections = options_.NeedsDetections();
+  if (need_detections && detections == nullptr) {
+    if (!detector_) {
+      DetectorOptions d = options_.detector;
+      if (d.cfg_path.empty()) d = DetectorOptionsForModel("yolo-fastest-1.1");
+      detector_ = YoloDetector::Create(d);
+    }
+    detection_job = std::async(std::launch::async, [this, &rgb, &detection_ms]() {
+      const auto t0 = std::chrono::steady_clock::now();
+      auto found = detector_->Detect(rgb.channels() == 3 ? rgb : cv::Mat());
+      detection_ms = MsSince(t0);
+      return found;
+    });
+  }
   const auto t_orb = std::chrono::steady_clock::now();
   OrbFeatures features = extractor_.Extract(gray, mask);
   result.times.orb_extraction_ms = MsSince(t_orb);
   result.num_features = static_cast<int>(features.keypoints.size());
-
-  // Dynamic filter: box removal when detections are given (full filter wired in the dynamic module).
-  std::vector<uint8_t> dynamic(features.keypoints.size(), 0);
-  if (options_.filter_mode == FilterMode::kBoxes && detections) {
-    result.detections_used = true;
-    for (size_t i = 0; i < features.keypoints.size(); ++i) {
-      for (const Detection& d : *detections) {
-        if (d.box.contains(features.keypoints[i].pt)) dynamic[i] = 1;
-      }
-    }
+  if (detection_job.valid()) {
+    const auto t_wait = std::chrono::steady_clock::now();
+    own_detections = detection_job.get();
+    result.times.detection_wait_ms = MsSince(t_wait);
+    result.times.detection_ms = detection_ms;
+    detections = &own_detections;
   }
+  result.detections_used = need_detections && detections != nullptr;
+
+  // Dynamic filter in front of tracking.
+  static const std::vector<Detection> kNoDetections;
+  const cv::Mat descriptor_matrix = features.DescriptorMatrix();
+  FilterInput input(features.keypoints, descriptor_matrix, detections ? *detections : kNoDetections);
+  std::vector<cv::Point2f> undistorted;
+  if (options_.camera.HasDistortion() && !features.keypoints.empty()) {
+    std::vector<cv::Point2f> points(features.keypoints.size());
+    for (size_t i = 0; i < points.size(); ++i) points[i] = features.keypoints[i].pt;
+    cv::undistortPoints(points, undistorted, options_.camera.K(), options_.camera.DistCoeffs(), cv::noArray(),
+                        options_.camera.K());
+    input.undistorted_points = &undistorted;
+  }
+  const FilterResult filtered = filter_.Process(input);
+  result.times.matching_ms = filtered.matching_ms;
+  result.times.probability_ms = filtered.probability_ms;
+  std::vector<uint8_t> dynamic = filtered.DynamicFlags();
   OrbFeatures kept;
   for (size_t i = 0; i < features.keypoints.size(); ++i) {
     if (dynamic[i]) continue;
     kept.keypoints.push_back(features.keypoints[i]);
     kept.descriptors.push_back(features.descriptors[i]);
   }
-  int num_dynamic = 0;
-  for (uint8_t d : dynamic) num_dynamic += d;
-  result.num_dynamic = num_dynamic;
+  result.num_dynamic = filtered.num_dynamic;
 
   const auto t_track = std::chrono::steady_clock::now();
   Frame frame(next_frame_id_++, stamp, std::move(kept), depth_m, geometry_);
@@ -156,7 +209,8 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
       data.world_from_cam = *result.world_from_cam;
       data.rgb = rgb;
       data.depth = depth_m;
-      data.dynamic_mask = cv::Mat::zeros(rgb.size(), CV_8UC1);
+      data.dynamic_mask = ComputeDynamicMask(rgb.size(), depth_m, detections ? *detections : kNoDetections,
+                                             features.keypoints, dynamic, options_.dynamic_mask);
       data.keypoints = features.keypoints;
       data.keypoint_dynamic = dynamic;
       if (detections) data.detections = *detections;

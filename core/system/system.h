@@ -14,6 +14,9 @@
 
 #include "core/base/camera.h"
 #include "core/base/types.h"
+#include "core/dynamic/dynamic_filter.h"
+#include "core/dynamic/dynamic_mask.h"
+#include "core/dynamic/yolo_detector.h"
 #include "core/slam/local_mapping.h"
 #include "core/slam/orb_extractor.h"
 #include "core/slam/tracking.h"
@@ -55,11 +58,17 @@ struct SystemOptions {
   TrackingOptions tracking;
   LocalMappingOptions local_mapping;
   FilterMode filter_mode = FilterMode::kFull;
+  // The paper's parameters (filter.mode is set from filter_mode).
+  DynamicFilterOptions filter;
+  // Pixels of keyframes judged dynamic, for the map.
+  DynamicMaskOptions dynamic_mask;
+  // When FeedRgbdFrame gets no detections and the filter mode needs them, this detector runs
+  // inside the system, concurrently with ORB extraction. Empty cfg_path: the default model
+  // (see SystemOptions::Check / system.cc).
+  DetectorOptions detector;
   // Fixed seeds, local mapping run synchronously after each keyframe: identical output run to run.
   bool deterministic = false;
-  // When FeedRgbdFrame gets no detections and the filter needs them, run the detector internally
-  // (concurrently with ORB extraction). Paths of the model files.
-  std::string detector_cfg, detector_weights, detector_names;
+  bool NeedsDetections() const { return filter_mode == FilterMode::kBoxes || filter_mode == FilterMode::kFull; }
   void Check() const;
 };
 

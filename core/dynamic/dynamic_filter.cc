@@ -52,6 +52,9 @@ void DynamicFilterOptions::Check() const {
   DYGSLAM_CHECK_OPTION(fundamental_confidence > 0 && fundamental_confidence < 1,
                        "DynamicFilter.fundamental_confidence");
   DYGSLAM_CHECK_OPTION(fundamental_max_iters > 0, "DynamicFilter.fundamental_max_iters");
+  DYGSLAM_CHECK_OPTION(
+      octave_scale_factor == 0 || (octave_scale_factor >= 1 && octave_scale_factor < 4),
+      "DynamicFilter.octave_scale_factor");
   DYGSLAM_CHECK_OPTION(min_fundamental_matches >= 8, "DynamicFilter.min_fundamental_matches");
   DYGSLAM_CHECK_OPTION(homography_inlier_ratio > 0 && homography_inlier_ratio <= 2,
                        "DynamicFilter.homography_inlier_ratio");
@@ -381,7 +384,13 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
         }
         fs.has_observation = true;
         fs.epipolar_distance = d;
-        posterior[i] = KalmanUpdate(prior_post, GeometryProbability(d, o.c1, o.alpha), o.q, o.r);
+        // Optional: distances in units of the keypoint's pyramid scale (localisation error grows
+        // with the octave). Off by default (the paper uses pixels).
+        const double d_eff = o.octave_scale_factor > 1.0
+                                 ? d / std::pow(o.octave_scale_factor, std::max(kps[i].octave, 0))
+                                 : d;
+        posterior[i] =
+            KalmanUpdate(prior_post, GeometryProbability(d_eff, o.c1, o.alpha), o.q, o.r);
       } else {
         posterior[i] = KalmanPredict(prior_post, o.q);
       }

@@ -75,6 +75,9 @@ struct DynamicFilterOptions {
   double c2 = 1.0;
   double delta = 60.0;  // px
   double threshold = 0.5;
+  // > 1: the epipolar distance enters eq. 5 divided by octave_scale_factor^octave (keypoints of
+  // coarse pyramid levels are localised less precisely). 0: plain pixels, as in the paper.
+  double octave_scale_factor = 0.0;
   // Posterior variance of a feature first seen in the dynamic region (no prior state).
   double initial_variance = 1.0;
 

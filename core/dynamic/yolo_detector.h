@@ -43,7 +43,9 @@ struct DetectorOptions {
   // 416 (YOLOv3-tiny) / 160 (CYTI); any multiple of 32 works.
   int input_width = 320;
   int input_height = 320;
-  // Minimum class score (objectness x class probability).
+  // Minimum class score (objectness x class probability). OpenCV's [yolo] layer already zeroes
+  // scores below 0.2 (its default `thresh`), so values below 0.2 act as 0.2 (checked: no box
+  // below 0.206 with 0.01); Create() warns.
   float confidence_threshold = 0.3f;
   // IoU above which the lower-scoring box of the same class is suppressed.
   float nms_threshold = 0.4f;

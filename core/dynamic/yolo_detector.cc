@@ -332,9 +332,10 @@ std::unique_ptr<YoloDetector> YoloDetector::Create(const DetectorOptions& option
                          det->class_names_.front() + "'");
   }
 
-  if (options.confidence_threshold < 0.2f)
+  if (options.confidence_threshold < 0.2f) {
     LOG_WARNING << "Detector.confidence_threshold " << options.confidence_threshold
                 << " is below the 0.2 that OpenCV's yolo layer applies internally; 0.2 is in effect";
+  }
   if (options.num_threads > 0) cv::setNumThreads(options.num_threads);
   try {
     det->impl_->net = cv::dnn::readNetFromDarknet(options.cfg_path, options.weights_path);

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include <Eigen/SVD>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/base/error.h"
@@ -20,6 +21,18 @@ PinholeCamera BonnCamera() {
   camera.width = 640;
   camera.height = 480;
   return camera;
+}
+
+Rigid3d BonnMarkerFromCam() {
+  Eigen::Matrix3d ros;
+  ros << -1, 0, 0, 0, 0, 1, 0, 1, 0;
+  Eigen::Matrix3d m;
+  m << 1.0157, 0.1828, -0.2389, 0.0009, -0.8431, -0.6413, -0.3009, 0.6147, -0.8085;
+  const Eigen::Vector3d t(0.0113, -0.0098, 0.0111);
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d r = svd.matrixU() * svd.matrixV().transpose();
+  if (r.determinant() < 0) r = -r;
+  return Rigid3d(ros, Eigen::Vector3d::Zero()) * Rigid3d(r, t);
 }
 
 std::vector<DepthEntry> ReadDepthList(const std::string& dir) {

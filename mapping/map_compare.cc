@@ -36,9 +36,27 @@ int KeyState(const octomap::OcTree& map, const octomap::OcTreeKey& key) {
   return map.isNodeOccupied(node) ? 1 : 0;
 }
 
+bool OccupiedNear(const octomap::OcTree& map, const octomap::OcTreeKey& key, int margin) {
+  for (int dx = -margin; dx <= margin; ++dx) {
+    for (int dy = -margin; dy <= margin; ++dy) {
+      for (int dz = -margin; dz <= margin; ++dz) {
+        const octomap::OcTreeKey k(static_cast<uint16_t>(key[0] + dx),
+                                   static_cast<uint16_t>(key[1] + dy),
+                                   static_cast<uint16_t>(key[2] + dz));
+        if (KeyState(map, k) == 1) return true;
+      }
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
-GhostVoxelCounts CompareGhostVoxels(const octomap::OcTree& a, const octomap::OcTree& b) {
+GhostVoxelCounts CompareGhostVoxels(const octomap::OcTree& a, const octomap::OcTree& b,
+                                    int surface_margin_cells) {
+  if (surface_margin_cells < 0 || surface_margin_cells > 10) {
+    throw std::invalid_argument("CompareGhostVoxels: surface_margin_cells must be in [0, 10]");
+  }
   if (std::abs(a.getResolution() - b.getResolution()) > 1e-9) {
     throw std::invalid_argument("CompareGhostVoxels: maps differ in resolution (" +
                                 std::to_string(a.getResolution()) + " vs " +
@@ -51,7 +69,10 @@ GhostVoxelCounts CompareGhostVoxels(const octomap::OcTree& a, const octomap::OcT
       ++counts.occupied_in_a;
       switch (KeyState(b, key)) {
         case 1: ++counts.occupied_a_occupied_b; break;
-        case 0: ++counts.occupied_a_free_b; break;
+        case 0:
+          ++counts.occupied_a_free_b;
+          if (!OccupiedNear(b, key, surface_margin_cells)) ++counts.ghost;
+          break;
         default: ++counts.occupied_a_unknown_b; break;
       }
     });

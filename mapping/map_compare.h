@@ -14,6 +14,10 @@ struct GhostVoxelCounts {
   uint64_t occupied_in_a = 0;
   // Occupied in A, observed free in B: ghosts of A (e.g. people baked into the map).
   uint64_t occupied_a_free_b = 0;
+  // Of those, cells with no occupied cell of B within `surface_margin_cells` (26-neighbourhood):
+  // ghosts proper. Depth noise and grazing rays make surface cells flip between occupied and
+  // free from one frame set to the next; this count leaves that jitter out.
+  uint64_t ghost = 0;
   // Occupied in A, occupied in B too (agreed structure).
   uint64_t occupied_a_occupied_b = 0;
   // Occupied in A, never observed in B (no verdict).
@@ -23,14 +27,16 @@ struct GhostVoxelCounts {
   uint64_t occupied_b_free_a = 0;
 
   double GhostFraction() const {
-    return occupied_in_a == 0 ? 0.0 : static_cast<double>(occupied_a_free_b) / occupied_in_a;
+    return occupied_in_a == 0 ? 0.0 : static_cast<double>(ghost) / occupied_in_a;
   }
 };
 
 // `a`: map under test (e.g. built from all frames); `b`: reference (e.g. people-free frames).
 // Both maps must have the same resolution (throws std::invalid_argument otherwise); cells are
 // compared by octree key, so the grids coincide exactly.
-GhostVoxelCounts CompareGhostVoxels(const octomap::OcTree& a, const octomap::OcTree& b);
+// surface_margin_cells >= 0 (0: ghost == occupied_a_free_b).
+GhostVoxelCounts CompareGhostVoxels(const octomap::OcTree& a, const octomap::OcTree& b,
+                                    int surface_margin_cells = 1);
 
 // Number of occupied (resp. observed free) cells whose centre satisfies `inside`.
 uint64_t CountOccupiedInside(const octomap::OcTree& map,

@@ -39,7 +39,7 @@ int RunComponentCommand(const std::vector<std::string>& args) {
               "[--deterministic] [--domain N] ...",
               "Runs one pipeline component (player | detector | slam | mapper | recorder) as its own\n"
               "process over Fast DDS, or `bench-transport` (see `dygslam component bench-transport --help`).");
-  p.AddPositional("NAME", "player | detector | slam | mapper | recorder | bench-transport");
+  p.AddPositional("NAME", "player | detector | slam | mapper | recorder | pipeline | bench-transport");
   p.AddOption("dataset", "DIR", "dataset folder (player)");
   p.AddOption("config", "FILE", "settings YAML (camera, sensor, modules)");
   p.AddOption("out", "DIR", "output folder (recorder, mapper)", "out/run");
@@ -56,6 +56,7 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   p.AddFlag("deterministic", "slam waits for every frame's detections; synchronous local mapping");
   p.AddFlag("no-detector", "no detector component (slam runs the System's own detector)");
   p.AddFlag("no-mapper", "no mapper component");
+  p.AddFlag("processes", "NAME = pipeline: one process per component (else threads)");
   if (!p.Parse(args)) return p.exit_code();
 
   PipelineOptions o;
@@ -81,6 +82,8 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   o.run_detector = !p.Flag("no-detector");
   o.run_mapper = !p.Flag("no-mapper");
 
+  o.processes = p.Flag("processes");
+  if (p.Positional("NAME") == "pipeline") return RunPipeline(o);  // the whole pipeline
   auto stop = std::make_shared<StopSignal>();
   SignalStopper signals(stop);
   return RunComponent(p.Positional("NAME"), o, stop);

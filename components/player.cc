@@ -121,10 +121,12 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
         }
       });
 
-  if (options.expected_readers > 0 &&
-      !frames.WaitForReaders(options.expected_readers,
-                             std::chrono::milliseconds(
-                                 static_cast<int64_t>(options.wait_for_readers_s * 1000)))) {
+  const auto readers_deadline =
+      Clock::now() + std::chrono::milliseconds(static_cast<int64_t>(options.wait_for_readers_s * 1000));
+  while (frames.matched() < options.expected_readers && Clock::now() < readers_deadline &&
+         !stop->WaitFor(std::chrono::milliseconds(10))) {
+  }
+  if (frames.matched() < options.expected_readers && !stop->requested()) {
     LOG_WARNING << "player: only " << frames.matched() << " of " << options.expected_readers
                 << " frame readers after " << options.wait_for_readers_s << " s; playing anyway";
   }

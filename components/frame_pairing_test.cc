@@ -1,0 +1,123 @@
+#include "components/frame_pairing.h"
+
+#include <gtest/gtest.h>
+
+namespace dygslam {
+namespace {
+
+using namespace std::chrono_literals;
+using Clock = FramePairer::Clock;
+
+RgbdFrameData Frame(int64_t i) {
+  RgbdFrameData f;
+  f.stamp = Timestamp::FromNanoseconds(1000 + i * 33);
+  f.seq = static_cast<uint64_t>(i);
+  return f;
+}
+
+std::vector<Detection> OneBox() {
+  Detection d;
+  d.box = cv::Rect2f(1, 2, 3, 4);
+  d.label = "person";
+  return {d};
+}
+
+TEST(FramePairing, PairsByStampInArrivalOrder) {
+  PairingOptions o;
+  FramePairer p(o);
+  const auto t0 = Clock::now();
+  p.AddFrame(Frame(0), t0);
+  p.AddFrame(Frame(1), t0);
+  p.AddDetections(Frame(1).stamp, OneBox());
+  EXPECT_FALSE(p.Next(t0).has_value());  // frame 0 waits for its own detections
+  p.AddDetections(Frame(0).stamp, {});
+  auto a = p.Next(t0);
+  ASSERT_TRUE(a);
+  EXPECT_EQ(a->frame.seq, 0u);
+  ASSERT_TRUE(a->detections);
+  EXPECT_TRUE(a->detections->empty());
+  auto b = p.Next(t0);
+  ASSERT_TRUE(b);
+  EXPECT_EQ(b->frame.seq, 1u);
+  ASSERT_TRUE(b->detections);
+  EXPECT_EQ(b->detections->size(), 1u);
+  EXPECT_EQ(p.stats().with_detections, 2u);
+}
+
+TEST(FramePairing, NormalModeWaitsBoundedThenCountsMiss) {
+  PairingOptions o;
+  o.max_wait = 100ms;
+  FramePairer p(o);
+  const auto t0 = Clock::now();
+  p.AddFrame(Frame(0), t0);
+  EXPECT_FALSE(p.Next(t0 + 50ms));
+  ASSERT_TRUE(p.NextDeadline());
+  EXPECT_EQ(*p.NextDeadline(), t0 + 100ms);
+  auto f = p.Next(t0 + 100ms);
+  ASSERT_TRUE(f);
+  EXPECT_FALSE(f->detections);
+  EXPECT_TRUE(f->detections_missing);
+  EXPECT_EQ(p.stats().missing_detections, 1u);
+  // Late detections of a released frame are dropped.
+  p.AddDetections(Frame(0).stamp, OneBox());
+  EXPECT_EQ(p.stats().dropped_detections, 1u);
+}
+
+TEST(FramePairing, DeterministicWaitsUntilDetectorIsGone) {
+  PairingOptions o;
+  o.deterministic = true;
+  o.max_wait = 1ms;
+  FramePairer p(o);
+  const auto t0 = Clock::now();
+  p.AddFrame(Frame(0), t0);
+  EXPECT_FALSE(p.Next(t0 + 1h));
+  EXPECT_FALSE(p.NextDeadline());
+  p.SetDetectorAlive(false);  // detector writer disappeared (killed)
+  auto f = p.Next(t0 + 1h);
+  ASSERT_TRUE(f);
+  EXPECT_TRUE(f->detections_missing);
+  EXPECT_TRUE(p.detector_lost());
+  EXPECT_EQ(p.stats().lost_episodes, 1u);
+}
+
+TEST(FramePairing, ConsecutiveMissesDeclareDetectorLostThenRecover) {
+  PairingOptions o;
+  o.max_wait = 10ms;
+  o.lost_after_misses = 3;
+  FramePairer p(o);
+  auto t = Clock::now();
+  for (int i = 0; i < 3; ++i) {
+    p.AddFrame(Frame(i), t);
+    ASSERT_TRUE(p.Next(t + 10ms));
+  }
+  EXPECT_TRUE(p.detector_lost());
+  // Lost: frames no longer wait at all (geometry-only).
+  p.AddFrame(Frame(3), t);
+  auto f = p.Next(t);
+  ASSERT_TRUE(f);
+  EXPECT_TRUE(f->detections_missing);
+  // Detections arrive again: waiting resumes and pairing works.
+  p.AddDetections(Frame(4).stamp, OneBox());
+  EXPECT_FALSE(p.detector_lost());
+  p.AddFrame(Frame(4), t);
+  auto g = p.Next(t);
+  ASSERT_TRUE(g);
+  ASSERT_TRUE(g->detections);
+  EXPECT_EQ(p.stats().lost_episodes, 1u);
+  EXPECT_EQ(p.stats().missing_detections, 4u);
+}
+
+TEST(FramePairing, NoDetectionsNeededNoWait) {
+  PairingOptions o;
+  o.needs_detections = false;
+  FramePairer p(o);
+  const auto t0 = Clock::now();
+  p.AddFrame(Frame(0), t0);
+  auto f = p.Next(t0);
+  ASSERT_TRUE(f);
+  EXPECT_FALSE(f->detections_missing);
+  EXPECT_FALSE(f->detections);
+}
+
+}  // namespace
+}  // namespace dygslam

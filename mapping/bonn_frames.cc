@@ -1,12 +1,11 @@
 #include "mapping/bonn_frames.h"
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <fstream>
-#include <sstream>
-
-#include <Eigen/SVD>
 #include <opencv2/imgcodecs.hpp>
+#include <sstream>
 
 #include "core/base/error.h"
 
@@ -47,7 +46,8 @@ std::vector<DepthEntry> ReadDepthList(const std::string& dir) {
     if (line.empty() || line[0] == '#') continue;
     std::istringstream fields(line);
     std::string stamp_text, file;
-    if (!(fields >> stamp_text >> file)) throw InputError(path, line_no, "expected 'timestamp path'");
+    if (!(fields >> stamp_text >> file))
+      throw InputError(path, line_no, "expected 'timestamp path'");
     const auto stamp = Timestamp::Parse(stamp_text);
     if (!stamp) throw InputError(path, line_no, "bad timestamp '" + stamp_text + "'");
     entries.push_back({*stamp, dir + "/" + file});

@@ -3,11 +3,10 @@
 // keeps the mapping tests independent of it.)
 #pragma once
 
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "core/base/camera.h"
 #include "core/base/types.h"

@@ -6,14 +6,14 @@
 // them. Camera poses are ground truth * BonnMarkerFromCam() (--raw-gt: the body pose as the
 // camera pose). --check-marker compares the 24 axis-aligned rotations between the ground-truth body
 // frame and the camera frame by how consistently frames 50-99 fall onto the map of frames 0-49.
+#include <octomap/OcTree.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <vector>
-
-#include <octomap/OcTree.h>
 
 #include "core/base/error.h"
 #include "mapping/bonn_frames.h"
@@ -66,7 +66,8 @@ void CheckMarker(const std::vector<Frame>& frames, const PinholeCamera& camera) 
   std::printf("marker_from_cam candidate (rows)        consistency  occupied_cells\n");
   std::vector<Rigid3d> candidates = {mapping_data::BonnMarkerFromCam()};
   if (std::getenv("DYGSLAM_MARKER_ALL_AXES") != nullptr) {
-    for (const Eigen::Matrix3d& r : AxisRotations()) candidates.emplace_back(r, Eigen::Vector3d::Zero());
+    for (const Eigen::Matrix3d& r : AxisRotations())
+      candidates.emplace_back(r, Eigen::Vector3d::Zero());
   } else {
     candidates.push_back(Rigid3d());
   }
@@ -89,8 +90,8 @@ void CheckMarker(const std::vector<Frame>& frames, const PinholeCamera& camera) 
         hits += CellState(tree, octomap::point3d(w.x(), w.y(), w.z())) == 1;
       }
     }
-    std::printf("[%2.0f %2.0f %2.0f; %2.0f %2.0f %2.0f; %2.0f %2.0f %2.0f]   %.3f       %llu\n", r(0, 0),
-                r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2),
+    std::printf("[%2.0f %2.0f %2.0f; %2.0f %2.0f %2.0f; %2.0f %2.0f %2.0f]   %.3f       %llu\n",
+                r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2),
                 total ? double(hits) / total : 0.0,
                 static_cast<unsigned long long>(builder.Stats().num_occupied_voxels));
   }
@@ -167,9 +168,8 @@ int Main(int argc, char** argv) {
       "surface within 1 cell): %llu of %llu occupied (%.1f %%); occupied-and-free incl. surface "
       "jitter %llu; agreed %llu, unknown in reference %llu; reference cells cleared in "
       "all-frames map: %llu of %llu\n",
-      static_cast<unsigned long long>(c.ghost),
-      static_cast<unsigned long long>(c.occupied_in_a), 100.0 * c.GhostFraction(),
-      static_cast<unsigned long long>(c.occupied_a_free_b),
+      static_cast<unsigned long long>(c.ghost), static_cast<unsigned long long>(c.occupied_in_a),
+      100.0 * c.GhostFraction(), static_cast<unsigned long long>(c.occupied_a_free_b),
       static_cast<unsigned long long>(c.occupied_a_occupied_b),
       static_cast<unsigned long long>(c.occupied_a_unknown_b),
       static_cast<unsigned long long>(c.occupied_b_free_a),
@@ -182,9 +182,9 @@ int Main(int argc, char** argv) {
   all.UpdatePoses({{first_id, Rigid3d(first_pose.rotation,
                                       first_pose.translation + Eigen::Vector3d(0.1, 0, 0))}});
   all.Sync();
-  std::printf("full rebuild of %zu keyframes: %.0f ms\n", all.Stats().num_keyframes,
-              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                  .count());
+  std::printf(
+      "full rebuild of %zu keyframes: %.0f ms\n", all.Stats().num_keyframes,
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
   all.UpdatePoses({{first_id, first_pose}});
   if (!out_dir.empty()) {
     reference.WriteBinary(out_dir + "/reference.bt");

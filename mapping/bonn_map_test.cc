@@ -1,10 +1,10 @@
 // Maps of the shared Bonn frames with ground-truth poses (marker body pose * the dataset's
 // marker-to-camera calibration), without any dynamic mask: the people walking through from
 // frame ~110 on leave ghost cells in the map that a people-free reference observed as free.
+#include <gtest/gtest.h>
+
 #include <cstdio>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "mapping/bonn_frames.h"
 #include "mapping/map_compare.h"
@@ -96,7 +96,8 @@ TEST(BonnMap, MarkerCalibrationSharpensTheMap) {
               static_cast<unsigned long long>(smeared.num_occupied_voxels));
   EXPECT_LT(sharp.num_occupied_voxels * 10, smeared.num_occupied_voxels * 8);
   // And the calibrated camera is level-ish, looking slightly down, in a z-up world.
-  const Eigen::Vector3d down = frames.keyframes[0].world_from_cam.rotation * Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d down =
+      frames.keyframes[0].world_from_cam.rotation * Eigen::Vector3d::UnitY();
   EXPECT_LT(down.z(), -0.9);
 }
 

@@ -68,12 +68,16 @@ GhostVoxelCounts CompareGhostVoxels(const octomap::OcTree& a, const octomap::OcT
     ForEachKeyOfLeaf(a, it, [&](const octomap::OcTreeKey& key) {
       ++counts.occupied_in_a;
       switch (KeyState(b, key)) {
-        case 1: ++counts.occupied_a_occupied_b; break;
+        case 1:
+          ++counts.occupied_a_occupied_b;
+          break;
         case 0:
           ++counts.occupied_a_free_b;
           if (!OccupiedNear(b, key, surface_margin_cells)) ++counts.ghost;
           break;
-        default: ++counts.occupied_a_unknown_b; break;
+        default:
+          ++counts.occupied_a_unknown_b;
+          break;
       }
     });
   }
@@ -91,9 +95,8 @@ void ForEachCell(const octomap::OcTree& map,
                  const std::function<void(const octomap::point3d&, bool occupied)>& visit) {
   for (auto it = map.begin_leafs(), end = map.end_leafs(); it != end; ++it) {
     const bool occupied = map.isNodeOccupied(*it);
-    ForEachKeyOfLeaf(map, it, [&](const octomap::OcTreeKey& key) {
-      visit(map.keyToCoord(key), occupied);
-    });
+    ForEachKeyOfLeaf(map, it,
+                     [&](const octomap::OcTreeKey& key) { visit(map.keyToCoord(key), occupied); });
   }
 }
 

@@ -3,10 +3,10 @@
 // as 8^k cells.
 #pragma once
 
+#include <octomap/OcTree.h>
+
 #include <cstdint>
 #include <functional>
-
-#include <octomap/OcTree.h>
 
 namespace dygslam {
 

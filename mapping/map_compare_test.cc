@@ -1,9 +1,9 @@
 #include "mapping/map_compare.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <stdexcept>
-
-#include <gtest/gtest.h>
 
 #include "mapping/octomap_builder.h"
 #include "mapping/test_scene.h"

@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <vector>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "core/base/error.h"
 #include "mapping/atomic_file.h"
@@ -88,7 +87,8 @@ cv::Mat RenderTopView(const octomap::OcTree& map, const TopViewOptions& options)
     for (int r = 0; r < grid.rows; ++r) {
       for (int c = 0; c < grid.cols; ++c) {
         const float h = height.at<float>(r, c);
-        if (std::isfinite(h)) level.at<uint8_t>(r, c) = cv::saturate_cast<uint8_t>((h - z_lo) / span * 255.0);
+        if (std::isfinite(h))
+          level.at<uint8_t>(r, c) = cv::saturate_cast<uint8_t>((h - z_lo) / span * 255.0);
       }
     }
     cv::Mat coloured;
@@ -106,8 +106,7 @@ cv::Mat RenderTopView(const octomap::OcTree& map, const TopViewOptions& options)
   cv::Mat out = Enlarge(image, options.pixels_per_cell);
   if (options.draw_legend && std::isfinite(z_lo) && out.cols >= 120 && out.rows >= 30) {
     char text[96];
-    std::snprintf(text, sizeof(text), "z %.2f..%.2f m, %.0f cm/cell", z_lo, z_hi,
-                  grid.res * 100.0);
+    std::snprintf(text, sizeof(text), "z %.2f..%.2f m, %.0f cm/cell", z_lo, z_hi, grid.res * 100.0);
     cv::putText(out, text, cv::Point(4, 14), cv::FONT_HERSHEY_PLAIN, 0.9, cv::Scalar(255, 255, 255),
                 1, cv::LINE_AA);
   }

@@ -3,11 +3,11 @@
 // -x (left) to +x; one map cell is `pixels_per_cell` pixels.
 #pragma once
 
-#include <limits>
-#include <string>
-
 #include <octomap/OcTree.h>
+
+#include <limits>
 #include <opencv2/core.hpp>
+#include <string>
 
 namespace dygslam {
 

@@ -1,6 +1,7 @@
 #include "mapping/map_render.h"
 
 #include <gtest/gtest.h>
+
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/base/error.h"
@@ -19,9 +20,9 @@ class MapRender : public ::testing::Test {
     options.pixel_stride = 1;
     builder_ = std::make_unique<OctoMapBuilder>(camera, options);
     for (int k = 0; k < 12; ++k) {
-      builder_->Insert(test_scene::MakeKeyframe(
-          k, test_scene::DefaultRoom(), camera,
-          test_scene::LookingAlong({-1.2, 0, 1.2}, -0.9 + 0.15 * k)));
+      builder_->Insert(
+          test_scene::MakeKeyframe(k, test_scene::DefaultRoom(), camera,
+                                   test_scene::LookingAlong({-1.2, 0, 1.2}, -0.9 + 0.15 * k)));
     }
   }
   // Pixel of world (x, y) in an image of the map made with `ppc` pixels per cell.

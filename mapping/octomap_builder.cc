@@ -1,15 +1,15 @@
 #include "mapping/octomap_builder.h"
 
+#include <octomap/AbstractOcTree.h>
+#include <octomap/OcTree.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <unordered_map>
-
-#include <octomap/AbstractOcTree.h>
-#include <octomap/OcTree.h>
-#include <opencv2/imgproc.hpp>
 
 #include "core/base/error.h"
 #include "mapping/atomic_file.h"
@@ -144,9 +144,10 @@ StaticCloud OctoMapBuilder::ExtractStaticCloud(const KeyframeData& keyframe) con
       if (excluded.empty()) excluded = cv::Mat::zeros(depth.size(), CV_8UC1);
       for (size_t i = 0; i < keyframe.keypoints.size(); ++i) {
         if (!keyframe.keypoint_dynamic[i]) continue;
-        cv::circle(excluded, cv::Point(cvRound(keyframe.keypoints[i].pt.x),
-                                       cvRound(keyframe.keypoints[i].pt.y)),
-                   options_.dynamic_keypoint_radius_px, cv::Scalar(255), cv::FILLED);
+        cv::circle(
+            excluded,
+            cv::Point(cvRound(keyframe.keypoints[i].pt.x), cvRound(keyframe.keypoints[i].pt.y)),
+            options_.dynamic_keypoint_radius_px, cv::Scalar(255), cv::FILLED);
       }
     }
   }
@@ -233,7 +234,8 @@ size_t OctoMapBuilder::UpdatePoses(const std::map<int64_t, Rigid3d>& world_from_
     auto it = keyframes_.find(id);
     if (it == keyframes_.end()) continue;
     if (!pose.AllFinite()) {
-      throw InputError("keyframe " + std::to_string(id) + ": corrected world_from_cam is not finite");
+      throw InputError("keyframe " + std::to_string(id) +
+                       ": corrected world_from_cam is not finite");
     }
     ++known;
     it->second.world_from_cam = pose;
@@ -254,8 +256,9 @@ void OctoMapBuilder::Rebuild() {
   std::vector<StoredKeyframe*> ordered;
   ordered.reserve(keyframes_.size());
   for (auto& [id, keyframe] : keyframes_) ordered.push_back(&keyframe);
-  std::sort(ordered.begin(), ordered.end(),
-            [](const StoredKeyframe* a, const StoredKeyframe* b) { return a->sequence < b->sequence; });
+  std::sort(ordered.begin(), ordered.end(), [](const StoredKeyframe* a, const StoredKeyframe* b) {
+    return a->sequence < b->sequence;
+  });
   for (StoredKeyframe* keyframe : ordered) {
     InsertIntoTree(*keyframe);
     keyframe->inserted_world_from_cam = keyframe->world_from_cam;
@@ -359,8 +362,8 @@ std::unique_ptr<octomap::OcTree> ReadOctoMap(const std::string& path) {
     if (!abstract) throw InputError(path, 0, "malformed OctoMap (.ot)");
     auto* tree = dynamic_cast<octomap::OcTree*>(abstract.get());
     if (tree == nullptr) {
-      throw InputError(path, 0, "OctoMap file holds a " + abstract->getTreeType() +
-                                    ", expected an OcTree");
+      throw InputError(path, 0,
+                       "OctoMap file holds a " + abstract->getTreeType() + ", expected an OcTree");
     }
     abstract.release();
     return std::unique_ptr<octomap::OcTree>(tree);

@@ -33,14 +33,13 @@
 // Not thread-safe: one owner thread calls all methods.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "core/base/camera.h"
 #include "core/base/rigid3.h"
@@ -99,18 +98,18 @@ struct OctoMapOptions {
 
 struct OctoMapStats {
   size_t num_keyframes = 0;
-  size_t num_stored_points = 0;     // static points kept for rebuilds (all keyframes)
-  size_t num_leaves = 0;            // leaves of the (pruned) tree
+  size_t num_stored_points = 0;  // static points kept for rebuilds (all keyframes)
+  size_t num_leaves = 0;         // leaves of the (pruned) tree
   size_t num_occupied_leaves = 0;
   size_t num_free_leaves = 0;
   // The same in cells of `resolution` (a pruned leaf of size 2^k * res counts 8^k).
   uint64_t num_occupied_voxels = 0;
   uint64_t num_free_voxels = 0;
-  size_t memory_bytes = 0;          // octomap::OcTree::memoryUsage()
-  size_t num_insertions = 0;        // octree insertions (incremental + during rebuilds)
+  size_t memory_bytes = 0;    // octomap::OcTree::memoryUsage()
+  size_t num_insertions = 0;  // octree insertions (incremental + during rebuilds)
   size_t num_rebuilds = 0;
-  double last_insert_ms = 0;        // last incremental Insert() (filtering + ray casting)
-  double median_insert_ms = 0;      // over incremental Insert() calls
+  double last_insert_ms = 0;    // last incremental Insert() (filtering + ray casting)
+  double median_insert_ms = 0;  // over incremental Insert() calls
   double last_rebuild_ms = 0;
 };
 

@@ -1,14 +1,13 @@
 #include "mapping/octomap_builder.h"
 
+#include <gtest/gtest.h>
+#include <octomap/AbstractOcTree.h>
+#include <octomap/OcTree.h>
 #include <unistd.h>
 
 #include <cmath>
 #include <fstream>
 #include <memory>
-
-#include <gtest/gtest.h>
-#include <octomap/AbstractOcTree.h>
-#include <octomap/OcTree.h>
 #include <opencv2/imgproc.hpp>
 
 #include "core/base/error.h"
@@ -24,8 +23,8 @@ using test_scene::LookingAlong;
 using test_scene::MakeKeyframe;
 using test_scene::Scene;
 
-constexpr int kWalkFrames = 40;   // the person walks across the room
-constexpr int kAfterFrames = 6;   // then the camera keeps looking at the empty path
+constexpr int kWalkFrames = 40;  // the person walks across the room
+constexpr int kAfterFrames = 6;  // then the camera keeps looking at the empty path
 
 // Person-sized box walking along y in front of the far wall, then gone.
 Box PersonAt(int frame) {
@@ -183,8 +182,8 @@ TEST(OctoMapBuilder, StaticStructureOccupiedAndFreeSpaceCleared) {
     }
   }
   EXPECT_EQ(wall_occupied, wall_cells);
-  EXPECT_EQ(CellState(tree, octomap::point3d(1.52, -1.25, 0.5)), 1);   // cabinet front
-  EXPECT_EQ(CellState(tree, octomap::point3d(1.5, 0.3, -0.01)), 1);    // floor
+  EXPECT_EQ(CellState(tree, octomap::point3d(1.52, -1.25, 0.5)), 1);  // cabinet front
+  EXPECT_EQ(CellState(tree, octomap::point3d(1.5, 0.3, -0.01)), 1);   // floor
   const Box cabinet = test_scene::DefaultRoom().static_boxes[0];
   EXPECT_GT(CountOccupiedInside(tree,
                                 [&](const octomap::point3d& c) {
@@ -317,7 +316,8 @@ TEST(OctoMapBuilder, UpdatePosesMovesTheMap) {
 
   // A rotation of 1 degree moves points at 4 m by 7 cm: rebuild.
   std::map<int64_t, Rigid3d> rotated = corrected;
-  rotated[0].rotation = Eigen::AngleAxisd(M_PI / 180, Eigen::Vector3d::UnitZ()) * rotated[0].rotation;
+  rotated[0].rotation =
+      Eigen::AngleAxisd(M_PI / 180, Eigen::Vector3d::UnitZ()) * rotated[0].rotation;
   builder.UpdatePoses(rotated);
   EXPECT_TRUE(builder.rebuild_pending());
 

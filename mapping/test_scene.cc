@@ -54,9 +54,9 @@ Rigid3d LookingAlong(const Eigen::Vector3d& position, double yaw) {
   const Eigen::Vector3d up(0, 0, 1);
   const Eigen::Vector3d right = forward.cross(up);
   Eigen::Matrix3d rotation;
-  rotation.col(0) = right;   // camera x
-  rotation.col(1) = -up;     // camera y (down)
-  rotation.col(2) = forward; // camera z
+  rotation.col(0) = right;    // camera x
+  rotation.col(1) = -up;      // camera y (down)
+  rotation.col(2) = forward;  // camera z
   return Rigid3d(rotation, position);
 }
 

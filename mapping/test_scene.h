@@ -3,10 +3,9 @@
 // World frame: z up. Camera frame: optical (x right, y down, z forward).
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "core/base/camera.h"
 #include "core/base/rigid3.h"
@@ -22,7 +21,7 @@ struct Box {
 };
 
 struct Scene {
-  Box room;                   // seen from inside
+  Box room;  // seen from inside
   std::vector<Box> static_boxes;
   std::vector<Box> dynamic_boxes;  // rendered into depth and into dynamic_mask
 };

@@ -105,6 +105,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   size_t frames_received = 0;
   Clock::time_point last_frame_time = Clock::now();
   int detector_writers_seen = 0;
+  bool detector_done = false;  // the detector announced COMPONENT_DONE (finished, not lost)
 
   dds::Writer<msg::CameraPosePubSubType> pose_writer(participant, dds::topics::kCameraPose,
                                                      dds::TopicKind::kCameraPose);
@@ -151,6 +152,10 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
         if (s.kind() == static_cast<uint8_t>(StreamEvent::kEndOfStream)) {
           end_frames = static_cast<int64_t>(s.num_frames());
         }
+        if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone) &&
+            s.source() == "detector") {
+          detector_done = true;
+        }
         cv.notify_all();
       });
 
@@ -168,7 +173,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
       // Detector liveness from the matched writers of the detections topic.
       const int writers = detections.matched();
       if (writers > 0) detector_writers_seen = writers;
-      pairer.SetDetectorAlive(!(detector_writers_seen > 0 && writers == 0));
+      pairer.SetDetectorAlive(detector_done || !(detector_writers_seen > 0 && writers == 0));
       paired = pairer.Next(Clock::now());
       if (!paired) {
         const bool all_in = end_frames >= 0 &&

@@ -79,7 +79,7 @@ std::vector<int> FeatureGrid::Query(const std::vector<cv::KeyPoint>& undistorted
 }
 
 Frame::Frame(int64_t frame_id, Timestamp frame_stamp, OrbFeatures features, const cv::Mat& depth_m,
-             std::shared_ptr<const CameraGeometry> frame_geometry)
+             std::shared_ptr<const CameraGeometry> frame_geometry, std::vector<uint8_t> dynamic_region)
     : id(frame_id),
       stamp(frame_stamp),
       geometry(std::move(frame_geometry)),
@@ -106,6 +106,8 @@ Frame::Frame(int64_t frame_id, Timestamp frame_stamp, OrbFeatures features, cons
       u_right[i] = static_cast<float>(undistorted[i].pt.x - geometry->bf / d);
     }
   }
+  in_dynamic_region = std::move(dynamic_region);
+  in_dynamic_region.resize(n, 0);
   grid.Build(undistorted, *geometry);
   map_points.assign(n, nullptr);
   outlier.assign(n, 0);

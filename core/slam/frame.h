@@ -52,8 +52,10 @@ class Frame {
  public:
   Frame() = default;
   // depth_m: CV_32FC1 metres registered to the colour image.
+  // in_dynamic_region (optional, one flag per feature): features inside detection boxes that the
+  // filter kept. They are used for tracking against existing map points but never seed new ones.
   Frame(int64_t id, Timestamp stamp, OrbFeatures features, const cv::Mat& depth_m,
-        std::shared_ptr<const CameraGeometry> geometry);
+        std::shared_ptr<const CameraGeometry> geometry, std::vector<uint8_t> in_dynamic_region = {});
 
   int64_t id = -1;
   Timestamp stamp;
@@ -63,6 +65,8 @@ class Frame {
   std::vector<Descriptor> descriptors;
   std::vector<float> depth;                 // metres, <= 0: none
   std::vector<float> u_right;               // virtual right coordinate, < 0: none
+  std::vector<uint8_t> in_dynamic_region;   // 1: never seeds a map point
+  bool CanSeedPoint(size_t i) const { return depth[i] > 0 && !in_dynamic_region[i]; }
   FeatureGrid grid;
 
   // Tracking state built per frame.

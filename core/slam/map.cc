@@ -21,6 +21,7 @@ KeyFrame::KeyFrame(int64_t kf_id, const Frame& frame)
       descriptors(frame.descriptors),
       depth(frame.depth),
       u_right(frame.u_right),
+      in_dynamic_region(frame.in_dynamic_region),
       grid(frame.grid),
       cam_from_world(frame.cam_from_world),
       map_points(frame.map_points) {}

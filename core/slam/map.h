@@ -71,7 +71,9 @@ class KeyFrame {
   const std::vector<Descriptor> descriptors;
   const std::vector<float> depth;
   const std::vector<float> u_right;
+  const std::vector<uint8_t> in_dynamic_region;
   const FeatureGrid grid;
+  bool CanSeedPoint(size_t i) const { return depth[i] > 0 && !in_dynamic_region[i]; }
 
   // Mutable state, guarded by Map::mutex().
   Rigid3d cam_from_world;

@@ -77,7 +77,8 @@ int Matcher::SearchByProjection(Frame& current, const Frame& last, double radius
         best_idx = c;
       }
     }
-    if (best_idx >= 0 && best_dist <= options_.th_high) {
+    const int max_distance = (best_idx >= 0 && current.in_dynamic_region[best_idx]) ? options_.th_low : options_.th_high;
+    if (best_idx >= 0 && best_dist <= max_distance) {
       current.map_points[best_idx] = mp;
       matched_idx.push_back(best_idx);
       rotations.push_back(AngleDifference(last.undistorted[i].angle, current.undistorted[best_idx].angle));
@@ -119,7 +120,10 @@ int Matcher::SearchByProjection(Frame& frame, const std::vector<std::shared_ptr<
         second_level = frame.undistorted[c].octave;
       }
     }
-    if (best_idx >= 0 && best <= options_.th_high) {
+    // Features inside detection boxes that the filter kept must match more strictly: a
+    // background point hidden behind a person projects onto the person's texture.
+    const int max_distance = (best_idx >= 0 && frame.in_dynamic_region[best_idx]) ? options_.th_low : options_.th_high;
+    if (best_idx >= 0 && best <= max_distance) {
       if (best_level == second_level && best > options_.nn_ratio * second) continue;
       frame.map_points[best_idx] = mp;
       ++n;
@@ -214,7 +218,7 @@ std::vector<std::pair<int, int>> Matcher::SearchForTriangulation(const KeyFrame&
   std::vector<int> best_for_2(kf2.size(), 256), owner(kf2.size(), -1);
   std::vector<float> rotations;
   for (size_t i = 0; i < kf1.size(); ++i) {
-    if (kf1.map_points[i] || kf1.depth[i] <= 0) continue;
+    if (kf1.map_points[i] || !kf1.CanSeedPoint(i)) continue;
     const cv::Point2f& p1 = kf1.undistorted[i].pt;
     const double d = kf1.depth[i];
     const Eigen::Vector3d a = c2_from_c1 * g.camera.Unproject(p1.x, p1.y, 0.9 * d);
@@ -230,7 +234,7 @@ std::vector<std::pair<int, int>> Matcher::SearchForTriangulation(const KeyFrame&
     const Eigen::Vector2d dir = (ub - ua).norm() > 1e-9 ? Eigen::Vector2d((ub - ua).normalized()) : Eigen::Vector2d(1, 0);
     int best = 256, best_idx = -1;
     for (int c : candidates) {
-      if (kf2.map_points[c]) continue;
+      if (kf2.map_points[c] || kf2.in_dynamic_region[c]) continue;
       const Eigen::Vector2d q(kf2.undistorted[c].pt.x, kf2.undistorted[c].pt.y);
       const Eigen::Vector2d rel = q - ua;
       const double along = rel.dot(dir);

@@ -75,22 +75,27 @@ OrbExtractor::OrbExtractor(const OrbExtractorOptions& options) : options_(option
     scales_[l] = std::pow(options_.scale_factor, l);
     sigma2_[l] = scales_[l] * scales_[l];
   }
-  // Features per level decrease geometrically with the level's area ratio (1/s per level).
-  const double inv = 1.0 / options_.scale_factor;
-  double per_level = options_.num_features * (1 - inv) / (1 - std::pow(inv, levels));
-  features_per_level_.resize(levels);
-  int assigned = 0;
-  for (int l = 0; l < levels - 1; ++l) {
-    features_per_level_[l] = static_cast<int>(std::lround(per_level));
-    assigned += features_per_level_[l];
-    per_level *= inv;
-  }
-  features_per_level_[levels - 1] = std::max(options_.num_features - assigned, 0);
   // Row half-widths of the circular patch, symmetric by construction.
   umax_.resize(kPatchRadius + 1);
   for (int v = 0; v <= kPatchRadius; ++v) {
     umax_[v] = static_cast<int>(std::floor(std::sqrt(kPatchRadius * kPatchRadius + 0.5 - v * v)));
   }
+}
+
+// Features per level decrease geometrically with the level's area ratio (1/s per level).
+std::vector<int> OrbExtractor::FeaturesPerLevel(int num_features) const {
+  const int levels = options_.num_levels;
+  const double inv = 1.0 / options_.scale_factor;
+  double per_level = num_features * (1 - inv) / (1 - std::pow(inv, levels));
+  std::vector<int> counts(levels);
+  int assigned = 0;
+  for (int l = 0; l < levels - 1; ++l) {
+    counts[l] = static_cast<int>(std::lround(per_level));
+    assigned += counts[l];
+    per_level *= inv;
+  }
+  counts[levels - 1] = std::max(num_features - assigned, 0);
+  return counts;
 }
 
 void OrbExtractor::DistributeQuadtree(std::vector<cv::KeyPoint>& candidates, const cv::Rect& area,
@@ -167,9 +172,10 @@ void OrbExtractor::DistributeQuadtree(std::vector<cv::KeyPoint>& candidates, con
   for (int w : winners) kept->push_back(candidates[w]);
 }
 
-OrbFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& mask) const {
+OrbFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& mask, int num_features) const {
   CV_Assert(gray.type() == CV_8UC1);
   const int levels = options_.num_levels;
+  const std::vector<int> features_per_level = FeaturesPerLevel(num_features > 0 ? num_features : options_.num_features);
   OrbFeatures out;
   const auto& pattern = Pattern();
   cv::Mat level_img = gray;
@@ -211,7 +217,7 @@ OrbFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& mask) cons
       candidates.push_back(kp);
     }
     std::vector<cv::KeyPoint> kept;
-    DistributeQuadtree(candidates, area, features_per_level_[level], &kept);
+    DistributeQuadtree(candidates, area, features_per_level[level], &kept);
     if (kept.empty()) continue;
 
     // Orientation by intensity centroid on the unblurred level image.

@@ -53,7 +53,8 @@ class OrbExtractor {
   explicit OrbExtractor(const OrbExtractorOptions& options);
 
   // gray: CV_8UC1. mask (optional, CV_8UC1): features are not detected where mask != 0.
-  OrbFeatures Extract(const cv::Mat& gray, const cv::Mat& mask = cv::Mat()) const;
+  // num_features > 0 overrides the options' budget for this call.
+  OrbFeatures Extract(const cv::Mat& gray, const cv::Mat& mask = cv::Mat(), int num_features = -1) const;
 
   const OrbExtractorOptions& options() const { return options_; }
   double scale(int level) const { return scales_[level]; }
@@ -72,7 +73,7 @@ class OrbExtractor {
   OrbExtractorOptions options_;
   std::vector<double> scales_;
   std::vector<double> sigma2_;
-  std::vector<int> features_per_level_;
+  std::vector<int> FeaturesPerLevel(int num_features) const;
   std::vector<int> umax_;  // half-width of the circular patch per row
 };
 

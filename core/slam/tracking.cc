@@ -87,7 +87,7 @@ bool Tracker::Initialize(Frame& frame, TrackResult* result) {
   auto kf = std::make_shared<KeyFrame>(map_->NextKeyFrameId(), frame);
   map_->AddKeyFrame(kf);
   for (size_t i = 0; i < frame.size(); ++i) {
-    if (frame.depth[i] <= 0) continue;
+    if (!frame.CanSeedPoint(i)) continue;
     auto mp = std::make_shared<MapPoint>(map_->NextMapPointId(), frame.UnprojectWorld(i), kf->id);
     mp->ref_kf_id = kf->id;
     map_->AddObservation(mp, kf, static_cast<int>(i));
@@ -123,7 +123,7 @@ void Tracker::PrepareLastFrame() {
   }
   std::vector<std::pair<float, size_t>> by_depth;
   for (size_t i = 0; i < last_frame_.size(); ++i) {
-    if (last_frame_.depth[i] > 0) by_depth.push_back({last_frame_.depth[i], i});
+    if (last_frame_.CanSeedPoint(i)) by_depth.push_back({last_frame_.depth[i], i});
   }
   std::sort(by_depth.begin(), by_depth.end());
   int added = 0;
@@ -403,7 +403,7 @@ std::shared_ptr<KeyFrame> Tracker::CreateKeyFrame(Frame& frame) {
   // New points from depth: all close ones, at least new_points_min in total.
   std::vector<std::pair<float, size_t>> by_depth;
   for (size_t i = 0; i < kf->size(); ++i) {
-    if (kf->depth[i] > 0) by_depth.push_back({kf->depth[i], i});
+    if (kf->CanSeedPoint(i)) by_depth.push_back({kf->depth[i], i});
   }
   std::sort(by_depth.begin(), by_depth.end());
   int created = 0, considered = 0;

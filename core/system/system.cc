@@ -1,5 +1,6 @@
 #include "core/system/system.h"
 
+#include <algorithm>
 #include <chrono>
 #include <future>
 #include <mutex>
@@ -79,6 +80,7 @@ class SystemImpl {
                    const std::vector<Detection>* detections);
 
   std::vector<StampedPose> Trajectory() const { return tracker_.Trajectory(); }
+  void TopUpStaticFeatures(const cv::Mat& gray, const std::vector<Detection>& detections, OrbFeatures* kept) const;
   std::vector<StampedPose> KeyframeTrajectory() const { return tracker_.KeyframeTrajectory(); }
   void SetKeyframeCallback(std::function<void(const KeyframeData&)> cb) {
     std::lock_guard<std::mutex> lock(callback_mutex_);
@@ -101,6 +103,50 @@ class SystemImpl {
   std::mutex callback_mutex_;
   std::function<void(const KeyframeData&)> keyframe_callback_;
 };
+
+void SystemImpl::TopUpStaticFeatures(const cv::Mat& gray, const std::vector<Detection>& detections,
+                                     OrbFeatures* kept) const {
+  const int budget = options_.orb.num_features;
+  const int shortfall = budget - static_cast<int>(kept->keypoints.size());
+  if (kept->keypoints.size() >= options_.static_top_up_fraction * budget) return;
+  cv::Mat box_mask = cv::Mat::zeros(gray.size(), CV_8UC1);
+  const cv::Rect image(0, 0, gray.cols, gray.rows);
+  for (const Detection& d : detections) {
+    const float m = static_cast<float>(options_.filter.box_margin + 0.08 * d.box.width);
+    const cv::Rect r = cv::Rect(cv::Rect2f(d.box.x - m, d.box.y - m, d.box.width + 2 * m, d.box.height + 2 * m)) & image;
+    box_mask(r).setTo(255);
+  }
+  OrbFeatures extra = extractor_.Extract(gray, box_mask, shortfall);
+  // Skip corners already kept (same level, within 2 px).
+  constexpr int kCell = 8;
+  const int cols = gray.cols / kCell + 1, rows = gray.rows / kCell + 1;
+  std::vector<std::vector<int>> grid(cols * rows);
+  auto cell_of = [&](const cv::Point2f& p) {
+    return std::clamp(int(p.y) / kCell, 0, rows - 1) * cols + std::clamp(int(p.x) / kCell, 0, cols - 1);
+  };
+  for (size_t i = 0; i < kept->keypoints.size(); ++i) grid[cell_of(kept->keypoints[i].pt)].push_back(int(i));
+  const size_t original = kept->keypoints.size();
+  for (size_t j = 0; j < extra.keypoints.size(); ++j) {
+    const cv::KeyPoint& kp = extra.keypoints[j];
+    bool duplicate = false;
+    const int cx = std::clamp(int(kp.pt.x) / kCell, 0, cols - 1), cy = std::clamp(int(kp.pt.y) / kCell, 0, rows - 1);
+    for (int y = std::max(0, cy - 1); y <= std::min(rows - 1, cy + 1) && !duplicate; ++y) {
+      for (int x = std::max(0, cx - 1); x <= std::min(cols - 1, cx + 1) && !duplicate; ++x) {
+        for (int i : grid[y * cols + x]) {
+          if (i >= static_cast<int>(original)) continue;
+          const cv::KeyPoint& other = kept->keypoints[i];
+          if (other.octave == kp.octave && cv::norm(other.pt - kp.pt) < 2.0) {
+            duplicate = true;
+            break;
+          }
+        }
+      }
+    }
+    if (duplicate) continue;
+    kept->keypoints.push_back(kp);
+    kept->descriptors.push_back(extra.descriptors[j]);
+  }
+}
 
 FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp, const cv::Mat& mask,
                              const std::vector<Detection>* detections) {
@@ -181,15 +227,21 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   result.times.probability_ms = filtered.probability_ms;
   std::vector<uint8_t> dynamic = filtered.DynamicFlags();
   OrbFeatures kept;
+  std::vector<uint8_t> kept_in_region;
   for (size_t i = 0; i < features.keypoints.size(); ++i) {
     if (dynamic[i]) continue;
     kept.keypoints.push_back(features.keypoints[i]);
     kept.descriptors.push_back(features.descriptors[i]);
+    kept_in_region.push_back(filtered.features[i].in_dynamic_region ? 1 : 0);
   }
   result.num_dynamic = filtered.num_dynamic;
+  if (detections && !detections->empty() && options_.static_top_up_fraction > 0) {
+    TopUpStaticFeatures(gray, *detections, &kept);
+  }
 
   const auto t_track = std::chrono::steady_clock::now();
-  Frame frame(next_frame_id_++, stamp, std::move(kept), depth_m, geometry_);
+  kept_in_region.resize(kept.keypoints.size(), 0);  // top-up features lie outside the boxes
+  Frame frame(next_frame_id_++, stamp, std::move(kept), depth_m, geometry_, std::move(kept_in_region));
   TrackResult tracked = tracker_.Track(std::move(frame));
   result.times.tracking_ms = MsSince(t_track);
   result.state = tracked.state;

@@ -66,6 +66,10 @@ struct SystemOptions {
   // inside the system, concurrently with ORB extraction. Empty cfg_path: the default model
   // (see SystemOptions::Check / system.cc).
   DetectorOptions detector;
+  // Crowded frames: when fewer than this share of nFeatures survive the filter, features are
+  // extracted again outside the detection boxes (budget = the shortfall) so tracking keeps a
+  // full feature budget on the visible background. 0 disables it.
+  double static_top_up_fraction = 0.7;
   // Fixed seeds, local mapping run synchronously after each keyframe: identical output run to run.
   bool deterministic = false;
   bool NeedsDetections() const { return filter_mode == FilterMode::kBoxes || filter_mode == FilterMode::kFull; }

@@ -47,6 +47,7 @@ struct KeyframeData {
   std::vector<uint8_t> keypoint_dynamic;  // 1 = feature judged dynamic (removed before tracking)
   std::vector<Detection> detections;
   bool pose_update_only = false;  // true: only world_from_cam changed since last emission
+  bool removed = false;           // true: the keyframe was culled; drop it from the map
 };
 
 }  // namespace dygslam

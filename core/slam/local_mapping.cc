@@ -16,7 +16,7 @@ LocalMapper::LocalMapper(std::shared_ptr<Map> map, const LocalMappingOptions& op
 
 LocalMapper::~LocalMapper() { Finish(); }
 
-void LocalMapper::SetPosesChangedCallback(std::function<void(const std::vector<int64_t>&)> callback) {
+void LocalMapper::SetPosesChangedCallback(MapChangedCallback callback) {
   std::lock_guard<std::mutex> lock(queue_mutex_);
   poses_changed_ = std::move(callback);
 }
@@ -125,12 +125,14 @@ void LocalMapper::Process(const std::shared_ptr<KeyFrame>& kf) {
     stats_.total_ms += ms;
     stats_.per_keyframe_ms.push_back(ms);
   }
-  std::function<void(const std::vector<int64_t>&)> callback;
+  MapChangedCallback callback;
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     callback = poses_changed_;
   }
-  if (callback && !changed.empty()) callback(changed);
+  std::vector<int64_t> culled;
+  culled.swap(culled_since_callback_);
+  if (callback && (!changed.empty() || !culled.empty())) callback(changed, culled);
 }
 
 void LocalMapper::CullRecentPoints(const std::shared_ptr<KeyFrame>& kf) {
@@ -318,6 +320,7 @@ void LocalMapper::CullKeyFrames(const std::shared_ptr<KeyFrame>& kf) {
     }
     if (considered > 0 && redundant > options_.redundancy_ratio * considered) {
       map_->SetBad(other);
+      culled_since_callback_.push_back(other->id);
       ++culled;
     }
   }

@@ -60,8 +60,10 @@ class LocalMapper {
   void InterruptBA() { abort_ba_ = true; }
   // Waits until the queue is empty and the current keyframe is done, then stops the thread.
   void Finish();
-  // Called after each processed keyframe with the ids of keyframes whose pose BA changed.
-  void SetPosesChangedCallback(std::function<void(const std::vector<int64_t>&)> callback);
+  // Called (from the mapping thread) after each processed keyframe with the ids of keyframes whose
+  // pose bundle adjustment changed and the ids of keyframes culled.
+  using MapChangedCallback = std::function<void(const std::vector<int64_t>& moved, const std::vector<int64_t>& culled)>;
+  void SetPosesChangedCallback(MapChangedCallback callback);
   LocalMappingStats stats() const;
 
  private:
@@ -85,7 +87,8 @@ class LocalMapper {
   std::atomic<bool> idle_{true};
   std::atomic<bool> abort_ba_{false};
   std::list<std::shared_ptr<MapPoint>> recent_points_;  // local mapping thread only
-  std::function<void(const std::vector<int64_t>&)> poses_changed_;
+  MapChangedCallback poses_changed_;
+  std::vector<int64_t> culled_since_callback_;
   mutable std::mutex stats_mutex_;
   LocalMappingStats stats_;
   std::thread thread_;

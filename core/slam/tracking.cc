@@ -67,11 +67,12 @@ TrackResult Tracker::Track(Frame frame) {
       }
     }
   }
-  if (result.new_keyframe) {
-    local_mapper_.InsertKeyFrame(result.new_keyframe);
-    if (deterministic_) local_mapper_.ProcessPending();
-  }
   return result;
+}
+
+void Tracker::HandOffKeyFrame(const std::shared_ptr<KeyFrame>& kf) {
+  local_mapper_.InsertKeyFrame(kf);
+  if (deterministic_) local_mapper_.ProcessPending();
 }
 
 bool Tracker::Initialize(Frame& frame, TrackResult* result) {

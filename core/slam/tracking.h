@@ -62,7 +62,10 @@ class Tracker {
   Tracker(const TrackingOptions& options, std::shared_ptr<Map> map, LocalMapper& local_mapper,
           bool deterministic);
 
+  // A new keyframe is returned in TrackResult::new_keyframe; the caller hands it to the local
+  // mapper (HandOffKeyFrame) after it has announced it, so corrections never precede it.
   TrackResult Track(Frame frame);
+  void HandOffKeyFrame(const std::shared_ptr<KeyFrame>& kf);
 
   // World poses of all tracked frames (resolved through current keyframe poses).
   std::vector<StampedPose> Trajectory() const;

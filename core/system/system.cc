@@ -74,7 +74,44 @@ class SystemImpl {
         map_(std::make_shared<Map>()),
         local_mapper_(map_, options.local_mapping, !options.deterministic),
         tracker_(options.tracking, map_, local_mapper_, options.deterministic),
-        filter_(FilterOptionsOf(options)) {}
+        filter_(FilterOptionsOf(options)) {
+    local_mapper_.SetPosesChangedCallback(
+        [this](const std::vector<int64_t>& moved, const std::vector<int64_t>& culled) { EmitMapChanges(moved, culled); });
+  }
+
+  // Keyframe pose corrections (local BA) and culled keyframes, for the map.
+  void EmitMapChanges(const std::vector<int64_t>& moved, const std::vector<int64_t>& culled) {
+    std::function<void(const KeyframeData&)> cb;
+    {
+      std::lock_guard<std::mutex> lock(callback_mutex_);
+      cb = keyframe_callback_;
+    }
+    if (!cb) return;
+    std::vector<KeyframeData> updates;
+    {
+      std::lock_guard<std::mutex> lock(map_->mutex());
+      for (int64_t id : moved) {
+        auto kf = map_->GetKeyFrame(id);
+        if (!kf || kf->bad) continue;
+        KeyframeData d;
+        d.id = id;
+        d.stamp = kf->stamp;
+        d.world_from_cam = kf->cam_from_world.Inverse();
+        d.pose_update_only = true;
+        updates.push_back(std::move(d));
+      }
+      for (int64_t id : culled) {
+        auto kf = map_->GetKeyFrame(id);
+        KeyframeData d;
+        d.id = id;
+        if (kf) d.stamp = kf->stamp;
+        d.removed = true;
+        d.pose_update_only = true;
+        updates.push_back(std::move(d));
+      }
+    }
+    for (const KeyframeData& d : updates) cb(d);
+  }
 
   FrameResult Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp, const cv::Mat& mask,
                    const std::vector<Detection>* detections);
@@ -232,7 +269,8 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
     if (dynamic[i]) continue;
     kept.keypoints.push_back(features.keypoints[i]);
     kept.descriptors.push_back(features.descriptors[i]);
-    kept_in_region.push_back(filtered.features[i].in_dynamic_region ? 1 : 0);
+    // Inside a detection box (geometry mode treats the whole image as one region: no boxes).
+    kept_in_region.push_back(filtered.features[i].in_dynamic_region && options_.filter_mode != FilterMode::kGeometry ? 1 : 0);
   }
   result.num_dynamic = filtered.num_dynamic;
   if (detections && !detections->empty() && options_.static_top_up_fraction > 0) {
@@ -268,6 +306,11 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
       if (detections) data.detections = *detections;
       cb(data);
     }
+  }
+  if (tracked.new_keyframe) {
+    const auto t_map = std::chrono::steady_clock::now();
+    tracker_.HandOffKeyFrame(tracked.new_keyframe);
+    result.times.local_mapping_ms = MsSince(t_map);  // deterministic mode: local mapping runs here
   }
   result.times.total_ms = MsSince(t_start);
   return result;

@@ -36,6 +36,7 @@ struct StageTimes {
   double matching_ms = 0;         // dynamic filter: feature matching to previous frame
   double probability_ms = 0;      // dynamic filter: F estimation + probability update
   double tracking_ms = 0;         // pose tracking (motion model / reference KF / local map)
+  double local_mapping_ms = 0;  // synchronous local mapping (deterministic mode only)
   double total_ms = 0;            // wall time of FeedRgbdFrame
 };
 

@@ -12,12 +12,15 @@ BUILD_PACKAGES=(
   libgtest-dev googletest
   cyclonedds-dev cyclonedds-tools
   iproute2 python3 python3-matplotlib python3-numpy
+  docker-compose
 )
 
+# Runtime: the shared libraries `dygslam` links (readelf NEEDED; their own dependencies come with
+# them) + python3 for `dygslam eval --plot`. Checked by the test docker/RuntimePackagesCoverBinary.
 RUNTIME_PACKAGES=(
   libopencv-core406 libopencv-imgproc406 libopencv-imgcodecs406 libopencv-features2d406
-  libopencv-calib3d406 libopencv-dnn406 libopencv-rgbd406 libopencv-video406 libopencv-flann406
-  libceres3 liboctomap1.9 liboctomath1.9 libyaml-cpp0.7 libfastrtps2.9 libfastcdr1 iproute2
+  libopencv-calib3d406 libopencv-dnn406
+  libceres3 liboctomap1.9 libyaml-cpp0.7 libfastrtps2.9 libfastcdr1
   python3 python3-matplotlib python3-numpy
 )
 

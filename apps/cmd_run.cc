@@ -1,20 +1,46 @@
 // dygslam run DATASET_DIR [--config FILE] [--filter none|boxes|geometry|full] [--frames FIRST:LAST]
-//              [--out DIR] [--deterministic]
+//              [--out DIR] [--deterministic] [--processes | --direct] [--no-map] [--domain N]
+//              [--quiet]
+//
+// Three ways to run the same SLAM, same outputs in DIR (trajectory.txt, keyframes.txt, frames.csv,
+// map.bt unless --no-map) and the same summary on stdout:
+//   default      the DDS pipeline (player, detector, slam, mapper, recorder) on threads of this
+//                process (components/pipeline.h, RunPipeline); needs a build with DDS, else
+//                falls back to --direct and says so
+//   --processes  the DDS pipeline, one process per component
+//   --direct     no DDS: this process feeds the System frame by frame (the library loop), the map
+//                is built by a KeyframeMapper thread
+// SIGINT / SIGTERM stop the run at any time: outputs are flushed (atomically) and the exit code
+// is 0.
+#include <signal.h>
+#include <unistd.h>
+
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
+#include <optional>
+#include <random>
 
 #include "apps/command.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
+#include "core/config/mapping_config.h"
 #include "core/config/settings.h"
 #include "core/config/system_config.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
+#include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
+#include "mapping/keyframe_mapper.h"
+#ifdef DYGSLAM_HAVE_COMPONENTS
+#include "components/pipeline.h"
+#endif
 
 namespace dygslam::cli {
 namespace {
@@ -49,79 +75,248 @@ std::string DefaultConfig(const std::string& dataset_dir) {
   return (presets / preset).string();
 }
 
+// frames.csv: the same columns in every mode (the pipeline's recorder writes them from
+// CameraPose, components/recorder.cc FramesCsvHeader / FramesCsvRow).
+constexpr const char* kFramesCsvHeader =
+    "stamp,state,keyframe,features,dynamic,tracked,orb_ms,detection_ms,matching_ms,probability_ms,tracking_ms,"
+    "total_ms\n";
+
+std::string FramesCsvRow(const FrameResult& r) {
+  char line[512];
+  std::snprintf(line, sizeof(line), "%s,%s,%d,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n", r.stamp.ToString().c_str(),
+                ToString(r.state), r.is_keyframe ? 1 : 0, r.num_features, r.num_dynamic, r.num_tracked,
+                r.times.orb_extraction_ms, r.times.detection_ms, r.times.matching_ms, r.times.probability_ms,
+                r.times.tracking_ms, r.times.total_ms);
+  return line;
+}
+
+// SIGINT / SIGTERM -> a flag the direct loop polls (restores the previous handlers on exit).
+volatile std::sig_atomic_t g_direct_signal = 0;
+extern "C" void OnDirectSignal(int sig) { g_direct_signal = sig; }
+class DirectSignals {
+ public:
+  DirectSignals() {
+    g_direct_signal = 0;
+    struct sigaction sa {};
+    sa.sa_handler = OnDirectSignal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int_);
+    sigaction(SIGTERM, &sa, &old_term_);
+  }
+  ~DirectSignals() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+  bool signaled() const { return g_direct_signal != 0; }
+
+ private:
+  struct sigaction old_int_ {}, old_term_ {};
+};
+
+struct RunSetup {
+  std::string dataset_dir;
+  std::string config;
+  SystemOptions system;
+  OctoMapOptions octomap;
+  size_t first = 0, last = 0;
+  fs::path out;
+  bool map = true;
+  bool progress = true;
+};
+
+struct RunOutcome {
+  size_t processed = 0;
+  size_t lost = 0;
+  bool interrupted = false;
+  int exit_code = 0;
+};
+
+RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
+  RunOutcome outcome;
+  System system(s.system);
+  std::unique_ptr<KeyframeMapper> mapper;
+  if (s.map) {
+    mapper = std::make_unique<KeyframeMapper>(s.system.camera, s.octomap);
+    KeyframeMapper* m = mapper.get();
+    system.SetKeyframeCallback([m](const KeyframeData& k) { m->Submit(k); });
+  }
+  DirectSignals signals;
+  std::string csv = kFramesCsvHeader;
+  const auto t0 = std::chrono::steady_clock::now();
+  const size_t total = s.last - s.first;
+  for (size_t k = s.first; k < s.last && !signals.signaled(); ++k) {
+    const auto index = dataset.FrameForRgbEntry(k);
+    if (!index) continue;
+    const cv::Mat rgb = dataset.LoadRgb(*index, s.system.camera.width, s.system.camera.height);
+    const cv::Mat depth = dataset.LoadDepth(*index, s.system.camera.width, s.system.camera.height);
+    const FrameResult r = system.FeedRgbdFrame(rgb, depth, dataset.frame(*index).rgb_stamp);
+    ++outcome.processed;
+    if (r.state == TrackingState::kLost) ++outcome.lost;
+    csv += FramesCsvRow(r);
+    if (s.progress && (outcome.processed % 10 == 0 || k + 1 == s.last)) {
+      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::fprintf(stderr, "\r[run] frame %zu/%zu  %.1f fps  state=%s  lost=%zu   ", k + 1 - s.first, total,
+                   outcome.processed / std::max(elapsed, 1e-9), ToString(r.state), outcome.lost);
+      std::fflush(stderr);
+    }
+  }
+  if (s.progress) std::fprintf(stderr, "\n");
+  outcome.interrupted = signals.signaled();
+  if (outcome.interrupted) std::fprintf(stderr, "[run] interrupted: flushing outputs\n");
+  system.Shutdown();
+  WriteFileAtomically((s.out / "frames.csv").string(), csv);
+  WriteTumTrajectory((s.out / "trajectory.txt").string(), system.Trajectory());
+  WriteTumTrajectory((s.out / "keyframes.txt").string(), system.KeyframeTrajectory());
+  if (mapper) {
+    mapper->Flush();
+    const std::string path = (s.out / "map.bt").string();
+    mapper->WithBuilder([&](OctoMapBuilder& b) {
+      if (!b.KeyframeIds().empty()) b.WriteBinary(path);
+    });
+  }
+  return outcome;
+}
+
+#ifdef DYGSLAM_HAVE_COMPONENTS
+// A partition name unique to this run: concurrent runs on one DDS domain never mix.
+std::string RunPartition() {
+  char host[64] = {0};
+  gethostname(host, sizeof(host) - 1);
+  std::random_device rd;
+  return "dygslam_run_" + std::string(host) + "_" + std::to_string(getpid()) + "_" + std::to_string(rd() % 100000);
+}
+
+RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id) {
+  PipelineOptions o;
+  o.dataset_dir = s.dataset_dir;
+  o.output_dir = s.out.string();
+  o.settings_path = s.config;
+  o.system = s.system;
+  o.octomap = s.octomap;
+  o.first_entry = s.first;
+  o.last_entry = s.last;
+  o.processes = processes;
+  o.run_mapper = s.map;
+  o.domain_id = domain_id;
+  o.partition = RunPartition();
+  o.progress = s.progress;
+  RunOutcome outcome;
+  // The files a previous run left in DIR must not be mistaken for this run's.
+  for (const char* name : {"trajectory.txt", "keyframes.txt", "frames.csv", "map.bt"}) {
+    std::error_code ec;
+    fs::remove(s.out / name, ec);
+  }
+  StopReport report;
+  outcome.exit_code = RunPipeline(o, &report);
+  outcome.interrupted = report.signaled;
+  if (fs::exists(s.out / "frames.csv")) {
+    for (const TextLine& line : ReadDataLines((s.out / "frames.csv").string())) {
+      if (line.tokens.size() < 2 || line.tokens[0] == "stamp") continue;
+      ++outcome.processed;
+      if (line.tokens[1] == ToString(TrackingState::kLost)) ++outcome.lost;
+    }
+  }
+  return outcome;
+}
+#endif
+
 int RunRun(const std::vector<std::string>& args) {
-  ArgParser p("run", "DATASET_DIR [--config FILE] [--filter none|boxes|geometry|full] [--frames FIRST:LAST] [--out DIR] [--deterministic]",
+  ArgParser p("run",
+              "DATASET_DIR [--config FILE] [--filter none|boxes|geometry|full] [--frames FIRST:LAST] [--out DIR] "
+              "[--deterministic] [--processes | --direct] [--no-map]",
               "Runs the SLAM on a TUM/Bonn dataset folder; writes DIR/trajectory.txt (TUM format, every tracked\n"
-              "frame), DIR/keyframes.txt and DIR/frames.csv (state and stage times per frame).");
+              "frame), DIR/keyframes.txt, DIR/frames.csv (state and stage times per frame) and DIR/map.bt\n"
+              "(OctoMap of the static scene). Default: the DDS components (player, detector, slam, mapper,\n"
+              "recorder) on threads of this process; --processes: one process per component; --direct: no\n"
+              "DDS, the library loop. SIGINT / SIGTERM: outputs are flushed, exit 0.");
   p.AddPositional("DATASET_DIR", "folder with rgb.txt, depth.txt (groundtruth.txt optional)");
   p.AddOption("config", "FILE", "settings YAML (ORB-SLAM2 keys); default: DATASET_DIR/camera.yaml or a preset");
   p.AddOption("filter", "MODE", "dynamic filter: none | boxes | geometry | full", "full");
   p.AddOption("frames", "FIRST:LAST", "rgb.txt entries FIRST (inclusive, 0-based) to LAST (exclusive)");
   p.AddOption("out", "DIR", "output folder", "out/run");
   p.AddFlag("deterministic", "fixed seeds and synchronous local mapping: identical output run to run");
+  p.AddFlag("processes", "DDS pipeline with each component in its own process");
+  p.AddFlag("direct", "no DDS: feed the System directly in this process");
+  p.AddFlag("no-map", "do not build map.bt");
+  p.AddOption("domain", "N", "DDS domain id (default: $DYGSLAM_DOMAIN_ID or 0)", "-1");
   p.AddFlag("quiet", "no progress line");
   if (!p.Parse(args)) return p.exit_code();
+  if (p.Flag("processes") && p.Flag("direct")) return p.UsageError("--processes and --direct exclude each other");
 
-  const std::string dataset_dir = p.Positional("DATASET_DIR");
-  const std::string config = p.Has("config") ? p.Get("config") : DefaultConfig(dataset_dir);
-  const Settings settings = LoadSettings(config);
-  SystemOptions options = SystemOptionsFromSettings(settings);
-  options.filter_mode = ParseFilterMode(p.Get("filter"));
-  options.deterministic = p.Flag("deterministic");
-
-  const RgbdDataset dataset = RgbdDataset::Open(dataset_dir);
-  auto [first, last] = p.Has("frames") ? ParseFrames(p.Get("frames"), dataset.num_rgb_entries())
-                                       : std::pair<size_t, size_t>{0, dataset.num_rgb_entries()};
-  const fs::path out = p.Get("out");
-  fs::create_directories(out);
-
-  System system(options);
-  std::ofstream frames_csv(out / "frames.csv.tmp");
-  frames_csv << "stamp,state,keyframe,features,dynamic,tracked,orb_ms,detection_ms,matching_ms,probability_ms,tracking_ms,total_ms\n";
-  const bool progress = !p.Flag("quiet");
-  size_t processed = 0, lost = 0, skipped = 0;
-  const auto t0 = std::chrono::steady_clock::now();
-  for (size_t k = first; k < last; ++k) {
-    const auto index = dataset.FrameForRgbEntry(k);
-    if (!index) {
-      ++skipped;
-      continue;
-    }
-    const cv::Mat rgb = dataset.LoadRgb(*index, options.camera.width, options.camera.height);
-    const cv::Mat depth = dataset.LoadDepth(*index, options.camera.width, options.camera.height);
-    const FrameResult r = system.FeedRgbdFrame(rgb, depth, dataset.frame(*index).rgb_stamp);
-    ++processed;
-    if (r.state == TrackingState::kLost) ++lost;
-    char line[512];
-    std::snprintf(line, sizeof(line), "%s,%s,%d,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n", r.stamp.ToString().c_str(),
-                  ToString(r.state), r.is_keyframe ? 1 : 0, r.num_features, r.num_dynamic, r.num_tracked,
-                  r.times.orb_extraction_ms, r.times.detection_ms, r.times.matching_ms, r.times.probability_ms,
-                  r.times.tracking_ms, r.times.total_ms);
-    frames_csv << line;
-    if (progress && (processed % 10 == 0 || k + 1 == last)) {
-      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::fprintf(stderr, "\r[run] frame %zu/%zu  %.1f fps  state=%s  lost=%zu   ", k + 1 - first, last - first,
-                   processed / std::max(elapsed, 1e-9), ToString(r.state), lost);
-      std::fflush(stderr);
-    }
+  RunSetup s;
+  s.dataset_dir = p.Positional("DATASET_DIR");
+  s.config = p.Has("config") ? p.Get("config") : DefaultConfig(s.dataset_dir);
+  const Settings settings = LoadSettings(s.config);
+  s.system = SystemOptionsFromSettings(settings);
+  ReadOptions(settings.reader, &s.octomap);
+  s.system.filter_mode = ParseFilterMode(p.Get("filter"));
+  s.system.deterministic = p.Flag("deterministic");
+  if (s.system.deterministic) {
+    // One OpenCV thread for the detector in every mode (the pipeline's detector component uses
+    // one too): detections are then bit-identical between --direct and the pipeline.
+    s.system.detector.num_threads = 1;
   }
-  if (progress) std::fprintf(stderr, "\n");
-  system.Shutdown();
-  frames_csv.close();
-  fs::rename(out / "frames.csv.tmp", out / "frames.csv");
-  const auto trajectory = system.Trajectory();
-  WriteTumTrajectory((out / "trajectory.txt").string(), trajectory);
-  WriteTumTrajectory((out / "keyframes.txt").string(), system.KeyframeTrajectory());
+  s.map = !p.Flag("no-map");
+  s.progress = !p.Flag("quiet");
+  int domain_id = -1;
+  try {
+    domain_id = std::stoi(p.Get("domain"));
+  } catch (const std::exception&) {
+    return p.UsageError("--domain: not an integer: '" + p.Get("domain") + "'");
+  }
+  if (domain_id < -1 || domain_id > 232) return p.UsageError("--domain: expected 0..232");
+
+  const RgbdDataset dataset = RgbdDataset::Open(s.dataset_dir);
+  std::tie(s.first, s.last) = p.Has("frames") ? ParseFrames(p.Get("frames"), dataset.num_rgb_entries())
+                                              : std::pair<size_t, size_t>{0, dataset.num_rgb_entries()};
+  size_t skipped = 0;
+  for (size_t k = s.first; k < s.last; ++k) {
+    if (!dataset.FrameForRgbEntry(k)) ++skipped;
+  }
+  s.out = p.Get("out");
+  fs::create_directories(s.out);
+
+  std::string mode;
+  RunOutcome outcome;
+  const auto t0 = std::chrono::steady_clock::now();
+#ifdef DYGSLAM_HAVE_COMPONENTS
+  if (!p.Flag("direct")) {
+    mode = p.Flag("processes") ? "DDS pipeline, one process per component" : "DDS pipeline, one process";
+    outcome = RunThroughPipeline(s, p.Flag("processes"), domain_id);
+  }
+#else
+  if (p.Flag("processes")) {
+    throw InvalidOptions("--processes: this build has no DDS components (configure with -DDYGSLAM_BUILD_DDS=ON)");
+  }
+  if (!p.Flag("direct")) {
+    std::fprintf(stderr, "[run] this build has no DDS components: running the direct library loop (--direct)\n");
+  }
+#endif
+  if (mode.empty()) {
+    mode = "direct (no DDS)";
+    outcome = RunDirect(s, dataset);
+  }
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("frames: %zu processed, %zu tracked, %zu lost, %zu without depth partner; %.1f fps\n", processed,
-              trajectory.size(), lost, skipped, processed / std::max(elapsed, 1e-9));
-  std::printf("filter: %s%s\n", ToString(options.filter_mode), options.deterministic ? " (deterministic)" : "");
+
+  const fs::path trajectory_path = s.out / "trajectory.txt";
+  const std::vector<StampedPose> trajectory =
+      fs::exists(trajectory_path) ? ReadTumTrajectory(trajectory_path.string()) : std::vector<StampedPose>{};
+  std::printf("mode: %s%s\n", mode.c_str(), outcome.interrupted ? " (interrupted by a signal)" : "");
+  std::printf("frames: %zu processed, %zu tracked, %zu lost, %zu without depth partner; %.1f fps\n", outcome.processed,
+              trajectory.size(), outcome.lost, skipped, outcome.processed / std::max(elapsed, 1e-9));
+  std::printf("filter: %s%s\n", ToString(s.system.filter_mode), s.system.deterministic ? " (deterministic)" : "");
   if (dataset.has_groundtruth() && trajectory.size() >= 3) {
     const AteResult ate = ComputeAte(ReadTumTrajectory(dataset.groundtruth_path()), trajectory);
     std::printf("ATE RMSE %.4f m (mean %.4f, median %.4f, max %.4f; %zu pairs)\n", ate.error.rmse, ate.error.mean,
                 ate.error.median, ate.error.max, ate.num_pairs);
   }
-  std::printf("outputs: %s/{trajectory.txt,keyframes.txt,frames.csv}\n", out.string().c_str());
+  const bool has_map = fs::exists(s.out / "map.bt");
+  std::printf("outputs: %s/{trajectory.txt,keyframes.txt,frames.csv%s}\n", s.out.string().c_str(),
+              has_map ? ",map.bt" : "");
+  if (outcome.exit_code != 0) {
+    std::fprintf(stderr, "dygslam run: a pipeline component failed (see the messages above)\n");
+    return 1;
+  }
   return 0;
 }
 

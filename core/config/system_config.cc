@@ -44,6 +44,7 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   filter.ReadIfPresent("delta", &f.delta);
   filter.ReadIfPresent("threshold", &f.threshold);
   filter.ReadIfPresent("box_margin", &f.box_margin);
+  filter.ReadIfPresent("box_margin_fraction", &f.box_margin_fraction);
   filter.ReadIfPresent("search_radius", &f.search_radius);
   filter.ReadIfPresent("max_hamming", &f.max_hamming);
   filter.ReadIfPresent("fundamental_threshold", &f.fundamental_threshold);

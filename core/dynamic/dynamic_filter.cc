@@ -44,6 +44,7 @@ void DynamicFilterOptions::Check() const {
   DYGSLAM_CHECK_OPTION(initial_variance > 0 && std::isfinite(initial_variance),
                        "DynamicFilter.initial_variance");
   DYGSLAM_CHECK_OPTION(box_margin >= 0 && std::isfinite(box_margin), "DynamicFilter.box_margin");
+  DYGSLAM_CHECK_OPTION(box_margin_fraction >= 0 && box_margin_fraction <= 1, "DynamicFilter.box_margin_fraction");
   DYGSLAM_CHECK_OPTION(search_radius > 0 && search_radius <= 1000, "DynamicFilter.search_radius");
   DYGSLAM_CHECK_OPTION(max_hamming >= 0 && max_hamming <= 256, "DynamicFilter.max_hamming");
   DYGSLAM_CHECK_OPTION(ratio > 0 && ratio <= 1, "DynamicFilter.ratio");
@@ -108,13 +109,17 @@ int HammingDistance256(const uint8_t* a, const uint8_t* b) {
   return dist;
 }
 
-bool InAnyBox(const cv::Point2f& p, const std::vector<Detection>& detections, double margin) {
+bool InAnyBox(const cv::Point2f& p, const std::vector<Detection>& detections, const DynamicFilterOptions& o) {
   for (const Detection& d : detections) {
-    if (p.x >= d.box.x - margin && p.x <= d.box.x + d.box.width + margin &&
-        p.y >= d.box.y - margin && p.y <= d.box.y + d.box.height + margin)
-      return true;
+    const cv::Rect2f r = DynamicRegion(d, o);
+    if (p.x >= r.x && p.x <= r.x + r.width && p.y >= r.y && p.y <= r.y + r.height) return true;
   }
   return false;
+}
+
+cv::Rect2f DynamicRegion(const Detection& detection, const DynamicFilterOptions& options) {
+  const float m = static_cast<float>(options.box_margin + options.box_margin_fraction * detection.box.width);
+  return cv::Rect2f(detection.box.x - m, detection.box.y - m, detection.box.width + 2 * m, detection.box.height + 2 * m);
 }
 
 DynamicFilter::DynamicFilter(const DynamicFilterOptions& options) : options_(options) {
@@ -248,7 +253,7 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
   for (int i = 0; i < n; ++i) {
     FeatureStatus& f = result.features[i];
     f.in_dynamic_region = o.mode == DynamicFilterMode::kGeometry ||
-                          InAnyBox(kps[i].pt, input.detections, o.box_margin);
+                          InAnyBox(kps[i].pt, input.detections, o);
     result.num_in_dynamic_region += f.in_dynamic_region;
   }
   if (o.mode == DynamicFilterMode::kBoxes) {

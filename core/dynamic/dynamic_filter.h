@@ -83,6 +83,9 @@ struct DynamicFilterOptions {
 
   // Boxes are grown by this many pixels on each side for the region test.
   double box_margin = 0.0;
+  // Plus this fraction of the box width on each side: detector boxes are imprecise in proportion
+  // to their size (arms and legs stick out of people's boxes).
+  double box_margin_fraction = 0.1;
 
   // Matching to the previous frame.
   double search_radius = 48.0;  // px
@@ -149,6 +152,9 @@ struct FilterResult {
   // Per-feature flags in the layout of KeyframeData::keypoint_dynamic.
   std::vector<uint8_t> DynamicFlags() const;
 };
+
+// The dynamic region of one detection: its box grown by box_margin + box_margin_fraction * width.
+cv::Rect2f DynamicRegion(const Detection& detection, const DynamicFilterOptions& options);
 
 // Eq. 4: distance (px) of p_t to the epipolar line F p_prev (p_t^T F p_prev = 0).
 double EpipolarDistance(const cv::Matx33d& fundamental, const cv::Point2d& p_prev,

@@ -117,6 +117,26 @@ class SystemImpl {
                    const std::vector<Detection>* detections);
 
   std::vector<StampedPose> Trajectory() const { return tracker_.Trajectory(); }
+  void Prefetch(const cv::Mat& rgb, Timestamp stamp) {
+    if (!options_.NeedsDetections() || rgb.empty() || rgb.type() != CV_8UC3) return;
+    EnsureDetector();
+    auto job = std::make_shared<DetectionJob>();
+    job->stamp = stamp;
+    job->result = std::async(std::launch::async, [this, rgb, job]() {
+      const auto t0 = std::chrono::steady_clock::now();
+      std::lock_guard<std::mutex> lock(detector_mutex_);
+      auto found = detector_->Detect(rgb);
+      job->ms = MsSince(t0);
+      return found;
+    });
+    prefetched_ = job;
+  }
+  void EnsureDetector() {
+    if (detector_) return;
+    DetectorOptions d = options_.detector;
+    if (d.cfg_path.empty()) d = DetectorOptionsForModel("yolo-fastest-1.1");
+    detector_ = YoloDetector::Create(d);
+  }
   void TopUpStaticFeatures(const cv::Mat& gray, const std::vector<Detection>& detections, OrbFeatures* kept) const;
   std::vector<StampedPose> KeyframeTrajectory() const { return tracker_.KeyframeTrajectory(); }
   void SetKeyframeCallback(std::function<void(const KeyframeData&)> cb) {
@@ -134,6 +154,13 @@ class SystemImpl {
   Tracker tracker_;
   DynamicFilter filter_;
   std::unique_ptr<YoloDetector> detector_;  // created on first use
+  std::mutex detector_mutex_;               // one inference at a time
+  struct DetectionJob {
+    Timestamp stamp;
+    std::future<std::vector<Detection>> result;
+    double ms = 0;
+  };
+  std::shared_ptr<DetectionJob> prefetched_;
   int64_t next_frame_id_ = 0;
   Timestamp last_stamp_;
   bool has_last_stamp_ = false;
@@ -149,8 +176,7 @@ void SystemImpl::TopUpStaticFeatures(const cv::Mat& gray, const std::vector<Dete
   cv::Mat box_mask = cv::Mat::zeros(gray.size(), CV_8UC1);
   const cv::Rect image(0, 0, gray.cols, gray.rows);
   for (const Detection& d : detections) {
-    const float m = static_cast<float>(options_.filter.box_margin + 0.08 * d.box.width);
-    const cv::Rect r = cv::Rect(cv::Rect2f(d.box.x - m, d.box.y - m, d.box.width + 2 * m, d.box.height + 2 * m)) & image;
+    const cv::Rect r = cv::Rect(DynamicRegion(d, options_.filter)) & image;
     box_mask(r).setTo(255);
   }
   OrbFeatures extra = extractor_.Extract(gray, box_mask, shortfall);
@@ -221,14 +247,13 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   std::future<std::vector<Detection>> detection_job;
   double detection_ms = 0;
   const bool need_detections = options_.NeedsDetections();
-  if (need_detections && detections == nullptr) {
-    if (!detector_) {
-      DetectorOptions d = options_.detector;
-      if (d.cfg_path.empty()) d = DetectorOptionsForModel("yolo-fastest-1.1");
-      detector_ = YoloDetector::Create(d);
-    }
+  std::shared_ptr<DetectionJob> prefetched;
+  if (prefetched_ && prefetched_->stamp == stamp) prefetched.swap(prefetched_);
+  if (need_detections && detections == nullptr && !prefetched) {
+    EnsureDetector();
     detection_job = std::async(std::launch::async, [this, &rgb, &detection_ms]() {
       const auto t0 = std::chrono::steady_clock::now();
+      std::lock_guard<std::mutex> lock(detector_mutex_);
       auto found = detector_->Detect(rgb.channels() == 3 ? rgb : cv::Mat());
       detection_ms = MsSince(t0);
       return found;
@@ -238,9 +263,14 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   OrbFeatures features = extractor_.Extract(gray, mask);
   result.times.orb_extraction_ms = MsSince(t_orb);
   result.num_features = static_cast<int>(features.keypoints.size());
-  if (detection_job.valid()) {
+  if (need_detections && detections == nullptr) {
     const auto t_wait = std::chrono::steady_clock::now();
-    own_detections = detection_job.get();
+    if (prefetched) {
+      own_detections = prefetched->result.get();
+      detection_ms = prefetched->ms;
+    } else {
+      own_detections = detection_job.get();
+    }
     result.times.detection_wait_ms = MsSince(t_wait);
     result.times.detection_ms = detection_ms;
     detections = &own_detections;
@@ -315,6 +345,8 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   result.times.total_ms = MsSince(t_start);
   return result;
 }
+
+void System::PrefetchDetections(const cv::Mat& rgb, Timestamp stamp) { impl_->Prefetch(rgb, stamp); }
 
 System::System(const SystemOptions& options) {
   options.Check();

@@ -94,6 +94,12 @@ class System {
                             const cv::Mat& mask = cv::Mat(),
                             const std::vector<Detection>* detections = nullptr);
 
+  // Pipelining: starts the internal detector on a frame that will be fed next (dataset runs know
+  // it in advance), so detection of frame t+1 overlaps the tracking of frame t and does not add to
+  // the per-frame time. FeedRgbdFrame uses the prefetched detections when the stamp matches.
+  // No effect when the filter mode needs no detections. `rgb` must stay valid until it is fed.
+  void PrefetchDetections(const cv::Mat& rgb, Timestamp stamp);
+
   // Every tracked frame, world_from_cam, expressed relative to its (refined) reference keyframe.
   std::vector<StampedPose> Trajectory() const;
   std::vector<StampedPose> KeyframeTrajectory() const;

@@ -1,0 +1,188 @@
+// dygslam bridge: the ROS 2 bridge (bridge/ros2_bridge.h) on the pipeline's DDS domain, optionally
+// with the SLAM components in the same process (--run-slam): a ROS 2 camera driver in, pose /
+// path / odometry / TF / detections / OctoMap out. SIGINT / SIGTERM stop it (the components
+// flush their outputs).
+// Compiled only when the bridge is built (dygslam_bridge defines DYGSLAM_HAVE_BRIDGE).
+#ifdef DYGSLAM_HAVE_BRIDGE
+#include <iostream>
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include "apps/command.h"
+#include "bridge/ros2_bridge.h"
+#include "components/dds/participant.h"
+#include "components/pipeline.h"
+#include "core/base/error.h"
+#include "core/base/log.h"
+#include "core/config/settings.h"
+#include "core/config/system_config.h"
+
+namespace dygslam::cli {
+namespace {
+
+double ParseDouble(const std::string& option, const std::string& text) {
+  try {
+    size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used == text.size()) return v;
+  } catch (const std::exception&) {
+  }
+  throw InvalidOptions("--" + option + ": expected a number, got '" + text + "'");
+}
+
+int ParseInt(const std::string& option, const std::string& text) {
+  try {
+    size_t used = 0;
+    const int v = std::stoi(text, &used);
+    if (used == text.size()) return v;
+  } catch (const std::exception&) {
+  }
+  throw InvalidOptions("--" + option + ": expected an integer, got '" + text + "'");
+}
+
+int RunBridgeCommand(const std::vector<std::string>& args) {
+  ArgParser p("bridge", "[--preset realsense] [--run-slam --config FILE] [--domain N] [options]",
+              "ROS 2 bridge: subscribes to a ROS 2 camera (colour + aligned depth + CameraInfo) and\n"
+              "feeds the pipeline; republishes pose, path, odometry, TF, detections and the OctoMap\n"
+              "as ROS 2 topics (ROS 2 type names, QoS and topic conventions; no ROS 2 needed).\n"
+              "Use the ROS_DOMAIN_ID of the robot as --domain.");
+  ros2::RosBridgeOptions d;
+  p.AddOption("domain", "N", "DDS domain id = ROS_DOMAIN_ID (default DYGSLAM_DOMAIN_ID or 0)", "-1");
+  p.AddOption("preset", "NAME", "camera topics: realsense | realsense-legacy | azure-kinect | kinect",
+              "realsense");
+  p.AddOption("color-topic", "TOPIC", "colour sensor_msgs/Image (overrides the preset)");
+  p.AddOption("depth-topic", "TOPIC", "depth aligned to colour, 16UC1 mm or 32FC1 m");
+  p.AddOption("camera-info-topic", "TOPIC", "colour sensor_msgs/CameraInfo");
+  p.AddOption("depth-unit", "M", "metres per 16UC1 depth count", "0.001");
+  p.AddOption("max-stamp-diff", "S", "colour/depth pairing tolerance (s)", "0.02");
+  p.AddOption("window", "N", "frames in flight to slam (back-pressure)", "2");
+  p.AddOption("max-pending", "N", "synchronised frames waiting for slam before the oldest is dropped",
+              "2");
+  p.AddOption("eos-idle", "S", "end the stream after S seconds without frames (0 = never)", "0");
+  p.AddOption("pose-topic", "TOPIC", "geometry_msgs/PoseStamped", d.pose_topic);
+  p.AddOption("odom-topic", "TOPIC", "nav_msgs/Odometry", d.odom_topic);
+  p.AddOption("path-topic", "TOPIC", "nav_msgs/Path", d.path_topic);
+  p.AddOption("tf-topic", "TOPIC", "tf2_msgs/TFMessage", d.tf_topic);
+  p.AddOption("tf-static-topic", "TOPIC", "tf2_msgs/TFMessage (transient local)", d.tf_static_topic);
+  p.AddOption("detections-topic", "TOPIC", "vision_msgs/Detection2DArray", d.detections_topic);
+  p.AddOption("octomap-topic", "TOPIC", "octomap_msgs/Octomap (binary)", d.octomap_topic);
+  p.AddOption("map-frame", "FRAME", "fixed frame of pose / path / odometry / TF", d.map_frame);
+  p.AddOption("world-frame", "FRAME", "SLAM world frame (OctoMap), static TF from map", d.world_frame);
+  p.AddOption("camera-frame", "FRAME", "TF child frame of the camera (optical axes)", d.camera_frame);
+  p.AddOption("image-frame", "FRAME", "frame of the detections (default: the images' frame_id)");
+  p.AddOption("path-every", "N", "publish the online path every N poses", "10");
+  p.AddFlag("no-ros-axes", "map = SLAM world axes (optical: z forward) instead of REP 103");
+  p.AddFlag("no-tf", "do not publish /tf");
+  p.AddFlag("no-inbound", "outbound only (the frames come from elsewhere, e.g. the player)");
+  p.AddFlag("no-outbound", "inbound only");
+  p.AddFlag("run-slam", "also run the detector, slam, mapper and recorder components here");
+  p.AddOption("config", "FILE", "--run-slam: settings YAML (camera intrinsics must match CameraInfo)");
+  p.AddOption("filter", "MODE", "--run-slam: none | boxes | geometry | full", "full");
+  p.AddOption("out", "DIR", "--run-slam: output folder (trajectory, map.bt)", "out/bridge");
+  p.AddFlag("no-mapper", "--run-slam: no mapper component");
+  if (!p.Parse(args)) return p.exit_code();
+
+  ros2::RosBridgeOptions o;
+  o.ApplyCameraPreset(p.Get("preset"));
+  if (p.Has("color-topic")) o.color_topic = p.Get("color-topic");
+  if (p.Has("depth-topic")) o.depth_topic = p.Get("depth-topic");
+  if (p.Has("camera-info-topic")) o.camera_info_topic = p.Get("camera-info-topic");
+  o.depth_unit = ParseDouble("depth-unit", p.Get("depth-unit"));
+  o.max_stamp_difference_s = ParseDouble("max-stamp-diff", p.Get("max-stamp-diff"));
+  o.window = ParseInt("window", p.Get("window"));
+  const int max_pending = ParseInt("max-pending", p.Get("max-pending"));
+  if (max_pending < 1) throw InvalidOptions("--max-pending: must be >= 1");
+  o.max_pending_frames = static_cast<size_t>(max_pending);
+  o.end_of_stream_idle_s = ParseDouble("eos-idle", p.Get("eos-idle"));
+  o.pose_topic = p.Get("pose-topic");
+  o.odom_topic = p.Get("odom-topic");
+  o.path_topic = p.Get("path-topic");
+  o.tf_topic = p.Get("tf-topic");
+  o.tf_static_topic = p.Get("tf-static-topic");
+  o.detections_topic = p.Get("detections-topic");
+  o.octomap_topic = p.Get("octomap-topic");
+  o.map_frame = p.Get("map-frame");
+  o.world_frame = p.Get("world-frame");
+  o.camera_frame = p.Get("camera-frame");
+  o.image_frame = p.Get("image-frame");
+  o.path_every = ParseInt("path-every", p.Get("path-every"));
+  o.ros_axes = !p.Flag("no-ros-axes");
+  o.publish_tf = !p.Flag("no-tf");
+  o.inbound = !p.Flag("no-inbound");
+  o.outbound = !p.Flag("no-outbound");
+  o.Check();
+
+  int domain = ParseInt("domain", p.Get("domain"));
+  if (domain < 0) domain = dds::DomainIdFromEnvironment(0);
+
+  PipelineOptions pipeline;
+  const bool run_slam = p.Flag("run-slam");
+  if (run_slam) {
+    if (!p.Has("config")) return p.UsageError("--run-slam needs --config FILE");
+    pipeline.dataset_dir = "-";
+    pipeline.settings_path = p.Get("config");
+    pipeline.output_dir = p.Get("out");
+    pipeline.system = SystemOptionsFromSettings(LoadSettings(pipeline.settings_path));
+    pipeline.system.filter_mode = ParseFilterMode(p.Get("filter"));
+    pipeline.run_mapper = !p.Flag("no-mapper");
+    pipeline.domain_id = domain;
+    pipeline.Check();
+  }
+
+  auto stop = std::make_shared<StopSignal>();
+  SignalStopper signals(stop);
+  std::vector<std::thread> threads;
+  std::mutex mutex;
+  int result = 0;
+  if (run_slam) {
+    std::vector<std::string> names = {"recorder", "slam"};
+    if (pipeline.run_mapper) names.push_back("mapper");
+    if (pipeline.NeedsDetectorComponent()) names.push_back("detector");
+    for (const std::string& name : names) {
+      threads.emplace_back([&, name] {
+        try {
+          const int code = RunComponent(name, pipeline, stop);
+          std::lock_guard<std::mutex> lock(mutex);
+          if (code != 0) result = 1;
+        } catch (const std::exception& e) {
+          LOG_ERROR << name << ": " << e.what();
+          std::lock_guard<std::mutex> lock(mutex);
+          result = 1;
+          stop->Request();
+        }
+      });
+    }
+  }
+  dds::ParticipantOptions po;
+  po.domain_id = domain;
+  po.name = "dygslam_ros2_bridge";
+  LOG_INFO << "ros2 bridge on domain " << domain << ": in " << o.color_topic << " + "
+           << o.depth_topic << " + " << o.camera_info_topic << "; out " << o.pose_topic << ", "
+           << o.path_topic << ", " << o.odom_topic << ", " << o.tf_topic << ", "
+           << o.detections_topic << ", " << o.octomap_topic;
+  ros2::RosBridgeStats s;
+  try {
+    s = ros2::RunBridge(dds::Participant::Create(po), o, stop);
+  } catch (...) {
+    stop->Request();
+    for (std::thread& t : threads) t.join();
+    throw;
+  }
+  stop->Request();
+  for (std::thread& t : threads) t.join();
+  std::cerr << "ros2 bridge: " << s.frames_forwarded << " frames forwarded (colour "
+            << s.color_received << ", depth " << s.depth_received << ", unpaired "
+            << s.dropped_unsynchronized << ", no camera info " << s.dropped_no_camera_info
+            << ", dropped waiting " << s.dropped_pending << ", bad " << s.bad_samples << "); "
+            << s.poses << " poses, " << s.paths << " paths, " << s.detections
+            << " detection arrays, " << s.maps << " maps published\n";
+  return result;
+}
+
+const CommandRegistrar kRegistrar({"bridge", "ROS 2 bridge (camera in; pose, path, TF, map out)",
+                                   RunBridgeCommand});
+
+}  // namespace
+}  // namespace dygslam::cli
+#endif  // DYGSLAM_HAVE_BRIDGE

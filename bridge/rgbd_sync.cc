@@ -1,0 +1,93 @@
+#include "bridge/rgbd_sync.h"
+
+#include <cmath>
+#include <cstdlib>
+
+#include "core/base/error.h"
+
+namespace dygslam::ros2 {
+
+void RgbdSyncOptions::Check() const {
+  DYGSLAM_CHECK_OPTION(max_stamp_difference_s >= 0 && std::isfinite(max_stamp_difference_s),
+                       "max_stamp_difference_s");
+  DYGSLAM_CHECK_OPTION(max_queue >= 1, "sync max_queue");
+}
+
+RgbdSynchronizer::RgbdSynchronizer(const RgbdSyncOptions& options) : options_(options) {
+  options_.Check();
+  tolerance_ns_ = static_cast<int64_t>(std::llround(options.max_stamp_difference_s * 1e9));
+}
+
+std::vector<RgbdPair> RgbdSynchronizer::AddColor(StampedImage color) {
+  if (last_color_ && color.stamp <= *last_color_) {
+    ++stats_.dropped_color;
+    return {};
+  }
+  last_color_ = color.stamp;
+  colors_.push_back(std::move(color));
+  if (colors_.size() > options_.max_queue) {
+    colors_.pop_front();
+    ++stats_.dropped_color;
+  }
+  return Match();
+}
+
+std::vector<RgbdPair> RgbdSynchronizer::AddDepth(StampedImage depth) {
+  if (last_depth_ && depth.stamp <= *last_depth_) {
+    ++stats_.dropped_depth;
+    return {};
+  }
+  last_depth_ = depth.stamp;
+  depths_.push_back(std::move(depth));
+  if (depths_.size() > options_.max_queue) {
+    depths_.pop_front();
+    ++stats_.dropped_depth;
+  }
+  return Match();
+}
+
+std::vector<RgbdPair> RgbdSynchronizer::Match() {
+  std::vector<RgbdPair> out;
+  while (!colors_.empty() && !depths_.empty()) {
+    const int64_t tc = colors_.front().stamp.nanoseconds();
+    size_t best = 0;
+    int64_t best_diff = -1;
+    bool final_choice = false;
+    for (size_t i = 0; i < depths_.size(); ++i) {
+      const int64_t diff = std::llabs(depths_[i].stamp.nanoseconds() - tc);
+      if (best_diff < 0 || diff < best_diff) {
+        best = i;
+        best_diff = diff;
+      }
+      if (depths_[i].stamp.nanoseconds() >= tc) {
+        final_choice = true;  // later depths are further from this colour
+        break;
+      }
+    }
+    if (!final_choice) {
+      // Every queued depth is older than the colour: the nearest so far is the newest one; it
+      // may still be beaten by a depth to come, unless it is already exact.
+      if (best_diff == 0) final_choice = true;
+    }
+    if (!final_choice) break;  // wait for more depth
+    if (best_diff > tolerance_ns_) {
+      // The best partner is out of tolerance: the colour cannot be paired any more.
+      colors_.pop_front();
+      ++stats_.dropped_color;
+      continue;
+    }
+    // Depths older than the chosen one cannot serve later colours better.
+    for (size_t i = 0; i < best; ++i) {
+      depths_.pop_front();
+      ++stats_.dropped_depth;
+    }
+    RgbdPair pair{std::move(colors_.front()), std::move(depths_.front())};
+    colors_.pop_front();
+    depths_.pop_front();
+    ++stats_.pairs;
+    out.push_back(std::move(pair));
+  }
+  return out;
+}
+
+}  // namespace dygslam::ros2

@@ -1,0 +1,389 @@
+// ROS 2 interop of the bridge with a second DDS implementation (Cyclone DDS, C API, types from
+// the same ROS 2 IDL, ROS 2 type names) as the ROS 2 stand-in, on the shared Bonn frames.
+// Runs inside run_in_netns.sh (loopback only); distinct domain ids per test.
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <iostream>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+#include <opencv2/core.hpp>
+
+#include "bridge/ros2_bridge.h"
+#include "bridge/tests/cyclone_peer.h"
+#include "components/convert.h"
+#include "components/dds/participant.h"
+#include "components/dds/pubsub.h"
+#include "components/dds/qos.h"
+#include "components/pipeline.h"
+#include "core/config/settings.h"
+#include "core/config/system_config.h"
+#include "core/eval/trajectory_eval.h"
+#include "core/io/dataset.h"
+#include "core/io/trajectory_io.h"
+#include "core/system/system.h"
+#include "dygslam_msg/CameraPosePubSubTypes.h"
+#include "dygslam_msg/DetectionsPubSubTypes.h"
+#include "dygslam_msg/MapUpdatePubSubTypes.h"
+#include "dygslam_msg/TrajectoryPubSubTypes.h"
+#include "tests/support/test_support.h"
+
+namespace dygslam {
+namespace {
+
+using testing::CyclonePeer;
+using testing::PeerPose;
+
+std::string Config() {
+  return std::string(std::getenv("DYGSLAM_SOURCE_DIR")) + "/config/bonn.yaml";
+}
+
+std::shared_ptr<dds::Participant> MakeParticipant(int domain, const std::string& name) {
+  dds::ParticipantOptions o;
+  o.domain_id = domain;
+  o.name = name;
+  o.use_xml_profile = false;
+  return dds::Participant::Create(o);
+}
+
+// REP 103 map axes from the optical SLAM world axes, written out independently of the bridge.
+Rigid3d MapFromWorld() {
+  Eigen::Matrix3d r;
+  r << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  return Rigid3d(r, Eigen::Vector3d::Zero());
+}
+
+void ExpectPoseEq(const PeerPose& got, const Rigid3d& expected, const std::string& what) {
+  EXPECT_NEAR(got.position[0], expected.translation.x(), 1e-9) << what;
+  EXPECT_NEAR(got.position[1], expected.translation.y(), 1e-9) << what;
+  EXPECT_NEAR(got.position[2], expected.translation.z(), 1e-9) << what;
+  const Eigen::Quaterniond q(got.orientation[3], got.orientation[0], got.orientation[1],
+                             got.orientation[2]);
+  EXPECT_NEAR(std::abs(q.dot(expected.rotation.normalized())), 1.0, 1e-9) << what;
+}
+
+template <class Pred>
+bool WaitUntil(Pred pred, std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!pred()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
+}
+
+// Outbound: a Cyclone peer subscribed with ROS 2 type names receives pose, odometry, path, TF,
+// detections and the map of a dataset run, with the values the pipeline produced (read from the
+// pipeline's own topics with Fast DDS at the same time).
+TEST(Interop, CyclonePeerReceivesWhatThePipelineProduced) {
+  DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
+  const std::string tmp = dygslam::testing::MakeTempDir("bridge_outbound");
+  const int domain = 171;
+
+  CyclonePeer peer(domain);
+  peer.Subscribe({});
+
+  std::mutex mutex;
+  std::map<int64_t, msg::CameraPose> ref_poses;  // by stamp (ns), tracked frames only
+  std::map<int64_t, msg::Detections> ref_detections;
+  std::vector<msg::MapUpdate> ref_maps;
+  std::optional<msg::Trajectory> ref_trajectory;
+  auto ref = MakeParticipant(domain, "test_reference");
+  auto stamp_ns = [](const msg::Time& t) { return int64_t{t.sec()} * 1000000000 + t.nanosec(); };
+  dds::Reader<msg::CameraPosePubSubType> pose_reader(
+      ref, dds::topics::kCameraPose, dds::TopicKind::kCameraPose, [&](msg::CameraPose&& m) {
+        if (!m.has_pose()) return;
+        std::lock_guard<std::mutex> lock(mutex);
+        ref_poses[stamp_ns(m.header().stamp())] = m;
+      });
+  dds::Reader<msg::DetectionsPubSubType> det_reader(
+      ref, dds::topics::kDetections, dds::TopicKind::kDetections, [&](msg::Detections&& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        ref_detections[stamp_ns(m.header().stamp())] = m;
+      });
+  dds::Reader<msg::MapUpdatePubSubType> map_reader(
+      ref, dds::topics::kMapUpdate, dds::TopicKind::kMapUpdate, [&](msg::MapUpdate&& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        ref_maps.push_back(m);
+      });
+  dds::Reader<msg::TrajectoryPubSubType> trajectory_reader(
+      ref, dds::topics::kTrajectory, dds::TopicKind::kTrajectory, [&](msg::Trajectory&& m) {
+        if (m.keyframes_only()) return;
+        std::lock_guard<std::mutex> lock(mutex);
+        ref_trajectory = m;
+      });
+
+  ros2::RosBridgeOptions options;
+  options.inbound = false;
+  ros2::RosBridge bridge(MakeParticipant(domain, "test_bridge"), options);
+  // The peer's 7 readers find the bridge's 7 writers (discovery across implementations).
+  ASSERT_TRUE(WaitUntil([&] { return peer.MatchedWriters() >= 7; }, std::chrono::seconds(15)))
+      << "matched " << peer.MatchedWriters() << " of 7 bridge writers";
+
+  PipelineOptions po;
+  po.dataset_dir = dataset;
+  po.output_dir = tmp + "/run";
+  po.system = SystemOptionsFromSettings(LoadSettings(Config()));
+  po.system.deterministic = true;
+  po.first_entry = 100;  // people walk through from frame ~110
+  po.last_entry = 150;
+  po.domain_id = domain;
+  ASSERT_EQ(RunPipeline(po), 0);
+
+  // Everything the pipeline published reaches the peer.
+  auto complete = [&] {
+    peer.Poll();
+    std::lock_guard<std::mutex> lock(mutex);
+    return ref_trajectory && !ref_maps.empty() && peer.poses.size() >= ref_poses.size() &&
+           peer.detections.size() >= ref_detections.size() && !peer.maps.empty() &&
+           peer.maps.back().stamp_ns == stamp_ns(ref_maps.back().header().stamp()) &&
+           !peer.paths.empty() &&
+           peer.paths.back().poses.size() == ref_trajectory->poses().size();
+  };
+  EXPECT_TRUE(WaitUntil(complete, std::chrono::seconds(20)));
+  std::lock_guard<std::mutex> lock(mutex);
+  const Rigid3d map_from_world = MapFromWorld();
+
+  // Pose + TF + odometry: one each per tracked frame, equal to map_from_world * world_from_cam.
+  ASSERT_GT(ref_poses.size(), 40u);
+  ASSERT_EQ(peer.poses.size(), ref_poses.size());
+  ASSERT_EQ(peer.transforms.size(), ref_poses.size());
+  ASSERT_EQ(peer.odometry.size(), ref_poses.size());
+  for (size_t i = 0; i < peer.poses.size(); ++i) {
+    const PeerPose& p = peer.poses[i];
+    ASSERT_TRUE(ref_poses.count(p.stamp_ns)) << "pose with an unknown stamp " << p.stamp_ns;
+    const Rigid3d expected =
+        map_from_world * PoseFromMsg(ref_poses.at(p.stamp_ns).world_from_cam(), "ref");
+    EXPECT_EQ(p.frame_id, "map");
+    ExpectPoseEq(p, expected, "pose " + std::to_string(i));
+    const auto& tf = peer.transforms[i];
+    EXPECT_EQ(tf.pose.frame_id, "map");
+    EXPECT_EQ(tf.child_frame_id, "dygslam_camera");
+    ASSERT_TRUE(ref_poses.count(tf.pose.stamp_ns));
+    ExpectPoseEq(tf.pose,
+                 map_from_world * PoseFromMsg(ref_poses.at(tf.pose.stamp_ns).world_from_cam(), "r"),
+                 "tf " + std::to_string(i));
+    EXPECT_EQ(peer.odometry[i].child_frame_id, "dygslam_camera");
+    ExpectPoseEq(peer.odometry[i].pose,
+                 map_from_world *
+                     PoseFromMsg(ref_poses.at(peer.odometry[i].pose.stamp_ns).world_from_cam(), "r"),
+                 "odometry " + std::to_string(i));
+  }
+  // A moving camera has a non-zero odometry twist somewhere.
+  double max_speed = 0;
+  for (const auto& o : peer.odometry) {
+    max_speed = std::max(max_speed, std::hypot(o.linear[0], o.linear[1], o.linear[2]));
+  }
+  EXPECT_GT(max_speed, 0.01);
+
+  // /tf_static: map -> SLAM world (transient local).
+  ASSERT_GE(peer.static_transforms.size(), 1u);
+  EXPECT_EQ(peer.static_transforms[0].pose.frame_id, "map");
+  EXPECT_EQ(peer.static_transforms[0].child_frame_id, "dygslam_world");
+  ExpectPoseEq(peer.static_transforms[0].pose, map_from_world, "tf_static");
+
+  // Path: online paths while running, then the final refined trajectory.
+  ASSERT_TRUE(ref_trajectory);
+  ASSERT_GE(peer.paths.size(), 2u);
+  const auto& final_path = peer.paths.back();
+  ASSERT_EQ(final_path.poses.size(), ref_trajectory->poses().size());
+  EXPECT_EQ(final_path.frame_id, "map");
+  for (size_t i = 0; i < final_path.poses.size(); ++i) {
+    const auto& r = ref_trajectory->poses()[i];
+    EXPECT_EQ(final_path.poses[i].stamp_ns, stamp_ns(r.stamp()));
+    ExpectPoseEq(final_path.poses[i], map_from_world * PoseFromMsg(r.world_from_cam(), "ref"),
+                 "path pose " + std::to_string(i));
+  }
+
+  // Detections: same boxes as the detector component's, centre + size, class name, score.
+  ASSERT_EQ(peer.detections.size(), ref_detections.size());
+  size_t boxes = 0;
+  for (const auto& d : peer.detections) {
+    ASSERT_TRUE(ref_detections.count(d.stamp_ns));
+    const auto& r = ref_detections.at(d.stamp_ns).detections();
+    ASSERT_EQ(d.boxes.size(), r.size());
+    for (size_t k = 0; k < r.size(); ++k) {
+      EXPECT_DOUBLE_EQ(d.boxes[k].center_x, r[k].x() + r[k].w() * 0.5);
+      EXPECT_DOUBLE_EQ(d.boxes[k].center_y, r[k].y() + r[k].h() * 0.5);
+      EXPECT_DOUBLE_EQ(d.boxes[k].size_x, r[k].w());
+      EXPECT_DOUBLE_EQ(d.boxes[k].size_y, r[k].h());
+      EXPECT_EQ(d.boxes[k].class_id, r[k].label());
+      EXPECT_DOUBLE_EQ(d.boxes[k].score, r[k].score());
+      ++boxes;
+    }
+  }
+  EXPECT_GT(boxes, 10u) << "people walk through frames 110-150";
+
+  // OctoMap: the newest map, readable as octomap_msgs::binaryMsgToMap does, equal to the
+  // mapper's octree.
+  const auto& map = peer.maps.back();
+  EXPECT_TRUE(map.binary);
+  EXPECT_EQ(map.id, "OcTree");
+  EXPECT_EQ(map.frame_id, "dygslam_world");
+  const msg::MapUpdate& ref_map = ref_maps.back();
+  std::istringstream bt(std::string(ref_map.octree_bt().begin(), ref_map.octree_bt().end()));
+  octomap::OcTree ref_tree(0.1);
+  ASSERT_TRUE(ref_tree.readBinary(bt));
+  EXPECT_DOUBLE_EQ(map.resolution, ref_tree.getResolution());
+  octomap::OcTree tree(map.resolution);
+  std::stringstream data;
+  data.write(reinterpret_cast<const char*>(map.data.data()), map.data.size());
+  tree.readBinaryData(data);
+  EXPECT_GT(tree.getNumLeafNodes(), 100u);
+  EXPECT_EQ(tree.getNumLeafNodes(), ref_tree.getNumLeafNodes());
+  size_t occupied = 0, same = 0;
+  for (auto it = ref_tree.begin_leafs(); it != ref_tree.end_leafs(); ++it) {
+    if (!ref_tree.isNodeOccupied(*it)) continue;
+    ++occupied;
+    const octomap::OcTreeNode* n = tree.search(it.getKey(), it.getDepth());
+    if (n != nullptr && tree.isNodeOccupied(n)) ++same;
+  }
+  EXPECT_GT(occupied, 0u);
+  EXPECT_EQ(same, occupied);
+
+  const ros2::RosBridgeStats s = bridge.stats();
+  EXPECT_EQ(s.bad_pipeline_samples, 0u);
+}
+
+// Inbound: a Cyclone peer publishing sensor_msgs/Image colour (rgb8) + depth (16UC1 mm) and
+// CameraInfo from the Bonn frames drives slam through the bridge (the components as in the
+// pipeline, without the player) to a trajectory whose ATE is within 10 % of the direct run of
+// the System on the same frames.
+TEST(Interop, CameraOverRos2DrivesSlamWithinTenPercentOfDirectAte) {
+  DYGSLAM_REQUIRE_DATASET(dataset_dir, "bonn_crowd_part");
+  const std::string tmp = dygslam::testing::MakeTempDir("bridge_inbound");
+  const int domain = 172;
+  const size_t kFrames = 100;
+
+  SystemOptions options = SystemOptionsFromSettings(LoadSettings(Config()));
+  options.deterministic = true;
+  const RgbdDataset dataset = RgbdDataset::Open(dataset_dir);
+  const auto groundtruth = ReadTumTrajectory(dataset.groundtruth_path());
+  std::vector<size_t> indices;
+  for (size_t k = 0; k < kFrames; ++k) {
+    if (auto i = dataset.FrameForRgbEntry(k)) indices.push_back(*i);
+  }
+
+  // Direct run.
+  std::vector<StampedPose> direct;
+  {
+    System system(options);
+    for (size_t i : indices) {
+      system.FeedRgbdFrame(dataset.LoadRgb(i), dataset.LoadDepth(i), dataset.frame(i).rgb_stamp);
+    }
+    system.Shutdown();
+    direct = system.Trajectory();
+  }
+  const double direct_ate = ComputeAte(groundtruth, direct).error.rmse;
+
+  // Through ROS 2: components on threads, the bridge, the Cyclone camera.
+  PipelineOptions po;
+  po.dataset_dir = "-";
+  po.output_dir = tmp + "/bridge";
+  po.system = options;
+  po.run_mapper = false;
+  po.domain_id = domain;
+  std::filesystem::create_directories(po.output_dir);
+  auto stop = std::make_shared<StopSignal>();
+  std::vector<std::string> names = {"recorder", "slam"};
+  if (po.NeedsDetectorComponent()) names.push_back("detector");
+  std::map<std::string, std::thread> threads;
+  std::map<std::string, int> codes;
+  std::mutex mutex;
+  for (const std::string& name : names) {
+    threads[name] = std::thread([&, name] {
+      int code = 1;
+      try {
+        code = RunComponent(name, po, stop);
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << name << ": " << e.what();
+      }
+      std::lock_guard<std::mutex> lock(mutex);
+      codes[name] = code;
+    });
+  }
+
+  std::set<int64_t> acknowledged;  // stamps slam has answered (CameraPose)
+  auto ref = MakeParticipant(domain, "test_acks");
+  dds::Reader<msg::CameraPosePubSubType> acks(
+      ref, dds::topics::kCameraPose, dds::TopicKind::kCameraPose, [&](msg::CameraPose&& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        acknowledged.insert(int64_t{m.header().stamp().sec()} * 1000000000 +
+                            m.header().stamp().nanosec());
+      });
+
+  ros2::RosBridgeOptions bo;
+  bo.outbound = false;
+  bo.max_pending_frames = 1000;
+  auto bridge = std::make_unique<ros2::RosBridge>(MakeParticipant(domain, "test_bridge"), bo);
+
+  CyclonePeer peer(domain);
+  peer.Advertise("rt/camera/camera/color/image_raw",
+                 "rt/camera/camera/aligned_depth_to_color/image_raw",
+                 "rt/camera/camera/color/camera_info");
+  ASSERT_TRUE(peer.WaitForCameraReaders(std::chrono::seconds(15)));
+  testing::PeerCamera camera;
+  camera.width = options.camera.width;
+  camera.height = options.camera.height;
+  camera.fx = options.camera.fx;
+  camera.fy = options.camera.fy;
+  camera.cx = options.camera.cx;
+  camera.cy = options.camera.cy;
+  const double d[5] = {options.camera.k1, options.camera.k2, options.camera.p1, options.camera.p2,
+                       options.camera.k3};
+  for (int k = 0; k < 5; ++k) camera.d[k] = d[k];
+
+  // A driver that publishes the next frame once slam answered the previous one (lockstep, as
+  // the player's back-pressure; a lost best-effort image is published again).
+  size_t republished = 0;
+  for (size_t i : indices) {
+    const int64_t stamp = dataset.frame(i).rgb_stamp.nanoseconds();
+    const cv::Mat rgb = dataset.LoadRgb(i);
+    cv::Mat depth_mm;  // Bonn PNG: value / 5000 = m; ROS: millimetres
+    dataset.LoadDepth(i).convertTo(depth_mm, CV_16UC1, 1000.0 / 5000.0);
+    bool answered = false;
+    for (int attempt = 0; attempt < 5 && !answered; ++attempt) {
+      if (attempt > 0) ++republished;
+      peer.PublishFrame(stamp, rgb, depth_mm, camera, "camera_color_optical_frame");
+      answered = WaitUntil(
+          [&] {
+            std::lock_guard<std::mutex> lock(mutex);
+            return acknowledged.count(stamp) > 0;
+          },
+          std::chrono::seconds(3));
+    }
+    ASSERT_TRUE(answered) << "slam never answered frame " << stamp;
+  }
+  bridge->EndInput();
+  threads["slam"].join();
+  threads["recorder"].join();
+  stop->Request();
+  if (threads.count("detector")) threads["detector"].join();
+  const ros2::RosBridgeStats s = bridge->stats();
+  bridge.reset();
+  EXPECT_EQ(codes["slam"], 0);
+  EXPECT_EQ(codes["recorder"], 0);
+  EXPECT_EQ(s.frames_forwarded, indices.size());
+  EXPECT_EQ(s.bad_samples, 0u);
+  EXPECT_TRUE(s.end_of_stream_sent);
+  EXPECT_LE(republished, indices.size() / 10) << "best-effort images lost too often";
+
+  const auto estimate = ReadTumTrajectory(po.output_dir + "/trajectory.txt");
+  EXPECT_GE(estimate.size(), indices.size() * 9 / 10);
+  const double bridge_ate = ComputeAte(groundtruth, estimate).error.rmse;
+  RecordProperty("direct_ate_m", std::to_string(direct_ate));
+  RecordProperty("bridge_ate_m", std::to_string(bridge_ate));
+  std::cout << "ATE direct " << direct_ate << " m, through the ROS 2 bridge " << bridge_ate
+            << " m (" << indices.size() << " frames, " << republished << " republished)\n";
+  EXPECT_LE(std::abs(bridge_ate - direct_ate), 0.10 * direct_ate);
+}
+
+}  // namespace
+}  // namespace dygslam

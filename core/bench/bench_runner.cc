@@ -1,0 +1,213 @@
+#include "core/bench/bench_runner.h"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "core/base/error.h"
+#include "core/eval/trajectory_eval.h"
+#include "core/io/file_util.h"
+#include "core/io/trajectory_io.h"
+
+namespace dygslam {
+namespace {
+namespace fs = std::filesystem;
+
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void CheckRange(size_t first, size_t last) {
+  if (first >= last)
+    throw InvalidOptions("frame range: empty range [" + std::to_string(first) + ", " +
+                         std::to_string(last) + ")");
+}
+
+}  // namespace
+
+std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total) {
+  const auto colon = text.find(':');
+  if (colon == std::string::npos)
+    throw InvalidOptions("--frames: expected FIRST:LAST, got '" + text + "'");
+  auto parse = [&](const std::string& s, size_t def) -> size_t {
+    if (s.empty()) return def;
+    if (s.size() > 12) throw InvalidOptions("--frames: number too large: '" + s + "'");
+    for (char c : s)
+      if (c < '0' || c > '9')
+        throw InvalidOptions("--frames: not a non-negative integer: '" + s + "'");
+    return std::stoul(s);
+  };
+  const size_t first = parse(text.substr(0, colon), 0);
+  const size_t last = std::min(parse(text.substr(colon + 1), total), total);
+  if (first >= last) throw InvalidOptions("--frames: empty range '" + text + "'");
+  return {first, last};
+}
+
+RunOutput RunSystemOnSequence(const RgbdDataset& dataset, const SystemOptions& options,
+                              size_t first, size_t last, const RunProgress& progress) {
+  last = std::min(last, dataset.num_rgb_entries());
+  CheckRange(first, last);
+  System system(options);
+  RunOutput out;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (size_t k = first; k < last; ++k) {
+    const auto index = dataset.FrameForRgbEntry(k);
+    if (!index) continue;
+    const cv::Mat rgb = dataset.LoadRgb(*index, options.camera.width, options.camera.height);
+    const cv::Mat depth = dataset.LoadDepth(*index, options.camera.width, options.camera.height);
+    const FrameResult r = system.FeedRgbdFrame(rgb, depth, dataset.frame(*index).rgb_stamp);
+    ++out.frames;
+    if (r.state == TrackingState::kLost) ++out.lost;
+    out.stamps.push_back(r.stamp);
+    out.ok.push_back(HasPose(r.state));
+    out.times.push_back(r.times);
+    if (progress) progress(k + 1 - first, last - first);
+  }
+  system.Shutdown();
+  out.loop_seconds = SecondsSince(t0);
+  out.trajectory = system.Trajectory();
+  return out;
+}
+
+RunOutput RunOdometryOnSequence(const RgbdDataset& dataset, const PinholeCamera& camera,
+                                double depth_map_factor, const RgbdOdometryOptions& options,
+                                size_t first, size_t last, const RunProgress& progress) {
+  last = std::min(last, dataset.num_rgb_entries());
+  CheckRange(first, last);
+  RgbdOdometryBaseline odometry(camera, depth_map_factor, options);
+  RunOutput out;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (size_t k = first; k < last; ++k) {
+    const auto index = dataset.FrameForRgbEntry(k);
+    if (!index) continue;
+    const cv::Mat rgb = dataset.LoadRgb(*index, camera.width, camera.height);
+    const cv::Mat depth = dataset.LoadDepth(*index, camera.width, camera.height);
+    const OdometryStep step = odometry.Track(rgb, depth, dataset.frame(*index).rgb_stamp);
+    ++out.frames;
+    if (!step.ok) ++out.lost;
+    out.stamps.push_back(step.stamp);
+    out.ok.push_back(step.ok);
+    StageTimes times;
+    times.total_ms = step.time_ms;
+    out.times.push_back(times);
+    if (progress) progress(k + 1 - first, last - first);
+  }
+  out.loop_seconds = SecondsSince(t0);
+  out.trajectory = odometry.Trajectory();
+  return out;
+}
+
+void WriteRunOutput(const std::string& directory, const RunOutput& output) {
+  std::error_code ec;
+  fs::create_directories(directory, ec);
+  if (!fs::is_directory(directory)) throw InputError(directory, 0, "cannot create the run folder");
+  WriteTumTrajectory((fs::path(directory) / "trajectory.txt").string(), output.trajectory);
+  std::ostringstream csv;
+  csv << "stamp,ok,orb_ms,detection_ms,detection_wait_ms,matching_ms,probability_ms,tracking_ms,"
+         "local_mapping_ms,total_ms\n";
+  char line[512];
+  for (size_t i = 0; i < output.times.size(); ++i) {
+    const StageTimes& t = output.times[i];
+    std::snprintf(line, sizeof(line), "%s,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+                  output.stamps[i].ToString().c_str(), output.ok[i] ? 1 : 0, t.orb_extraction_ms,
+                  t.detection_ms, t.detection_wait_ms, t.matching_ms, t.probability_ms,
+                  t.tracking_ms, t.local_mapping_ms, t.total_ms);
+    csv << line;
+  }
+  WriteFileAtomically((fs::path(directory) / "frames.csv").string(), csv.str());
+  std::ostringstream summary;
+  summary << "frames " << output.frames << "\nlost " << output.lost << "\nloop_seconds "
+          << output.loop_seconds << "\n";
+  WriteFileAtomically((fs::path(directory) / "summary.txt").string(), summary.str());
+}
+
+StageMeans MeanStageTimes(const std::vector<StageTimes>& times) {
+  StageMeans m;
+  if (times.empty()) return m;
+  for (const StageTimes& t : times) {
+    m.orb_ms += t.orb_extraction_ms;
+    m.detection_ms += t.detection_ms;
+    m.detection_wait_ms += t.detection_wait_ms;
+    m.matching_ms += t.matching_ms;
+    m.probability_ms += t.probability_ms;
+    m.tracking_ms += t.tracking_ms;
+    m.local_mapping_ms += t.local_mapping_ms;
+    m.total_ms += t.total_ms;
+  }
+  const double n = static_cast<double>(times.size());
+  for (double* v : {&m.orb_ms, &m.detection_ms, &m.detection_wait_ms, &m.matching_ms,
+                    &m.probability_ms, &m.tracking_ms, &m.local_mapping_ms, &m.total_ms})
+    *v /= n;
+  return m;
+}
+
+BenchRun ScoreRun(const std::string& directory, const std::vector<StampedPose>& groundtruth) {
+  const fs::path dir(directory);
+  BenchRun run;
+  // summary.txt
+  const std::string summary_path = (dir / "summary.txt").string();
+  bool has_frames = false, has_lost = false, has_loop = false;
+  for (const TextLine& line : ReadDataLines(summary_path)) {
+    if (line.tokens.size() != 2)
+      throw InputError(summary_path, line.line_number, "expected 'key value'");
+    const std::string& key = line.tokens[0];
+    char* end = nullptr;
+    const double v = std::strtod(line.tokens[1].c_str(), &end);
+    if (*end != '\0')
+      throw InputError(summary_path, line.line_number, key + ": not a number: " + line.tokens[1]);
+    if (key == "frames") run.frames = static_cast<int>(v), has_frames = true;
+    if (key == "lost") run.lost = static_cast<int>(v), has_lost = true;
+    if (key == "loop_seconds") run.loop_seconds = v, has_loop = true;
+  }
+  if (!has_frames || !has_lost || !has_loop)
+    throw InputError(summary_path, 0, "missing key (frames, lost, loop_seconds)");
+  run.fps = run.loop_seconds > 0 ? run.frames / run.loop_seconds : 0;
+  // frames.csv
+  const std::string frames_path = (dir / "frames.csv").string();
+  std::vector<StageTimes> times;
+  for (const TextLine& line : ReadDataLines(frames_path)) {
+    if (line.line_number == 1) continue;  // header
+    if (line.tokens.size() != 10)
+      throw InputError(frames_path, line.line_number,
+                       "expected 10 columns, got " + std::to_string(line.tokens.size()));
+    double v[8];
+    for (int i = 0; i < 8; ++i) {
+      char* end = nullptr;
+      v[i] = std::strtod(line.tokens[2 + i].c_str(), &end);
+      if (*end != '\0')
+        throw InputError(frames_path, line.line_number,
+                         "column " + std::to_string(3 + i) + ": not a number");
+    }
+    StageTimes t;
+    t.orb_extraction_ms = v[0];
+    t.detection_ms = v[1];
+    t.detection_wait_ms = v[2];
+    t.matching_ms = v[3];
+    t.probability_ms = v[4];
+    t.tracking_ms = v[5];
+    t.local_mapping_ms = v[6];
+    t.total_ms = v[7];
+    times.push_back(t);
+  }
+  run.stages = MeanStageTimes(times);
+  // trajectory.txt
+  run.trajectory_path = (dir / "trajectory.txt").string();
+  const std::vector<StampedPose> estimate = ReadTumTrajectory(run.trajectory_path);
+  run.poses = static_cast<int>(estimate.size());
+  try {
+    const AteResult ate = ComputeAte(groundtruth, estimate);
+    run.ate = ate.error;
+    run.ate_pairs = static_cast<int>(ate.num_pairs);
+  } catch (const InputError&) {
+    // Fewer than 3 poses associated: the run failed; it has no ATE (NaN, left out of medians).
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    run.ate = ErrorStatistics{nan, nan, nan, nan, nan, nan};
+    run.ate_pairs = 0;
+  }
+  return run;
+}
+
+}  // namespace dygslam

@@ -1,0 +1,122 @@
+#!/usr/bin/env python3
+"""Pictures of `dygslam bench`: per sequence and configuration, ground truth vs. the aligned
+estimate (top view) and the ATE over time; per sequence, all configurations in one figure.
+
+Called by `dygslam bench` with a manifest (JSON):
+    {"sequences": [{"sequence": NAME, "compare_png": PATH,
+                    "series": [{"config": C, "label": L, "pairs": FILE, "png": PATH}, ...]}]}
+where each pairs FILE has one line per associated pose: t gt_x gt_y gt_z est_x est_y est_z error.
+Exit codes: 0 written, 2 bad input, 3 matplotlib missing.
+"""
+import argparse
+import json
+import os
+import sys
+
+COLORS = {"none": "tab:red", "boxes": "tab:orange", "geometry": "tab:purple", "full": "tab:blue",
+          "rgbd_icp_odometry": "tab:gray"}
+
+
+def read_pairs(path):
+    rows = []
+    with open(path) as f:
+        for number, line in enumerate(f, 1):
+            line = line.strip()
+            if not line or line.startswith("#"):
+                continue
+            values = line.split()
+            if len(values) != 8:
+                raise ValueError(f"{path}:{number}: expected 8 columns, got {len(values)}")
+            rows.append([float(v) for v in values])
+    if not rows:
+        raise ValueError(f"{path}: no pairs")
+    return rows
+
+
+def plane_axes(gt):
+    extent = [max(p[k] for p in gt) - min(p[k] for p in gt) for k in range(3)]
+    return sorted(sorted(range(3), key=lambda k: -extent[k])[:2])
+
+
+def save(fig, path):
+    out_dir = os.path.dirname(os.path.abspath(path))
+    os.makedirs(out_dir, exist_ok=True)
+    tmp = os.path.join(out_dir, f".{os.path.basename(path)}.tmp.{os.getpid()}.png")
+    fig.savefig(tmp, dpi=90)
+    os.replace(tmp, path)
+
+
+def draw(plt, sequence, series, out_png):
+    """series: list of (config, label, rows)."""
+    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(12, 5))
+    gt_rows = max((rows for _, _, rows in series), key=len)
+    gt = [r[1:4] for r in gt_rows]
+    a, b = plane_axes(gt)
+    names = "xyz"
+    t0 = min(rows[0][0] for _, _, rows in series)
+    ax0.plot([p[a] for p in gt], [p[b] for p in gt], "-", color="black", lw=2.0, label="ground truth")
+    for config, label, rows in series:
+        color = COLORS.get(config, None)
+        est = [r[4:7] for r in rows]
+        err = [r[7] for r in rows]
+        rmse = (sum(e * e for e in err) / len(err)) ** 0.5
+        ax0.plot([p[a] for p in est], [p[b] for p in est], "-", color=color, lw=1.0,
+                 label=f"{label}")
+        ax1.plot([r[0] - t0 for r in rows], err, "-", color=color, lw=1.0,
+                 label=f"{label}: RMSE {rmse:.4f} m")
+        if len(series) == 1:
+            for i in range(0, len(rows), max(1, len(rows) // 60)):
+                ax0.plot([rows[i][1 + a], rows[i][4 + a]], [rows[i][1 + b], rows[i][4 + b]], "-",
+                         color="tab:red", lw=0.5)
+    ax0.set_xlabel(f"{names[a]} [m]")
+    ax0.set_ylabel(f"{names[b]} [m]")
+    ax0.set_aspect("equal", adjustable="datalim")
+    ax0.legend(loc="best", fontsize=8)
+    ax0.set_title(f"ground truth vs. aligned estimate ({names[a]}-{names[b]} plane)")
+    ax1.set_xlabel("time [s]")
+    ax1.set_ylabel("ATE [m]")
+    ax1.set_yscale("log" if len(series) > 1 else "linear")
+    if len(series) == 1:
+        ax1.set_ylim(bottom=0)
+    ax1.legend(loc="best", fontsize=8)
+    ax1.set_title("absolute trajectory error over time")
+    fig.suptitle(sequence if len(series) > 1 else f"{sequence}: {series[0][1]}")
+    fig.tight_layout()
+    save(fig, out_png)
+    plt.close(fig)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--manifest", required=True)
+    args = ap.parse_args()
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        # A python3 without matplotlib first on PATH (pyenv, venv): try the system one.
+        system = "/usr/bin/python3"
+        if os.path.exists(system) and os.path.realpath(sys.executable) != os.path.realpath(system) \
+                and not os.environ.get("DYGSLAM_PLOT_NO_REEXEC"):
+            os.environ["DYGSLAM_PLOT_NO_REEXEC"] = "1"
+            os.execv(system, [system] + sys.argv)
+        print("bench_plots.py: python3-matplotlib is not installed", file=sys.stderr)
+        return 3
+    try:
+        with open(args.manifest) as f:
+            manifest = json.load(f)
+        for seq in manifest["sequences"]:
+            series = [(s["config"], s["label"], read_pairs(s["pairs"])) for s in seq["series"]]
+            for one, s in zip(series, seq["series"]):
+                draw(plt, seq["sequence"], [one], s["png"])
+            if series:
+                draw(plt, seq["sequence"], series, seq["compare_png"])
+    except (OSError, ValueError, KeyError) as e:
+        print(f"bench_plots.py: {e}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,192 @@
+// Soak benchmark: a dataset looped through the System for a fixed wall time, recording memory
+// (RSS) and per-frame time over time. Each loop's stamps continue after the previous loop (+1 s),
+// so every loop starts with a jump back to the first camera pose: tracking loss ->
+// relocalisation, reported in the CSV.
+//
+//   reliability_soak DATASET_DIR --minutes M [--config FILE] [--filter MODE] [--out DIR]
+//                    [--frames N] [--sample-every N]
+// Writes OUT/soak.csv (one row per frame: wall_s, loop, frame, state, total_ms, rss_mb,
+// keyframes) and OUT/trajectory.txt, prints a summary (RSS at start / 1 min / end, growth per
+// minute over the second half, frame time median / p95 / p99 per window, states).
+// SIGINT / SIGTERM stop the loop early; the outputs are still written.
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/base/error.h"
+#include "core/base/log.h"
+#include "core/config/settings.h"
+#include "core/config/system_config.h"
+#include "core/io/dataset.h"
+#include "core/io/trajectory_io.h"
+#include "core/system/system.h"
+
+namespace {
+namespace fs = std::filesystem;
+using namespace dygslam;
+
+volatile std::sig_atomic_t g_stop = 0;
+extern "C" void OnSignal(int) { g_stop = 1; }
+
+double RssMb() {
+  std::ifstream statm("/proc/self/statm");
+  long pages_total = 0, pages_resident = 0;
+  statm >> pages_total >> pages_resident;
+  return pages_resident * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+}
+
+double Percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1) + 0.5));
+  std::nth_element(v.begin(), v.begin() + k, v.end());
+  return v[k];
+}
+
+struct Row {
+  double wall_s, total_ms, rss_mb;
+  int loop;
+  size_t frame;
+  TrackingState state;
+  size_t keyframes;
+};
+
+int Usage() {
+  std::cerr << "usage: reliability_soak DATASET_DIR --minutes M [--config FILE] [--filter MODE] [--out DIR]"
+               " [--frames N] [--sample-every N]\n";
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) return Usage();
+  std::string dataset_dir = argv[1], config, out = "out/soak", filter = "full";
+  double minutes = 1;
+  size_t max_frames = 0;
+  int sample_every = 30;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (i + 1 >= argc) return Usage();
+    const std::string v = argv[++i];
+    if (a == "--minutes") minutes = std::stod(v);
+    else if (a == "--config") config = v;
+    else if (a == "--filter") filter = v;
+    else if (a == "--out") out = v;
+    else if (a == "--frames") max_frames = std::stoul(v);
+    else if (a == "--sample-every") sample_every = std::max(1, std::stoi(v));
+    else return Usage();
+  }
+  try {
+    if (config.empty()) config = std::string(DYGSLAM_SOURCE_DIR) + "/config/bonn.yaml";
+    SystemOptions options = SystemOptionsFromSettings(LoadSettings(config));
+    options.filter_mode = ParseFilterMode(filter);
+    const RgbdDataset dataset = RgbdDataset::Open(dataset_dir);
+    const size_t n = max_frames > 0 ? std::min(max_frames, dataset.size()) : dataset.size();
+    if (n < 2) throw InputError(dataset_dir, 0, "need at least 2 frames");
+    const int64_t period_ns =
+        dataset.frame(n - 1).rgb_stamp.nanoseconds() - dataset.frame(0).rgb_stamp.nanoseconds() + 1000000000;
+    fs::create_directories(out);
+
+    struct sigaction sa {};
+    sa.sa_handler = OnSignal;
+    sigaction(SIGINT, &sa, nullptr);
+    sigaction(SIGTERM, &sa, nullptr);
+
+    SetLogLevel(LogLevel::kWarning);
+    std::vector<Row> rows;
+    std::ofstream csv(fs::path(out) / "soak.csv.tmp");
+    csv << "wall_s,loop,frame,state,total_ms,rss_mb,keyframes\n";
+    const double rss_start = RssMb();
+    System system(options);
+    const auto t0 = std::chrono::steady_clock::now();
+    auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+    size_t keyframes = 0;
+    int loop = 0;
+    std::map<TrackingState, size_t> states;
+    size_t relocalisations_after_loop = 0;
+    for (; !g_stop && wall() < minutes * 60; ++loop) {
+      bool relocalised = false;
+      for (size_t i = 0; i < n && !g_stop && wall() < minutes * 60; ++i) {
+        const cv::Mat rgb = dataset.LoadRgb(i, options.camera.width, options.camera.height);
+        const cv::Mat depth = dataset.LoadDepth(i, options.camera.width, options.camera.height);
+        const Timestamp stamp = Timestamp::FromNanoseconds(dataset.frame(i).rgb_stamp.nanoseconds() + loop * period_ns);
+        const FrameResult r = system.FeedRgbdFrame(rgb, depth, stamp);
+        ++states[r.state];
+        if (r.state == TrackingState::kRelocalized && loop > 0 && !relocalised) {
+          relocalised = true;
+          ++relocalisations_after_loop;
+        }
+        if (rows.size() % sample_every == 0) keyframes = system.KeyframeTrajectory().size();
+        rows.push_back({wall(), r.times.total_ms, RssMb(), loop, i, r.state, keyframes});
+        const Row& w = rows.back();
+        char line[160];
+        std::snprintf(line, sizeof(line), "%.3f,%d,%zu,%s,%.3f,%.1f,%zu\n", w.wall_s, w.loop, w.frame,
+                      ToString(w.state), w.total_ms, w.rss_mb, w.keyframes);
+        csv << line;
+        if (rows.size() % 300 == 0) {
+          csv.flush();
+          std::fprintf(stderr, "[soak] %.1f min  loop %d  rss %.0f MB  keyframes %zu  last %.1f ms\n", w.wall_s / 60,
+                       loop, w.rss_mb, keyframes, w.total_ms);
+        }
+      }
+    }
+    system.Shutdown();
+    csv.close();
+    fs::rename(fs::path(out) / "soak.csv.tmp", fs::path(out) / "soak.csv");
+    WriteTumTrajectory((fs::path(out) / "trajectory.txt").string(), system.Trajectory());
+    WriteTumTrajectory((fs::path(out) / "keyframes.txt").string(), system.KeyframeTrajectory());
+
+    // Summary.
+    if (rows.empty()) throw std::runtime_error("no frames processed");
+    const double total_s = rows.back().wall_s;
+    auto rss_at = [&](double s) {
+      for (const Row& r : rows)
+        if (r.wall_s >= s) return r.rss_mb;
+      return rows.back().rss_mb;
+    };
+    // Growth over the second half: least-squares slope of RSS vs time.
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    size_t m = 0;
+    for (const Row& r : rows) {
+      if (r.wall_s < total_s / 2) continue;
+      sx += r.wall_s; sy += r.rss_mb; sxx += r.wall_s * r.wall_s; sxy += r.wall_s * r.rss_mb; ++m;
+    }
+    const double slope = m > 1 ? (m * sxy - sx * sy) / (m * sxx - sx * sx) * 60.0 : 0;
+    double peak = 0;
+    for (const Row& r : rows) peak = std::max(peak, r.rss_mb);
+    std::printf("soak: %s, filter %s, %.1f min, %zu frames, %d loops of %zu frames\n", dataset_dir.c_str(),
+                filter.c_str(), total_s / 60, rows.size(), loop, n);
+    std::printf("rss MB: before System %.0f, 1 min %.0f, half %.0f, end %.0f, peak %.0f; second-half slope %.2f MB/min\n",
+                rss_start, rss_at(60), rss_at(total_s / 2), rows.back().rss_mb, peak, slope);
+    std::printf("keyframes (live, end): %zu\n", system.KeyframeTrajectory().size());
+    const double window = std::max(60.0, total_s / 6);
+    for (double w0 = 0; w0 < total_s; w0 += window) {
+      std::vector<double> t;
+      for (const Row& r : rows)
+        if (r.wall_s >= w0 && r.wall_s < w0 + window) t.push_back(r.total_ms);
+      if (t.empty()) continue;
+      std::printf("  window %5.1f-%5.1f min: %6zu frames, frame ms median %.1f p95 %.1f p99 %.1f max %.1f, rss %.0f MB\n",
+                  w0 / 60, std::min(total_s, w0 + window) / 60, t.size(), Percentile(t, 0.5), Percentile(t, 0.95),
+                  Percentile(t, 0.99), *std::max_element(t.begin(), t.end()), rss_at(std::min(total_s, w0 + window)));
+    }
+    std::printf("states:");
+    for (const auto& [s, c] : states) std::printf(" %s %zu", ToString(s), c);
+    std::printf("; loops that relocalised after the jump back: %zu of %d\n", relocalisations_after_loop,
+                std::max(0, loop - 1));
+    std::printf("outputs: %s/{soak.csv,trajectory.txt,keyframes.txt}\n", out.c_str());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "reliability_soak: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -72,6 +72,58 @@ TEST(SlamAccuracy, GeneratedDynamicSequenceFilterBeatsNoFilter) {
   EXPECT_LE(ate_full, ate_none);
 }
 
+// Blank frames (no texture, no depth) are reported lost without a pose; after a jump along the
+// path the tracker relocalizes against the map instead of inventing a pose.
+TEST(SlamRelocalization, LostFramesHaveNoPoseAndTrackingRecovers) {
+  SyntheticOptions synth;
+  synth.num_frames = 120;
+  synth.num_moving_objects = 0;
+  synth.seed = 5;
+  SyntheticScene scene(synth);
+  SystemOptions options;
+  options.camera = synth.camera;
+  options.sensor = synth.sensor;
+  options.filter_mode = FilterMode::kNone;
+  options.deterministic = true;
+  System system(options);
+  const cv::Mat blank_rgb(synth.camera.height, synth.camera.width, CV_8UC3, cv::Scalar(128, 128, 128));
+  const cv::Mat blank_depth(synth.camera.height, synth.camera.width, CV_16UC1, cv::Scalar(0));
+  std::vector<int> fed;
+  for (int i = 0; i < 60; ++i) fed.push_back(i);
+  for (int i = 100; i < 120; ++i) fed.push_back(i);  // kidnapped: 40 frames later along the path
+  int lost = 0, relocalized = 0, blanks = 0;
+  int64_t fake_ns = 0;
+  for (size_t n = 0; n < fed.size(); ++n) {
+    if (n == 60) {
+      for (int b = 0; b < 5; ++b) {
+        const Timestamp t = Timestamp::FromNanoseconds(scene.FrameStamp(59).nanoseconds() + (++fake_ns) * 1000000);
+        const FrameResult r = system.FeedRgbdFrame(blank_rgb, blank_depth, t);
+        EXPECT_EQ(r.state, TrackingState::kLost);
+        EXPECT_FALSE(r.world_from_cam.has_value());
+        ++blanks;
+      }
+    }
+    const SyntheticFrame f = scene.RenderFrame(fed[n]);
+    const FrameResult r = system.FeedRgbdFrame(f.rgb, f.depth, f.stamp);
+    if (r.state == TrackingState::kLost) {
+      ++lost;
+      EXPECT_FALSE(r.world_from_cam.has_value());
+    }
+    if (r.state == TrackingState::kRelocalized) ++relocalized;
+  }
+  system.Shutdown();
+  EXPECT_EQ(blanks, 5);
+  EXPECT_GE(relocalized, 1);
+  EXPECT_LE(lost, 3);
+  std::vector<StampedPose> gt;
+  for (int i : fed) gt.push_back(StampedPose{scene.FrameStamp(i), scene.WorldFromCam(i)});
+  const AteResult ate = ComputeAte(gt, system.Trajectory());
+  std::cout << "kidnapped sequence: " << relocalized << " relocalized, " << lost << " lost, ATE " << ate.error.rmse
+            << " m over " << ate.num_pairs << " poses\n";
+  EXPECT_GE(ate.num_pairs, fed.size() - 3);
+  EXPECT_LE(ate.error.rmse, 0.01);
+}
+
 RunOutput RunBonn(const std::string& dir, size_t first, size_t last, FilterMode mode) {
   const Settings settings = LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
   SystemOptions options = SystemOptionsFromSettings(settings);

@@ -297,7 +297,7 @@ struct RosBridge::Impl {
         LOG_INFO << "ros2 bridge: no frames for " << options.end_of_stream_idle_s << " s";
         end_requested = true;
         continue;
-      } else if (end_requested && !stats.end_of_stream_sent) {
+      } else if (end_requested && !stats.end_of_stream_sent && status_writer) {
         const uint64_t n = next_seq;
         stats.end_of_stream_sent = true;
         lock.unlock();

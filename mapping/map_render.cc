@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "core/base/error.h"
-#include "mapping/atomic_file.h"
+#include "core/io/file_util.h"
 #include "mapping/map_compare.h"
 
 namespace dygslam {

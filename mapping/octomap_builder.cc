@@ -12,7 +12,7 @@
 #include <unordered_map>
 
 #include "core/base/error.h"
-#include "mapping/atomic_file.h"
+#include "core/io/file_util.h"
 
 namespace dygslam {
 namespace {
@@ -200,6 +200,10 @@ bool OctoMapBuilder::NeedsRebuild(const Rigid3d& a, const Rigid3d& b) const {
 }
 
 void OctoMapBuilder::Insert(const KeyframeData& keyframe) {
+  if (keyframe.removed) {
+    Remove(keyframe.id);
+    return;
+  }
   if (!keyframe.world_from_cam.AllFinite()) {
     throw InputError(KeyframeName(keyframe) + ": world_from_cam is not finite");
   }

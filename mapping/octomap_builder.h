@@ -128,9 +128,9 @@ class OctoMapBuilder {
   OctoMapBuilder(const OctoMapBuilder&) = delete;
   OctoMapBuilder& operator=(const OctoMapBuilder&) = delete;
 
-  // Inserts the static part of a keyframe. If keyframe.pose_update_only, or the id is already
-  // known and depth is empty, only its pose is updated (as UpdatePoses). If the id is known and
-  // depth is given, the keyframe is replaced. Throws InputError on depth/mask of the wrong type
+  // Inserts the static part of a keyframe. If keyframe.removed, removes it (as Remove). If
+  // keyframe.pose_update_only, or the id is already known and depth is empty, only its pose is
+  // updated (as UpdatePoses). If the id is known and depth is given, the keyframe is replaced. Throws InputError on depth/mask of the wrong type
   // or size, or a non-finite pose (the message names the keyframe id and the field).
   void Insert(const KeyframeData& keyframe);
 

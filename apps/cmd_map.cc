@@ -1,0 +1,429 @@
+// dygslam map DATASET_DIR [--config FILE] [--filter none|boxes|geometry|full] [--frames FIRST:LAST]
+//              [--out DIR] [--trajectory FILE [--every N] [--bonn-marker]] [--deterministic]
+//              [--resolution R] [--no-mask] [--reference-until K] [--save-every SECONDS]
+//
+// Runs the SLAM on a dataset folder and builds the OctoMap of the static scene from its keyframes
+// (mapping/keyframe_mapper.h: new keyframes inserted with their dynamic masks, local-BA pose
+// corrections and culled keyframes applied), or, with --trajectory, from given poses (e.g. the
+// ground truth) without masks.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <optional>
+
+#include "apps/command.h"
+#include "core/base/error.h"
+#include "core/config/mapping_config.h"
+#include "core/config/settings.h"
+#include "core/config/system_config.h"
+#include "core/io/dataset.h"
+#include "core/io/trajectory_io.h"
+#include "core/system/system.h"
+#include "mapping/bonn_frames.h"
+#include "mapping/keyframe_mapper.h"
+#include "mapping/map_compare.h"
+#include "mapping/map_frame.h"
+#include "mapping/map_render.h"
+#include "mapping/octomap_builder.h"
+
+namespace dygslam::cli {
+namespace {
+namespace fs = std::filesystem;
+
+// "FIRST:LAST" (either side may be empty) -> [first, last) of rgb.txt entries (as `dygslam run`).
+std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total) {
+  const auto colon = text.find(':');
+  if (colon == std::string::npos)
+    throw InvalidOptions("--frames: expected FIRST:LAST, got '" + text + "'");
+  auto parse = [&](const std::string& s, size_t def) -> size_t {
+    if (s.empty()) return def;
+    for (char c : s)
+      if (c < '0' || c > '9')
+        throw InvalidOptions("--frames: not a non-negative integer: '" + s + "'");
+    return std::stoul(s);
+  };
+  const size_t first = parse(text.substr(0, colon), 0);
+  const size_t last = std::min(parse(text.substr(colon + 1), total), total);
+  if (first >= last) throw InvalidOptions("--frames: empty range '" + text + "'");
+  return {first, last};
+}
+
+// Settings: DATASET_DIR/camera.yaml (generated sequences), else a preset by folder name (as
+// `dygslam run`).
+std::string DefaultSettingsFile(const std::string& dataset_dir) {
+  const fs::path own = fs::path(dataset_dir) / "camera.yaml";
+  if (fs::exists(own)) return own.string();
+  const std::string name = fs::path(dataset_dir).lexically_normal().filename().string();
+  const fs::path presets = fs::path(ScriptsDir()).parent_path() / "config";
+  std::string preset = "bonn.yaml";
+  if (name.find("freiburg1") != std::string::npos) preset = "tum1.yaml";
+  if (name.find("freiburg2") != std::string::npos) preset = "tum2.yaml";
+  if (name.find("freiburg3") != std::string::npos) preset = "tum3.yaml";
+  return (presets / preset).string();
+}
+
+double ParsePositive(const std::string& option, const std::string& text) {
+  size_t used = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !(value > 0) || !std::isfinite(value))
+    throw InvalidOptions("--" + option + ": expected a positive number, got '" + text + "'");
+  return value;
+}
+
+// Keyframes recorded for the reference map (--reference-until): depth kept, final pose tracked.
+struct ReferenceKeyframe {
+  Timestamp stamp;
+  cv::Mat depth;
+  Rigid3d world_from_cam;
+  bool removed = false;
+};
+
+std::string Count(uint64_t n) { return std::to_string(n); }
+
+int RunMap(const std::vector<std::string>& args) {
+  ArgParser p(
+      "map",
+      "DATASET_DIR [--config FILE] [--filter none|boxes|geometry|full] [--frames FIRST:LAST] "
+      "[--out DIR]\n"
+      "            [--trajectory FILE [--every N] [--bonn-marker]] [--deterministic] [--resolution "
+      "R]\n"
+      "            [--no-mask] [--reference-until K] [--save-every SECONDS]",
+      "Builds an occupancy map (OctoMap) of the static scene: runs the SLAM and inserts its "
+      "keyframes with\n"
+      "the pixels judged dynamic left out (people), applying keyframe pose corrections. Writes "
+      "DIR/map.bt\n"
+      "(max-likelihood, octovis), DIR/map.ot (probabilities), DIR/map_top.png (top view, coloured "
+      "by\n"
+      "height), DIR/map_slice.png (occupancy slice just below the first camera's height) and\n"
+      "DIR/trajectory.txt (SLAM world = first camera frame). The map is levelled: z up with the "
+      "floor at\n"
+      "z = 0, the first camera above the origin looking along +y (map_from_slam_world is printed;\n"
+      "--save-every snapshots are in the SLAM world). Map settings: the OctoMap: section of the "
+      "settings.");
+  p.AddPositional("DATASET_DIR", "folder with rgb.txt, depth.txt (groundtruth.txt optional)");
+  p.AddOption("config", "FILE", "settings YAML; default: DATASET_DIR/camera.yaml or a preset");
+  p.AddOption("filter", "MODE", "dynamic filter of the SLAM: none | boxes | geometry | full",
+              "full");
+  p.AddOption("frames", "FIRST:LAST",
+              "rgb.txt entries FIRST (inclusive, 0-based) to LAST (exclusive)");
+  p.AddOption("out", "DIR", "output folder", "out/map");
+  p.AddOption("trajectory", "FILE",
+              "build the map from these poses (TUM format, e.g. groundtruth.txt) instead of the "
+              "SLAM; no masks");
+  p.AddOption("every", "N", "with --trajectory: use every N-th frame", "10");
+  p.AddFlag("bonn-marker",
+            "with --trajectory: poses are Bonn marker-body poses (apply the marker-to-camera "
+            "calibration)");
+  p.AddOption("resolution", "R", "leaf size in metres (overrides OctoMap.resolution)");
+  p.AddFlag("no-mask", "insert every valid depth pixel (ignore the keyframes' dynamic masks)");
+  p.AddOption("reference-until", "K",
+              "also build a reference map from the keyframes before rgb entry K (e.g. people-free "
+              "frames), without\n"
+              "masks and with their final poses; print ghost voxels (occupied in the map, observed "
+              "free in the\n"
+              "reference); write DIR/reference.bt");
+  p.AddOption("save-every", "SECONDS",
+              "also write map.bt/map.ot every SECONDS of wall time while running");
+  p.AddFlag("deterministic",
+            "fixed seeds and synchronous local mapping: identical output run to run");
+  p.AddFlag("quiet", "no progress line");
+  if (!p.Parse(args)) return p.exit_code();
+
+  const std::string dataset_dir = p.Positional("DATASET_DIR");
+  const std::string config = p.Has("config") ? p.Get("config") : DefaultSettingsFile(dataset_dir);
+  const Settings settings = LoadSettings(config);
+  SystemOptions options = SystemOptionsFromSettings(settings);
+  options.filter_mode = ParseFilterMode(p.Get("filter"));
+  options.deterministic = p.Flag("deterministic");
+  OctoMapOptions map_options;
+  ReadOptions(settings.reader, &map_options);
+  if (p.Has("resolution"))
+    map_options.resolution = ParsePositive("resolution", p.Get("resolution"));
+  if (p.Flag("no-mask") || options.filter_mode == FilterMode::kNone)
+    map_options.use_dynamic_mask = false;
+  map_options.Check();
+  const bool from_trajectory = p.Has("trajectory");
+  int every = 1;
+  if (from_trajectory) {
+    const double e = ParsePositive("every", p.Get("every"));
+    if (e != std::floor(e))
+      return p.UsageError("--every: expected a positive integer, got '" + p.Get("every") + "'");
+    every = static_cast<int>(e);
+  } else if (p.Has("every") || p.Flag("bonn-marker")) {
+    return p.UsageError("--every and --bonn-marker need --trajectory");
+  }
+  std::optional<double> save_every;
+  if (p.Has("save-every")) save_every = ParsePositive("save-every", p.Get("save-every"));
+
+  const RgbdDataset dataset = RgbdDataset::Open(dataset_dir);
+  auto [first, last] = p.Has("frames") ? ParseFrameRange(p.Get("frames"), dataset.num_rgb_entries())
+                                       : std::pair<size_t, size_t>{0, dataset.num_rgb_entries()};
+  std::optional<Timestamp> reference_until;
+  if (p.Has("reference-until")) {
+    const double k = ParsePositive("reference-until", p.Get("reference-until"));
+    if (k != std::floor(k) || k > dataset.num_rgb_entries())
+      return p.UsageError("--reference-until: expected an rgb entry index 1.." +
+                          std::to_string(dataset.num_rgb_entries()));
+    // The stamp of rgb entry K: the first frame with a depth partner at or after it.
+    for (size_t e = static_cast<size_t>(k); e < dataset.num_rgb_entries() && !reference_until;
+         ++e) {
+      if (const auto index = dataset.FrameForRgbEntry(e))
+        reference_until = dataset.frame(*index).rgb_stamp;
+    }
+    if (!reference_until)
+      reference_until =
+          Timestamp::FromNanoseconds(dataset.frames().back().rgb_stamp.nanoseconds() + 1);
+  }
+  std::vector<StampedPose> given_poses;
+  if (from_trajectory) given_poses = ReadTumTrajectory(p.Get("trajectory"));
+  const fs::path out = p.Get("out");
+  fs::create_directories(out);
+
+  KeyframeMapper mapper(options.camera, map_options);
+  std::mutex
+      record_mutex;  // guards the records below (the callback may run on the local-mapping thread)
+  std::map<int64_t, ReferenceKeyframe> reference;
+  std::vector<Timestamp> keyframe_stamps;
+  std::optional<Rigid3d> first_camera;
+  auto on_keyframe = [&](const KeyframeData& keyframe) {
+    {
+      std::lock_guard<std::mutex> lock(record_mutex);
+      const bool is_new = !keyframe.pose_update_only && !keyframe.removed;
+      if (is_new) {
+        keyframe_stamps.push_back(keyframe.stamp);
+        if (!first_camera) first_camera = keyframe.world_from_cam;
+      }
+      if (reference_until) {
+        if (is_new && keyframe.stamp < *reference_until) {
+          reference[keyframe.id] = {keyframe.stamp, keyframe.depth.clone(), keyframe.world_from_cam,
+                                    false};
+        } else if (auto it = reference.find(keyframe.id); it != reference.end()) {
+          // A culled people-free keyframe still observed the scene: keep it, at its last pose.
+          if (keyframe.removed)
+            it->second.removed = true;
+          else
+            it->second.world_from_cam = keyframe.world_from_cam;
+        }
+      }
+    }
+    mapper.Submit(keyframe);
+  };
+
+  std::optional<System> system;
+  if (!from_trajectory) {
+    system.emplace(options);
+    system->SetKeyframeCallback(on_keyframe);
+  }
+  const bool progress = !p.Flag("quiet");
+  size_t processed = 0, lost = 0, skipped = 0, saves = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto last_save = t0;
+  auto save_maps = [&]() {
+    mapper.WithBuilder([&](OctoMapBuilder& builder) {
+      builder.WriteBinary((out / "map.bt").string());
+      builder.WriteFull((out / "map.ot").string());
+    });
+    ++saves;
+  };
+  for (size_t k = first; k < last; ++k) {
+    const auto index = dataset.FrameForRgbEntry(k);
+    if (!index) {
+      ++skipped;
+      continue;
+    }
+    const RgbdFrameEntry& entry = dataset.frame(*index);
+    TrackingState state = TrackingState::kOk;
+    if (from_trajectory) {
+      if ((k - first) % every != 0) continue;
+      std::optional<Rigid3d> pose = mapping_data::InterpolatePose(given_poses, entry.rgb_stamp);
+      if (!pose) {
+        ++lost;
+        continue;
+      }
+      if (p.Flag("bonn-marker")) *pose = *pose * mapping_data::BonnMarkerFromCam();
+      KeyframeData keyframe;
+      keyframe.id = static_cast<int64_t>(k);
+      keyframe.stamp = entry.rgb_stamp;
+      keyframe.world_from_cam = *pose;
+      dataset.LoadDepth(*index, options.camera.width, options.camera.height)
+          .convertTo(keyframe.depth, CV_32F, 1.0 / options.sensor.depth_map_factor);
+      on_keyframe(keyframe);
+    } else {
+      const cv::Mat rgb = dataset.LoadRgb(*index, options.camera.width, options.camera.height);
+      const cv::Mat depth = dataset.LoadDepth(*index, options.camera.width, options.camera.height);
+      state = system->FeedRgbdFrame(rgb, depth, entry.rgb_stamp).state;
+      if (state == TrackingState::kLost) ++lost;
+    }
+    ++processed;
+    const auto now = std::chrono::steady_clock::now();
+    if (save_every && std::chrono::duration<double>(now - last_save).count() >= *save_every) {
+      save_maps();
+      last_save = now;
+    }
+    if (progress && (processed % 10 == 0 || k + 1 == last)) {
+      const double elapsed = std::chrono::duration<double>(now - t0).count();
+      size_t num_keyframes;
+      {
+        std::lock_guard<std::mutex> lock(record_mutex);
+        num_keyframes = keyframe_stamps.size();
+      }
+      const MapperStats ms = mapper.Stats();
+      std::fprintf(stderr,
+                   "\r[map] frame %zu/%zu  %.1f fps  state=%s  keyframes=%zu  map queue=%zu   ",
+                   k + 1 - first, last - first, processed / std::max(elapsed, 1e-9),
+                   ToString(state), num_keyframes, ms.num_submitted - ms.num_applied);
+      std::fflush(stderr);
+    }
+  }
+  if (progress) std::fprintf(stderr, "\n");
+  if (system) system->Shutdown();  // last local-mapping corrections reach the mapper
+  mapper.Flush();
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (system) {
+    WriteTumTrajectory((out / "trajectory.txt").string(), system->Trajectory());
+    WriteTumTrajectory((out / "keyframes.txt").string(), system->KeyframeTrajectory());
+  }
+
+  // SLAM maps: level the map (z up, floor at z = 0) by the floor it found, so pictures and
+  // planners see it upright. A rigid change of the world frame: all stored keyframe poses move,
+  // the tree is rebuilt once.
+  std::optional<FloorEstimate> floor;
+  Rigid3d map_from_world;
+  if (system && first_camera) {
+    const Eigen::Vector3d prior_up = first_camera->rotation * -Eigen::Vector3d::UnitY();
+    mapper.WithBuilder([&](OctoMapBuilder& builder) {
+      floor = EstimateFloor(builder.tree(), prior_up, first_camera->translation);
+      map_from_world = LevelFrameFromWorld(*floor, prior_up, *first_camera);
+      std::map<int64_t, Rigid3d> moved;
+      for (int64_t id : builder.KeyframeIds()) moved[id] = map_from_world * builder.Pose(id);
+      builder.UpdatePoses(moved);
+    });
+    for (auto& [id, kf] : reference) kf.world_from_cam = map_from_world * kf.world_from_cam;
+    first_camera = map_from_world * *first_camera;
+  }
+
+  // Outputs and figures.
+  OctoMapStats stats;
+  std::optional<GhostVoxelCounts> ghosts;
+  size_t reference_keyframes = 0;
+  const double camera_z = first_camera ? first_camera->translation.z() : 0.0;
+  const bool has_floor = floor && floor->found;
+  mapper.WithBuilder([&](OctoMapBuilder& builder) {
+    const auto t_sync = std::chrono::steady_clock::now();
+    builder.Sync();  // the final rebuild (pose corrections), if any
+    const double final_sync_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_sync)
+            .count();
+    stats = builder.Stats();
+    builder.WriteBinary((out / "map.bt").string());
+    builder.WriteFull((out / "map.ot").string());
+    // Top view without the ceiling (up to 2 m above the floor, or 0.7 m above the first camera
+    // when the map frame is not levelled by a floor); slice at 1 m above the floor (or 0.3 m
+    // below the camera).
+    TopViewOptions top;
+    top.max_z = has_floor ? 2.0 : camera_z + 0.7;
+    WritePngAtomically((out / "map_top.png").string(), RenderTopView(builder.tree(), top));
+    WritePngAtomically((out / "map_slice.png").string(),
+                       RenderSlice(builder.tree(), has_floor ? 1.0 : camera_z - 0.3));
+    if (reference_until) {
+      OctoMapOptions reference_options = map_options;
+      reference_options.use_dynamic_mask = false;
+      OctoMapBuilder reference_map(options.camera, reference_options);
+      for (const auto& [id, kf] : reference) {
+        KeyframeData data;
+        data.id = id;
+        data.stamp = kf.stamp;
+        data.depth = kf.depth;
+        // The map's final pose of the keyframe (culled ones: their last pose).
+        data.world_from_cam = builder.Contains(id) ? builder.Pose(id) : kf.world_from_cam;
+        reference_map.Insert(data);
+        ++reference_keyframes;
+      }
+      reference_map.WriteBinary((out / "reference.bt").string());
+      ghosts = CompareGhostVoxels(builder.tree(), reference_map.tree());
+    }
+    std::printf("final map sync (rebuild after pose corrections): %.1f ms\n", final_sync_ms);
+  });
+
+  const MapperStats ms = mapper.Stats();
+  if (system) {
+    std::printf(
+        "frames: %zu processed, %zu lost, %zu without depth partner; %.1f fps (SLAM + map)\n",
+        processed, lost, skipped, processed / std::max(elapsed, 1e-9));
+    std::printf("filter: %s%s; map masks %s\n", ToString(options.filter_mode),
+                options.deterministic ? " (deterministic)" : "",
+                map_options.use_dynamic_mask ? "applied" : "not applied");
+  } else {
+    std::printf("frames: %zu inserted from %s (every %d), %zu without pose\n", processed,
+                p.Get("trajectory").c_str(), every, lost);
+  }
+  std::printf(
+      "keyframes: %zu in the map (%zu inserted, %zu pose corrections, %zu culled), %llu rebuilds\n",
+      stats.num_keyframes, ms.num_new_keyframes, ms.num_pose_updates, ms.num_removals,
+      static_cast<unsigned long long>(stats.num_rebuilds));
+  std::printf(
+      "map: resolution %.3f m, %zu leaves (%zu occupied, %zu free), %s occupied / %s free cells, "
+      "%.2f MB\n",
+      map_options.resolution, stats.num_leaves, stats.num_occupied_leaves, stats.num_free_leaves,
+      Count(stats.num_occupied_voxels).c_str(), Count(stats.num_free_voxels).c_str(),
+      stats.memory_bytes / 1048576.0);
+  std::printf("insertion per keyframe: median %.1f ms; last rebuild %.1f ms for %zu keyframes\n",
+              stats.median_insert_ms, stats.last_rebuild_ms, stats.num_keyframes);
+  if (keyframe_stamps.size() >= 2) {
+    const double span = SecondsBetween(keyframe_stamps.front(), keyframe_stamps.back());
+    const double keyframe_rate = (keyframe_stamps.size() - 1) / std::max(span, 1e-9);
+    const double capacity = stats.median_insert_ms > 0 ? 1000.0 / stats.median_insert_ms : 0.0;
+    std::printf(
+        "keyframe rate %.2f /s (sequence time); mapper capacity %.1f keyframes/s (%s); queue max "
+        "%zu, "
+        "latency median %.1f ms, max %.1f ms\n",
+        keyframe_rate, capacity, capacity > keyframe_rate ? "keeps up" : "falls behind",
+        ms.max_queue_depth, ms.median_latency_ms, ms.max_latency_ms);
+  }
+  if (floor) {
+    if (floor->found) {
+      std::printf(
+          "map frame: levelled on the floor (%zu cells, %.1f deg from the first camera's up); "
+          "first camera %.2f m above it\n",
+          floor->num_inliers, floor->tilt_from_prior_deg, camera_z);
+    } else {
+      std::printf(
+          "map frame: no floor found; z = up in the first image, first camera at the origin\n");
+    }
+    const Eigen::Quaterniond q = map_from_world.rotation;
+    std::printf("map_from_slam_world (tx ty tz qx qy qz qw): %.6f %.6f %.6f %.6f %.6f %.6f %.6f\n",
+                map_from_world.translation.x(), map_from_world.translation.y(),
+                map_from_world.translation.z(), q.x(), q.y(), q.z(), q.w());
+  }
+  if (ghosts) {
+    std::printf("reference: %zu keyframes before rgb entry %s\n", reference_keyframes,
+                p.Get("reference-until").c_str());
+    std::printf(
+        "ghost voxels: %s (occupied in the map, observed free in the reference, no reference "
+        "surface "
+        "within 1 cell); occupied-and-free %s; map occupied %s, reference occupied %s\n",
+        Count(ghosts->ghost).c_str(), Count(ghosts->occupied_a_free_b).c_str(),
+        Count(ghosts->occupied_in_a).c_str(), Count(ghosts->occupied_in_b).c_str());
+  }
+  if (saves > 0) std::printf("periodic saves: %zu\n", saves);
+  std::printf("outputs: %s/{map.bt,map.ot,map_top.png,map_slice.png%s%s}\n", out.string().c_str(),
+              system ? ",trajectory.txt,keyframes.txt" : "", ghosts ? ",reference.bt" : "");
+  return 0;
+}
+
+const CommandRegistrar kRegistrar({"map", "build a static occupancy map (OctoMap) of a dataset run",
+                                   RunMap});
+
+}  // namespace
+}  // namespace dygslam::cli

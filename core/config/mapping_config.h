@@ -1,0 +1,35 @@
+// OctoMapOptions from the settings file's optional `OctoMap:` section (defaults in
+// mapping/octomap_builder.h). Keys are the option names:
+//
+//   OctoMap:
+//     resolution: 0.05          # leaf size (m)
+//     max_range: 4.0            # beams longer than this clear space up to max_range only (m)
+//     min_range: 0.3            # closer depth is no measurement (m)
+//     prob_hit: 0.7             # OctoMap sensor model
+//     prob_miss: 0.4
+//     clamping_min: 0.12
+//     clamping_max: 0.97
+//     occupancy_threshold: 0.5
+//     pixel_stride: 2           # every n-th pixel in u and v
+//     voxel_filter_size: 0.0    # voxel grid before insertion (m); <= 0: = resolution
+//     use_voxel_filter: true
+//     use_dynamic_mask: true    # false: every valid depth pixel goes in (no filter)
+//     dynamic_mask_dilation_px: 5
+//     dynamic_keypoint_radius_px: 8
+//     lazy_eval: true
+//     discretize: false
+//     rebuild_displacement: 0.0 # pose correction that triggers a rebuild (m); <= 0: half a voxel
+//
+// Flat keys ("OctoMap.resolution: 0.05") work too. Bad values: InputError "<file>:<line>: key
+// 'OctoMap.<name>': ...".
+#pragma once
+
+#include "core/config/config_reader.h"
+#include "mapping/octomap_builder.h"
+
+namespace dygslam {
+
+// Overwrites the fields of *options whose keys are present; checks the result.
+void ReadOptions(const ConfigReader& root, OctoMapOptions* options);
+
+}  // namespace dygslam

@@ -1,0 +1,96 @@
+#include "core/config/mapping_config.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "core/config/settings.h"
+
+namespace dygslam {
+namespace {
+
+std::string ErrorOf(const std::string& yaml) {
+  try {
+    OctoMapOptions options;
+    ReadOptions(ConfigReader::FromString(yaml, "map.yaml"), &options);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(MappingConfig, AbsentSectionKeepsDefaults) {
+  OctoMapOptions options;
+  ReadOptions(ConfigReader::FromString("Camera.fx: 500\n", "map.yaml"), &options);
+  const OctoMapOptions defaults;
+  EXPECT_EQ(options.resolution, defaults.resolution);
+  EXPECT_EQ(options.max_range, defaults.max_range);
+  EXPECT_EQ(options.prob_hit, defaults.prob_hit);
+  EXPECT_EQ(options.use_dynamic_mask, defaults.use_dynamic_mask);
+  // The "sensible defaults" for Kinect-class sensors.
+  EXPECT_DOUBLE_EQ(defaults.resolution, 0.05);
+  EXPECT_DOUBLE_EQ(defaults.max_range, 4.0);
+}
+
+TEST(MappingConfig, ReadsNestedAndFlatKeys) {
+  OctoMapOptions options;
+  ReadOptions(ConfigReader::FromString("OctoMap:\n"
+                                       "  resolution: 0.1\n"
+                                       "  max_range: 3.5\n"
+                                       "  prob_hit: 0.8\n"
+                                       "  prob_miss: 0.3\n"
+                                       "  clamping_min: 0.1\n"
+                                       "  clamping_max: 0.95\n"
+                                       "  pixel_stride: 4\n"
+                                       "  use_dynamic_mask: false\n"
+                                       "  dynamic_mask_dilation_px: 9\n"
+                                       "  discretize: on\n"
+                                       "OctoMap.min_range: 0.5\n",
+                                       "map.yaml"),
+              &options);
+  EXPECT_DOUBLE_EQ(options.resolution, 0.1);
+  EXPECT_DOUBLE_EQ(options.max_range, 3.5);
+  EXPECT_DOUBLE_EQ(options.min_range, 0.5);
+  EXPECT_DOUBLE_EQ(options.prob_hit, 0.8);
+  EXPECT_DOUBLE_EQ(options.prob_miss, 0.3);
+  EXPECT_DOUBLE_EQ(options.clamping_min, 0.1);
+  EXPECT_DOUBLE_EQ(options.clamping_max, 0.95);
+  EXPECT_EQ(options.pixel_stride, 4);
+  EXPECT_FALSE(options.use_dynamic_mask);
+  EXPECT_EQ(options.dynamic_mask_dilation_px, 9);
+  EXPECT_TRUE(options.discretize);
+  EXPECT_TRUE(options.use_voxel_filter);  // untouched
+}
+
+TEST(MappingConfig, BadValuesNameFileLineAndKey) {
+  // prob_hit must be a hit (> 0.5): line 3.
+  const std::string e1 = ErrorOf("OctoMap:\n  resolution: 0.05\n  prob_hit: 0.4\n");
+  EXPECT_NE(e1.find("map.yaml:3"), std::string::npos) << e1;
+  EXPECT_NE(e1.find("OctoMap.prob_hit"), std::string::npos) << e1;
+  // Not a number.
+  const std::string e2 = ErrorOf("OctoMap:\n  resolution: fine\n");
+  EXPECT_NE(e2.find("map.yaml:2"), std::string::npos) << e2;
+  EXPECT_NE(e2.find("OctoMap.resolution"), std::string::npos) << e2;
+  // Negative resolution.
+  const std::string e3 = ErrorOf("OctoMap.resolution: -1\n");
+  EXPECT_NE(e3.find("OctoMap.resolution"), std::string::npos) << e3;
+  // A misspelt key is not silently ignored.
+  const std::string e4 = ErrorOf("OctoMap:\n  resolution: 0.05\n  max_rnage: 3\n");
+  EXPECT_NE(e4.find("map.yaml:3"), std::string::npos) << e4;
+  EXPECT_NE(e4.find("OctoMap.max_rnage"), std::string::npos) << e4;
+  EXPECT_NE(e4.find("unknown key"), std::string::npos) << e4;
+}
+
+// The shipped presets carry a (commented) OctoMap section that reads and checks.
+TEST(MappingConfig, PresetsRead) {
+  for (const char* name : {"bonn.yaml", "tum1.yaml", "tum2.yaml", "tum3.yaml"}) {
+    const std::string path = std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/" + name;
+    const Settings settings = LoadSettings(path);
+    OctoMapOptions options;
+    EXPECT_NO_THROW(ReadOptions(settings.reader, &options)) << path;
+    EXPECT_GT(options.resolution, 0) << path;
+  }
+}
+
+}  // namespace
+}  // namespace dygslam

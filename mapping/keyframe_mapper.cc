@@ -1,0 +1,140 @@
+#include "mapping/keyframe_mapper.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "core/base/error.h"
+
+namespace dygslam {
+namespace {
+
+double MsBetween(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+KeyframeData DeepCopy(const KeyframeData& in) {
+  KeyframeData out = in;  // scalars, vectors
+  out.rgb = in.rgb.clone();
+  out.depth = in.depth.clone();
+  out.dynamic_mask = in.dynamic_mask.clone();
+  return out;
+}
+
+}  // namespace
+
+void KeyframeMapperOptions::Check() const {
+  DYGSLAM_CHECK_OPTION(max_queue >= 1, "KeyframeMapper.max_queue");
+}
+
+KeyframeMapper::KeyframeMapper(const PinholeCamera& camera, const OctoMapOptions& options,
+                               const KeyframeMapperOptions& mapper_options)
+    : mapper_options_(mapper_options), builder_(camera, options) {
+  mapper_options_.Check();
+  worker_ = std::thread([this] { Run(); });
+}
+
+KeyframeMapper::~KeyframeMapper() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  changed_.notify_all();
+  if (worker_.joinable()) worker_.join();
+}
+
+void KeyframeMapper::RethrowIfFailed() {
+  if (error_) {
+    std::exception_ptr e = error_;
+    error_ = nullptr;
+    std::rethrow_exception(e);
+  }
+}
+
+void KeyframeMapper::Submit(const KeyframeData& keyframe) {
+  Item item{DeepCopy(keyframe), std::chrono::steady_clock::now()};
+  std::unique_lock<std::mutex> lock(mutex_);
+  RethrowIfFailed();
+  if (queue_.size() >= mapper_options_.max_queue) {
+    ++stats_.num_blocked;
+    changed_.wait(lock, [this] { return queue_.size() < mapper_options_.max_queue || stop_; });
+  }
+  queue_.push_back(std::move(item));
+  ++stats_.num_submitted;
+  stats_.max_queue_depth = std::max(stats_.max_queue_depth, queue_.size());
+  lock.unlock();
+  changed_.notify_all();
+}
+
+void KeyframeMapper::Flush() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  changed_.wait(lock, [this] { return (queue_.empty() && !busy_) || error_ != nullptr; });
+  RethrowIfFailed();
+}
+
+void KeyframeMapper::WithBuilder(const std::function<void(OctoMapBuilder&)>& fn) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    RethrowIfFailed();
+  }
+  std::lock_guard<std::mutex> builder_lock(builder_mutex_);
+  fn(builder_);
+}
+
+MapperStats KeyframeMapper::Stats() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  MapperStats stats = stats_;
+  if (!latencies_ms_.empty()) {
+    std::vector<double> sorted = latencies_ms_;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    stats.median_latency_ms = sorted[sorted.size() / 2];
+    stats.max_latency_ms = *std::max_element(latencies_ms_.begin(), latencies_ms_.end());
+  }
+  return stats;
+}
+
+void KeyframeMapper::Run() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true) {
+    changed_.wait(lock, [this] { return !queue_.empty() || stop_; });
+    if (queue_.empty()) return;  // stop_ and drained
+    Item item = std::move(queue_.front());
+    queue_.pop_front();
+    busy_ = true;
+    lock.unlock();
+    changed_.notify_all();  // space in the queue
+
+    const auto start = std::chrono::steady_clock::now();
+    std::exception_ptr error;
+    try {
+      std::lock_guard<std::mutex> builder_lock(builder_mutex_);
+      const KeyframeData& k = item.keyframe;
+      if (k.removed) {
+        builder_.Remove(k.id);
+      } else if (k.pose_update_only) {
+        builder_.UpdatePoses({{k.id, k.world_from_cam}});
+      } else {
+        builder_.Insert(k);
+      }
+    } catch (...) {
+      error = std::current_exception();
+    }
+    const auto end = std::chrono::steady_clock::now();
+
+    lock.lock();
+    busy_ = false;
+    if (error && !error_) error_ = error;
+    ++stats_.num_applied;
+    stats_.worker_busy_ms += MsBetween(start, end);
+    if (item.keyframe.removed) {
+      ++stats_.num_removals;
+    } else if (item.keyframe.pose_update_only) {
+      ++stats_.num_pose_updates;
+    } else {
+      ++stats_.num_new_keyframes;
+      latencies_ms_.push_back(MsBetween(item.submitted, end));
+    }
+    changed_.notify_all();
+  }
+}
+
+}  // namespace dygslam

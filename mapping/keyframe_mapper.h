@@ -1,0 +1,94 @@
+// Thread-safe front of an OctoMapBuilder for a running SLAM: the keyframe callback (tracking
+// thread for new keyframes, local-mapping thread for pose corrections and culled keyframes) hands
+// each KeyframeData to Submit(), which deep-copies the images into a FIFO queue and returns; one
+// worker thread applies the queue in submission order to the builder it owns:
+//   new keyframe        -> OctoMapBuilder::Insert (filter, downsample, ray-cast insertion)
+//   pose_update_only    -> OctoMapBuilder::UpdatePoses (rebuild deferred until the map is read)
+//   removed             -> OctoMapBuilder::Remove
+// The map depends only on the order of submissions, so a deterministic SLAM run gives the same
+// map every time.
+//
+//   KeyframeMapper mapper(camera, options);
+//   system.SetKeyframeCallback([&mapper](const KeyframeData& k) { mapper.Submit(k); });
+//   ...
+//   mapper.Flush();                                   // queue applied
+//   mapper.WithBuilder([](OctoMapBuilder& b) { b.WriteBinary("map.bt"); });
+//
+// Nothing is dropped: when max_queue submissions are waiting, Submit() blocks (back-pressure on
+// the SLAM) and counts it in MapperStats::num_blocked. An exception from the builder (bad
+// keyframe data) is kept and rethrown by the next Submit()/Flush()/WithBuilder().
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <exception>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "mapping/octomap_builder.h"
+
+namespace dygslam {
+
+struct KeyframeMapperOptions {
+  size_t max_queue = 32;  // submissions waiting before Submit() blocks
+  void Check() const;
+};
+
+struct MapperStats {
+  size_t num_submitted = 0;
+  size_t num_applied = 0;
+  size_t num_new_keyframes = 0;
+  size_t num_pose_updates = 0;
+  size_t num_removals = 0;
+  size_t max_queue_depth = 0;
+  size_t num_blocked = 0;        // Submit() calls that had to wait for space
+  double worker_busy_ms = 0;     // total time the worker spent applying submissions
+  double median_latency_ms = 0;  // new keyframes: Submit() to inserted
+  double max_latency_ms = 0;
+};
+
+class KeyframeMapper {
+ public:
+  KeyframeMapper(const PinholeCamera& camera, const OctoMapOptions& options,
+                 const KeyframeMapperOptions& mapper_options = {});
+  // Applies what is queued, then stops the worker.
+  ~KeyframeMapper();
+  KeyframeMapper(const KeyframeMapper&) = delete;
+  KeyframeMapper& operator=(const KeyframeMapper&) = delete;
+
+  // Thread-safe. Copies the keyframe (images cloned).
+  void Submit(const KeyframeData& keyframe);
+  // Blocks until everything submitted so far is applied.
+  void Flush();
+  // Runs fn on the builder with the worker paused (the queue keeps filling meanwhile).
+  void WithBuilder(const std::function<void(OctoMapBuilder&)>& fn);
+  MapperStats Stats() const;
+
+ private:
+  struct Item {
+    KeyframeData keyframe;
+    std::chrono::steady_clock::time_point submitted;
+  };
+  void Run();
+  void RethrowIfFailed();  // lock held
+
+  KeyframeMapperOptions mapper_options_;
+  OctoMapBuilder builder_;  // touched by the worker, or by WithBuilder under builder_mutex_
+  std::mutex builder_mutex_;
+
+  mutable std::mutex mutex_;  // guards everything below
+  std::condition_variable changed_;
+  std::deque<Item> queue_;
+  bool busy_ = false;  // worker is applying an item
+  bool stop_ = false;
+  std::exception_ptr error_;
+  MapperStats stats_;
+  std::vector<double> latencies_ms_;
+  std::thread worker_;
+};
+
+}  // namespace dygslam

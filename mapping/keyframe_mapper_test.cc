@@ -1,0 +1,157 @@
+#include "mapping/keyframe_mapper.h"
+
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+
+#include <cmath>
+#include <thread>
+#include <vector>
+
+#include "core/base/error.h"
+#include "mapping/map_compare.h"
+#include "mapping/test_scene.h"
+
+namespace dygslam {
+namespace {
+
+using test_scene::Box;
+using test_scene::LookingAlong;
+using test_scene::MakeKeyframe;
+using test_scene::Scene;
+
+OctoMapOptions TestOptions() {
+  OctoMapOptions options;
+  options.pixel_stride = 1;
+  options.resolution = 0.1;  // fast
+  return options;
+}
+
+Rigid3d PoseOf(int k) {
+  return LookingAlong({-1.0, 0.1 * std::sin(0.5 * k), 1.2}, 0.5 * std::sin(0.4 * k));
+}
+
+// A person walks in front of the camera in the first half.
+KeyframeData Keyframe(int k) {
+  Scene scene = test_scene::DefaultRoom();
+  if (k < 6)
+    scene.dynamic_boxes.push_back(Box{{0.5, -0.5 + 0.2 * k, 0.0}, {0.9, -0.1 + 0.2 * k, 1.7}});
+  return MakeKeyframe(k, scene, test_scene::SmallCamera(), PoseOf(k));
+}
+
+// Same occupied and free cells.
+void ExpectSameMap(const octomap::OcTree& a, const octomap::OcTree& b) {
+  const GhostVoxelCounts ab = CompareGhostVoxels(a, b, 0), ba = CompareGhostVoxels(b, a, 0);
+  EXPECT_GT(ab.occupied_in_a, 100u);
+  EXPECT_EQ(ab.occupied_in_a, ab.occupied_in_b);
+  EXPECT_EQ(ab.occupied_a_occupied_b, ab.occupied_in_a);
+  EXPECT_EQ(ab.occupied_a_free_b + ab.occupied_a_unknown_b, 0u);
+  EXPECT_EQ(ba.occupied_a_free_b + ba.occupied_a_unknown_b, 0u);
+}
+
+TEST(KeyframeMapper, AppliesInsertsCorrectionsAndRemovalsInOrder) {
+  const PinholeCamera camera = test_scene::SmallCamera();
+  KeyframeMapper mapper(camera, TestOptions());
+  OctoMapBuilder direct(camera, TestOptions());
+  std::vector<KeyframeData> sequence;
+  for (int k = 0; k < 12; ++k) sequence.push_back(Keyframe(k));
+  // A local-BA style correction of keyframe 3 and the culling of keyframe 5.
+  KeyframeData correction;
+  correction.id = 3;
+  correction.world_from_cam = PoseOf(3);
+  correction.world_from_cam.translation.x() += 0.2;
+  correction.pose_update_only = true;
+  sequence.push_back(correction);
+  KeyframeData culled;
+  culled.id = 5;
+  culled.removed = true;
+  culled.pose_update_only = true;
+  sequence.push_back(culled);
+
+  for (const KeyframeData& k : sequence) {
+    mapper.Submit(k);
+    direct.Insert(k);
+  }
+  mapper.Flush();
+  const MapperStats stats = mapper.Stats();
+  EXPECT_EQ(stats.num_submitted, sequence.size());
+  EXPECT_EQ(stats.num_applied, sequence.size());
+  EXPECT_EQ(stats.num_new_keyframes, 12u);
+  EXPECT_EQ(stats.num_pose_updates, 1u);
+  EXPECT_EQ(stats.num_removals, 1u);
+  mapper.WithBuilder([&](OctoMapBuilder& builder) {
+    EXPECT_FALSE(builder.Contains(5));
+    EXPECT_EQ(builder.KeyframeIds().size(), 11u);
+    EXPECT_NEAR(builder.Pose(3).translation.x(), correction.world_from_cam.translation.x(), 1e-12);
+    ExpectSameMap(builder.tree(), direct.tree());
+  });
+}
+
+TEST(KeyframeMapper, SubmitCopiesTheImages) {
+  const PinholeCamera camera = test_scene::SmallCamera();
+  KeyframeMapper mapper(camera, TestOptions(), KeyframeMapperOptions{64});
+  OctoMapBuilder direct(camera, TestOptions());
+  for (int k = 0; k < 8; ++k) {
+    KeyframeData keyframe = Keyframe(k);
+    direct.Insert(keyframe);
+    mapper.Submit(keyframe);
+    // The caller reuses its buffers right away (as the SLAM does with the next frame).
+    keyframe.depth.setTo(0.5f);
+    keyframe.dynamic_mask.setTo(0);
+  }
+  mapper.Flush();
+  mapper.WithBuilder(
+      [&](OctoMapBuilder& builder) { ExpectSameMap(builder.tree(), direct.tree()); });
+}
+
+TEST(KeyframeMapper, ConcurrentSubmittersAndBackPressureLoseNothing) {
+  const PinholeCamera camera = test_scene::SmallCamera();
+  KeyframeMapper mapper(camera, TestOptions(), KeyframeMapperOptions{1});
+  std::vector<KeyframeData> keyframes;
+  for (int k = 0; k < 16; ++k) keyframes.push_back(Keyframe(k));
+  // "Tracking" submits new keyframes; "local mapping" submits pose corrections of known ones.
+  std::thread tracking([&] {
+    for (const KeyframeData& k : keyframes) mapper.Submit(k);
+  });
+  std::thread local_mapping([&] {
+    for (int i = 0; i < 40; ++i) {
+      KeyframeData update;
+      update.id = i % 16;
+      update.world_from_cam = PoseOf(i % 16);
+      update.pose_update_only = true;
+      mapper.Submit(update);  // ignored if the keyframe is not in yet
+    }
+  });
+  tracking.join();
+  local_mapping.join();
+  mapper.Flush();
+  const MapperStats stats = mapper.Stats();
+  EXPECT_EQ(stats.num_applied, 56u);
+  EXPECT_LE(stats.max_queue_depth, 1u);
+  mapper.WithBuilder([&](OctoMapBuilder& builder) {
+    EXPECT_EQ(builder.KeyframeIds().size(), 16u);
+    for (int k = 0; k < 16; ++k)
+      EXPECT_TRUE(builder.Pose(k).translation.isApprox(PoseOf(k).translation));
+  });
+}
+
+TEST(KeyframeMapper, BadKeyframeSurfacesAtFlushNamingIt) {
+  const PinholeCamera camera = test_scene::SmallCamera();
+  KeyframeMapper mapper(camera, TestOptions());
+  KeyframeData bad = Keyframe(0);
+  bad.id = 42;
+  bad.depth = cv::Mat::zeros(10, 10, CV_32FC1);
+  mapper.Submit(bad);
+  try {
+    mapper.Flush();
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("keyframe 42"), std::string::npos) << e.what();
+  }
+  // The mapper keeps working afterwards.
+  mapper.Submit(Keyframe(1));
+  mapper.Flush();
+  mapper.WithBuilder([](OctoMapBuilder& builder) { EXPECT_EQ(builder.KeyframeIds().size(), 1u); });
+}
+
+}  // namespace
+}  // namespace dygslam

@@ -22,13 +22,12 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <tuple>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include "apps/command.h"
 #include "core/base/error.h"
@@ -266,36 +265,46 @@ void WritePairs(const std::string& path, const AteResult& ate) {
 
 std::string SafeName(const std::string& s) {
   std::string out;
-  for (char c : s) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_') ? c : '_';
+  for (char c : s)
+    out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_') ? c : '_';
   return out;
 }
 
 // --- the benchmark --------------------------------------------------------------------------
 
 int RunBench(const std::vector<std::string>& args) {
-  ArgParser p("bench", kUsage,
-              "Runs every configuration (none = no filter, ORB-SLAM2-equivalent; boxes = box removal\n"
-              "only; geometry = geometry only; full = the full method) and the cv::rgbd::RgbdICPOdometry\n"
-              "baseline on every TUM/Bonn sequence in DATA_DIR (a sequence folder or a folder of them),\n"
-              "N runs each, and writes DIR/report.md (medians: ATE like the paper's Tables 1-2, stage\n"
-              "times like Table 3, frames/s, peak memory), DIR/runs.csv (every run) and PNG pictures.\n"
-              "--update-benchmarks FILE replaces the text between <!-- bench:begin --> and\n"
-              "<!-- bench:end --> in FILE with the report.");
+  ArgParser p(
+      "bench", kUsage,
+      "Runs every configuration (none = no filter, ORB-SLAM2-equivalent; boxes = box removal\n"
+      "only; geometry = geometry only; full = the full method) and the cv::rgbd::RgbdICPOdometry\n"
+      "baseline on every TUM/Bonn sequence in DATA_DIR (a sequence folder or a folder of them),\n"
+      "N runs each, and writes DIR/report.md (medians: ATE like the paper's Tables 1-2, stage\n"
+      "times like Table 3, frames/s, peak memory), DIR/runs.csv (every run) and PNG pictures.\n"
+      "--update-benchmarks FILE replaces the text between <!-- bench:begin --> and\n"
+      "<!-- bench:end --> in FILE with the report.");
   p.AddPositional("DATA_DIR", "data directory (e.g. ../shared/data) or one sequence folder");
   p.AddOption("runs", "N", "runs per sequence and configuration (median reported)", "5");
-  p.AddFlag("quick", "development mode: 1 run (unless --runs), 60 frames from the middle (unless --frames)");
-  p.AddOption("configs", "LIST", "filter configurations, comma-separated", "none,boxes,geometry,full");
+  p.AddFlag("quick",
+            "development mode: 1 run (unless --runs), 60 frames from the middle (unless --frames)");
+  p.AddOption("configs", "LIST", "filter configurations, comma-separated",
+              "none,boxes,geometry,full");
   p.AddFlag("no-baseline", "skip the cv::rgbd::RgbdICPOdometry baseline");
-  p.AddOption("frames", "FIRST:LAST", "rgb.txt entries FIRST (inclusive) to LAST (exclusive) of every sequence");
+  p.AddOption("frames", "FIRST:LAST",
+              "rgb.txt entries FIRST (inclusive) to LAST (exclusive) of every sequence");
   p.AddOption("out", "DIR", "report folder (report.md, runs.csv, PNGs)", "out/bench");
   p.AddOption("work", "DIR", "run folders (trajectories, frames.csv); default DIR/runs");
-  p.AddOption("update-benchmarks", "FILE", "write the report between the bench markers of FILE (BENCHMARKS.md)");
-  p.AddOption("config", "FILE", "settings YAML for every sequence (default: camera.yaml in the sequence or a preset)");
+  p.AddOption("update-benchmarks", "FILE",
+              "write the report between the bench markers of FILE (BENCHMARKS.md)");
+  p.AddOption(
+      "config", "FILE",
+      "settings YAML for every sequence (default: camera.yaml in the sequence or a preset)");
   p.AddFlag("deterministic", "fixed seeds, synchronous local mapping (default: real threading)");
-  p.AddOption("features-frame", "K", "rgb.txt entry drawn in the features picture (default: 70 % into the range)");
+  p.AddOption("features-frame", "K",
+              "rgb.txt entry drawn in the features picture (default: 70 % into the range)");
   p.AddFlag("no-pictures", "tables only");
   p.AddFlag("quiet", "no progress line");
-  p.AddOption("worker", "CONFIG", "internal: run one configuration on the sequence DATA_DIR into --out");
+  p.AddOption("worker", "CONFIG",
+              "internal: run one configuration on the sequence DATA_DIR into --out");
   p.AddOption("progress-prefix", "TEXT", "internal: progress line prefix of a worker");
   if (!p.Parse(args)) return p.exit_code();
   if (p.Has("worker")) return RunWorker(p);
@@ -372,8 +381,9 @@ int RunBench(const std::vector<std::string>& args) {
         const double eta =
             done_jobs > 0 ? elapsed / done_jobs * (total_jobs - done_jobs) : std::nan("");
         char prefix[512];
-        std::snprintf(prefix, sizeof(prefix), "[bench %d/%d, %s elapsed, ETA %s] %s %s run %d/%d:",
-                      done_jobs + 1, total_jobs, Duration(elapsed).c_str(), Duration(eta).c_str(),
+        std::snprintf(prefix, sizeof(prefix),
+                      "[bench %d/%d, %s elapsed, ETA %s] %s %s run %d/%d:", done_jobs + 1,
+                      total_jobs, Duration(elapsed).c_str(), Duration(eta).c_str(),
                       pr.sequence.name.c_str(), config.c_str(), run + 1, runs);
         load_samples.push_back(LoadAverage1());
         std::vector<std::string> cmd = {self,
@@ -433,7 +443,8 @@ int RunBench(const std::vector<std::string>& args) {
                         " runs without an ATE (fewer than 3 poses) left out of the medians");
       cells.push_back(cell);
       for (const BenchRun& r : all_runs)
-        if (r.sequence == pr.sequence.name && r.config == config) grouped[{r.sequence, config}].push_back(&r);
+        if (r.sequence == pr.sequence.name && r.config == config)
+          grouped[{r.sequence, config}].push_back(&r);
     }
   }
 
@@ -541,8 +552,8 @@ int RunBench(const std::vector<std::string>& args) {
   context.configs = all_configs;
   for (const std::string& s : skipped) notes.push_back("skipped " + s);
   context.notes = notes;
-  const std::string report = "# dygslam bench report\n\n" +
-                             RenderBenchMarkdown(context, cells, pictures, "") + "\n";
+  const std::string report =
+      "# dygslam bench report\n\n" + RenderBenchMarkdown(context, cells, pictures, "") + "\n";
   WriteFileAtomically((out_dir / "report.md").string(), report);
   if (p.Has("update-benchmarks")) {
     const fs::path target = fs::absolute(p.Get("update-benchmarks"));
@@ -566,15 +577,19 @@ int RunBench(const std::vector<std::string>& args) {
     for (const BenchCell& n : cells)
       if (n.sequence == c.sequence && n.config == kNoFilterConfig) mu = n.ate.rmse;
     const double gamma = c.config == kNoFilterConfig ? std::nan("") : Improvement(c.ate.rmse, mu);
-    std::printf("%-24s %-20s %8.4f %8.4f %8.4f %8.2f%% %8.2f %7.1f\n", c.sequence.c_str(),
-                c.config.c_str(), c.ate.rmse, c.ate.mean, c.ate.sd, gamma, c.stages.total_ms, c.fps);
+    char gamma_text[32] = "-";
+    if (std::isfinite(gamma)) std::snprintf(gamma_text, sizeof(gamma_text), "%.2f%%", gamma);
+    std::printf("%-24s %-20s %8.4f %8.4f %8.4f %9s %8.2f %7.1f\n", c.sequence.c_str(),
+                c.config.c_str(), c.ate.rmse, c.ate.mean, c.ate.sd, gamma_text, c.stages.total_ms,
+                c.fps);
   }
   std::printf("report: %s\nruns:   %s\n", (out_dir / "report.md").string().c_str(),
               (out_dir / "runs.csv").string().c_str());
   return notes.empty() || all_runs.size() > 0 ? 0 : 1;
 }
 
-const CommandRegistrar kRegistrar({"bench", "benchmark the configurations and a baseline (BENCHMARKS.md)",
+const CommandRegistrar kRegistrar({"bench",
+                                   "benchmark the configurations and a baseline (BENCHMARKS.md)",
                                    RunBench});
 
 }  // namespace

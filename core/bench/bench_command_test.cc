@@ -68,15 +68,16 @@ TEST(BenchCommand, QuickRunOnGeneratedSequenceMatchesEval) {
   synth.seed = 3;
   synth.supersampling = 1;
   WriteSyntheticSequence((root / "data" / "gen_seq").string(), synth);
-  const std::string head = "# Benchmarks\n\n## Dynamic filter on bonn_crowd_part\n\nintro\n<!-- bench:begin -->\n";
+  const std::string head =
+      "# Benchmarks\n\n## Dynamic filter on bonn_crowd_part\n\nintro\n<!-- bench:begin -->\n";
   const std::string tail = "<!-- bench:end -->\n\n## Other section\nkept as is\n";
   WriteFileAtomically((root / "BENCHMARKS.md").string(), head + "old figures\n" + tail);
 
   const fs::path out = root / "out";
-  const CommandOutput r = RunDygslam("bench " + (root / "data").string() + " --quick --quiet --out " +
-                                  out.string() + " --update-benchmarks " +
-                                  (root / "BENCHMARKS.md").string(),
-                              (root / "stderr.txt").string());
+  const CommandOutput r =
+      RunDygslam("bench " + (root / "data").string() + " --quick --quiet --out " + out.string() +
+                     " --update-benchmarks " + (root / "BENCHMARKS.md").string(),
+                 (root / "stderr.txt").string());
   ASSERT_EQ(r.exit_code, 0) << r.stdout_text << ReadText((root / "stderr.txt").string());
 
   // Every configuration and the baseline ran once on all 40 frames.
@@ -114,8 +115,9 @@ TEST(BenchCommand, QuickRunOnGeneratedSequenceMatchesEval) {
     EXPECT_NEAR(JsonNumber(eval.stdout_text, "ate_sd"), run.ate.sd, 1e-7);
     EXPECT_EQ(JsonNumber(eval.stdout_text, "pairs"), run.ate_pairs);
     // The report shows them (one run: the median is the run).
-    const std::string row = "| gen_seq | " + ConfigLabel(run.config) + " | " + Fixed4(run.ate.rmse) +
-                            " | " + Fixed4(run.ate.mean) + " | " + Fixed4(run.ate.sd) + " | ";
+    const std::string row = "| gen_seq | " + ConfigLabel(run.config) + " | " +
+                            Fixed4(run.ate.rmse) + " | " + Fixed4(run.ate.mean) + " | " +
+                            Fixed4(run.ate.sd) + " | ";
     EXPECT_NE(report.find(row), std::string::npos) << row << "\n" << report;
     // Pictures: per configuration.
     EXPECT_TRUE(NonEmptyFile(out / ("gen_seq_" + run.config + ".png")));
@@ -154,15 +156,21 @@ TEST(BenchCommand, QuickRunOnGeneratedSequenceMatchesEval) {
 TEST(BenchCommand, BadInputIsNamed) {
   const fs::path root = testing::MakeTempDir("bench_command_bad");
   const std::string err = (root / "stderr.txt").string();
-  EXPECT_EQ(RunDygslam("bench /nonexistent/dygslam_data --quiet --out " + root.string(), err).exit_code, 1);
+  EXPECT_EQ(
+      RunDygslam("bench /nonexistent/dygslam_data --quiet --out " + root.string(), err).exit_code,
+      1);
   EXPECT_NE(ReadText(err).find("/nonexistent/dygslam_data: not a directory"), std::string::npos)
       << ReadText(err);
-  EXPECT_EQ(RunDygslam("bench " + root.string() + " --configs none,bogus --out " + root.string(), err).exit_code, 1);
+  EXPECT_EQ(
+      RunDygslam("bench " + root.string() + " --configs none,bogus --out " + root.string(), err)
+          .exit_code,
+      1);
   EXPECT_NE(ReadText(err).find("bogus"), std::string::npos) << ReadText(err);
   EXPECT_EQ(RunDygslam("bench " + root.string() + " --runs 0", err).exit_code, 1);
   EXPECT_NE(ReadText(err).find("--runs"), std::string::npos) << ReadText(err);
   // A folder without any sequence.
-  EXPECT_EQ(RunDygslam("bench " + root.string() + " --out " + (root / "o").string(), err).exit_code, 1);
+  EXPECT_EQ(RunDygslam("bench " + root.string() + " --out " + (root / "o").string(), err).exit_code,
+            1);
   EXPECT_NE(ReadText(err).find("no sequence found"), std::string::npos) << ReadText(err);
 }
 

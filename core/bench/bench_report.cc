@@ -35,12 +35,31 @@ bool IsFilterConfig(const std::string& config) { return config != kBaselineConfi
 
 // Columns of the runs CSV, in order.
 const std::vector<std::string>& CsvColumns() {
-  static const std::vector<std::string> columns = {
-      "sequence",  "config",        "run",           "trajectory",   "frames",
-      "poses",     "lost",          "ate_pairs",     "ate_rmse",     "ate_mean",
-      "ate_median", "ate_sd",       "ate_min",       "ate_max",      "orb_ms",
-      "detection_ms", "detection_wait_ms", "matching_ms", "probability_ms", "tracking_ms",
-      "local_mapping_ms", "total_ms", "loop_seconds", "fps",         "peak_rss_mib"};
+  static const std::vector<std::string> columns = {"sequence",
+                                                   "config",
+                                                   "run",
+                                                   "trajectory",
+                                                   "frames",
+                                                   "poses",
+                                                   "lost",
+                                                   "ate_pairs",
+                                                   "ate_rmse",
+                                                   "ate_mean",
+                                                   "ate_median",
+                                                   "ate_sd",
+                                                   "ate_min",
+                                                   "ate_max",
+                                                   "orb_ms",
+                                                   "detection_ms",
+                                                   "detection_wait_ms",
+                                                   "matching_ms",
+                                                   "probability_ms",
+                                                   "tracking_ms",
+                                                   "local_mapping_ms",
+                                                   "total_ms",
+                                                   "loop_seconds",
+                                                   "fps",
+                                                   "peak_rss_mib"};
   return columns;
 }
 
@@ -62,8 +81,9 @@ std::string ConfigLabel(const std::string& config) {
 }
 
 double Median(std::vector<double> values) {
-  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }),
-               values.end());
+  values.erase(
+      std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }),
+      values.end());
   if (values.empty()) return kNaN;
   std::sort(values.begin(), values.end());
   const size_t n = values.size();
@@ -116,7 +136,8 @@ BenchCell Summarize(const std::vector<BenchRun>& runs) {
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
   // Failed runs (no ATE) sort last and are not picked unless every run failed.
   auto key = [&](int i) {
-    return std::isfinite(runs[i].ate.rmse) ? runs[i].ate.rmse : std::numeric_limits<double>::infinity();
+    return std::isfinite(runs[i].ate.rmse) ? runs[i].ate.rmse
+                                           : std::numeric_limits<double>::infinity();
   };
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return key(a) < key(b); });
   int finite = 0;
@@ -164,13 +185,12 @@ std::string RenderBenchMarkdown(const BenchContext& context, const std::vector<B
      << " (other jobs sharing the cores slow the timings, not the accuracy)\n";
   md << "- " << context.runs << " run" << (context.runs == 1 ? "" : "s")
      << " per sequence and configuration, median reported"
-     << (context.deterministic
-             ? "; deterministic mode (fixed seeds, local mapping synchronous)"
-             : "; real threading (local mapping on its own thread)")
+     << (context.deterministic ? "; deterministic mode (fixed seeds, local mapping synchronous)"
+                               : "; real threading (local mapping on its own thread)")
      << (context.quick ? "; **--quick mode (development figures, not for publication)**" : "")
      << "\n";
-  md << "- frames: " << (context.frames.empty() ? "all" : context.frames)
-     << "; data: `" << context.data_dir << "`\n";
+  md << "- frames: " << (context.frames.empty() ? "all" : context.frames) << "; data: `"
+     << context.data_dir << "`\n";
   md << "- ATE: timestamp association within 0.02 s, rigid SE(3) alignment of the estimate onto "
         "groundtruth.txt (no scale), as `dygslam eval` (TUM benchmark conventions); for Bonn the "
         "ground truth is the marker body, without the marker-to-camera calibration\n";
@@ -351,7 +371,8 @@ std::vector<BenchRun> ReadBenchRunsCsv(const std::string& path) {
     if (line.empty()) continue;
     const std::vector<std::string> f = split(line);
     if (line_number == 1) {
-      if (f != columns) throw InputError(path, 1, "unexpected header (not a dygslam bench runs.csv)");
+      if (f != columns)
+        throw InputError(path, 1, "unexpected header (not a dygslam bench runs.csv)");
       continue;
     }
     if (f.size() != columns.size())
@@ -364,7 +385,8 @@ std::vector<BenchRun> ReadBenchRunsCsv(const std::string& path) {
       char* end = nullptr;
       const double v = std::strtod(text.c_str(), &end);
       if (text.empty() || *end != '\0')
-        throw InputError(path, line_number, "column " + columns[k] + ": not a number: '" + text + "'");
+        throw InputError(path, line_number,
+                         "column " + columns[k] + ": not a number: '" + text + "'");
       ++k;
       return v;
     };

@@ -54,9 +54,10 @@ TEST(BenchReport, ImprovementMatchesPaperTable2) {
 }
 
 TEST(BenchReport, SummarizeTakesMediansAndMedianRun) {
-  std::vector<BenchRun> runs = {MakeRun("s", "full", 0, 0.030, 50), MakeRun("s", "full", 1, 0.010, 40),
-                                MakeRun("s", "full", 2, 0.020, 70), MakeRun("s", "full", 3, 0.050, 45),
-                                MakeRun("s", "full", 4, 0.015, 60)};
+  std::vector<BenchRun> runs = {
+      MakeRun("s", "full", 0, 0.030, 50), MakeRun("s", "full", 1, 0.010, 40),
+      MakeRun("s", "full", 2, 0.020, 70), MakeRun("s", "full", 3, 0.050, 45),
+      MakeRun("s", "full", 4, 0.015, 60)};
   const BenchCell c = Summarize(runs);
   EXPECT_EQ(c.num_runs, 5);
   EXPECT_EQ(c.num_failed, 0);
@@ -120,11 +121,13 @@ TEST(BenchReport, MarkdownHasPaperLayoutAndAllConfigurations) {
   EXPECT_NE(md.find("(docs/benchmarks/seqA_full.png)"), std::string::npos);
   EXPECT_NE(md.find("(docs/benchmarks/seqA_features.png)"), std::string::npos);
   // Baseline timing row: only the total.
-  EXPECT_NE(md.find("| seqA | " + ConfigLabel(kBaselineConfig) + " | - | - | - | - | - | - | 30.00 |"),
-            std::string::npos)
+  EXPECT_NE(
+      md.find("| seqA | " + ConfigLabel(kBaselineConfig) + " | - | - | - | - | - | - | 30.00 |"),
+      std::string::npos)
       << md;
   // The order: configurations as given, baseline last.
-  EXPECT_LT(md.find(ConfigLabel("boxes") + " | 0.0365"), md.find(ConfigLabel("full") + " | 0.0269"));
+  EXPECT_LT(md.find(ConfigLabel("boxes") + " | 0.0365"),
+            md.find(ConfigLabel("full") + " | 0.0269"));
 }
 
 TEST(BenchReport, RunsCsvRoundTrip) {
@@ -157,16 +160,19 @@ TEST(BenchReport, RunsCsvRoundTrip) {
     ReadBenchRunsCsv(path);
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(path + ":2: column ate_rmse"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(path + ":2: column ate_rmse"), std::string::npos)
+        << e.what();
   }
 }
 
 TEST(BenchReport, ReplaceBetweenMarkersKeepsTheRest) {
   const std::string text =
-      "# Title\n\n## Section\n\nintro\n<!-- bench:begin -->\nold\nstuff\n<!-- bench:end -->\n\n## Other\nkeep\n";
+      "# Title\n\n## Section\n\nintro\n<!-- bench:begin -->\nold\nstuff\n<!-- bench:end -->\n\n## "
+      "Other\nkeep\n";
   const std::string out = ReplaceBetweenMarkers(text, "new table\n", "B.md");
   EXPECT_EQ(out,
-            "# Title\n\n## Section\n\nintro\n<!-- bench:begin -->\nnew table\n<!-- bench:end -->\n\n## Other\nkeep\n");
+            "# Title\n\n## Section\n\nintro\n<!-- bench:begin -->\nnew table\n<!-- bench:end "
+            "-->\n\n## Other\nkeep\n");
   // Idempotent.
   EXPECT_EQ(ReplaceBetweenMarkers(out, "new table", "B.md"), out);
 }
@@ -182,10 +188,13 @@ TEST(BenchReport, ReplaceBetweenMarkersNamesTheProblem) {
   };
   EXPECT_NE(message("no markers").find("BENCHMARKS.md: marker <!-- bench:begin --> not found"),
             std::string::npos);
-  EXPECT_NE(message("<!-- bench:begin -->\n").find("<!-- bench:end --> not found"), std::string::npos);
-  EXPECT_NE(message("a\n<!-- bench:end -->\n<!-- bench:begin -->\n").find("BENCHMARKS.md:2: marker <!-- bench:end --> comes before"),
+  EXPECT_NE(message("<!-- bench:begin -->\n").find("<!-- bench:end --> not found"),
             std::string::npos);
-  EXPECT_NE(message("<!-- bench:begin -->\n<!-- bench:end -->\n<!-- bench:begin -->\n").find("BENCHMARKS.md:3: marker <!-- bench:begin --> repeated"),
+  EXPECT_NE(message("a\n<!-- bench:end -->\n<!-- bench:begin -->\n")
+                .find("BENCHMARKS.md:2: marker <!-- bench:end --> comes before"),
+            std::string::npos);
+  EXPECT_NE(message("<!-- bench:begin -->\n<!-- bench:end -->\n<!-- bench:begin -->\n")
+                .find("BENCHMARKS.md:3: marker <!-- bench:begin --> repeated"),
             std::string::npos);
 }
 

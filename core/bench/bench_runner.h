@@ -26,9 +26,9 @@ namespace dygslam {
 
 struct RunOutput {
   std::vector<StampedPose> trajectory;
-  std::vector<Timestamp> stamps;    // every processed frame
-  std::vector<bool> ok;             // per frame: a pose (SLAM) / step accepted (baseline)
-  std::vector<StageTimes> times;    // per frame (baseline: total_ms only)
+  std::vector<Timestamp> stamps;  // every processed frame
+  std::vector<bool> ok;           // per frame: a pose (SLAM) / step accepted (baseline)
+  std::vector<StageTimes> times;  // per frame (baseline: total_ms only)
   int frames = 0;
   int lost = 0;
   double loop_seconds = 0;

@@ -18,8 +18,9 @@ bool LooksLikeSequence(const fs::path& dir) {
   return IsFile(dir / "rgb.txt") && IsFile(dir / "depth.txt");
 }
 
-void Collect(const fs::path& dir, const std::string& config_dir, const std::string& settings_override,
-             int depth_left, std::vector<BenchSequence>* found, std::vector<std::string>* skipped) {
+void Collect(const fs::path& dir, const std::string& config_dir,
+             const std::string& settings_override, int depth_left,
+             std::vector<BenchSequence>* found, std::vector<std::string>* skipped) {
   if (LooksLikeSequence(dir)) {
     if (!IsFile(dir / "groundtruth.txt")) {
       if (skipped) skipped->push_back(dir.string() + ": no groundtruth.txt (cannot be scored)");
@@ -28,8 +29,8 @@ void Collect(const fs::path& dir, const std::string& config_dir, const std::stri
     BenchSequence s;
     s.directory = dir.string();
     s.name = dir.filename().string();
-    s.settings_path =
-        settings_override.empty() ? DefaultSettingsPath(s.directory, config_dir) : settings_override;
+    s.settings_path = settings_override.empty() ? DefaultSettingsPath(s.directory, config_dir)
+                                                : settings_override;
     found->push_back(std::move(s));
     return;
   }

@@ -8,7 +8,7 @@
 namespace dygslam {
 
 struct BenchSequence {
-  std::string name;           // folder name, e.g. "bonn_crowd_part", "rgbd_dataset_freiburg3_walking_xyz"
+  std::string name;  // folder name, e.g. "bonn_crowd_part", "rgbd_dataset_freiburg3_walking_xyz"
   std::string directory;      // absolute
   std::string settings_path;  // settings YAML the sequence runs with
 };

@@ -49,7 +49,8 @@ TEST(BenchSequences, FindsTumAndBonnLayoutsNestedAndSorted) {
   EXPECT_NE(skipped[0].find("groundtruth.txt"), std::string::npos);
 
   // A sequence folder itself (trailing slash too); an override wins over presets.
-  const auto one = FindBenchSequences((root / "rgbd_bonn_crowd").string() + "/", "/cfg", "/my.yaml");
+  const auto one =
+      FindBenchSequences((root / "rgbd_bonn_crowd").string() + "/", "/cfg", "/my.yaml");
   ASSERT_EQ(one.size(), 1u);
   EXPECT_EQ(one[0].name, "rgbd_bonn_crowd");
   EXPECT_EQ(one[0].settings_path, "/my.yaml");
@@ -62,12 +63,14 @@ TEST(BenchSequences, NotADirectoryNamesThePath) {
     FindBenchSequences("/nonexistent/dygslam_data", "/cfg");
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("/nonexistent/dygslam_data: not a directory"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/dygslam_data: not a directory"),
+              std::string::npos);
   }
 }
 
 TEST(BenchSequences, DefaultSettingsPresetByName) {
-  EXPECT_EQ(DefaultSettingsPath("/d/rgbd_dataset_freiburg2_desk_with_person", "/c"), "/c/tum2.yaml");
+  EXPECT_EQ(DefaultSettingsPath("/d/rgbd_dataset_freiburg2_desk_with_person", "/c"),
+            "/c/tum2.yaml");
   EXPECT_EQ(DefaultSettingsPath("/d/bonn_crowd_part/", "/c"), "/c/bonn.yaml");
 }
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cstdio>
-
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -20,8 +19,8 @@ const cv::Scalar kYellow(0, 220, 255);
 
 void DrawLabel(cv::Mat& panel, const std::string& title, const std::string& counts) {
   cv::rectangle(panel, cv::Rect(0, 0, panel.cols, 44), cv::Scalar(0, 0, 0), cv::FILLED);
-  cv::putText(panel, title, cv::Point(6, 18), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255),
-              1, cv::LINE_AA);
+  cv::putText(panel, title, cv::Point(6, 18), cv::FONT_HERSHEY_SIMPLEX, 0.5,
+              cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
   cv::putText(panel, counts, cv::Point(6, 38), cv::FONT_HERSHEY_SIMPLEX, 0.45,
               cv::Scalar(220, 220, 220), 1, cv::LINE_AA);
 }
@@ -70,9 +69,9 @@ FeatureFigure DrawFeatureFigure(const RgbdDataset& dataset, size_t rgb_entry,
                          " out of range (" + std::to_string(dataset.num_rgb_entries()) +
                          " entries)");
   if (!dataset.FrameForRgbEntry(rgb_entry))
-    throw InputError(dataset.directory(), 0,
-                     "features picture: rgb.txt entry " + std::to_string(rgb_entry) +
-                         " has no depth partner");
+    throw InputError(
+        dataset.directory(), 0,
+        "features picture: rgb.txt entry " + std::to_string(rgb_entry) + " has no depth partner");
   DetectorOptions detector_options = options.detector;
   if (detector_options.cfg_path.empty())
     detector_options = DetectorOptionsForModel("yolo-fastest-1.1");
@@ -84,16 +83,14 @@ FeatureFigure DrawFeatureFigure(const RgbdDataset& dataset, size_t rgb_entry,
   full_options.mode = DynamicFilterMode::kFull;
   DynamicFilter boxes_filter(boxes_options), full_filter(full_options);
 
-  const size_t first =
-      rgb_entry >= static_cast<size_t>(figure_options.warmup_frames)
-          ? rgb_entry - figure_options.warmup_frames
-          : 0;
+  const size_t first = rgb_entry >= static_cast<size_t>(figure_options.warmup_frames)
+                           ? rgb_entry - figure_options.warmup_frames
+                           : 0;
   FeatureFigure figure;
   for (size_t k = first; k <= rgb_entry; ++k) {
     const auto index = dataset.FrameForRgbEntry(k);
     if (!index) continue;
-    const cv::Mat bgr =
-        dataset.LoadRgb(*index, options.camera.width, options.camera.height);
+    const cv::Mat bgr = dataset.LoadRgb(*index, options.camera.width, options.camera.height);
     cv::Mat gray;
     cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
     const OrbFeatures features = extractor.Extract(gray);
@@ -149,14 +146,16 @@ FeatureFigure DrawFeatureFigure(const RgbdDataset& dataset, size_t rgb_entry,
     DrawLabel(dyg, "full method (DYG-SLAM)", text);
     cv::hconcat(std::vector<cv::Mat>{all, boxed, dyg}, figure.image);
     char caption[512];
-    std::snprintf(caption, sizeof(caption),
-                  "Features on rgb.txt entry %zu (stamp %s), after %zu preceding frames through the "
-                  "filters: green = static (used for tracking), red crosses = removed as dynamic, "
-                  "yellow = inside a person box but kept as static by the geometry probability, "
-                  "red rectangles = detector boxes (%d). %d features; box removal drops %d, the "
-                  "full method %d.",
-                  rgb_entry, dataset.frame(*dataset.FrameForRgbEntry(rgb_entry)).rgb_stamp.ToString().c_str(),
-                  rgb_entry - first, figure.num_boxes, n, by_boxes.num_dynamic, full.num_dynamic);
+    std::snprintf(
+        caption, sizeof(caption),
+        "Features on rgb.txt entry %zu (stamp %s), after %zu preceding frames through the "
+        "filters: green = static (used for tracking), red crosses = removed as dynamic, "
+        "yellow = inside a person box but kept as static by the geometry probability, "
+        "red rectangles = detector boxes (%d). %d features; box removal drops %d, the "
+        "full method %d. (On crowded frames the running system also extracts "
+        "replacement features outside the boxes; those are not drawn.)",
+        rgb_entry, dataset.frame(*dataset.FrameForRgbEntry(rgb_entry)).rgb_stamp.ToString().c_str(),
+        rgb_entry - first, figure.num_boxes, n, by_boxes.num_dynamic, full.num_dynamic);
     figure.caption = caption;
   }
   return figure;

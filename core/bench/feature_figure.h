@@ -5,9 +5,8 @@
 // Kalman-fused probabilities of the full method are those of a running system.
 #pragma once
 
-#include <string>
-
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "core/io/dataset.h"
 #include "core/system/system.h"
@@ -15,13 +14,13 @@
 namespace dygslam {
 
 struct FeatureFigureOptions {
-  int warmup_frames = 10;      // frames run through the filters before the drawn one
-  double panel_scale = 0.75;   // each panel is the image scaled by this
+  int warmup_frames = 10;     // frames run through the filters before the drawn one
+  double panel_scale = 0.75;  // each panel is the image scaled by this
   void Check() const;
 };
 
 struct FeatureFigure {
-  cv::Mat image;  // CV_8UC3, three panels side by side
+  cv::Mat image;        // CV_8UC3, three panels side by side
   std::string caption;  // one Markdown sentence: frame, counts per panel
   int num_features = 0;
   int num_boxes = 0;

@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-
 #include <opencv2/imgproc.hpp>
 #include <opencv2/rgbd.hpp>
 
@@ -38,7 +37,8 @@ RgbdOdometryBaseline::RgbdOdometryBaseline(const PinholeCamera& camera, double d
 
 RgbdOdometryBaseline::~RgbdOdometryBaseline() = default;
 
-OdometryStep RgbdOdometryBaseline::Track(const cv::Mat& bgr, const cv::Mat& depth, Timestamp stamp) {
+OdometryStep RgbdOdometryBaseline::Track(const cv::Mat& bgr, const cv::Mat& depth,
+                                         Timestamp stamp) {
   if (bgr.empty() || (bgr.type() != CV_8UC3 && bgr.type() != CV_8UC1))
     throw InputError("odometry: rgb image must be CV_8UC3 or CV_8UC1");
   if (depth.empty() || (depth.type() != CV_16UC1 && depth.type() != CV_32FC1))

@@ -15,9 +15,8 @@
 #pragma once
 
 #include <memory>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "core/base/camera.h"
 #include "core/base/error.h"
@@ -32,10 +31,10 @@ namespace dygslam {
 
 struct RgbdOdometryOptions {
   // OpenCV's defaults (cv::rgbd::Odometry::DEFAULT_*), except max_depth: 4 m -> 6 m (Bonn rooms).
-  double min_depth = 0.0;       // metres
-  double max_depth = 6.0;       // metres
-  double max_depth_diff = 0.07; // metres, correspondence rejection
-  double max_points_part = 0.07;  // share of pixels used per pyramid level
+  double min_depth = 0.0;                             // metres
+  double max_depth = 6.0;                             // metres
+  double max_depth_diff = 0.07;                       // metres, correspondence rejection
+  double max_points_part = 0.07;                      // share of pixels used per pyramid level
   std::vector<int> iteration_counts = {7, 7, 7, 10};  // coarse levels last (OpenCV order)
   // Accepted motion between consecutive frames (OpenCV's checks).
   double max_translation = 0.15;  // metres

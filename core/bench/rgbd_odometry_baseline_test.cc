@@ -28,8 +28,10 @@ TEST(RgbdOdometryBaseline, FollowsGeneratedStaticSequence) {
     EXPECT_TRUE(step.ok) << "frame " << i;
     EXPECT_GT(step.time_ms, 0);
     const Rigid3d expected = first_from_world * scene.WorldFromCam(i);
-    max_error = std::max(max_error, (step.world_from_cam.translation - expected.translation).norm());
-    EXPECT_LT(RotationAngle(step.world_from_cam.rotation.inverse() * expected.rotation), 0.5 * M_PI / 180)
+    max_error =
+        std::max(max_error, (step.world_from_cam.translation - expected.translation).norm());
+    EXPECT_LT(RotationAngle(step.world_from_cam.rotation.inverse() * expected.rotation),
+              0.5 * M_PI / 180)
         << "frame " << i;
     path_length += (expected.translation - previous).norm();
     previous = expected.translation;

@@ -49,9 +49,7 @@ void Map::AddMapPoint(const std::shared_ptr<MapPoint>& mp) { points_[mp->id] = m
 
 std::shared_ptr<KeyFrame> Map::GetKeyFrame(int64_t id) const {
   auto it = keyframes_.find(id);
-  if (it != keyframes_.end()) return it->second;
-  auto jt = culled_.find(id);
-  return jt != culled_.end() ? jt->second : nullptr;
+  return it != keyframes_.end() ? it->second : nullptr;
 }
 
 void Map::AddObservation(const std::shared_ptr<MapPoint>& mp, const std::shared_ptr<KeyFrame>& kf,
@@ -237,20 +235,23 @@ void Map::SetBad(const std::shared_ptr<KeyFrame>& kf) {
   kf->connection_weights.clear();
   kf->ordered_connections.clear();
   kf->bad = true;
-  culled_[kf->id] = kf;
+  culled_[kf->id] = CulledKeyFrame{parent, kf->cam_from_parent};
   keyframes_.erase(kf->id);
 }
 
 Rigid3d Map::ResolvedPose(int64_t kf_id) const {
-  Rigid3d cam_from_kf = Rigid3d::Identity();
-  auto kf = GetKeyFrame(kf_id);
-  int guard = 0;
-  while (kf && kf->bad && guard++ < 100000) {
-    cam_from_kf = cam_from_kf * kf->cam_from_parent;
-    kf = GetKeyFrame(kf->parent_id);
+  // Walk up the parents of culled keyframes to an active one.
+  Rigid3d cam_from_active = Rigid3d::Identity();
+  int64_t id = kf_id;
+  for (int guard = 0; guard < 1000000; ++guard) {
+    auto active = keyframes_.find(id);
+    if (active != keyframes_.end()) return cam_from_active * active->second->cam_from_world;
+    auto culled = culled_.find(id);
+    if (culled == culled_.end()) break;
+    cam_from_active = cam_from_active * culled->second.cam_from_parent;
+    id = culled->second.parent_id;
   }
-  if (!kf) return cam_from_kf;
-  return cam_from_kf * kf->cam_from_world;
+  return cam_from_active;
 }
 
 }  // namespace dygslam

@@ -104,7 +104,7 @@ class Map {
 
   void AddKeyFrame(const std::shared_ptr<KeyFrame>& kf);
   void AddMapPoint(const std::shared_ptr<MapPoint>& mp);
-  std::shared_ptr<KeyFrame> GetKeyFrame(int64_t id) const;  // including culled ones
+  std::shared_ptr<KeyFrame> GetKeyFrame(int64_t id) const;  // active keyframes only
   const std::map<int64_t, std::shared_ptr<KeyFrame>>& keyframes() const { return keyframes_; }
   const std::map<int64_t, std::shared_ptr<MapPoint>>& map_points() const { return points_; }
   size_t NumKeyFrames() const { return keyframes_.size(); }
@@ -129,7 +129,13 @@ class Map {
   mutable std::mutex mutex_;
   int64_t next_kf_id_ = 0, next_point_id_ = 0;
   std::map<int64_t, std::shared_ptr<KeyFrame>> keyframes_;  // active
-  std::map<int64_t, std::shared_ptr<KeyFrame>> culled_;
+  // Culled keyframes keep only what the trajectory needs (their parent and the relative pose),
+  // so memory does not grow with the features of keyframes that are gone.
+  struct CulledKeyFrame {
+    int64_t parent_id;
+    Rigid3d cam_from_parent;
+  };
+  std::map<int64_t, CulledKeyFrame> culled_;
   std::map<int64_t, std::shared_ptr<MapPoint>> points_;
 };
 

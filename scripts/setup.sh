@@ -17,14 +17,14 @@ BUILD_PACKAGES=(
 
 # Runtime (docker/Dockerfile): the packages of the shared libraries `dygslam` links (readelf
 # NEEDED; their own dependencies come with them; Ceres is linked statically, so its libraries glog,
-# cholmod, cxsparse, ATLAS instead of libceres3) + python3 for `dygslam eval --plot`.
+# cholmod, cxsparse, ATLAS instead of libceres3). No python3-matplotlib: in Debian 12 it pulls
+# scipy -> pythran -> g++ and -dev packages (`dygslam eval` prints the numbers without the plot).
 # Checked against the built binary by the test docker/RuntimePackagesCoverBinary.
 RUNTIME_PACKAGES=(
   libopencv-core406 libopencv-imgproc406 libopencv-imgcodecs406 libopencv-features2d406
   libopencv-calib3d406 libopencv-dnn406
   libgoogle-glog0v6 libcholmod3 libcxsparse3 libatlas3-base
   liboctomap1.9 libyaml-cpp0.7 libfastrtps2.9 libfastcdr1
-  python3 python3-matplotlib python3-numpy
 )
 
 if [[ "${1:-}" == "--runtime" ]]; then

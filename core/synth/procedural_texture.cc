@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 #include "core/base/error.h"
@@ -71,8 +70,8 @@ cv::Mat MakeProceduralTexture(double width_m, double height_m, double texels_per
   SynthRng rng(MixSeed(seed, 0x7E47u));
 
   // Background: a base colour under value noise at three scales (0.9 m, 0.3 m, 0.09 m).
-  const cv::Scalar base = RandomColour(rng, params.base_grey_lo, params.base_grey_hi,
-                                       params.base_saturation);
+  const cv::Scalar base =
+      RandomColour(rng, params.base_grey_lo, params.base_grey_hi, params.base_saturation);
   cv::Mat background(rows, cols, CV_32FC3, cv::Scalar(base[0], base[1], base[2]));
   AddValueNoise(background, 0.9 * texels_per_metre, params.noise_amplitude, true, rng);
   AddValueNoise(background, 0.3 * texels_per_metre, 0.6 * params.noise_amplitude, true, rng);
@@ -90,7 +89,8 @@ cv::Mat MakeProceduralTexture(double width_m, double height_m, double texels_per
   constexpr double kOne = 1 << kShift;
   for (const Scale& scale : scales) {
     const double expected = scale.per_square_metre * params.density_scale * area;
-    const int count = static_cast<int>(expected) + (rng.Uniform() < expected - std::floor(expected));
+    const int count =
+        static_cast<int>(expected) + (rng.Uniform() < expected - std::floor(expected));
     for (int i = 0; i < count; ++i) {
       const double cx = rng.Uniform(-0.1, 1.1) * cols;
       const double cy = rng.Uniform(-0.1, 1.1) * rows;
@@ -117,8 +117,7 @@ cv::Mat MakeProceduralTexture(double width_m, double height_m, double texels_per
         }
         cv::fillConvexPoly(texture, p, 4, colour, cv::LINE_AA, kShift);
       } else if (kind < 0.87) {  // ellipse (blob)
-        cv::ellipse(texture,
-                    cv::Point(static_cast<int>(cx * kOne), static_cast<int>(cy * kOne)),
+        cv::ellipse(texture, cv::Point(static_cast<int>(cx * kOne), static_cast<int>(cy * kOne)),
                     cv::Size(static_cast<int>(w / 2 * kOne), static_cast<int>(h / 2 * kOne)),
                     angle * 180.0 / 3.141592653589793, 0, 360, colour, cv::FILLED, cv::LINE_AA,
                     kShift);

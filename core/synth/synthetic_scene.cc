@@ -1,10 +1,9 @@
 #include "core/synth/synthetic_scene.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include <Eigen/Geometry>
 
 #include "core/base/error.h"
 #include "core/synth/procedural_texture.h"
@@ -94,8 +93,9 @@ void SyntheticOptions::Check() const {
   DYGSLAM_CHECK_OPTION(depth_noise_coefficient >= 0 && depth_noise_coefficient < 0.1,
                        "depth_noise_coefficient");
   DYGSLAM_CHECK_OPTION(rgb_noise_sigma >= 0 && rgb_noise_sigma <= 50, "rgb_noise_sigma");
-  DYGSLAM_CHECK_OPTION(min_depth >= 0 && max_depth >= 0 && (max_depth == 0 || max_depth > min_depth),
-                       "min_depth/max_depth");
+  DYGSLAM_CHECK_OPTION(
+      min_depth >= 0 && max_depth >= 0 && (max_depth == 0 || max_depth > min_depth),
+      "min_depth/max_depth");
   DYGSLAM_CHECK_OPTION(min_detection_pixels >= 1, "min_detection_pixels");
 }
 
@@ -110,21 +110,21 @@ SyntheticScene::SyntheticScene(const SyntheticOptions& options) : options_(optio
 
   // Furniture along the walls, clear of the camera path and of the object lanes.
   static_boxes_ = {
-      MakeBox({hx - 0.25, -hy + 1.15, 0.95}, {0.22, 0.45, 0.95}, 0.0),    // cabinet
-      MakeBox({hx - 0.40, hy - 1.10, 0.375}, {0.35, 0.60, 0.375}, 0.0),   // table
-      MakeBox({hx - 0.35, 0.10, 0.25}, {0.25, 0.30, 0.25}, 15.0),         // crate
-      MakeBox({hx - 0.45, hy - 1.00, 0.90}, {0.15, 0.20, 0.15}, -25.0),   // box on the table
-      MakeBox({-hx + 2.20, hy - 0.30, 0.40}, {0.70, 0.28, 0.40}, 0.0),    // desk
-      MakeBox({-hx + 1.80, -hy + 0.22, 0.80}, {0.50, 0.20, 0.80}, 0.0),   // shelf
+      MakeBox({hx - 0.25, -hy + 1.15, 0.95}, {0.22, 0.45, 0.95}, 0.0),   // cabinet
+      MakeBox({hx - 0.40, hy - 1.10, 0.375}, {0.35, 0.60, 0.375}, 0.0),  // table
+      MakeBox({hx - 0.35, 0.10, 0.25}, {0.25, 0.30, 0.25}, 15.0),        // crate
+      MakeBox({hx - 0.45, hy - 1.00, 0.90}, {0.15, 0.20, 0.15}, -25.0),  // box on the table
+      MakeBox({-hx + 2.20, hy - 0.30, 0.40}, {0.70, 0.28, 0.40}, 0.0),   // desk
+      MakeBox({-hx + 1.80, -hy + 0.22, 0.80}, {0.50, 0.20, 0.80}, 0.0),  // shelf
   };
 
   SynthRng rng(MixSeed(options_.seed, 0x0B1Eu));
   const int k = options_.num_moving_objects;
   for (int i = 0; i < k; ++i) {
     MovingObject object;
-    const double x = k == 1 ? 0.5 * (NearLaneX(options_) + FarLaneX(options_))
-                            : NearLaneX(options_) +
-                                  (FarLaneX(options_) - NearLaneX(options_)) * i / (k - 1);
+    const double x =
+        k == 1 ? 0.5 * (NearLaneX(options_) + FarLaneX(options_))
+               : NearLaneX(options_) + (FarLaneX(options_) - NearLaneX(options_)) * i / (k - 1);
     const double y_extent = hy - 0.8;
     const double z = options_.object_size.z() / 2;
     object.lane_start = {x, -y_extent + rng.Uniform(0.0, 0.3), z};
@@ -144,9 +144,9 @@ SyntheticScene::SyntheticScene(const SyntheticOptions& options) : options_(optio
     surface.texels_per_metre = texels_per_metre;
     for (int face = 0; face < 6; ++face) {
       const int a = face / 2, b = (a + 1) % 3, c = (a + 2) % 3;
-      surface.texture[face] = MakeProceduralTexture(
-          2 * box.half_extents[b], 2 * box.half_extents[c], texels_per_metre,
-          MixSeed(options_.seed, id, static_cast<uint64_t>(face)), style);
+      surface.texture[face] =
+          MakeProceduralTexture(2 * box.half_extents[b], 2 * box.half_extents[c], texels_per_metre,
+                                MixSeed(options_.seed, id, static_cast<uint64_t>(face)), style);
     }
     surfaces_.push_back(std::move(surface));
   };
@@ -169,8 +169,8 @@ Timestamp SyntheticScene::FrameStamp(int frame) const {
 
 Timestamp SyntheticScene::DepthStamp(int frame) const {
   SynthRng rng(MixSeed(options_.seed, static_cast<uint64_t>(frame), 0x5A5Au));
-  const double offset = options_.depth_stamp_offset +
-                        options_.depth_stamp_jitter * rng.Uniform(-1.0, 1.0);
+  const double offset =
+      options_.depth_stamp_offset + options_.depth_stamp_jitter * rng.Uniform(-1.0, 1.0);
   return Timestamp::FromNanoseconds(FrameStamp(frame).nanoseconds() +
                                     std::llround(offset * 1e6) * 1000);
 }
@@ -187,10 +187,9 @@ Rigid3d SyntheticScene::WorldFromCamAtTime(double t) const {
       0.8 * o.path_amplitude * std::sin(w * t / (1.37 * o.path_period) + 1.0),
       o.camera_height + 0.1 * std::sin(w * t / (0.8 * o.path_period) + 0.5));
   const double yaw = o.yaw_amplitude_deg * kDeg * std::sin(w * t / o.yaw_period);
-  const double pitch = (o.pitch_offset_deg +
-                        o.pitch_amplitude_deg * std::sin(w * t / o.pitch_period)) * kDeg;
-  const double roll =
-      o.roll_amplitude_deg * kDeg * std::sin(w * t / (1.3 * o.pitch_period) + 0.7);
+  const double pitch =
+      (o.pitch_offset_deg + o.pitch_amplitude_deg * std::sin(w * t / o.pitch_period)) * kDeg;
+  const double roll = o.roll_amplitude_deg * kDeg * std::sin(w * t / (1.3 * o.pitch_period) + 0.7);
   // Camera looking along world +x: camera x -> world -y, camera y -> world -z, z -> world +x.
   Eigen::Matrix3d look_x;
   look_x << 0, 0, 1, -1, 0, 0, 0, -1, 0;
@@ -238,7 +237,8 @@ bool SyntheticScene::IsInSweptVolume(const Eigen::Vector3d& p_world, double marg
 
 double SyntheticScene::DistanceToStaticSurface(const Eigen::Vector3d& p_world) const {
   double best = room_.DistanceToSurface(p_world);
-  for (const OrientedBox& box : static_boxes_) best = std::min(best, box.DistanceToSurface(p_world));
+  for (const OrientedBox& box : static_boxes_)
+    best = std::min(best, box.DistanceToSurface(p_world));
   return best;
 }
 

@@ -8,11 +8,10 @@
 // Depth is the z coordinate of the surface point in the camera frame (not the ray length).
 #pragma once
 
-#include <cstdint>
-#include <vector>
-
 #include <Eigen/Core>
+#include <cstdint>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "core/base/camera.h"
 #include "core/base/rigid3.h"
@@ -35,7 +34,7 @@ PinholeCamera DefaultSyntheticCamera();  // fx = fy = 525, cx = 319.5, cy = 239.
 
 struct SyntheticOptions {
   PinholeCamera camera = DefaultSyntheticCamera();  // no distortion is rendered; must be zero
-  RgbdSensorOptions sensor;                          // fps, bf, ThDepth, DepthMapFactor
+  RgbdSensorOptions sensor;                         // fps, bf, ThDepth, DepthMapFactor
   int num_frames = 100;
   int num_moving_objects = 2;  // 0..4 person-sized boxes on parallel lanes in front of the camera
   uint64_t seed = 1;           // textures, object speeds/phases/lanes, noise
@@ -51,14 +50,14 @@ struct SyntheticOptions {
   double texels_per_metre = 250.0;           // room textures (furniture x1.2, objects x2)
 
   // Camera path (sinusoids of time; yaw 0 looks along world +x, positive pitch looks up).
-  double camera_height = 1.4;        // metres above the floor
-  double path_amplitude = 0.35;      // metres (x; y uses 0.8x, z 0.1 m)
-  double path_period = 9.0;          // seconds
+  double camera_height = 1.4;    // metres above the floor
+  double path_amplitude = 0.35;  // metres (x; y uses 0.8x, z 0.1 m)
+  double path_period = 9.0;      // seconds
   double yaw_amplitude_deg = 35.0;
-  double yaw_period = 8.0;           // seconds
+  double yaw_period = 8.0;  // seconds
   double pitch_offset_deg = -6.0;
   double pitch_amplitude_deg = 8.0;
-  double pitch_period = 5.5;         // seconds
+  double pitch_period = 5.5;  // seconds
   double roll_amplitude_deg = 3.0;
 
   // Moving objects: boxes of object_size (width x depth x height), walking along world y on lanes
@@ -83,12 +82,12 @@ struct SyntheticFrame {
   Timestamp stamp;        // rgb stamp
   Timestamp depth_stamp;  // as written to depth.txt
   Rigid3d world_from_cam;
-  cv::Mat rgb;             // CV_8UC3 BGR
-  cv::Mat depth;           // CV_16UC1, value / DepthMapFactor = metres, 0 = invalid
-  cv::Mat dynamic_mask;    // CV_8UC1, 255 where a moving object is visible (pixel centre ray)
-  cv::Mat object_labels;   // CV_8UC1, 0 = static scene, k + 1 = moving object k
-  std::vector<Detection> boxes;      // visible moving objects: class 0 "person", score 1
-  std::vector<int> box_object_ids;   // moving-object index of each box
+  cv::Mat rgb;                   // CV_8UC3 BGR
+  cv::Mat depth;                 // CV_16UC1, value / DepthMapFactor = metres, 0 = invalid
+  cv::Mat dynamic_mask;          // CV_8UC1, 255 where a moving object is visible (pixel centre ray)
+  cv::Mat object_labels;         // CV_8UC1, 0 = static scene, k + 1 = moving object k
+  std::vector<Detection> boxes;  // visible moving objects: class 0 "person", score 1
+  std::vector<int> box_object_ids;  // moving-object index of each box
 };
 
 // What a ray through a pixel hits.
@@ -143,13 +142,13 @@ class SyntheticScene {
   struct MovingObject {
     Eigen::Vector3d lane_start, lane_end;  // centre positions at the two turning points
     double speed = 1.0;
-    double phase = 0.0;                    // fraction of a back-and-forth cycle at start
+    double phase = 0.0;  // fraction of a back-and-forth cycle at start
   };
   struct Surface {
     OrientedBox box;
-    bool inside = false;              // seen from inside (the room)
+    bool inside = false;  // seen from inside (the room)
     double texels_per_metre = 250.0;
-    cv::Mat texture[6];               // per face, CV_8UC3
+    cv::Mat texture[6];  // per face, CV_8UC3
   };
   struct FrameGeometry;
 

@@ -1,12 +1,12 @@
 #include "core/synth/synthetic_scene.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "core/base/error.h"
 
@@ -76,8 +76,8 @@ TEST(SyntheticScene, DepthOfKnownWallMatchesAnalyticValue) {
     for (int v = 5; v < camera.height; v += 23) {
       for (int u = 3; u < camera.width; u += 29) {
         // Analytic: the ray hits the front wall x = hx at t with depth z = t (ray (x, y, 1)).
-        const Eigen::Vector3d d = r * Eigen::Vector3d((u - camera.cx) / camera.fx,
-                                                      (v - camera.cy) / camera.fy, 1.0);
+        const Eigen::Vector3d d =
+            r * Eigen::Vector3d((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
         if (d.x() <= 0) continue;
         const double z = (hx - c.x()) / d.x();
         const Eigen::Vector3d p = c + z * d;
@@ -198,8 +198,7 @@ TEST(SyntheticScene, StaticPointLooksTheSameFromTwoViews) {
   std::vector<double> diffs, shuffled_diffs;
   for (int v = 10; v < camera.height - 10; v += 9) {
     for (int u = 10; u < camera.width - 10; u += 9) {
-      const Eigen::Vector3d p =
-          f0.world_from_cam * camera.Unproject(u, v, Metres(f0.depth, u, v));
+      const Eigen::Vector3d p = f0.world_from_cam * camera.Unproject(u, v, Metres(f0.depth, u, v));
       const Eigen::Vector3d q = cam1_from_world * p;
       if (q.z() < 0.3) continue;
       const Eigen::Vector2d uv = camera.Project(q);
@@ -263,7 +262,8 @@ TEST(SyntheticScene, CameraPathIsHandheldAndInsideTheRoom) {
     max_rate = std::max(max_rate, RotationAngle(a.rotation.conjugate() * b.rotation) / dt);
     EXPECT_TRUE(scene.room().Contains(a.translation, -0.5));
     EXPECT_FALSE(scene.IsInsideMovingObject(a.translation, i, 0.3));
-    for (const OrientedBox& box : scene.static_boxes()) EXPECT_FALSE(box.Contains(a.translation, 0.3));
+    for (const OrientedBox& box : scene.static_boxes())
+      EXPECT_FALSE(box.Contains(a.translation, 0.3));
     if (i % 10 == 0) centre_depths.push_back(scene.CastPixel(i, 159.5, 119.5).depth);
   }
   EXPECT_GT(max_speed, 0.15);
@@ -304,8 +304,8 @@ TEST(SyntheticScene, ObjectsWalkBackAndForthOnTheFloor) {
       }
       min_y = std::min(min_y, a.world_from_box.translation.y());
       max_y = std::max(max_y, a.world_from_box.translation.y());
-      max_speed = std::max(max_speed,
-                           (b.world_from_box.translation - a.world_from_box.translation).norm() / dt);
+      max_speed = std::max(
+          max_speed, (b.world_from_box.translation - a.world_from_box.translation).norm() / dt);
     }
     EXPECT_GT(max_y - min_y, 2.5);  // crosses the room and turns back
     EXPECT_GT(max_speed, 0.75);
@@ -319,7 +319,7 @@ TEST(SyntheticScene, ObjectsWalkBackAndForthOnTheFloor) {
   EXPECT_TRUE(scene.IsInSweptVolume(first.world_from_box.translation));
   EXPECT_TRUE(scene.IsInsideMovingObject(first.world_from_box.translation, 100));
   EXPECT_FALSE(scene.IsInsideMovingObject(first.world_from_box.translation, 10));  // not yet there
-  EXPECT_TRUE(scene.IsStaticSurface(Eigen::Vector3d(0.3, 0.2, 0.0), 1e-9));  // floor
+  EXPECT_TRUE(scene.IsStaticSurface(Eigen::Vector3d(0.3, 0.2, 0.0), 1e-9));        // floor
 }
 
 TEST(SyntheticScene, DepthNoiseAndRangeLimits) {

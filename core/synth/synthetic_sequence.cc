@@ -3,11 +3,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <system_error>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include "core/base/error.h"
 
@@ -104,12 +103,12 @@ void WriteSyntheticSequence(const std::string& directory, const SyntheticOptions
       throw InputError(path.string(), 0, "cannot create directory: " + error.message());
     }
   }
-  const std::string header = "# dygslam synthetic sequence, seed " + std::to_string(options.seed) +
-                             "\n";
+  const std::string header =
+      "# dygslam synthetic sequence, seed " + std::to_string(options.seed) + "\n";
   std::string rgb_txt = "# color images\n" + header + "# timestamp filename\n";
   std::string depth_txt = "# depth maps\n" + header + "# timestamp filename\n";
-  std::string mask_txt = "# ground-truth dynamic masks (255 = moving object)\n" + header +
-                         "# timestamp filename\n";
+  std::string mask_txt =
+      "# ground-truth dynamic masks (255 = moving object)\n" + header + "# timestamp filename\n";
   std::string groundtruth_txt = "# ground truth trajectory (world_from_cam)\n" + header +
                                 "# timestamp tx ty tz qx qy qz qw\n";
   std::string detections_txt = "# ground-truth boxes of visible moving objects\n" + header +

@@ -1,14 +1,14 @@
 #include "core/synth/synthetic_sequence.h"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 
 #include "core/base/error.h"
 #include "tests/support/test_support.h"
@@ -79,8 +79,8 @@ TEST(SyntheticSequence, WritesTheTumLayoutByteIdenticallyForOneSeed) {
     ASSERT_TRUE(fs::exists(fs::path(b) / name)) << name;
     EXPECT_EQ(ReadAll(fs::path(a) / name), ReadAll(fs::path(b) / name)) << name;
   }
-  for (const char* name : {"rgb.txt", "depth.txt", "mask.txt", "groundtruth.txt",
-                           "detections.txt", "objects.txt", "camera.yaml"}) {
+  for (const char* name : {"rgb.txt", "depth.txt", "mask.txt", "groundtruth.txt", "detections.txt",
+                           "objects.txt", "camera.yaml"}) {
     EXPECT_TRUE(fs::exists(fs::path(a) / name)) << name;
   }
   // Another seed gives other images.
@@ -115,10 +115,12 @@ TEST(SyntheticSequence, FilesMatchTheRenderedFrames) {
     const double offset = SecondsBetween(f.stamp, f.depth_stamp);
     EXPECT_GE(offset, 0.003 - 1e-9);
     EXPECT_LE(offset, 0.005 + 1e-9);
-    const cv::Mat rgb_image = cv::imread((fs::path(dir) / rgb[i][1]).string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat rgb_image =
+        cv::imread((fs::path(dir) / rgb[i][1]).string(), cv::IMREAD_UNCHANGED);
     const cv::Mat depth_image =
         cv::imread((fs::path(dir) / depth[i][1]).string(), cv::IMREAD_UNCHANGED);
-    const cv::Mat mask_image = cv::imread((fs::path(dir) / mask[i][1]).string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat mask_image =
+        cv::imread((fs::path(dir) / mask[i][1]).string(), cv::IMREAD_UNCHANGED);
     ASSERT_EQ(rgb_image.type(), CV_8UC3);
     ASSERT_EQ(depth_image.type(), CV_16UC1);
     ASSERT_EQ(mask_image.type(), CV_8UC1);
@@ -127,7 +129,8 @@ TEST(SyntheticSequence, FilesMatchTheRenderedFrames) {
     EXPECT_EQ(cv::norm(mask_image, f.dynamic_mask, cv::NORM_INF), 0);
     ASSERT_EQ(gt[i].size(), 8u);
     EXPECT_EQ(gt[i][0], f.stamp.ToString());
-    for (int k = 0; k < 3; ++k) EXPECT_NEAR(std::stod(gt[i][1 + k]), f.world_from_cam.translation[k], 1e-6);
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(std::stod(gt[i][1 + k]), f.world_from_cam.translation[k], 1e-6);
     for (const Detection& d : f.boxes) {
       ASSERT_LT(detection_line, detections.size());
       const auto& line = detections[detection_line++];
@@ -148,11 +151,11 @@ TEST(SyntheticSequence, FilesMatchTheRenderedFrames) {
   }
   EXPECT_EQ(detection_line, detections.size());
   const std::string yaml = ReadAll(fs::path(dir) / "camera.yaml");
-  for (const char* key : {"Camera.fx: 131.25", "Camera.cx: 79.5", "Camera.width: 160",
-                          "Camera.bf: 40", "ThDepth: 40", "DepthMapFactor: 5000",
-                          "ORBextractor.nFeatures: 1000", "ORBextractor.scaleFactor: 1.2",
-                          "ORBextractor.nLevels: 8", "ORBextractor.iniThFAST: 20",
-                          "ORBextractor.minThFAST: 7", "Camera.k3: 0"}) {
+  for (const char* key :
+       {"Camera.fx: 131.25", "Camera.cx: 79.5", "Camera.width: 160", "Camera.bf: 40", "ThDepth: 40",
+        "DepthMapFactor: 5000", "ORBextractor.nFeatures: 1000", "ORBextractor.scaleFactor: 1.2",
+        "ORBextractor.nLevels: 8", "ORBextractor.iniThFAST: 20", "ORBextractor.minThFAST: 7",
+        "Camera.k3: 0"}) {
     EXPECT_NE(yaml.find(key), std::string::npos) << key;
   }
 }
@@ -191,7 +194,8 @@ TEST(SyntheticSequence, LoadsThroughTheDatasetReader) {
     const Rigid3d expected = scene.WorldFromCam(static_cast<int>(i));
     EXPECT_EQ(poses[i].stamp, scene.FrameStamp(static_cast<int>(i)));
     EXPECT_LT((poses[i].world_from_cam.translation - expected.translation).norm(), 2e-6);
-    EXPECT_LT(RotationAngle(poses[i].world_from_cam.rotation.conjugate() * expected.rotation), 1e-6);
+    EXPECT_LT(RotationAngle(poses[i].world_from_cam.rotation.conjugate() * expected.rotation),
+              1e-6);
   }
 }
 #endif

@@ -252,7 +252,8 @@ void LocalMapper::CreateNewMapPoints(const std::shared_ptr<KeyFrame>& kf) {
 }
 
 void LocalMapper::FuseWithNeighbors(const std::shared_ptr<KeyFrame>& kf) {
-  std::lock_guard<std::mutex> lock(map_->mutex());
+  // The map lock is taken per neighbour so tracking is never held up for the whole fusion.
+  std::unique_lock<std::mutex> lock(map_->mutex());
   if (kf->bad) return;
   std::vector<std::shared_ptr<KeyFrame>> targets;
   std::set<int64_t> seen = {kf->id};
@@ -273,7 +274,13 @@ void LocalMapper::FuseWithNeighbors(const std::shared_ptr<KeyFrame>& kf) {
   std::vector<std::shared_ptr<MapPoint>> own;
   for (const auto& mp : kf->map_points)
     if (mp && !mp->bad) own.push_back(mp);
-  for (const auto& t : targets) matcher_.Fuse(*map_, t, own, options_.fusion_radius_px);
+  for (const auto& t : targets) {
+    lock.unlock();
+    lock.lock();
+    if (t->bad || kf->bad) continue;
+    matcher_.Fuse(*map_, t, own, options_.fusion_radius_px);
+  }
+  if (kf->bad) return;
   // Neighbours' points into the current keyframe.
   std::vector<std::shared_ptr<MapPoint>> candidates;
   std::set<int64_t> added;

@@ -302,6 +302,8 @@ int RunBench(const std::vector<std::string>& args) {
   p.AddOption("features-frame", "K",
               "rgb.txt entry drawn in the features picture (default: 70 % into the range)");
   p.AddFlag("no-pictures", "tables only");
+  p.AddFlag("report-only",
+            "no runs: rebuild report and pictures from DIR/runs.csv of an earlier bench");
   p.AddFlag("quiet", "no progress line");
   p.AddOption("worker", "CONFIG",
               "internal: run one configuration on the sequence DATA_DIR into --out");
@@ -370,8 +372,22 @@ int RunBench(const std::vector<std::string>& args) {
   std::vector<std::string> notes;
   std::vector<double> load_samples;
   const std::string load_start = LoadAverages();
+  std::string load_text;
+  std::map<std::string, std::string> recorded;
+  const bool report_only = p.Flag("report-only");
+  if (report_only) {
+    all_runs = ReadBenchRunsCsv((out_dir / "runs.csv").string());
+    // The context of the bench that measured the runs (written next to runs.csv).
+    std::ifstream meta(out_dir / "bench_context.txt");
+    for (std::string line; std::getline(meta, line);) {
+      const size_t colon = line.find(": ");
+      if (colon == std::string::npos) continue;
+      recorded[line.substr(0, colon)] = line.substr(colon + 2);
+    }
+    load_text = recorded.count("load") ? recorded["load"] : "not recorded";
+  }
   for (const Prepared& pr : prepared) {
-    for (int run = 0; run < runs; ++run) {
+    for (int run = 0; run < runs && !report_only; ++run) {
       for (const std::string& config : all_configs) {
         const fs::path run_dir =
             work_dir / SafeName(pr.sequence.name) / (config + "_" + std::to_string(run));
@@ -424,8 +440,21 @@ int RunBench(const std::vector<std::string>& args) {
       }
     }
   }
-  const std::string load_end = LoadAverages();
-  WriteFileAtomically((out_dir / "runs.csv").string(), BenchRunsCsv(all_runs));
+  if (!report_only) {
+    double load_mean = 0;
+    for (double v : load_samples) load_mean += v;
+    if (!load_samples.empty()) load_mean /= load_samples.size();
+    char load[256];
+    std::snprintf(load, sizeof(load), "1/5/15-min %s at the start, %s at the end; 1-min mean %.2f",
+                  load_start.c_str(), LoadAverages().c_str(), load_mean);
+    load_text = load;
+    WriteFileAtomically((out_dir / "runs.csv").string(), BenchRunsCsv(all_runs));
+    std::string command_line = "dygslam bench";
+    for (const std::string& a : args) command_line += " " + ShellQuote(a);
+    WriteFileAtomically(
+        (out_dir / "bench_context.txt").string(),
+        "command: " + command_line + "\nload: " + load_text + "\ndate: " + UtcNow() + "\n");
+  }
 
   // Medians.
   std::vector<BenchCell> cells;
@@ -534,17 +563,19 @@ int RunBench(const std::vector<std::string>& args) {
   for (const std::string& a : args) command_line += " " + ShellQuote(a);
   context.command_line = command_line;
   context.date = UtcNow();
+  if (report_only) {
+    if (recorded.count("command")) context.command_line = recorded["command"];
+    if (recorded.count("date")) context.date = recorded["date"];
+    int max_run = -1;
+    for (const BenchRun& r : all_runs) max_run = std::max(max_run, r.run);
+    context.runs = max_run + 1;
+    notes.push_back("report rebuilt with --report-only from runs.csv");
+  }
   context.machine = MachineDescription();
-  double load_mean = 0;
-  for (double v : load_samples) load_mean += v;
-  if (!load_samples.empty()) load_mean /= load_samples.size();
-  char load[256];
-  std::snprintf(load, sizeof(load), "1/5/15-min %s at the start, %s at the end; 1-min mean %.2f",
-                load_start.c_str(), load_end.c_str(), load_mean);
-  context.load = load;
+  context.load = load_text;
   context.version = DYGSLAM_VERSION;
   context.data_dir = p.Positional("DATA_DIR");
-  context.runs = runs;
+  if (!report_only) context.runs = runs;
   context.quick = quick;
   context.deterministic = deterministic;
   context.frames = p.Has("frames") ? "rgb.txt entries " + p.Get("frames")

@@ -142,6 +142,22 @@ TEST(BenchCommand, QuickRunOnGeneratedSequenceMatchesEval) {
     EXPECT_NE(report.find("(gen_seq_features.png)"), std::string::npos);
   }
 
+  // --report-only rebuilds the same tables from runs.csv, with the recorded command and load.
+  const CommandOutput again =
+      RunDygslam("bench " + (root / "data").string() +
+                     " --quick --quiet --report-only --no-pictures --out " + out.string(),
+                 (root / "stderr2.txt").string());
+  ASSERT_EQ(again.exit_code, 0) << ReadText((root / "stderr2.txt").string());
+  const std::string rebuilt = ReadText((out / "report.md").string());
+  EXPECT_NE(rebuilt.find("--update-benchmarks"), std::string::npos);  // the original command
+  EXPECT_NE(rebuilt.find("1/5/15-min"), std::string::npos);
+  EXPECT_NE(rebuilt.find("--report-only"), std::string::npos);
+  for (const BenchRun& run : runs) {
+    EXPECT_NE(rebuilt.find("| gen_seq | " + ConfigLabel(run.config) + " | " + Fixed4(run.ate.rmse)),
+              std::string::npos)
+        << run.config;
+  }
+
   // BENCHMARKS.md: only the marked part changed; links relative to it.
   const std::string bench = ReadText((root / "BENCHMARKS.md").string());
   ASSERT_EQ(bench.compare(0, head.size(), head), 0) << bench;

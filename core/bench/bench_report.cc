@@ -194,6 +194,8 @@ std::string RenderBenchMarkdown(const BenchContext& context, const std::vector<B
   md << "- ATE: timestamp association within 0.02 s, rigid SE(3) alignment of the estimate onto "
         "groundtruth.txt (no scale), as `dygslam eval` (TUM benchmark conventions); for Bonn the "
         "ground truth is the marker body, without the marker-to-camera calibration\n";
+  md << "- published figures for context (the paper and others) are quoted apart, in "
+        "BENCHMARKS.md, *Published figures*: they were not measured by us\n";
   for (const std::string& note : context.notes) md << "- " << note << "\n";
   md << "\n";
 

@@ -5,6 +5,7 @@
 #include <sys/resource.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <functional>
 #include <limits>
@@ -205,6 +206,35 @@ TEST(DdsWire, AbsurdPosesDetectionsAndKeyframesAreRejected) {
   t.poses()[0].world_from_cam().orientation().w(0);
   b = fuzz::Serialize<msg::TrajectoryPubSubType>(t);
   EXPECT_EQ(StatusOf(SampleKind::kTrajectory, b), DecodeStatus::kRejectedContent);
+}
+
+// fastcdr bounds a sequence length by the bytes left in the payload, but resizes the vector
+// before decoding the elements: a payload of B bytes can make the reader allocate about
+// B x sizeof(element) (here Detection2D). Characterises that amplification for a 1 MiB sample.
+TEST(DdsWire, SequenceLengthClaimsAllocateAtMostElementSizeTimesPayload) {
+  std::vector<Detection> one(1);
+  one[0].box = cv::Rect2f(1.25f, 2, 3, 4);
+  std::vector<uint8_t> b = fuzz::Serialize<msg::DetectionsPubSubType>(DetectionsToMsg(one, Timestamp(), 0));
+  const float x = 1.25f;
+  size_t at = std::string::npos;
+  for (size_t i = 0; i + 8 <= b.size(); ++i) {
+    uint32_t v;
+    std::memcpy(&v, b.data() + i, 4);
+    if (v == 1 && std::memcmp(b.data() + i + 4, &x, 4) == 0) at = i;
+  }
+  ASSERT_NE(at, std::string::npos);
+  const size_t payload = 1u << 20;
+  b.resize(payload, 0);
+  const uint32_t claim = static_cast<uint32_t>(payload - at - 4);
+  std::memcpy(b.data() + at, &claim, 4);
+  const long before = MaxRssKb();
+  const auto r = DecodeSample(SampleKind::kDetections, b.data(), b.size());
+  const long grown_kb = MaxRssKb() - before;
+  EXPECT_NE(r.status, DecodeStatus::kOk);
+  RecordProperty("rss_growth_kb_for_1MiB_payload", static_cast<int>(grown_kb));
+  std::printf("sizeof(msg::Detection2D) = %zu, max RSS growth for a 1 MiB sample: %ld KiB\n",
+              sizeof(msg::Detection2D), grown_kb);
+  EXPECT_LT(grown_kb, 200 * 1024);
 }
 
 // fastcdr throws BadParamException for a boolean byte other than 0/1; the generated

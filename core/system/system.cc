@@ -46,6 +46,7 @@ void SystemOptions::Check() const {
   tracking.Check();
   local_mapping.Check();
   filter.Check();
+  dynamic_mask.Check();  // used only when a keyframe is made: fail here, not mid-run
 }
 
 namespace {
@@ -223,6 +224,10 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   if (depth.empty() || (depth.type() != CV_16UC1 && depth.type() != CV_32FC1))
     throw InputError("depth image: expected CV_16UC1 or CV_32FC1");
   if (depth.size() != rgb.size()) throw InputError("depth image: size differs from the rgb image");
+  if (!mask.empty() && (mask.type() != CV_8UC1 || mask.size() != rgb.size()))
+    throw InputError("mask: expected CV_8UC1 " + std::to_string(rgb.cols) + "x" + std::to_string(rgb.rows) +
+                     ", got type " + std::to_string(mask.type()) + " " + std::to_string(mask.cols) + "x" +
+                     std::to_string(mask.rows));
   if (has_last_stamp_ && stamp <= last_stamp_)
     throw InputError("frame stamp " + stamp.ToString() + " is not after the previous frame " + last_stamp_.ToString());
   last_stamp_ = stamp;

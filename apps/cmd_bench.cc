@@ -427,7 +427,17 @@ int RunBench(const std::vector<std::string>& args) {
           notes.push_back(note);
           continue;
         }
-        BenchRun scored = ScoreRun(run_dir.string(), pr.groundtruth);
+        BenchRun scored;
+        try {
+          scored = ScoreRun(run_dir.string(), pr.groundtruth);
+        } catch (const InputError& e) {
+          const std::string note = pr.sequence.name + " " + config + " run " +
+                                   std::to_string(run + 1) + ": outputs unreadable (" + e.what() +
+                                   "), run left out";
+          std::cerr << "\ndygslam bench: " << note << "\n";
+          notes.push_back(note);
+          continue;
+        }
         scored.sequence = pr.sequence.name;
         scored.config = config;
         scored.run = run;

@@ -24,6 +24,8 @@ KeyframeData DeepCopy(const KeyframeData& in) {
 
 void KeyframeMapperOptions::Check() const {
   DYGSLAM_CHECK_OPTION(max_queue >= 1, "KeyframeMapper.max_queue");
+  DYGSLAM_CHECK_OPTION(max_rebuild_share >= 0 && max_rebuild_share <= 1,
+                       "KeyframeMapper.max_rebuild_share");
 }
 
 KeyframeMapper::KeyframeMapper(const PinholeCamera& camera, const OctoMapOptions& options,
@@ -92,6 +94,25 @@ MapperStats KeyframeMapper::Stats() const {
   return stats;
 }
 
+double KeyframeMapper::MaybeRebuild() {
+  std::lock_guard<std::mutex> builder_lock(builder_mutex_);
+  if (!builder_.rebuild_pending()) return -1;
+  const auto now = std::chrono::steady_clock::now();
+  if (last_rebuild_ms_ > 0 &&
+      MsBetween(last_rebuild_end_, now) < last_rebuild_ms_ / mapper_options_.max_rebuild_share) {
+    return -1;
+  }
+  try {
+    builder_.Sync();
+  } catch (...) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!error_) error_ = std::current_exception();
+  }
+  last_rebuild_end_ = std::chrono::steady_clock::now();
+  last_rebuild_ms_ = std::max(MsBetween(now, last_rebuild_end_), 1e-3);
+  return last_rebuild_ms_;
+}
+
 void KeyframeMapper::Run() {
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
@@ -134,6 +155,16 @@ void KeyframeMapper::Run() {
       latencies_ms_.push_back(MsBetween(item.submitted, end));
     }
     changed_.notify_all();
+    // Idle: catch up on pose corrections, within the time share.
+    if (queue_.empty() && mapper_options_.max_rebuild_share > 0 && !error_) {
+      lock.unlock();
+      const double rebuild_ms = MaybeRebuild();
+      lock.lock();
+      if (rebuild_ms >= 0) {
+        ++stats_.num_background_rebuilds;
+        stats_.background_rebuild_ms += rebuild_ms;
+      }
+    }
   }
 }
 

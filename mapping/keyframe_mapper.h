@@ -5,8 +5,10 @@
 //   new keyframe        -> OctoMapBuilder::Insert (filter, downsample, ray-cast insertion)
 //   pose_update_only    -> OctoMapBuilder::UpdatePoses (rebuild deferred until the map is read)
 //   removed             -> OctoMapBuilder::Remove
-// The map depends only on the order of submissions, so a deterministic SLAM run gives the same
-// map every time.
+// The map read after Flush() depends only on the order of submissions (the read rebuilds what
+// pose corrections left stale, see max_rebuild_share), so a deterministic SLAM run gives the same
+// map every time with max_rebuild_share = 0 (background rebuilds happen at times that depend on
+// the machine; they change the final map only by corrections below the rebuild threshold).
 //
 //   KeyframeMapper mapper(camera, options);
 //   system.SetKeyframeCallback([&mapper](const KeyframeData& k) { mapper.Submit(k); });
@@ -35,6 +37,12 @@ namespace dygslam {
 
 struct KeyframeMapperOptions {
   size_t max_queue = 32;  // submissions waiting before Submit() blocks
+  // Background rebuilds after pose corrections: when the queue is empty and a rebuild is pending,
+  // the worker rebuilds if the time since the end of the last rebuild is at least
+  // (duration of the last rebuild) / max_rebuild_share, i.e. at most this share of the worker's
+  // time goes to rebuilds however big the map grows (a rebuild costs ~25 ms CPU per keyframe).
+  // 0 = never in the background (the tree is rebuilt when read: WithBuilder -> tree() / Write*).
+  double max_rebuild_share = 0.3;
   void Check() const;
 };
 
@@ -45,9 +53,11 @@ struct MapperStats {
   size_t num_pose_updates = 0;
   size_t num_removals = 0;
   size_t max_queue_depth = 0;
-  size_t num_blocked = 0;        // Submit() calls that had to wait for space
-  double worker_busy_ms = 0;     // total time the worker spent applying submissions
-  double median_latency_ms = 0;  // new keyframes: Submit() to inserted
+  size_t num_blocked = 0;  // Submit() calls that had to wait for space
+  size_t num_background_rebuilds = 0;
+  double background_rebuild_ms = 0;  // total wall time of background rebuilds
+  double worker_busy_ms = 0;         // total time the worker spent applying submissions
+  double median_latency_ms = 0;      // new keyframes: Submit() to inserted
   double max_latency_ms = 0;
 };
 
@@ -75,6 +85,8 @@ class KeyframeMapper {
   };
   void Run();
   void RethrowIfFailed();  // lock held
+  // Worker, mutex_ not held: background rebuild if due; its wall ms, or -1 if none.
+  double MaybeRebuild();
 
   KeyframeMapperOptions mapper_options_;
   OctoMapBuilder builder_;  // touched by the worker, or by WithBuilder under builder_mutex_
@@ -88,6 +100,9 @@ class KeyframeMapper {
   std::exception_ptr error_;
   MapperStats stats_;
   std::vector<double> latencies_ms_;
+  // Worker only.
+  std::chrono::steady_clock::time_point last_rebuild_end_;
+  double last_rebuild_ms_ = 0;
   std::thread worker_;
 };
 

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <fstream>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -16,6 +17,13 @@
 
 namespace dygslam {
 namespace {
+
+// CPU time of the calling thread (not inflated by other processes sharing the cores).
+double ThreadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
 
 double MillisecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
@@ -213,6 +221,7 @@ void OctoMapBuilder::Insert(const KeyframeData& keyframe) {
     return;
   }
   const auto start = std::chrono::steady_clock::now();
+  const double cpu_start = ThreadCpuMs();
   StoredKeyframe stored;
   stored.sequence = next_sequence_++;
   stored.world_from_cam = keyframe.world_from_cam;
@@ -226,10 +235,11 @@ void OctoMapBuilder::Insert(const KeyframeData& keyframe) {
     return;
   }
   auto [it, inserted] = keyframes_.emplace(keyframe.id, std::move(stored));
-  if (rebuild_pending_) return;  // the pending rebuild inserts it
+  // Inserted now even when a rebuild is pending, so the map stays live; the rebuild re-inserts it.
   InsertIntoTree(it->second);
   last_insert_ms_ = MillisecondsSince(start);
   insert_ms_.push_back(last_insert_ms_);
+  insert_cpu_ms_.push_back(ThreadCpuMs() - cpu_start);
 }
 
 size_t OctoMapBuilder::UpdatePoses(const std::map<int64_t, Rigid3d>& world_from_cam) {
@@ -256,6 +266,7 @@ bool OctoMapBuilder::Remove(int64_t keyframe_id) {
 
 void OctoMapBuilder::Rebuild() {
   const auto start = std::chrono::steady_clock::now();
+  const double cpu_start = ThreadCpuMs();
   ResetTree();
   std::vector<StoredKeyframe*> ordered;
   ordered.reserve(keyframes_.size());
@@ -270,6 +281,7 @@ void OctoMapBuilder::Rebuild() {
   rebuild_pending_ = false;
   ++num_rebuilds_;
   last_rebuild_ms_ = MillisecondsSince(start);
+  last_rebuild_cpu_ms_ = ThreadCpuMs() - cpu_start;
 }
 
 void OctoMapBuilder::Sync() {
@@ -319,10 +331,14 @@ OctoMapStats OctoMapBuilder::Stats() {
   stats.num_rebuilds = num_rebuilds_;
   stats.last_insert_ms = last_insert_ms_;
   stats.last_rebuild_ms = last_rebuild_ms_;
+  stats.last_rebuild_cpu_ms = last_rebuild_cpu_ms_;
   if (!insert_ms_.empty()) {
     std::vector<double> sorted = insert_ms_;
     std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
     stats.median_insert_ms = sorted[sorted.size() / 2];
+    sorted = insert_cpu_ms_;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    stats.median_insert_cpu_ms = sorted[sorted.size() / 2];
   }
   return stats;
 }

@@ -29,6 +29,9 @@
 // the stored pose (the cells would move by less than half a voxel) and are applied with the
 // next rebuild. Several corrections in a row (loop closure + culling) cost one rebuild, because
 // the rebuild is deferred until the map is read (tree(), Stats(), Write*()) or Sync() is called.
+// New keyframes are inserted into the tree right away even while a rebuild is pending (the map
+// stays live; what is stale are the cells of the moved keyframes). KeyframeMapper bounds the
+// share of time spent on rebuilds when the SLAM corrects poses after every keyframe.
 //
 // Not thread-safe: one owner thread calls all methods.
 #pragma once
@@ -109,8 +112,12 @@ struct OctoMapStats {
   size_t num_insertions = 0;  // octree insertions (incremental + during rebuilds)
   size_t num_rebuilds = 0;
   double last_insert_ms = 0;    // last incremental Insert() (filtering + ray casting)
-  double median_insert_ms = 0;  // over incremental Insert() calls
+  double median_insert_ms = 0;  // over incremental Insert() calls (wall time)
+  // The same in CPU time of the inserting thread: what insertion costs when other processes
+  // share the cores.
+  double median_insert_cpu_ms = 0;
   double last_rebuild_ms = 0;
+  double last_rebuild_cpu_ms = 0;
 };
 
 // Result of preparing one keyframe (exposed for tests and tools).
@@ -130,8 +137,9 @@ class OctoMapBuilder {
 
   // Inserts the static part of a keyframe. If keyframe.removed, removes it (as Remove). If
   // keyframe.pose_update_only, or the id is already known and depth is empty, only its pose is
-  // updated (as UpdatePoses). If the id is known and depth is given, the keyframe is replaced. Throws InputError on depth/mask of the wrong type
-  // or size, or a non-finite pose (the message names the keyframe id and the field).
+  // updated (as UpdatePoses). If the id is known and depth is given, the keyframe is replaced.
+  // Throws InputError on depth/mask of the wrong type or size, or a non-finite pose (the message
+  // names the keyframe id and the field).
   void Insert(const KeyframeData& keyframe);
 
   // Sets the poses of known keyframes (unknown ids are ignored; returns how many were known).
@@ -186,8 +194,10 @@ class OctoMapBuilder {
   bool rebuild_pending_ = false;
   bool inner_dirty_ = false;
   std::vector<double> insert_ms_;
+  std::vector<double> insert_cpu_ms_;
   double last_insert_ms_ = 0;
   double last_rebuild_ms_ = 0;
+  double last_rebuild_cpu_ms_ = 0;
   size_t num_insertions_ = 0;
   size_t num_rebuilds_ = 0;
 };

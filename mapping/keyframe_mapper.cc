@@ -142,7 +142,6 @@ void KeyframeMapper::Run() {
     const auto end = std::chrono::steady_clock::now();
 
     lock.lock();
-    busy_ = false;
     if (error && !error_) error_ = error;
     ++stats_.num_applied;
     stats_.worker_busy_ms += MsBetween(start, end);
@@ -154,8 +153,7 @@ void KeyframeMapper::Run() {
       ++stats_.num_new_keyframes;
       latencies_ms_.push_back(MsBetween(item.submitted, end));
     }
-    changed_.notify_all();
-    // Idle: catch up on pose corrections, within the time share.
+    // Idle: catch up on pose corrections, within the time share (still busy: Flush() waits).
     if (queue_.empty() && mapper_options_.max_rebuild_share > 0 && !error_) {
       lock.unlock();
       const double rebuild_ms = MaybeRebuild();
@@ -165,6 +163,8 @@ void KeyframeMapper::Run() {
         stats_.background_rebuild_ms += rebuild_ms;
       }
     }
+    busy_ = false;
+    changed_.notify_all();
   }
 }
 

@@ -72,7 +72,7 @@ class KeyframeMapper {
 
   // Thread-safe. Copies the keyframe (images cloned).
   void Submit(const KeyframeData& keyframe);
-  // Blocks until everything submitted so far is applied.
+  // Blocks until everything submitted so far is applied (and a due background rebuild is done).
   void Flush();
   // Runs fn on the builder with the worker paused (the queue keeps filling meanwhile).
   void WithBuilder(const std::function<void(OctoMapBuilder&)>& fn);

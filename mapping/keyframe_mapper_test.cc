@@ -134,6 +134,30 @@ TEST(KeyframeMapper, ConcurrentSubmittersAndBackPressureLoseNothing) {
   });
 }
 
+// A pose correction is applied by a background rebuild when the mapper is idle (share 1: as
+// soon as it is idle), not only when the map is read; with share 0 it waits for the read.
+TEST(KeyframeMapper, BackgroundRebuildAppliesCorrections) {
+  const PinholeCamera camera = test_scene::SmallCamera();
+  for (const double share : {1.0, 0.0}) {
+    KeyframeMapperOptions mapper_options;
+    mapper_options.max_rebuild_share = share;
+    KeyframeMapper mapper(camera, TestOptions(), mapper_options);
+    for (int k = 0; k < 4; ++k) mapper.Submit(Keyframe(k));
+    KeyframeData correction;
+    correction.id = 1;
+    correction.world_from_cam = PoseOf(1);
+    correction.world_from_cam.translation.y() += 0.3;
+    correction.pose_update_only = true;
+    mapper.Submit(correction);
+    mapper.Flush();
+    const MapperStats stats = mapper.Stats();
+    mapper.WithBuilder([&](OctoMapBuilder& builder) {
+      EXPECT_EQ(builder.rebuild_pending(), share == 0) << share;
+      EXPECT_EQ(stats.num_background_rebuilds, share > 0 ? 1u : 0u) << share;
+    });
+  }
+}
+
 TEST(KeyframeMapper, BadKeyframeSurfacesAtFlushNamingIt) {
   const PinholeCamera camera = test_scene::SmallCamera();
   KeyframeMapper mapper(camera, TestOptions());

@@ -6,6 +6,8 @@
 // (mapping/keyframe_mapper.h: new keyframes inserted with their dynamic masks, local-BA pose
 // corrections and culled keyframes applied), or, with --trajectory, from given poses (e.g. the
 // ground truth) without masks.
+#include <octomap/OcTree.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -22,6 +24,7 @@
 #include "core/config/settings.h"
 #include "core/config/system_config.h"
 #include "core/io/dataset.h"
+#include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
 #include "mapping/bonn_frames.h"
@@ -131,7 +134,7 @@ int RunMap(const std::vector<std::string>& args) {
               "frames), without\n"
               "masks and with their final poses; print ghost voxels (occupied in the map, observed "
               "free in the\n"
-              "reference); write DIR/reference.bt");
+              "reference); write DIR/reference.bt, DIR/ghosts_top.png, DIR/ghost_cells.txt");
   p.AddOption("save-every", "SECONDS",
               "also write map.bt/map.ot every SECONDS of wall time while running");
   p.AddFlag("deterministic",
@@ -355,7 +358,21 @@ int RunMap(const std::vector<std::string>& args) {
         ++reference_keyframes;
       }
       reference_map.WriteBinary((out / "reference.bt").string());
-      ghosts = CompareGhostVoxels(builder.tree(), reference_map.tree());
+      std::vector<octomap::point3d> ghost_cells;
+      ghosts = CompareGhostVoxels(builder.tree(), reference_map.tree(), 1, &ghost_cells);
+      // Where the ghosts are: a top view of the ghost cells alone.
+      octomap::OcTree ghost_map(builder.tree().getResolution());
+      for (const octomap::point3d& c : ghost_cells) ghost_map.updateNode(c, true);
+      TopViewOptions ghost_top;
+      ghost_top.draw_free = false;
+      WritePngAtomically((out / "ghosts_top.png").string(), RenderTopView(ghost_map, ghost_top));
+      std::string lines = "# ghost cell centres (map frame, m): x y z\n";
+      char line[96];
+      for (const octomap::point3d& c : ghost_cells) {
+        std::snprintf(line, sizeof(line), "%.3f %.3f %.3f\n", c.x(), c.y(), c.z());
+        lines += line;
+      }
+      WriteFileAtomically((out / "ghost_cells.txt").string(), lines);
     }
     std::printf("final map sync (rebuild after pose corrections): %.1f ms\n", final_sync_ms);
   });
@@ -436,7 +453,8 @@ int RunMap(const std::vector<std::string>& args) {
   }
   if (saves > 0) std::printf("periodic saves: %zu\n", saves);
   std::printf("outputs: %s/{map.bt,map.ot,map_top.png,map_slice.png%s%s}\n", out.string().c_str(),
-              system ? ",trajectory.txt,keyframes.txt" : "", ghosts ? ",reference.bt" : "");
+              system ? ",trajectory.txt,keyframes.txt" : "",
+              ghosts ? ",reference.bt,ghosts_top.png,ghost_cells.txt" : "");
   return 0;
 }
 

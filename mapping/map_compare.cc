@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace dygslam {
 namespace {
@@ -53,7 +54,9 @@ bool OccupiedNear(const octomap::OcTree& map, const octomap::OcTreeKey& key, int
 }  // namespace
 
 GhostVoxelCounts CompareGhostVoxels(const octomap::OcTree& a, const octomap::OcTree& b,
-                                    int surface_margin_cells) {
+                                    int surface_margin_cells,
+                                    std::vector<octomap::point3d>* ghost_cells) {
+  if (ghost_cells != nullptr) ghost_cells->clear();
   if (surface_margin_cells < 0 || surface_margin_cells > 10) {
     throw std::invalid_argument("CompareGhostVoxels: surface_margin_cells must be in [0, 10]");
   }
@@ -73,7 +76,10 @@ GhostVoxelCounts CompareGhostVoxels(const octomap::OcTree& a, const octomap::OcT
           break;
         case 0:
           ++counts.occupied_a_free_b;
-          if (!OccupiedNear(b, key, surface_margin_cells)) ++counts.ghost;
+          if (!OccupiedNear(b, key, surface_margin_cells)) {
+            ++counts.ghost;
+            if (ghost_cells != nullptr) ghost_cells->push_back(a.keyToCoord(key));
+          }
           break;
         default:
           ++counts.occupied_a_unknown_b;

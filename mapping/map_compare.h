@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 namespace dygslam {
 
@@ -34,9 +35,11 @@ struct GhostVoxelCounts {
 // `a`: map under test (e.g. built from all frames); `b`: reference (e.g. people-free frames).
 // Both maps must have the same resolution (throws std::invalid_argument otherwise); cells are
 // compared by octree key, so the grids coincide exactly.
-// surface_margin_cells >= 0 (0: ghost == occupied_a_free_b).
+// surface_margin_cells >= 0 (0: ghost == occupied_a_free_b). ghost_cells, if given, receives the
+// centres of the ghost cells.
 GhostVoxelCounts CompareGhostVoxels(const octomap::OcTree& a, const octomap::OcTree& b,
-                                    int surface_margin_cells = 1);
+                                    int surface_margin_cells = 1,
+                                    std::vector<octomap::point3d>* ghost_cells = nullptr);
 
 // Number of occupied (resp. observed free) cells whose centre satisfies `inside`.
 uint64_t CountOccupiedInside(const octomap::OcTree& map,

@@ -22,7 +22,7 @@ BUILD_PACKAGES=(
 # Checked against the built binary by the test docker/RuntimePackagesCoverBinary.
 RUNTIME_PACKAGES=(
   libopencv-core406 libopencv-imgproc406 libopencv-imgcodecs406 libopencv-features2d406
-  libopencv-calib3d406 libopencv-dnn406
+  libopencv-calib3d406 libopencv-dnn406 libopencv-contrib406
   libgoogle-glog0v6 libcholmod3 libcxsparse3 libatlas3-base
   liboctomap1.9 libyaml-cpp0.7 libfastrtps2.9 libfastcdr1
 )

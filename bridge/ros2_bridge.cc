@@ -178,7 +178,9 @@ struct RosBridge::Impl {
     } catch (const InputError& e) {
       std::lock_guard<std::mutex> lock(mutex);
       ++stats.bad_samples;
-      if (ShouldLog(stats.bad_samples)) LOG_WARNING << "ros2 bridge: dropped image: " << e.what();
+      if (ShouldLog(stats.bad_samples)) {
+        LOG_WARNING << "ros2 bridge: dropped image: " << e.what();
+      }
       return;
     }
     std::lock_guard<std::mutex> lock(mutex);
@@ -220,7 +222,9 @@ struct RosBridge::Impl {
     }
     if (!error.empty()) {
       ++stats.bad_samples;
-      if (ShouldLog(stats.bad_samples)) LOG_WARNING << "ros2 bridge: frame dropped: " << error;
+      if (ShouldLog(stats.bad_samples)) {
+        LOG_WARNING << "ros2 bridge: frame dropped: " << error;
+      }
       return;
     }
     RgbdFrameData frame;
@@ -261,7 +265,9 @@ struct RosBridge::Impl {
     } catch (const InputError& e) {
       std::lock_guard<std::mutex> lock(mutex);
       ++stats.bad_samples;
-      if (ShouldLog(stats.bad_samples)) LOG_WARNING << "ros2 bridge: " << e.what();
+      if (ShouldLog(stats.bad_samples)) {
+        LOG_WARNING << "ros2 bridge: " << e.what();
+      }
     }
   }
 

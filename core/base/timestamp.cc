@@ -20,8 +20,9 @@ std::optional<Timestamp> Timestamp::Parse(std::string_view text) {
   int64_t whole = 0;
   size_t whole_digits = 0;
   while (i < text.size() && text[i] >= '0' && text[i] <= '9') {
-    if (whole > 9'000'000'000LL) return std::nullopt;  // would overflow int64 nanoseconds
     whole = whole * 10 + (text[i] - '0');
+    // Beyond INT64_MAX nanoseconds (checked every digit, so whole * 10 + 9 never overflows).
+    if (whole > 9'223'372'035LL) return std::nullopt;
     ++i;
     ++whole_digits;
   }

@@ -13,15 +13,16 @@
 
 namespace dygslam::fuzz {
 
-// A scratch directory of this process, created once, removed at exit.
+// A scratch directory of this process, created once, removed at exit (intentionally leaked so
+// the exit handler can still use it).
 inline const std::string& ScratchDir() {
-  static const std::string dir = [] {
-    std::string templ = "/tmp/dygslam_fuzz_XXXXXX";
-    if (mkdtemp(templ.data()) == nullptr) std::abort();
-    std::atexit([] { std::system(("rm -rf " + ScratchDir()).c_str()); });
-    return templ;
+  static const std::string* dir = [] {
+    auto* path = new std::string("/tmp/dygslam_fuzz_XXXXXX");
+    if (mkdtemp(path->data()) == nullptr) std::abort();
+    std::atexit([] { std::system(("rm -rf '" + ScratchDir() + "'").c_str()); });
+    return path;
   }();
-  return dir;
+  return *dir;
 }
 
 inline void WriteFile(const std::string& path, std::string_view bytes) {

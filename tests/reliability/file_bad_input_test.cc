@@ -246,9 +246,13 @@ TEST(TrajectoryBadInput, NonFinitePosesAreRejectedOnReadAndWrite) {
       "1.0 0 0 0 0 0 0 inf\n",
       "1.0 0 0 0 0 0 0 0\n",
       "1.0 1e400 0 0 0 0 0 1\n",
+      // Stamps beyond int64 nanoseconds (found by trajectory_fuzzer: signed overflow).
+      "15483398238.98123 0 0 0 0 0 0 1\n",
+      "99999999999999999999 0 0 0 0 0 0 1\n",
   };
   for (const std::string& line : bad) {
     WriteText(dir / "t.txt", "0.5 0 0 0 0 0 0 1\n" + line);
+    SCOPED_TRACE(line);
     try {
       ReadTumTrajectory((dir / "t.txt").string());
       ADD_FAILURE() << "accepted " << line;

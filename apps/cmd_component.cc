@@ -12,6 +12,7 @@
 #include "components/bench_transport.h"
 #include "components/pipeline.h"
 #include "core/base/error.h"
+#include "core/config/mapping_config.h"
 #include "core/config/settings.h"
 #include "core/config/system_config.h"
 
@@ -53,6 +54,9 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   p.AddOption("detector-weights", "FILE", "detector weights");
   p.AddOption("detector-names", "FILE", "detector class names");
   p.AddOption("domain", "N", "DDS domain id (default DYGSLAM_DOMAIN_ID or 0)", "-1");
+  p.AddOption("partition", "NAME", "DDS partition of every reader / writer (default: none)");
+  p.AddFlag("progress", "recorder: progress line on stderr");
+  p.AddFlag("wait-for-components", "player: wait for the other components' start announcements");
   p.AddFlag("deterministic", "slam waits for every frame's detections; synchronous local mapping");
   p.AddFlag("no-detector", "no detector component (slam runs the System's own detector)");
   p.AddFlag("no-mapper", "no mapper component");
@@ -65,7 +69,9 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   o.settings_path = p.Get("config");
   if (o.settings_path.empty()) return p.UsageError("--config is required");
   if (o.dataset_dir.empty()) o.dataset_dir = "-";  // only the player reads it
-  o.system = SystemOptionsFromSettings(LoadSettings(o.settings_path));
+  const Settings settings = LoadSettings(o.settings_path);
+  o.system = SystemOptionsFromSettings(settings);
+  ReadOptions(settings.reader, &o.octomap);
   o.system.filter_mode = ParseFilterMode(p.Get("filter"));
   o.system.deterministic = p.Flag("deterministic");
   if (p.Has("detector-cfg")) {
@@ -81,6 +87,9 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   o.domain_id = std::stoi(p.Get("domain"));
   o.run_detector = !p.Flag("no-detector");
   o.run_mapper = !p.Flag("no-mapper");
+  o.partition = p.Get("partition");
+  o.progress = p.Flag("progress");
+  o.wait_for_components = p.Flag("wait-for-components");
 
   o.processes = p.Flag("processes");
   if (p.Positional("NAME") == "pipeline") return RunPipeline(o);  // the whole pipeline

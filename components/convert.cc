@@ -309,7 +309,8 @@ msg::Keyframe KeyframeToMsg(const KeyframeData& k, const PinholeCamera& camera) 
   m.header().seq(static_cast<uint64_t>(k.id < 0 ? 0 : k.id));
   m.id(k.id);
   m.world_from_cam(PoseToMsg(k.world_from_cam));
-  m.pose_update_only(k.pose_update_only);
+  m.pose_update_only(k.pose_update_only || k.removed);
+  m.removed(k.removed);
   m.camera(CameraToMsg(camera, 1.0));
   if (!k.pose_update_only) {
     m.color(ImageToMsg(k.rgb));
@@ -339,7 +340,8 @@ KeyframeData KeyframeFromMsg(const msg::Keyframe& m, PinholeCamera* camera) {
   if (k.id < 0) Fail("Keyframe.id", std::to_string(k.id) + " is negative");
   k.stamp = TimeFromMsg(m.header().stamp(), "Keyframe.header.stamp");
   k.world_from_cam = PoseFromMsg(m.world_from_cam(), "Keyframe.world_from_cam");
-  k.pose_update_only = m.pose_update_only();
+  k.removed = m.removed();
+  k.pose_update_only = m.pose_update_only() || k.removed;
   const PinholeCamera cam = CameraFromMsg(m.camera(), "Keyframe.camera");
   if (camera != nullptr) *camera = cam;
   if (k.pose_update_only) return k;

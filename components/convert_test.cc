@@ -269,7 +269,22 @@ TEST(Convert, KeyframeRoundTrip) {
   EXPECT_TRUE(um.color().data().empty());
   const KeyframeData ub = KeyframeFromMsg(um);
   EXPECT_TRUE(ub.pose_update_only);
+  EXPECT_FALSE(ub.removed);
   EXPECT_TRUE(ub.rgb.empty());
+
+  // A culled keyframe: removed travels, no images.
+  KeyframeData culled;
+  culled.id = 9;
+  culled.stamp = k.stamp;
+  culled.removed = true;
+  const msg::Keyframe cm = KeyframeToMsg(culled, TestCamera());
+  EXPECT_TRUE(cm.removed());
+  EXPECT_TRUE(cm.pose_update_only());
+  EXPECT_TRUE(cm.depth().data().empty());
+  const KeyframeData cb = KeyframeFromMsg(cm);
+  EXPECT_EQ(cb.id, 9);
+  EXPECT_TRUE(cb.removed);
+  EXPECT_TRUE(cb.pose_update_only);
 }
 
 TEST(Convert, KeyframeInconsistentSamplesAreRejected) {

@@ -4,6 +4,7 @@
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
+#include "components/stream_status.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "dygslam_msg/DetectionsPubSubTypes.h"
@@ -50,7 +51,9 @@ DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
   double total_ms = 0;
   size_t received = 0;
   auto idle_since = std::chrono::steady_clock::now();
+  StartAnnouncer announcer("detector");
   while (!stop->requested()) {
+    announcer.Poll(status, frames.matched() > 0 && writer.matched() > 0);
     std::optional<msg::RgbdFrame> sample = queue.Pop(std::chrono::milliseconds(20));
     if (!sample) {
       std::lock_guard<std::mutex> lock(mutex);

@@ -6,6 +6,7 @@
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
+#include "components/stream_status.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "dygslam_msg/KeyframePubSubTypes.h"
@@ -17,18 +18,30 @@ namespace dygslam {
 void MapperOptions::Check() const {
   octomap.Check();
   DYGSLAM_CHECK_OPTION(update_every_keyframes >= 0, "mapper.update_every_keyframes");
+  DYGSLAM_CHECK_OPTION(flush_timeout_s >= 0, "mapper.flush_timeout_s");
 }
 
 MapperCore::MapperCore(const MapperOptions& options) : options_(options) { options_.Check(); }
 
 void MapperCore::Process(const KeyframeData& keyframe, const PinholeCamera& camera) {
-  if (builder_ == nullptr) {
-    if (keyframe.pose_update_only) return;  // nothing to correct yet
-    builder_ = std::make_unique<OctoMapBuilder>(camera, options_.octomap);
+  if (keyframe.removed) {
+    if (builder_ != nullptr && builder_->Remove(keyframe.id)) ++num_removed_;
+    return;
   }
+  if (keyframe.pose_update_only) {
+    if (builder_ != nullptr && builder_->UpdatePoses({{keyframe.id, keyframe.world_from_cam}}) > 0) {
+      ++num_pose_updates_;
+    }
+    return;
+  }
+  if (builder_ == nullptr) builder_ = std::make_unique<OctoMapBuilder>(camera, options_.octomap);
   builder_->Insert(keyframe);
-  if (!keyframe.pose_update_only) ++num_keyframes_;
+  ++num_inserted_;
   if (keyframe.stamp > newest_) newest_ = keyframe.stamp;
+}
+
+size_t MapperCore::num_keyframes() const {
+  return builder_ == nullptr ? 0 : builder_->KeyframeIds().size();
 }
 
 msg::MapUpdate MapperCore::MakeUpdate() {
@@ -40,7 +53,7 @@ msg::MapUpdate MapperCore::MakeUpdate() {
   const std::string bytes = stream.str();
   m.header().stamp(TimeToMsg(newest_));
   m.header().frame_id("world");
-  m.header().seq(num_keyframes_);
+  m.header().seq(num_inserted_);
   m.resolution(tree.getResolution());
   m.num_keyframes(stats.num_keyframes);
   m.num_leaf_nodes(stats.num_leaves);
@@ -88,13 +101,26 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
 
   size_t since_update = 0;
   int idle_after_done = 0;
-  while (!stop->requested()) {
+  std::optional<std::chrono::steady_clock::time_point> flush_deadline;
+  StartAnnouncer announcer("mapper");
+  while (true) {
+    announcer.Poll(status, keyframes.matched() > 0);
+    if (stop->requested() && !flush_deadline) {
+      // Stopping: slam publishes its last corrections as it stops; take them if it is there.
+      flush_deadline = std::chrono::steady_clock::now() +
+                       std::chrono::milliseconds(static_cast<int64_t>(options.flush_timeout_s * 1000));
+      if (keyframes.matched() == 0) *flush_deadline = std::chrono::steady_clock::now();
+    }
     std::optional<msg::Keyframe> sample = queue.Pop(std::chrono::milliseconds(50));
     if (!sample) {
       std::lock_guard<std::mutex> lock(mutex);
       // slam's DONE is written after its last keyframe (and after waiting for acknowledgements);
       // order is only kept per writer, so allow a short grace period (6 x 50 ms) after DONE.
       if (slam_done && ++idle_after_done >= 6) break;
+      if (flush_deadline && (std::chrono::steady_clock::now() >= *flush_deadline ||
+                             keyframes.matched() == 0)) {
+        break;
+      }
       continue;
     }
     idle_after_done = 0;
@@ -105,7 +131,7 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
       ++stats.keyframes_received;
       if (!k.pose_update_only) ++since_update;
       if (options.update_every_keyframes > 0 &&
-          since_update >= static_cast<size_t>(options.update_every_keyframes)) {
+          since_update >= static_cast<size_t>(options.update_every_keyframes) && !flush_deadline) {
         publish();
         since_update = 0;
       }
@@ -122,7 +148,9 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
   status.Write(done);
   updates.WaitForAcknowledgments(std::chrono::milliseconds(3000));
   status.WaitForAcknowledgments(std::chrono::milliseconds(2000));
-  LOG_INFO << "mapper: " << core.num_keyframes() << " keyframes in the map"
+  LOG_INFO << "mapper: " << stats.keyframes_received << " keyframe messages (" << core.num_inserted()
+           << " new, " << core.num_pose_updates() << " pose updates, " << core.num_removed()
+           << " removed), " << core.num_keyframes() << " keyframes in the map"
            << (options.map_path.empty() ? "" : ", written to " + options.map_path);
   return stats;
 }

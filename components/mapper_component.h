@@ -1,7 +1,11 @@
 // Mapper component: Keyframe -> OctoMapBuilder -> map.bt (periodically and at the end, atomic)
 // + MapUpdate (whole .bt stream + stats, transient-local keep-last 1).
+// Keyframe messages: a new keyframe is inserted; pose_update_only -> OctoMapBuilder::UpdatePoses;
+// removed (culled by the SLAM) -> OctoMapBuilder::Remove.
 // Core: MapperCore (no DDS). Shell: RunMapper, ends after slam's COMPONENT_DONE and the keyframe
-// queue is drained (or on stop), always writing the map first.
+// queue is drained. On stop (SIGINT / SIGTERM) it keeps draining until slam's COMPONENT_DONE
+// (slam publishes its last corrections when it stops) for at most flush_timeout_s while a
+// keyframe writer is matched, then writes the map.
 #pragma once
 
 #include <memory>
@@ -23,16 +27,23 @@ struct MapperOptions {
   std::string map_path = "map.bt";  // "" = do not write
   // Write map.bt + publish MapUpdate every this many inserted keyframes (0 = only at the end).
   int update_every_keyframes = 5;
+  // After stop: longest wait for slam's last keyframe messages (seconds).
+  double flush_timeout_s = 5.0;
   void Check() const;
 };
 
 class MapperCore {
  public:
   explicit MapperCore(const MapperOptions& options);
-  // Inserts a keyframe (creates the builder on the first one, from the keyframe's camera).
+  // Inserts a keyframe (creates the builder on the first one, from the keyframe's camera), or
+  // applies a pose correction / removal of a known keyframe (unknown ids are ignored).
   void Process(const KeyframeData& keyframe, const PinholeCamera& camera);
   bool has_map() const { return builder_ != nullptr; }
-  size_t num_keyframes() const { return num_keyframes_; }
+  // Keyframes currently in the map (inserted minus removed).
+  size_t num_keyframes() const;
+  size_t num_inserted() const { return num_inserted_; }
+  size_t num_pose_updates() const { return num_pose_updates_; }
+  size_t num_removed() const { return num_removed_; }
   // Whole map as a MapUpdate (binary .bt stream). Requires has_map().
   msg::MapUpdate MakeUpdate();
   // Atomic .bt write (no-op without map or path).
@@ -41,7 +52,7 @@ class MapperCore {
  private:
   MapperOptions options_;
   std::unique_ptr<OctoMapBuilder> builder_;
-  size_t num_keyframes_ = 0;
+  size_t num_inserted_ = 0, num_pose_updates_ = 0, num_removed_ = 0;
   Timestamp newest_;
 };
 

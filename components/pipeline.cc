@@ -86,6 +86,7 @@ void PipelineOptions::Check() const {
   DYGSLAM_CHECK_OPTION(!processes || !settings_path.empty(),
                        "settings_path (required with --processes: the children re-read it)");
   DYGSLAM_CHECK_OPTION(last_entry == 0 || last_entry > first_entry, "frames (empty range)");
+  DYGSLAM_CHECK_OPTION(flush_timeout_s >= 0, "flush_timeout_s");
 }
 
 bool PipelineOptions::NeedsDetectorComponent() const {
@@ -129,7 +130,10 @@ std::vector<std::string> ComponentArgs(const PipelineOptions& o) {
       "--rate", Number(o.rate), "--window", std::to_string(o.window),
       "--detection-wait-ms", std::to_string(o.detection_wait.count()),
       "--domain", std::to_string(DomainId(o))};
+  if (!o.partition.empty()) a.insert(a.end(), {"--partition", o.partition});
   if (o.system.deterministic) a.push_back("--deterministic");
+  if (o.progress) a.push_back("--progress");
+  if (o.wait_for_components) a.push_back("--wait-for-components");
   if (!o.run_detector) a.push_back("--no-detector");
   if (!o.run_mapper) a.push_back("--no-mapper");
   if (!o.system.detector.cfg_path.empty()) {
@@ -140,6 +144,16 @@ std::vector<std::string> ComponentArgs(const PipelineOptions& o) {
 }
 
 namespace {
+
+std::vector<std::string> ComponentNames(const PipelineOptions& options) {
+  // Consumers first, the player last.
+  std::vector<std::string> names = {"recorder"};
+  if (options.run_mapper) names.push_back("mapper");
+  names.push_back("slam");
+  if (options.NeedsDetectorComponent()) names.push_back("detector");
+  names.push_back("player");
+  return names;
+}
 
 int RunComponentOn(const std::string& name, const PipelineOptions& options,
                    std::shared_ptr<dds::Participant> participant, const StopSignalPtr& stop) {
@@ -153,6 +167,11 @@ int RunComponentOn(const std::string& name, const PipelineOptions& options,
     p.last_entry = options.last_entry;
     p.window = options.window;
     p.expected_readers = options.NeedsDetectorComponent() ? 2 : 1;
+    if (options.wait_for_components) {
+      for (const std::string& component : ComponentNames(options)) {
+        if (component != "player") p.wait_for_components.push_back(component);
+      }
+    }
     RunPlayer(participant, p, stop);
     return 0;
   }
@@ -171,6 +190,8 @@ int RunComponentOn(const std::string& name, const PipelineOptions& options,
   if (name == "mapper") {
     MapperOptions m;
     m.map_path = (fs::path(options.output_dir) / "map.bt").string();
+    m.flush_timeout_s = options.flush_timeout_s;
+    m.octomap = options.octomap;
     fs::create_directories(options.output_dir);
     RunMapper(participant, m, stop);
     return 0;
@@ -178,6 +199,8 @@ int RunComponentOn(const std::string& name, const PipelineOptions& options,
   if (name == "recorder") {
     RecorderOptions r;
     r.output_dir = options.output_dir;
+    r.flush_timeout_s = options.flush_timeout_s;
+    r.progress = options.progress;
     RunRecorder(participant, r, stop);
     return 0;
   }
@@ -190,17 +213,8 @@ std::shared_ptr<dds::Participant> MakeParticipant(const PipelineOptions& options
   dds::ParticipantOptions p;
   p.domain_id = DomainId(options);
   p.name = "dygslam_" + name;
+  p.partition = options.partition;
   return dds::Participant::Create(p);
-}
-
-std::vector<std::string> ComponentNames(const PipelineOptions& options) {
-  // Consumers first, the player last.
-  std::vector<std::string> names = {"recorder"};
-  if (options.run_mapper) names.push_back("mapper");
-  names.push_back("slam");
-  if (options.NeedsDetectorComponent()) names.push_back("detector");
-  names.push_back("player");
-  return names;
 }
 
 int RunSingleProcess(const PipelineOptions& options, const StopSignalPtr& stop) {
@@ -302,8 +316,10 @@ int RunComponent(const std::string& name, const PipelineOptions& options,
   return RunComponentOn(name, options, MakeParticipant(options, name), stop);
 }
 
-int RunPipeline(const PipelineOptions& options) {
-  options.Check();
+int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
+  pipeline_options.Check();
+  PipelineOptions options = pipeline_options;
+  options.wait_for_components = true;
   fs::create_directories(options.output_dir);
   auto stop = std::make_shared<StopSignal>();
   SignalStopper signals(stop);
@@ -311,6 +327,7 @@ int RunPipeline(const PipelineOptions& options) {
   if (signals.signaled()) {
     LOG_INFO << "stopped by signal; outputs flushed";
   }
+  if (report != nullptr) report->signaled = signals.signaled();
   return code;
 }
 

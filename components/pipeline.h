@@ -16,8 +16,8 @@
 // SIGINT / SIGTERM: every component stops, flushes what it has (the recorder writes the final
 // trajectory if slam managed to send it, else the online poses; the mapper writes the map) and
 // RunPipeline returns 0. In multi-process mode the signal is forwarded (SIGTERM) to the children.
-// Outputs in output_dir: trajectory.txt, keyframes.txt, trajectory_online.txt, groundtruth.txt,
-// map.bt (if run_mapper).
+// Outputs in output_dir: trajectory.txt, keyframes.txt, frames.csv, trajectory_online.txt,
+// groundtruth.txt, map.bt (if run_mapper).
 #pragma once
 
 #include <chrono>
@@ -26,6 +26,7 @@
 
 #include "components/component_common.h"
 #include "core/system/system.h"
+#include "mapping/octomap_builder.h"
 
 namespace dygslam {
 
@@ -35,6 +36,7 @@ struct PipelineOptions {
   // Settings file of `system` (children of --processes re-read it with the same flags).
   std::string settings_path;
   SystemOptions system;  // camera, sensor, filter mode, deterministic, ...
+  OctoMapOptions octomap;  // mapper (settings section OctoMap:)
   // Detector component model (DetectorOptionsForModel) unless system.detector.cfg_path is set.
   std::string detector_model = "yolo-fastest-1.1";
   size_t first_entry = 0, last_entry = 0;  // rgb.txt entries [first, last), last 0 = all
@@ -45,6 +47,15 @@ struct PipelineOptions {
   bool run_detector = true;  // detector component (filter modes boxes/full); false: System's own
   bool run_mapper = true;
   int domain_id = -1;        // -1: DYGSLAM_DOMAIN_ID or 0
+  // DDS partition of every component ("" = default partition). `dygslam run` sets a name unique
+  // to the run, so concurrent runs on one domain stay apart.
+  std::string partition;
+  bool progress = false;     // recorder prints a progress line on stderr
+  // The player waits for the STARTED announcement of every other component of this pipeline
+  // (set by RunPipeline; `dygslam component player --wait-for-components` by hand).
+  bool wait_for_components = false;
+  // On stop: how long mapper and recorder wait for slam's last outputs (seconds).
+  double flush_timeout_s = 5.0;
   std::string executable;    // --processes: the dygslam binary (default /proc/self/exe)
   void Check() const;
   bool NeedsDetectorComponent() const;
@@ -59,7 +70,12 @@ std::vector<std::string> ComponentArgs(const PipelineOptions& options);
 int RunComponent(const std::string& name, const PipelineOptions& options,
                  const StopSignalPtr& stop);
 
-int RunPipeline(const PipelineOptions& options);
+struct StopReport {
+  bool signaled = false;  // stopped by SIGINT / SIGTERM (outputs flushed)
+};
+// Runs the whole pipeline until the end of the data or a signal. Returns 0 on success (also when
+// stopped by a signal), 1 if a component failed.
+int RunPipeline(const PipelineOptions& options, StopReport* report = nullptr);
 
 // Turns SIGINT / SIGTERM into stop->Request() while alive (one watcher per process).
 class SignalStopper {

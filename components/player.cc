@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <set>
 #include <thread>
 
 #include "components/dds/participant.h"
@@ -94,6 +95,7 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   std::condition_variable cv;
   int64_t acked = -1;  // highest seq whose pose was received
   bool slam_done = false;
+  std::set<std::string> started;  // components that announced STARTED
   dds::Writer<msg::RgbdFramePubSubType> frames(participant, dds::topics::kRgbdFrame,
                                               dds::TopicKind::kRgbdFrame);
   dds::Writer<msg::GroundTruthPosePubSubType> gt_writer(participant, dds::topics::kGroundTruth,
@@ -112,13 +114,15 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   dds::Reader<msg::StreamStatusPubSubType> status_reader(
       participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
       [&](msg::StreamStatus&& s) {
-        if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone) && s.source() == "slam") {
-          {
-            std::lock_guard<std::mutex> lock(mutex);
+        {
+          std::lock_guard<std::mutex> lock(mutex);
+          if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone) &&
+              s.source() == "slam") {
             slam_done = true;
           }
-          cv.notify_all();
+          if (s.kind() == static_cast<uint8_t>(StreamEvent::kStarted)) started.insert(s.source());
         }
+        cv.notify_all();
       });
 
   const auto readers_deadline =
@@ -129,6 +133,25 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   if (frames.matched() < options.expected_readers && !stop->requested()) {
     LOG_WARNING << "player: only " << frames.matched() << " of " << options.expected_readers
                 << " frame readers after " << options.wait_for_readers_s << " s; playing anyway";
+  }
+  {
+    const auto deadline = Clock::now() + std::chrono::milliseconds(static_cast<int64_t>(
+                                              options.wait_for_components_s * 1000));
+    std::unique_lock<std::mutex> lock(mutex);
+    auto missing = [&] {
+      std::string names;
+      for (const std::string& name : options.wait_for_components) {
+        if (!started.count(name)) names += (names.empty() ? "" : ", ") + name;
+      }
+      return names;
+    };
+    while (!missing().empty() && !stop->requested() && Clock::now() < deadline) {
+      cv.wait_for(lock, std::chrono::milliseconds(20));
+    }
+    if (!missing().empty() && !stop->requested()) {
+      LOG_WARNING << "player: no start announcement from " << missing() << " after "
+                  << options.wait_for_components_s << " s; playing anyway";
+    }
   }
   status.Write(MakeStatus(StreamEvent::kStarted, "player", player.num_frames(), 0));
 

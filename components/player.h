@@ -43,6 +43,11 @@ struct PlayerOptions {
   // Wait for at least one frame reader before the first frame (seconds).
   double wait_for_readers_s = 10.0;
   int expected_readers = 1;
+  // Components whose STARTED announcement (StreamStatus, source = name) the player waits for
+  // before the first frame (the pipeline lists the ones it runs), at most
+  // wait_for_components_s seconds.
+  std::vector<std::string> wait_for_components;
+  double wait_for_components_s = 60.0;
   bool publish_ground_truth = true;
   void Check() const;
 };

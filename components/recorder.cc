@@ -1,12 +1,15 @@
 #include "components/recorder.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
+#include "components/stream_status.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
+#include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 #include "dygslam_msg/CameraPosePubSubTypes.h"
 #include "dygslam_msg/GroundTruthPubSubTypes.h"
@@ -17,18 +20,45 @@ namespace dygslam {
 
 void RecorderOptions::Check() const {
   DYGSLAM_CHECK_OPTION(!output_dir.empty(), "recorder.output_dir");
+  DYGSLAM_CHECK_OPTION(flush_timeout_s >= 0, "recorder.flush_timeout_s");
 }
 
 RecorderCore::RecorderCore(const RecorderOptions& options) : options_(options) {
   options_.Check();
 }
 
+std::string FramesCsvHeader() {
+  return "stamp,state,keyframe,features,dynamic,tracked,orb_ms,detection_ms,matching_ms,"
+         "probability_ms,tracking_ms,total_ms\n";
+}
+
+std::string FramesCsvRow(const msg::CameraPose& m) {
+  const Timestamp stamp = TimeFromMsg(m.header().stamp(), "CameraPose.header.stamp");
+  if (m.tracking_state() > static_cast<uint8_t>(TrackingState::kLost)) {
+    throw InputError("CameraPose.tracking_state: " + std::to_string(m.tracking_state()) +
+                     " is not a tracking state (0..3)");
+  }
+  char line[512];
+  std::snprintf(line, sizeof(line), "%s,%s,%d,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n",
+                stamp.ToString().c_str(), ToString(static_cast<TrackingState>(m.tracking_state())),
+                m.is_keyframe() ? 1 : 0, m.num_features(), m.num_dynamic(), m.num_tracked(),
+                m.orb_extraction_ms(), m.detection_ms(), m.matching_ms(), m.probability_ms(),
+                m.tracking_ms(), m.total_ms());
+  return line;
+}
+
 void RecorderCore::AddPose(const msg::CameraPose& pose) {
-  if (!pose.has_pose()) return;
-  StampedPose p;
-  p.stamp = TimeFromMsg(pose.header().stamp(), "CameraPose.header.stamp");
-  p.world_from_cam = PoseFromMsg(pose.world_from_cam(), "CameraPose.world_from_cam");
-  online_.push_back(p);
+  const Timestamp stamp = TimeFromMsg(pose.header().stamp(), "CameraPose.header.stamp");
+  std::string row = FramesCsvRow(pose);
+  if (pose.has_pose()) {
+    StampedPose p;
+    p.stamp = stamp;
+    p.world_from_cam = PoseFromMsg(pose.world_from_cam(), "CameraPose.world_from_cam");
+    online_.push_back(p);
+    if (pose.is_keyframe()) online_keyframes_.push_back(p);
+  }
+  if (pose.tracking_state() == static_cast<uint8_t>(TrackingState::kLost)) ++num_lost_;
+  frame_rows_.emplace_back(stamp, std::move(row));
 }
 
 void RecorderCore::SetTrajectory(const msg::Trajectory& trajectory) {
@@ -65,7 +95,14 @@ std::string RecorderCore::Write() const {
   const std::string trajectory = (dir / "trajectory.txt").string();
   WriteTumTrajectory(trajectory, final_frames_ ? *final_frames_ : SortedUnique(online_));
   WriteTumTrajectory((dir / "trajectory_online.txt").string(), SortedUnique(online_));
-  if (final_keyframes_) WriteTumTrajectory((dir / "keyframes.txt").string(), *final_keyframes_);
+  WriteTumTrajectory((dir / "keyframes.txt").string(),
+                     final_keyframes_ ? *final_keyframes_ : SortedUnique(online_keyframes_));
+  std::vector<std::pair<Timestamp, std::string>> rows = frame_rows_;
+  std::stable_sort(rows.begin(), rows.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::string csv = FramesCsvHeader();
+  for (const auto& row : rows) csv += row.second;
+  WriteFileAtomically((dir / "frames.csv").string(), csv);
   if (!ground_truth_.empty()) {
     WriteTumTrajectory((dir / "groundtruth.txt").string(), SortedUnique(ground_truth_));
   }
@@ -79,6 +116,9 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
   std::mutex mutex;
   std::condition_variable cv;
   bool slam_done = false;
+  uint64_t total_frames = 0;  // announced by the player (STARTED)
+  const auto start = std::chrono::steady_clock::now();
+  std::optional<std::chrono::steady_clock::time_point> first_pose;
 
   dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
                                                   dds::TopicKind::kStreamStatus);
@@ -92,6 +132,20 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
         } catch (const InputError& e) {
           ++stats.bad_samples;
           LOG_WARNING << "recorder: dropped pose: " << e.what();
+          return;
+        }
+        const auto now = std::chrono::steady_clock::now();
+        if (!first_pose) first_pose = now;
+        const size_t n = core.num_frames();
+        if (options.progress && (n % 10 == 0 || n == total_frames)) {
+          const double elapsed = std::chrono::duration<double>(now - start).count();
+          std::fprintf(stderr, "\r[run] frame %zu/%llu  %.1f fps  state=%s  lost=%zu   ", n,
+                       static_cast<unsigned long long>(total_frames), n / std::max(elapsed, 1e-9),
+                       p.tracking_state() <= 3
+                           ? ToString(static_cast<TrackingState>(p.tracking_state()))
+                           : "?",
+                       core.num_lost());
+          std::fflush(stderr);
         }
       });
   dds::Reader<msg::TrajectoryPubSubType> trajectories(
@@ -119,8 +173,11 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
   dds::Reader<msg::StreamStatusPubSubType> status_reader(
       participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
       [&](msg::StreamStatus&& s) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (s.kind() == static_cast<uint8_t>(StreamEvent::kStarted) && s.source() == "player") {
+          total_frames = s.num_frames();
+        }
         if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone) && s.source() == "slam") {
-          std::lock_guard<std::mutex> lock(mutex);
           slam_done = true;
           cv.notify_all();
         }
@@ -128,11 +185,34 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
 
   {
     std::unique_lock<std::mutex> lock(mutex);
-    std::optional<std::chrono::steady_clock::time_point> done_at;
-    while (!stop->requested()) {
+    std::optional<std::chrono::steady_clock::time_point> done_at, flush_deadline;
+    StartAnnouncer announcer("recorder");
+    while (true) {
+      if (!announcer.done()) {
+        // Never write while holding `mutex`: intra-process delivery runs our own listeners
+        // (which take it) on this thread.
+        lock.unlock();
+        announcer.Poll(status, poses.matched() > 0 && trajectories.matched() > 0);
+        lock.lock();
+      }
       if (core.has_final_trajectory() && core.has_final_keyframes()) break;
+      if (stop->requested()) {
+        // Stopping: slam sends its final trajectories as it stops; wait for them while it is
+        // there (bounded).
+        const auto now = std::chrono::steady_clock::now();
+        if (!flush_deadline) {
+          flush_deadline =
+              now + std::chrono::milliseconds(static_cast<int64_t>(options.flush_timeout_s * 1000));
+        }
+        if (now >= *flush_deadline || trajectories.matched() == 0) break;
+      }
       if (slam_done && !done_at) done_at = std::chrono::steady_clock::now();
-      if (done_at && std::chrono::steady_clock::now() - *done_at > std::chrono::seconds(3)) {
+      // slam writes its final trajectories before DONE; give them 3 s, or up to 15 s while the
+      // slam is still there (it stays until they are acknowledged).
+      const auto since_done =
+          done_at ? std::chrono::steady_clock::now() - *done_at : std::chrono::seconds(0);
+      if (done_at && since_done > std::chrono::seconds(3) &&
+          (trajectories.matched() == 0 || since_done > std::chrono::seconds(15))) {
         LOG_WARNING << "recorder: slam is done but its final trajectory did not arrive; writing "
                        "the online poses";
         break;
@@ -141,6 +221,7 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
     }
     stats.final_trajectory = core.has_final_trajectory();
     stats.trajectory_path = core.Write();
+    if (options.progress && core.num_frames() > 0) std::fprintf(stderr, "\n");
   }
   msg::StreamStatus done;
   done.kind(static_cast<uint8_t>(StreamEvent::kComponentDone));

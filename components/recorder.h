@@ -2,11 +2,15 @@
 // and GroundTruthPose -> TUM files in output_dir, written atomically (temporary file + rename):
 //   trajectory.txt           final trajectory of every tracked frame (slam's System::Trajectory()),
 //                            or, if slam never sent it (killed / stopped), the online poses
-//   keyframes.txt            final keyframe trajectory (when received)
+//   keyframes.txt            final keyframe trajectory, or the online poses of keyframe frames
+//   frames.csv               per-frame state, counts and stage times (same columns as
+//                            `dygslam run --direct`), from CameraPose
 //   trajectory_online.txt    poses as published per frame
 //   groundtruth.txt          ground truth as published by the player (when received)
 // Core: RecorderCore (no DDS). Shell: RunRecorder ends once both final trajectories arrived
-// after slam's COMPONENT_DONE (or 3 s after DONE without them, or on stop), always writing.
+// after slam's COMPONENT_DONE (or 3 s after DONE without them), always writing. On stop
+// (SIGINT / SIGTERM) it waits up to flush_timeout_s for slam's final trajectories (slam sends
+// them as it stops) while a slam writer is matched, then writes what it has.
 #pragma once
 
 #include <memory>
@@ -25,8 +29,16 @@ class Participant;
 
 struct RecorderOptions {
   std::string output_dir = ".";
+  // After stop: longest wait for slam's final trajectories (seconds).
+  double flush_timeout_s = 5.0;
+  // Progress line on stderr ("[run] frame k/N  fps  state  lost"), every 10 frames.
+  bool progress = false;
   void Check() const;
 };
+
+// Header and one row of frames.csv (the columns of `dygslam run --direct`).
+std::string FramesCsvHeader();
+std::string FramesCsvRow(const msg::CameraPose& pose);
 
 class RecorderCore {
  public:
@@ -37,12 +49,17 @@ class RecorderCore {
   bool has_final_trajectory() const { return final_frames_.has_value(); }
   bool has_final_keyframes() const { return final_keyframes_.has_value(); }
   size_t num_online_poses() const { return online_.size(); }
+  size_t num_frames() const { return frame_rows_.size(); }
+  size_t num_lost() const { return num_lost_; }
   // Writes the files (see above). Returns the trajectory.txt path.
   std::string Write() const;
 
  private:
   RecorderOptions options_;
   std::vector<StampedPose> online_;
+  std::vector<StampedPose> online_keyframes_;
+  std::vector<std::pair<Timestamp, std::string>> frame_rows_;  // frames.csv rows by stamp
+  size_t num_lost_ = 0;
   std::vector<StampedPose> ground_truth_;
   std::optional<std::vector<StampedPose>> final_frames_, final_keyframes_;
 };

@@ -1,9 +1,11 @@
 #include "components/slam_component.h"
 
 #include <condition_variable>
+#include <map>
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
+#include "components/stream_status.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "dygslam_msg/CameraPosePubSubTypes.h"
@@ -81,6 +83,13 @@ msg::CameraPose CameraPoseToMsg(const FrameResult& r, uint64_t seq, bool detecti
   m.num_tracked(r.num_tracked);
   m.detections_used(r.detections_used);
   m.detections_missing(detections_missing);
+  m.orb_extraction_ms(r.times.orb_extraction_ms);
+  m.detection_ms(r.times.detection_ms);
+  m.detection_wait_ms(r.times.detection_wait_ms);
+  m.matching_ms(r.times.matching_ms);
+  m.probability_ms(r.times.probability_ms);
+  m.tracking_ms(r.times.tracking_ms);
+  m.local_mapping_ms(r.times.local_mapping_ms);
   m.total_ms(r.times.total_ms);
   return m;
 }
@@ -105,6 +114,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   size_t frames_received = 0;
   Clock::time_point last_frame_time = Clock::now();
   int detector_writers_seen = 0;
+  std::map<int64_t, double> inference_ms;  // detector component's time per frame stamp (ns)
   bool detector_done = false;  // the detector announced COMPONENT_DONE (finished, not lost)
 
   dds::Writer<msg::CameraPosePubSubType> pose_writer(participant, dds::topics::kCameraPose,
@@ -138,6 +148,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
           std::vector<Detection> dets = DetectionsFromMsg(sample);
           const Timestamp stamp = TimeFromMsg(sample.header().stamp(), "Detections.header.stamp");
           std::lock_guard<std::mutex> lock(mutex);
+          inference_ms[stamp.nanoseconds()] = sample.inference_ms();
           pairer.AddDetections(stamp, std::move(dets));
         } catch (const InputError& e) {
           LOG_WARNING << "slam: dropped detections seq " << sample.header().seq() << ": "
@@ -163,10 +174,18 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
     for (const KeyframeData& k : keyframes) {
       keyframe_writer.Write(KeyframeToMsg(k, core.camera()));
       ++stats.keyframes_published;
+      if (k.removed) {
+        ++stats.keyframes_removed;
+      } else if (k.pose_update_only) {
+        ++stats.keyframe_pose_updates;
+      }
     }
   };
 
+  StartAnnouncer announcer("slam");
   while (!stop->requested()) {
+    announcer.Poll(status, frames.matched() > 0 &&
+                               (!pairing_options.needs_detections || detections.matched() > 0));
     std::optional<PairedFrame> paired;
     {
       std::unique_lock<std::mutex> lock(mutex);
@@ -189,10 +208,20 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
       }
     }
     const std::vector<Detection>* dets = paired->detections ? &*paired->detections : nullptr;
+    double detection_ms = 0;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      const int64_t stamp = paired->frame.stamp.nanoseconds();
+      auto it = inference_ms.find(stamp);
+      if (it != inference_ms.end() && dets != nullptr) detection_ms = it->second;
+      inference_ms.erase(inference_ms.begin(), inference_ms.upper_bound(stamp));
+    }
     const SlamOutput out = core.Process(paired->frame, dets);
     ++stats.frames_processed;
     if (out.result.world_from_cam) ++stats.frames_tracked;
-    pose_writer.Write(CameraPoseToMsg(out.result, paired->frame.seq, paired->detections_missing));
+    msg::CameraPose pose = CameraPoseToMsg(out.result, paired->frame.seq, paired->detections_missing);
+    if (dets != nullptr && options.external_detections) pose.detection_ms(detection_ms);
+    pose_writer.Write(pose);
     publish_keyframes(out.keyframes);
   }
 
@@ -214,7 +243,10 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   trajectory_writer.WaitForAcknowledgments(std::chrono::milliseconds(5000));
   status.WaitForAcknowledgments(std::chrono::milliseconds(2000));
   LOG_INFO << "slam: " << stats.frames_processed << " frames (" << stats.frames_tracked
-           << " tracked), " << stats.keyframes_published << " keyframe messages; detections: "
+           << " tracked), " << stats.keyframes_published << " keyframe messages ("
+           << stats.keyframes_published - stats.keyframe_pose_updates - stats.keyframes_removed
+           << " new, " << stats.keyframe_pose_updates << " pose updates, " << stats.keyframes_removed
+           << " removed); detections: "
            << stats.pairing.with_detections << " paired, " << stats.pairing.missing_detections
            << " missing" << (stats.detector_lost ? " (detector lost: geometry-only frames)" : "");
   return stats;

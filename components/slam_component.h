@@ -68,7 +68,9 @@ struct SlamStats {
   PairingStats pairing;
   size_t frames_processed = 0;
   size_t frames_tracked = 0;
-  size_t keyframes_published = 0;
+  size_t keyframes_published = 0;  // Keyframe messages: new + pose updates + removals
+  size_t keyframe_pose_updates = 0;
+  size_t keyframes_removed = 0;
   size_t bad_samples = 0;
   bool detector_lost = false;
 };

@@ -5,7 +5,9 @@
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/publisher/qos/PublisherQos.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/subscriber/qos/SubscriberQos.hpp>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 
@@ -24,6 +26,8 @@ void ParticipantOptions::Check() const {
   DYGSLAM_CHECK_OPTION(use_shm || use_udp_loopback, "transports (shm or udp)");
   DYGSLAM_CHECK_OPTION(shm_segment_size >= (1u << 20), "shm_segment_size");
   DYGSLAM_CHECK_OPTION(socket_buffer_size >= (64u << 10), "socket_buffer_size");
+  DYGSLAM_CHECK_OPTION(partition.find_first_of("*?[]") == std::string::npos,
+                       "partition (no wildcards)");
 }
 
 int DomainIdFromEnvironment(int fallback) {
@@ -79,12 +83,19 @@ std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& optio
     throw std::runtime_error("Fast DDS: cannot create participant '" + options.name +
                              "' on domain " + std::to_string(options.domain_id));
   }
-  result->publisher_ = result->participant_->create_publisher(PUBLISHER_QOS_DEFAULT);
-  result->subscriber_ = result->participant_->create_subscriber(SUBSCRIBER_QOS_DEFAULT);
+  PublisherQos publisher_qos = PUBLISHER_QOS_DEFAULT;
+  SubscriberQos subscriber_qos = SUBSCRIBER_QOS_DEFAULT;
+  if (!options.partition.empty()) {
+    publisher_qos.partition().push_back(options.partition.c_str());
+    subscriber_qos.partition().push_back(options.partition.c_str());
+  }
+  result->publisher_ = result->participant_->create_publisher(publisher_qos);
+  result->subscriber_ = result->participant_->create_subscriber(subscriber_qos);
   if (result->publisher_ == nullptr || result->subscriber_ == nullptr) {
     throw std::runtime_error("Fast DDS: cannot create publisher/subscriber");
   }
   LOG_DEBUG << "participant '" << options.name << "' domain " << options.domain_id
+            << (options.partition.empty() ? "" : " partition '" + options.partition + "'")
             << (xml ? " (XML profile)" : " (SHM + UDPv4 127.0.0.1)");
   return result;
 }

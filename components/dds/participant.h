@@ -34,6 +34,10 @@ struct ParticipantOptions {
   bool use_udp_loopback = true;
   uint32_t shm_segment_size = 16u << 20;   // bytes
   uint32_t socket_buffer_size = 4u << 20;  // bytes, UDP send + receive
+  // DDS partition of every reader and writer of this participant ("" = the default partition).
+  // `dygslam run` gives each run its own partition so that two runs on the same domain (two
+  // users on one machine) never exchange samples; components started by hand use "".
+  std::string partition;
   void Check() const;
 };
 

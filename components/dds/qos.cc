@@ -18,9 +18,9 @@ Policy PolicyFor(TopicKind kind) {
     case TopicKind::kRgbdFrame:
       return {true, false, false, kFrameHistoryDepth};
     case TopicKind::kDetections:
-      return {true, false, false, 32};
+      return {true, true, false, 32};
     case TopicKind::kCameraPose:
-      return {true, false, false, 64};
+      return {true, true, false, 64};
     case TopicKind::kKeyframe:
       return {true, true, true, 0};
     case TopicKind::kMapUpdate:

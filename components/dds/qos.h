@@ -3,8 +3,8 @@
 // | topic                  | type               | reliability | durability      | history      |
 // |------------------------|--------------------|-------------|-----------------|--------------|
 // | dygslam/rgbd_frame     | RgbdFrame          | reliable    | volatile        | keep-last 4  |
-// | dygslam/detections     | Detections         | reliable    | volatile        | keep-last 32 |
-// | dygslam/camera_pose    | CameraPose         | reliable    | volatile        | keep-last 64 |
+// | dygslam/detections     | Detections         | reliable    | transient-local | keep-last 32 |
+// | dygslam/camera_pose    | CameraPose         | reliable    | transient-local | keep-last 64 |
 // | dygslam/keyframe       | Keyframe           | reliable    | transient-local | keep-all     |
 // | dygslam/map_update     | MapUpdate          | reliable    | transient-local | keep-last 1  |
 // | dygslam/ground_truth   | GroundTruthPose    | reliable    | transient-local | keep-all     |
@@ -20,7 +20,10 @@
 //   segment) stalls 0.1-1 s: hence the 16 MiB SHM segment + 4 MiB socket buffers in
 //   participant.h.
 // - Detections / poses are small: reliable keep-last with a depth that covers any realistic lag.
-//   Poses double as the frame acknowledgement for the player's back-pressure.
+//   Poses double as the frame acknowledgement for the player's back-pressure. Transient-local:
+//   discovery is pairwise, so a reader (recorder, slam) may be matched by its writer a few ms
+//   after the first samples went out; the writer then delivers them from its history (frames.csv
+//   and the deterministic pairing need every one).
 // - Keyframes are reliable + transient-local keep-all: a mapper that starts late (or restarts)
 //   receives the whole keyframe history (memory grows with the number of keyframes, ~2.4 MB each).
 // - The map update carries the whole octree: only the newest one matters (keep-last 1), and a

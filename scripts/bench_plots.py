@@ -68,11 +68,24 @@ def draw(plt, sequence, series, out_png):
             for i in range(0, len(rows), max(1, len(rows) // 60)):
                 ax0.plot([rows[i][1 + a], rows[i][4 + a]], [rows[i][1 + b], rows[i][4 + b]], "-",
                          color="tab:red", lw=0.5)
+    if len(series) > 1:
+        # Frame the ground truth: estimates that drift far away leave the picture (their ATE
+        # curve on the right still shows them) instead of shrinking the good ones to a dot.
+        lo = [min(p[k] for p in gt) for k in (a, b)]
+        hi = [max(p[k] for p in gt) for k in (a, b)]
+        span = max(hi[0] - lo[0], hi[1] - lo[1], 0.2)
+        centre = [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2]
+        half = 0.5 * span * 1.6
+        ax0.set_xlim(centre[0] - half, centre[0] + half)
+        ax0.set_ylim(centre[1] - half, centre[1] + half)
+        ax0.set_aspect("equal", adjustable="box")
+    else:
+        ax0.set_aspect("equal", adjustable="datalim")
     ax0.set_xlabel(f"{names[a]} [m]")
     ax0.set_ylabel(f"{names[b]} [m]")
-    ax0.set_aspect("equal", adjustable="datalim")
     ax0.legend(loc="best", fontsize=8)
-    ax0.set_title(f"ground truth vs. aligned estimate ({names[a]}-{names[b]} plane)")
+    ax0.set_title(f"ground truth vs. aligned estimate ({names[a]}-{names[b]} plane)"
+                  + (", framed on the ground truth" if len(series) > 1 else ""), fontsize=10)
     ax1.set_xlabel("time [s]")
     ax1.set_ylabel("ATE [m]")
     ax1.set_yscale("log" if len(series) > 1 else "linear")

@@ -141,6 +141,14 @@ int RunMap(const std::vector<std::string>& args) {
             "fixed seeds and synchronous local mapping: identical output run to run");
   p.AddFlag("quiet", "no progress line");
   if (!p.Parse(args)) return p.exit_code();
+  // Numbers first: a malformed one is a usage error (exit 2).
+  try {
+    for (const char* name : {"resolution", "every", "reference-until", "save-every"}) {
+      if (p.Has(name)) ParsePositive(name, p.Get(name));
+    }
+  } catch (const InvalidOptions& e) {
+    return p.UsageError(e.what());
+  }
 
   const std::string dataset_dir = p.Positional("DATASET_DIR");
   const std::string config = p.Has("config") ? p.Get("config") : DefaultSettingsFile(dataset_dir);

@@ -55,7 +55,6 @@ void KeyframeMapper::RethrowIfFailed() {
 void KeyframeMapper::Submit(const KeyframeData& keyframe) {
   Item item{DeepCopy(keyframe), std::chrono::steady_clock::now()};
   std::unique_lock<std::mutex> lock(mutex_);
-  RethrowIfFailed();
   if (queue_.size() >= mapper_options_.max_queue) {
     ++stats_.num_blocked;
     changed_.wait(lock, [this] { return queue_.size() < mapper_options_.max_queue || stop_; });

@@ -18,7 +18,8 @@
 //
 // Nothing is dropped: when max_queue submissions are waiting, Submit() blocks (back-pressure on
 // the SLAM) and counts it in MapperStats::num_blocked. An exception from the builder (bad
-// keyframe data) is kept and rethrown by the next Submit()/Flush()/WithBuilder().
+// keyframe data) is kept and rethrown by the next Flush()/WithBuilder(); Submit() never throws
+// it, because it runs inside the SLAM's callback (possibly on the local-mapping thread).
 #pragma once
 
 #include <chrono>
@@ -70,7 +71,7 @@ class KeyframeMapper {
   KeyframeMapper(const KeyframeMapper&) = delete;
   KeyframeMapper& operator=(const KeyframeMapper&) = delete;
 
-  // Thread-safe. Copies the keyframe (images cloned).
+  // Thread-safe. Copies the keyframe (images cloned). Does not throw the worker's errors.
   void Submit(const KeyframeData& keyframe);
   // Blocks until everything submitted so far is applied (and a due background rebuild is done).
   void Flush();

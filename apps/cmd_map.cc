@@ -429,6 +429,10 @@ int RunMap(const std::vector<std::string>& args) {
         keyframe_rate, keyframe_stamps.size(), span, capacity,
         capacity > keyframe_rate ? "keeps up" : "falls behind", ms.max_queue_depth,
         ms.median_latency_ms, ms.max_latency_ms, ms.worker_busy_ms / 1000.0, elapsed);
+    if (ms.num_blocked > 0) {
+      std::printf("map queue full: the SLAM's keyframe callback waited %zu times (back-pressure)\n",
+                  ms.num_blocked);
+    }
     if (ms.num_background_rebuilds > 0) {
       std::printf("background rebuilds after pose corrections: %zu, %.1f s in total\n",
                   ms.num_background_rebuilds, ms.background_rebuild_ms / 1000.0);

@@ -585,6 +585,12 @@ def cmd_run(a):
                "trajectory.txt: TUM rows for >= 90%% of the %d frames (%d)" % (a.frames, len(rows)))
     expect(os.path.isfile(os.path.join(out, "keyframes.txt")) and
            len(read_tum(os.path.join(out, "keyframes.txt"))) >= 2, "out/keyframes.txt written")
+    csv = os.path.join(out, "frames.csv")
+    if expect(os.path.isfile(csv), "out/frames.csv written"):
+        with open(csv) as f:
+            lines = f.read().splitlines()
+        expect(lines and lines[0].startswith("stamp,state") and len(lines) - 1 >= 0.9 * a.frames,
+               "frames.csv: header + a row per frame (%d rows)" % (len(lines) - 1))
     bt = os.path.join(out, "map.bt")
     if expect(os.path.isfile(bt), "out/map.bt written"):
         with open(bt, "rb") as f:

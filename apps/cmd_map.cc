@@ -293,10 +293,10 @@ int RunMap(const std::vector<std::string>& args) {
         num_keyframes = keyframe_stamps.size();
       }
       const MapperStats ms = mapper.Stats();
-      std::fprintf(stderr,
-                   "\r[map] frame %zu/%zu  %.1f fps  state=%s  keyframes=%zu  map queue=%zu   ",
-                   k + 1 - first, last - first, processed / std::max(elapsed, 1e-9),
-                   ToString(state), num_keyframes, ms.num_submitted - ms.num_applied);
+      std::fprintf(
+          stderr, "\r[map] frame %zu/%zu  %.1f fps  state=%s  keyframes=%zu  map queue=%zu   ",
+          k + 1 - first, last - first, processed / std::max(elapsed, 1e-9), ToString(state),
+          num_keyframes, ms.num_submitted - ms.num_applied - ms.num_coalesced);
       std::fflush(stderr);
     }
   }
@@ -399,8 +399,8 @@ int RunMap(const std::vector<std::string>& args) {
   }
   std::printf(
       "keyframes: %zu in the map (%zu inserted, %zu pose corrections, %zu culled), %llu rebuilds\n",
-      stats.num_keyframes, ms.num_new_keyframes, ms.num_pose_updates, ms.num_removals,
-      static_cast<unsigned long long>(stats.num_rebuilds));
+      stats.num_keyframes, ms.num_new_keyframes, ms.num_pose_updates + ms.num_coalesced,
+      ms.num_removals, static_cast<unsigned long long>(stats.num_rebuilds));
   std::printf(
       "map: resolution %.3f m, %zu leaves (%zu occupied, %zu free), %s occupied / %s free cells, "
       "%.2f MB\n",

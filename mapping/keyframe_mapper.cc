@@ -53,6 +53,19 @@ void KeyframeMapper::RethrowIfFailed() {
 }
 
 void KeyframeMapper::Submit(const KeyframeData& keyframe) {
+  if (keyframe.pose_update_only && !keyframe.removed) {
+    // Local BA corrects the same keyframes again and again: a correction still waiting in the
+    // queue takes the newer pose instead of queueing another one (same result, no burst).
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (auto it = queue_.rbegin(); it != queue_.rend(); ++it) {
+      if (it->keyframe.id != keyframe.id) continue;
+      if (!it->keyframe.pose_update_only || it->keyframe.removed) break;  // keep the order
+      it->keyframe.world_from_cam = keyframe.world_from_cam;
+      ++stats_.num_submitted;
+      ++stats_.num_coalesced;
+      return;
+    }
+  }
   Item item{DeepCopy(keyframe), std::chrono::steady_clock::now()};
   std::unique_lock<std::mutex> lock(mutex_);
   if (queue_.size() >= mapper_options_.max_queue) {

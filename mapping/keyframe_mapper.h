@@ -16,6 +16,8 @@
 //   mapper.Flush();                                   // queue applied
 //   mapper.WithBuilder([](OctoMapBuilder& b) { b.WriteBinary("map.bt"); });
 //
+// A pose correction for a keyframe whose previous correction is still queued (with nothing else
+// for that keyframe after it) replaces that correction's pose instead of queueing again.
 // Nothing is dropped: when max_queue submissions are waiting, Submit() blocks (back-pressure on
 // the SLAM) and counts it in MapperStats::num_blocked. An exception from the builder (bad
 // keyframe data) is kept and rethrown by the next Flush()/WithBuilder(); Submit() never throws
@@ -49,7 +51,8 @@ struct KeyframeMapperOptions {
 
 struct MapperStats {
   size_t num_submitted = 0;
-  size_t num_applied = 0;
+  size_t num_applied = 0;    // num_submitted - num_coalesced once flushed
+  size_t num_coalesced = 0;  // pose corrections merged into one still queued for the keyframe
   size_t num_new_keyframes = 0;
   size_t num_pose_updates = 0;
   size_t num_removals = 0;

@@ -125,7 +125,8 @@ TEST(KeyframeMapper, ConcurrentSubmittersAndBackPressureLoseNothing) {
   local_mapping.join();
   mapper.Flush();
   const MapperStats stats = mapper.Stats();
-  EXPECT_EQ(stats.num_applied, 56u);
+  EXPECT_EQ(stats.num_submitted, 56u);
+  EXPECT_EQ(stats.num_applied + stats.num_coalesced, 56u);
   EXPECT_LE(stats.max_queue_depth, 1u);
   mapper.WithBuilder([&](OctoMapBuilder& builder) {
     EXPECT_EQ(builder.KeyframeIds().size(), 16u);
@@ -156,6 +157,44 @@ TEST(KeyframeMapper, BackgroundRebuildAppliesCorrections) {
       EXPECT_EQ(stats.num_background_rebuilds, share > 0 ? 1u : 0u) << share;
     });
   }
+}
+
+// Corrections of a keyframe whose earlier correction is still queued merge into it.
+TEST(KeyframeMapper, QueuedCorrectionsOfAKeyframeCoalesce) {
+  const PinholeCamera camera = test_scene::SmallCamera();
+  KeyframeMapper mapper(camera, TestOptions());
+  auto correction = [](int id, double dx) {
+    KeyframeData k;
+    k.id = id;
+    k.world_from_cam = PoseOf(id);
+    k.world_from_cam.translation.x() += dx;
+    k.pose_update_only = true;
+    return k;
+  };
+  // Holding the builder keeps the worker from applying anything past the first item.
+  mapper.WithBuilder([&](OctoMapBuilder&) {
+    mapper.Submit(Keyframe(0));
+    mapper.Submit(Keyframe(1));
+    mapper.Submit(correction(0, 0.1));
+    mapper.Submit(correction(0, 0.2));  // merges into the previous one
+    mapper.Submit(correction(1, 0.1));
+    mapper.Submit(correction(0, 0.3));  // merges again (keyframe 1's entry is another id)
+    KeyframeData culled;
+    culled.id = 1;
+    culled.removed = true;
+    culled.pose_update_only = true;
+    mapper.Submit(culled);
+    mapper.Submit(correction(1, 0.4));  // after the removal: not merged across it
+  });
+  mapper.Flush();
+  const MapperStats stats = mapper.Stats();
+  EXPECT_EQ(stats.num_submitted, 8u);
+  EXPECT_EQ(stats.num_coalesced, 2u);
+  EXPECT_EQ(stats.num_applied, 6u);
+  mapper.WithBuilder([&](OctoMapBuilder& builder) {
+    EXPECT_NEAR(builder.Pose(0).translation.x(), PoseOf(0).translation.x() + 0.3, 1e-12);
+    EXPECT_FALSE(builder.Contains(1));
+  });
 }
 
 TEST(KeyframeMapper, BadKeyframeSurfacesAtFlushNamingIt) {

@@ -635,7 +635,7 @@ def main():
     ap.add_argument("--dataset-name", default="bonn_crowd_part")
     ap.add_argument("--models")
     ap.add_argument("--frames", type=int, default=150)
-    ap.add_argument("--domain", type=int, default=171)
+    ap.add_argument("--domain", type=int, default=197)
     ap.add_argument("--timeout", type=int, default=150)
     ap.add_argument("--max-ate", type=float, default=0.10)
     a = ap.parse_args()

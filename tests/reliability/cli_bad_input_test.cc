@@ -52,7 +52,9 @@ int RunCommand(const std::vector<std::string>& args, const std::string& out, con
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
-TEST(CliBadInput, TruncatedFrameMidRunIsAClearErrorOrACountedSkip) {
+class CliBadInput : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(CliBadInput, TruncatedFrameMidRunIsAClearErrorOrACountedSkip) {
   DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
   if (!fs::exists(Binary())) GTEST_SKIP() << "dygslam binary not built: " << Binary();
   // A 30-frame copy of the dataset (images linked, frame 15's colour image truncated).
@@ -80,10 +82,11 @@ TEST(CliBadInput, TruncatedFrameMidRunIsAClearErrorOrACountedSkip) {
   rgb_list.close();
   depth_list.close();
   const fs::path out = dir / "out";
-  const int code = RunCommand({Binary(), "run", dir.string(), "--config",
-                               std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml", "--filter", "none",
-                               "--out", out.string(), "--quiet"},
-                              (dir / "stdout.txt").string(), (dir / "stderr.txt").string());
+  std::vector<std::string> args = {Binary(), "run", dir.string(), "--config",
+                                   std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml", "--filter", "none",
+                                   "--out", out.string(), "--quiet", "--domain", "131"};
+  if (!GetParam().empty()) args.push_back(GetParam());
+  const int code = RunCommand(args, (dir / "stdout.txt").string(), (dir / "stderr.txt").string());
   const std::string stdout_text = ReadAll((dir / "stdout.txt").string());
   const std::string stderr_text = ReadAll((dir / "stderr.txt").string());
   ASSERT_LT(code, 128) << "dygslam run was killed by signal " << code - 128 << "\n" << stderr_text;
@@ -92,6 +95,10 @@ TEST(CliBadInput, TruncatedFrameMidRunIsAClearErrorOrACountedSkip) {
     EXPECT_EQ(code, 1);
     EXPECT_NE(stderr_text.find(broken), std::string::npos) << stderr_text;
     EXPECT_NE(stderr_text.find("error"), std::string::npos) << stderr_text;
+    // What was built before the broken frame is kept, when written at all, loadable.
+    if (fs::exists(out / "trajectory.txt")) {
+      RecordProperty("frames_kept", static_cast<int>(ReadTumTrajectory((out / "trajectory.txt").string()).size()));
+    }
   } else {
     // A counted skip: the broken frame is reported and the others are in the trajectory.
     EXPECT_NE((stdout_text + stderr_text).find(broken), std::string::npos) << stdout_text << stderr_text;
@@ -100,6 +107,11 @@ TEST(CliBadInput, TruncatedFrameMidRunIsAClearErrorOrACountedSkip) {
     EXPECT_LE(trajectory.size(), 29u);
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(Modes, CliBadInput, ::testing::Values(std::string(), std::string("--direct")),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                           return info.param.empty() ? std::string("Pipeline") : std::string("Direct");
+                         });
 
 }  // namespace
 }  // namespace dygslam

@@ -101,7 +101,7 @@ TEST_F(Faults, MapperKilledAndRestartedGetsEveryKeyframeBack) {
   EXPECT_EQ(Wait(recorder), 0) << ReadAll(tmp + "/recorder.log");
   EXPECT_EQ(Wait(mapper2), 0) << ReadAll(tmp + "/mapper2.log");
   const std::string mapper_log = ReadAll(tmp + "/mapper2.log");
-  const long in_map = Extract(mapper_log, R"(mapper: (\d+) keyframes in the map)");
+  const long in_map = Extract(mapper_log, R"((\d+) keyframes in the map)");
   const auto keyframes = ReadTumTrajectory(tmp + "/out/keyframes.txt");
   ASSERT_GT(keyframes.size(), 3u);
   // The restarted mapper holds every live keyframe, including those made before it started.
@@ -113,15 +113,15 @@ TEST_F(Faults, DetectorKilledAndRestartedIsUsedAgain) {
   const std::string tmp = testing::MakeTempDir("fault_detector");
   const int domain = 122;
   const std::vector<std::string> wait = {"--detection-wait-ms", "100"};
-  const pid_t recorder = Run("recorder", tmp, domain, "0:180");
-  const pid_t slam = Run("slam", tmp, domain, "0:180", wait);
-  const pid_t detector1 = Run("detector", tmp, domain, "0:180", {}, "detector1");
-  const pid_t player = Run("player", tmp, domain, "0:180", {"--rate", "1"});  // 6 s of frames
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  const pid_t recorder = Run("recorder", tmp, domain, "0:300");
+  const pid_t slam = Run("slam", tmp, domain, "0:300", wait);
+  const pid_t detector1 = Run("detector", tmp, domain, "0:300", {}, "detector1");
+  const pid_t player = Run("player", tmp, domain, "0:300", {"--rate", "1"});  // 10 s of frames
+  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
   kill(detector1, SIGKILL);
   EXPECT_EQ(Wait(detector1), 128 + SIGKILL);
-  std::this_thread::sleep_for(std::chrono::milliseconds(1200));
-  const pid_t detector2 = Run("detector", tmp, domain, "0:180", {}, "detector2");
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const pid_t detector2 = Run("detector", tmp, domain, "0:300", {}, "detector2");
   EXPECT_EQ(Wait(player), 0) << ReadAll(tmp + "/player.log");
   EXPECT_EQ(Wait(slam), 0) << ReadAll(tmp + "/slam.log");
   EXPECT_EQ(Wait(recorder), 0) << ReadAll(tmp + "/recorder.log");
@@ -132,45 +132,57 @@ TEST_F(Faults, DetectorKilledAndRestartedIsUsedAgain) {
   const long paired = Extract(slam_log, R"(detections: (\d+) paired)");
   const long missing = Extract(slam_log, R"((\d+) missing)");
   const long detector2_frames = Extract(det_log, R"(detector: (\d+) frames)");
-  EXPECT_NE(slam_log.find("slam: 180 frames"), std::string::npos) << slam_log;
+  EXPECT_NE(slam_log.find("slam: 300 frames"), std::string::npos) << slam_log;
   EXPECT_GT(missing, 0) << "no geometry-only frames while the detector was down\n" << slam_log;
   ASSERT_GT(detector2_frames, 20) << det_log;
-  // Detections of the restarted detector were paired again (slam did not stay geometry-only).
-  EXPECT_GE(paired, detector2_frames - 5) << slam_log << det_log;
-  EXPECT_GT(ReadTumTrajectory(tmp + "/out/trajectory.txt").size(), 160u);
+  // slam reports both transitions, and detections of the restarted detector were paired again
+  // (slam did not stay geometry-only; under load some still miss the wait window).
+  EXPECT_NE(slam_log.find("geometry-only"), std::string::npos) << slam_log;
+  EXPECT_NE(slam_log.find("arriving again"), std::string::npos) << slam_log;
+  EXPECT_GE(paired, detector2_frames / 2) << slam_log << det_log;
+  EXPECT_GT(ReadTumTrajectory(tmp + "/out/trajectory.txt").size(), 280u);
 }
 
-// SIGINT / SIGTERM at several moments (start-up, mid-run, late): the pipeline exits, and every
-// output present is complete and loadable; no temporary files are left behind.
+// SIGINT / SIGTERM at several moments (start-up, mid-run, late) into `dygslam run` in each mode
+// (DDS threads, DDS processes, direct): it exits 0 with every output complete and loadable
+// (trajectory files parse, map.bt is an OctoMap file) and no temporary file left behind.
 TEST_F(Faults, StopSignalAtAnyTimeLeavesLoadableOutputs) {
   struct Case {
+    std::string mode;
     int signal;
     int after_ms;
   };
-  const std::vector<Case> cases = {{SIGINT, 300}, {SIGTERM, 1500}, {SIGINT, 3500}};
+  const std::vector<Case> cases = {{"", SIGINT, 300},          {"", SIGTERM, 2500},
+                                   {"--processes", SIGINT, 2500}, {"--direct", SIGINT, 400},
+                                   {"--direct", SIGTERM, 3000}};
   int domain = 123;
   for (const Case& c : cases) {
-    SCOPED_TRACE("signal " + std::to_string(c.signal) + " after " + std::to_string(c.after_ms) + " ms");
+    SCOPED_TRACE("mode '" + c.mode + "' signal " + std::to_string(c.signal) + " after " +
+                 std::to_string(c.after_ms) + " ms");
     const std::string tmp = testing::MakeTempDir("fault_signal");
-    const pid_t pipeline = Run("pipeline", tmp, domain++, "0:200", {"--processes", "--rate", "1"});
+    std::vector<std::string> args = {Binary(), "run", dataset_, "--config", Config(), "--out", tmp + "/out",
+                                     "--frames", "0:300", "--filter", "geometry", "--quiet",
+                                     "--domain", std::to_string(domain++)};
+    if (!c.mode.empty()) args.push_back(c.mode);
+    const pid_t run = Spawn(args, tmp + "/run.log");
     std::this_thread::sleep_for(std::chrono::milliseconds(c.after_ms));
-    kill(pipeline, c.signal);
+    kill(run, c.signal);
     const auto t0 = std::chrono::steady_clock::now();
-    const int status = Wait(pipeline);
+    const int status = Wait(run);
     const double stop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const std::string log = ReadAll(tmp + "/pipeline.log");
-    EXPECT_TRUE(status == 0 || status == 128 + c.signal || status == 130) << status << "\n" << log;
+    const std::string log = ReadAll(tmp + "/run.log");
+    EXPECT_EQ(status, 0) << log;
     EXPECT_LT(stop_s, 30.0) << "stopping took too long";
+    ASSERT_TRUE(fs::exists(tmp + "/out")) << log;
     for (const auto& e : fs::recursive_directory_iterator(tmp + "/out")) {
       EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << "left behind: " << e.path();
     }
-    for (const char* name : {"trajectory.txt", "keyframes.txt", "trajectory_online.txt"}) {
+    for (const char* name : {"trajectory.txt", "keyframes.txt"}) {
       const std::string path = tmp + "/out/" + name;
-      if (!fs::exists(path)) continue;
-      EXPECT_NO_THROW(ReadTumTrajectory(path)) << path;
+      EXPECT_TRUE(fs::exists(path)) << name << " missing\n" << log;
+      if (fs::exists(path)) EXPECT_NO_THROW(ReadTumTrajectory(path)) << path;
     }
-    if (c.after_ms >= 1500) {
-      ASSERT_TRUE(fs::exists(tmp + "/out/trajectory.txt")) << log;
+    if (c.after_ms >= 2000) {
       EXPECT_GT(ReadTumTrajectory(tmp + "/out/trajectory.txt").size(), 5u) << log;
     }
     if (fs::exists(tmp + "/out/map.bt")) {

@@ -12,6 +12,17 @@
 namespace dygslam::testing {
 namespace fs = std::filesystem;
 
+namespace {
+// Test processes get the build-time locations unless the environment overrides them.
+const bool kEnvironmentReady = [] {
+  ::setenv("DYGSLAM_SOURCE_DIR", DYGSLAM_BAKED_SOURCE_DIR, 0);
+  ::setenv("DYGSLAM_BINARY_DIR", DYGSLAM_BAKED_BINARY_DIR, 0);
+  ::setenv("DYGSLAM_DEFAULT_DATA_DIR", DYGSLAM_BAKED_DATA_DIR, 0);
+  ::setenv("DYGSLAM_DEFAULT_MODELS_DIR", DYGSLAM_BAKED_MODELS_DIR, 0);
+  return true;
+}();
+}  // namespace
+
 std::string DataDir() { return ::dygslam::DataDir(); }
 
 std::string DatasetDir(const std::string& name) {

@@ -21,11 +21,13 @@ namespace {
 
 std::pair<size_t, size_t> ParseEntryRange(const std::string& text) {
   const auto colon = text.find(':');
-  if (colon == std::string::npos) throw InvalidOptions("--frames: expected FIRST:LAST, got '" + text + "'");
+  if (colon == std::string::npos)
+    throw InvalidOptions("--frames: expected FIRST:LAST, got '" + text + "'");
   auto parse = [&](const std::string& s) -> size_t {
     if (s.empty()) return 0;
     for (char c : s)
-      if (c < '0' || c > '9') throw InvalidOptions("--frames: not a non-negative integer: '" + s + "'");
+      if (c < '0' || c > '9')
+        throw InvalidOptions("--frames: not a non-negative integer: '" + s + "'");
     return std::stoul(s);
   };
   return {parse(text.substr(0, colon)), parse(text.substr(colon + 1))};
@@ -35,12 +37,15 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   if (!args.empty() && args[0] == "bench-transport") {
     return RunBenchTransportCommand(std::vector<std::string>(args.begin() + 1, args.end()));
   }
-  ArgParser p("component",
-              "NAME --dataset DIR --config FILE [--out DIR] [--filter MODE] [--frames FIRST:LAST] "
-              "[--deterministic] [--domain N] ...",
-              "Runs one pipeline component (player | detector | slam | mapper | recorder) as its own\n"
-              "process over Fast DDS, or `bench-transport` (see `dygslam component bench-transport --help`).");
-  p.AddPositional("NAME", "player | detector | slam | mapper | recorder | pipeline | bench-transport");
+  ArgParser p(
+      "component",
+      "NAME --dataset DIR --config FILE [--out DIR] [--filter MODE] [--frames FIRST:LAST] "
+      "[--deterministic] [--domain N] ...",
+      "Runs one pipeline component (player | detector | slam | mapper | recorder) as its own\n"
+      "process over Fast DDS, or `bench-transport` (see `dygslam component bench-transport "
+      "--help`).");
+  p.AddPositional("NAME",
+                  "player | detector | slam | mapper | recorder | pipeline | bench-transport");
   p.AddOption("dataset", "DIR", "dataset folder (player)");
   p.AddOption("config", "FILE", "settings YAML (camera, sensor, modules)");
   p.AddOption("out", "DIR", "output folder (recorder, mapper)", "out/run");
@@ -49,7 +54,8 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   p.AddOption("rate", "R", "player: 0 = as fast as consumed, 1 = real time", "0");
   p.AddOption("window", "N", "player back-pressure window in frames", "2");
   p.AddOption("detection-wait-ms", "MS", "slam: longest wait for a frame's detections", "150");
-  p.AddOption("detector-model", "NAME", "detector model (DetectorOptionsForModel)", "yolo-fastest-1.1");
+  p.AddOption("detector-model", "NAME", "detector model (DetectorOptionsForModel)",
+              "yolo-fastest-1.1");
   p.AddOption("detector-cfg", "FILE", "detector Darknet cfg (overrides --detector-model)");
   p.AddOption("detector-weights", "FILE", "detector weights");
   p.AddOption("detector-names", "FILE", "detector class names");

@@ -49,11 +49,13 @@ namespace fs = std::filesystem;
 // "FIRST:LAST" (either side may be empty) -> [first, last) of rgb.txt entries.
 std::pair<size_t, size_t> ParseFrames(const std::string& text, size_t total) {
   const auto colon = text.find(':');
-  if (colon == std::string::npos) throw InvalidOptions("--frames: expected FIRST:LAST, got '" + text + "'");
+  if (colon == std::string::npos)
+    throw InvalidOptions("--frames: expected FIRST:LAST, got '" + text + "'");
   auto parse = [&](const std::string& s, size_t def) -> size_t {
     if (s.empty()) return def;
     for (char c : s)
-      if (c < '0' || c > '9') throw InvalidOptions("--frames: not a non-negative integer: '" + s + "'");
+      if (c < '0' || c > '9')
+        throw InvalidOptions("--frames: not a non-negative integer: '" + s + "'");
     return std::stoul(s);
   };
   const size_t first = parse(text.substr(0, colon), 0);
@@ -78,14 +80,16 @@ std::string DefaultConfig(const std::string& dataset_dir) {
 // frames.csv: the same columns in every mode (the pipeline's recorder writes them from
 // CameraPose, components/recorder.cc FramesCsvHeader / FramesCsvRow).
 constexpr const char* kFramesCsvHeader =
-    "stamp,state,keyframe,features,dynamic,tracked,orb_ms,detection_ms,matching_ms,probability_ms,tracking_ms,"
+    "stamp,state,keyframe,features,dynamic,tracked,orb_ms,detection_ms,matching_ms,probability_ms,"
+    "tracking_ms,"
     "total_ms\n";
 
 std::string FramesCsvRow(const FrameResult& r) {
   char line[512];
-  std::snprintf(line, sizeof(line), "%s,%s,%d,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n", r.stamp.ToString().c_str(),
-                ToString(r.state), r.is_keyframe ? 1 : 0, r.num_features, r.num_dynamic, r.num_tracked,
-                r.times.orb_extraction_ms, r.times.detection_ms, r.times.matching_ms, r.times.probability_ms,
+  std::snprintf(line, sizeof(line), "%s,%s,%d,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n",
+                r.stamp.ToString().c_str(), ToString(r.state), r.is_keyframe ? 1 : 0,
+                r.num_features, r.num_dynamic, r.num_tracked, r.times.orb_extraction_ms,
+                r.times.detection_ms, r.times.matching_ms, r.times.probability_ms,
                 r.times.tracking_ms, r.times.total_ms);
   return line;
 }
@@ -110,7 +114,8 @@ class DirectSignals {
   bool signaled() const { return g_direct_signal != 0; }
 
  private:
-  struct sigaction old_int_ {}, old_term_ {};
+  struct sigaction old_int_ {
+  }, old_term_{};
 };
 
 struct RunSetup {
@@ -154,9 +159,11 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
     if (r.state == TrackingState::kLost) ++outcome.lost;
     csv += FramesCsvRow(r);
     if (s.progress && (outcome.processed % 10 == 0 || k + 1 == s.last)) {
-      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::fprintf(stderr, "\r[run] frame %zu/%zu  %.1f fps  state=%s  lost=%zu   ", k + 1 - s.first, total,
-                   outcome.processed / std::max(elapsed, 1e-9), ToString(r.state), outcome.lost);
+      const double elapsed =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::fprintf(stderr, "\r[run] frame %zu/%zu  %.1f fps  state=%s  lost=%zu   ",
+                   k + 1 - s.first, total, outcome.processed / std::max(elapsed, 1e-9),
+                   ToString(r.state), outcome.lost);
       std::fflush(stderr);
     }
   }
@@ -183,7 +190,8 @@ std::string RunPartition() {
   char host[64] = {0};
   gethostname(host, sizeof(host) - 1);
   std::random_device rd;
-  return "dygslam_run_" + std::string(host) + "_" + std::to_string(getpid()) + "_" + std::to_string(rd() % 100000);
+  return "dygslam_run_" + std::string(host) + "_" + std::to_string(getpid()) + "_" +
+         std::to_string(rd() % 100000);
 }
 
 RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id) {
@@ -221,27 +229,35 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id) 
 #endif
 
 int RunRun(const std::vector<std::string>& args) {
-  ArgParser p("run",
-              "DATASET_DIR [--config FILE] [--filter none|boxes|geometry|full] [--frames FIRST:LAST] [--out DIR] "
-              "[--deterministic] [--processes | --direct] [--no-map]",
-              "Runs the SLAM on a TUM/Bonn dataset folder; writes DIR/trajectory.txt (TUM format, every tracked\n"
-              "frame), DIR/keyframes.txt, DIR/frames.csv (state and stage times per frame) and DIR/map.bt\n"
-              "(OctoMap of the static scene). Default: the DDS components (player, detector, slam, mapper,\n"
-              "recorder) on threads of this process; --processes: one process per component; --direct: no\n"
-              "DDS, the library loop. SIGINT / SIGTERM: outputs are flushed, exit 0.");
+  ArgParser p(
+      "run",
+      "DATASET_DIR [--config FILE] [--filter none|boxes|geometry|full] [--frames FIRST:LAST] "
+      "[--out DIR] "
+      "[--deterministic] [--processes | --direct] [--no-map]",
+      "Runs the SLAM on a TUM/Bonn dataset folder; writes DIR/trajectory.txt (TUM format, every "
+      "tracked\n"
+      "frame), DIR/keyframes.txt, DIR/frames.csv (state and stage times per frame) and DIR/map.bt\n"
+      "(OctoMap of the static scene). Default: the DDS components (player, detector, slam, "
+      "mapper,\n"
+      "recorder) on threads of this process; --processes: one process per component; --direct: no\n"
+      "DDS, the library loop. SIGINT / SIGTERM: outputs are flushed, exit 0.");
   p.AddPositional("DATASET_DIR", "folder with rgb.txt, depth.txt (groundtruth.txt optional)");
-  p.AddOption("config", "FILE", "settings YAML (ORB-SLAM2 keys); default: DATASET_DIR/camera.yaml or a preset");
+  p.AddOption("config", "FILE",
+              "settings YAML (ORB-SLAM2 keys); default: DATASET_DIR/camera.yaml or a preset");
   p.AddOption("filter", "MODE", "dynamic filter: none | boxes | geometry | full", "full");
-  p.AddOption("frames", "FIRST:LAST", "rgb.txt entries FIRST (inclusive, 0-based) to LAST (exclusive)");
+  p.AddOption("frames", "FIRST:LAST",
+              "rgb.txt entries FIRST (inclusive, 0-based) to LAST (exclusive)");
   p.AddOption("out", "DIR", "output folder", "out/run");
-  p.AddFlag("deterministic", "fixed seeds and synchronous local mapping: identical output run to run");
+  p.AddFlag("deterministic",
+            "fixed seeds and synchronous local mapping: identical output run to run");
   p.AddFlag("processes", "DDS pipeline with each component in its own process");
   p.AddFlag("direct", "no DDS: feed the System directly in this process");
   p.AddFlag("no-map", "do not build map.bt");
   p.AddOption("domain", "N", "DDS domain id (default: $DYGSLAM_DOMAIN_ID or 0)", "-1");
   p.AddFlag("quiet", "no progress line");
   if (!p.Parse(args)) return p.exit_code();
-  if (p.Flag("processes") && p.Flag("direct")) return p.UsageError("--processes and --direct exclude each other");
+  if (p.Flag("processes") && p.Flag("direct"))
+    return p.UsageError("--processes and --direct exclude each other");
 
   RunSetup s;
   s.dataset_dir = p.Positional("DATASET_DIR");
@@ -267,8 +283,9 @@ int RunRun(const std::vector<std::string>& args) {
   if (domain_id < -1 || domain_id > 232) return p.UsageError("--domain: expected 0..232");
 
   const RgbdDataset dataset = RgbdDataset::Open(s.dataset_dir);
-  std::tie(s.first, s.last) = p.Has("frames") ? ParseFrames(p.Get("frames"), dataset.num_rgb_entries())
-                                              : std::pair<size_t, size_t>{0, dataset.num_rgb_entries()};
+  std::tie(s.first, s.last) = p.Has("frames")
+                                  ? ParseFrames(p.Get("frames"), dataset.num_rgb_entries())
+                                  : std::pair<size_t, size_t>{0, dataset.num_rgb_entries()};
   size_t skipped = 0;
   for (size_t k = s.first; k < s.last; ++k) {
     if (!dataset.FrameForRgbEntry(k)) ++skipped;
@@ -281,34 +298,43 @@ int RunRun(const std::vector<std::string>& args) {
   const auto t0 = std::chrono::steady_clock::now();
 #ifdef DYGSLAM_HAVE_COMPONENTS
   if (!p.Flag("direct")) {
-    mode = p.Flag("processes") ? "DDS pipeline, one process per component" : "DDS pipeline, one process";
+    mode = p.Flag("processes") ? "DDS pipeline, one process per component"
+                               : "DDS pipeline, one process";
     outcome = RunThroughPipeline(s, p.Flag("processes"), domain_id);
   }
 #else
   if (p.Flag("processes")) {
-    throw InvalidOptions("--processes: this build has no DDS components (configure with -DDYGSLAM_BUILD_DDS=ON)");
+    throw InvalidOptions(
+        "--processes: this build has no DDS components (configure with -DDYGSLAM_BUILD_DDS=ON)");
   }
   if (!p.Flag("direct")) {
-    std::fprintf(stderr, "[run] this build has no DDS components: running the direct library loop (--direct)\n");
+    std::fprintf(
+        stderr,
+        "[run] this build has no DDS components: running the direct library loop (--direct)\n");
   }
 #endif
   if (mode.empty()) {
     mode = "direct (no DDS)";
     outcome = RunDirect(s, dataset);
   }
-  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   const fs::path trajectory_path = s.out / "trajectory.txt";
-  const std::vector<StampedPose> trajectory =
-      fs::exists(trajectory_path) ? ReadTumTrajectory(trajectory_path.string()) : std::vector<StampedPose>{};
-  std::printf("mode: %s%s\n", mode.c_str(), outcome.interrupted ? " (interrupted by a signal)" : "");
-  std::printf("frames: %zu processed, %zu tracked, %zu lost, %zu without depth partner; %.1f fps\n", outcome.processed,
-              trajectory.size(), outcome.lost, skipped, outcome.processed / std::max(elapsed, 1e-9));
-  std::printf("filter: %s%s\n", ToString(s.system.filter_mode), s.system.deterministic ? " (deterministic)" : "");
+  const std::vector<StampedPose> trajectory = fs::exists(trajectory_path)
+                                                  ? ReadTumTrajectory(trajectory_path.string())
+                                                  : std::vector<StampedPose>{};
+  std::printf("mode: %s%s\n", mode.c_str(),
+              outcome.interrupted ? " (interrupted by a signal)" : "");
+  std::printf("frames: %zu processed, %zu tracked, %zu lost, %zu without depth partner; %.1f fps\n",
+              outcome.processed, trajectory.size(), outcome.lost, skipped,
+              outcome.processed / std::max(elapsed, 1e-9));
+  std::printf("filter: %s%s\n", ToString(s.system.filter_mode),
+              s.system.deterministic ? " (deterministic)" : "");
   if (dataset.has_groundtruth() && trajectory.size() >= 3) {
     const AteResult ate = ComputeAte(ReadTumTrajectory(dataset.groundtruth_path()), trajectory);
-    std::printf("ATE RMSE %.4f m (mean %.4f, median %.4f, max %.4f; %zu pairs)\n", ate.error.rmse, ate.error.mean,
-                ate.error.median, ate.error.max, ate.num_pairs);
+    std::printf("ATE RMSE %.4f m (mean %.4f, median %.4f, max %.4f; %zu pairs)\n", ate.error.rmse,
+                ate.error.mean, ate.error.median, ate.error.max, ate.num_pairs);
   }
   const bool has_map = fs::exists(s.out / "map.bt");
   std::printf("outputs: %s/{trajectory.txt,keyframes.txt,frames.csv%s}\n", s.out.string().c_str(),

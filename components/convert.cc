@@ -2,10 +2,9 @@
 
 #include <cmath>
 #include <cstring>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <stdexcept>
-
-#include <opencv2/imgproc.hpp>
 
 #include "core/base/error.h"
 
@@ -59,8 +58,8 @@ msg::Pose PoseToMsg(const Rigid3d& pose) {
 Rigid3d PoseFromMsg(const msg::Pose& pose, const std::string& field) {
   const Eigen::Vector3d t(pose.position().x(), pose.position().y(), pose.position().z());
   if (!t.allFinite()) Fail(field + ".position", "non-finite value");
-  const Eigen::Quaterniond q(pose.orientation().w(), pose.orientation().x(),
-                             pose.orientation().y(), pose.orientation().z());
+  const Eigen::Quaterniond q(pose.orientation().w(), pose.orientation().x(), pose.orientation().y(),
+                             pose.orientation().z());
   if (!q.coeffs().allFinite()) Fail(field + ".orientation", "non-finite value");
   const double norm = q.norm();
   if (std::abs(norm - 1.0) > 1e-3) {
@@ -92,10 +91,18 @@ msg::Image ImageToMsg(const cv::Mat& image) {
   }
   std::string encoding;
   switch (image.type()) {
-    case CV_8UC3: encoding = "bgr8"; break;
-    case CV_8UC1: encoding = "mono8"; break;
-    case CV_16UC1: encoding = "16UC1"; break;
-    case CV_32FC1: encoding = "32FC1"; break;
+    case CV_8UC3:
+      encoding = "bgr8";
+      break;
+    case CV_8UC1:
+      encoding = "mono8";
+      break;
+    case CV_16UC1:
+      encoding = "16UC1";
+      break;
+    case CV_32FC1:
+      encoding = "32FC1";
+      break;
     default:
       throw std::invalid_argument("ImageToMsg: unsupported cv::Mat type " +
                                   std::to_string(image.type()));
@@ -188,8 +195,8 @@ PinholeCamera CameraFromMsg(const msg::CameraIntrinsics& m, const std::string& f
   if (!std::isfinite(c.cy)) Fail(field + ".cy", "non-finite value");
   const std::vector<double>& d = m.distortion();
   if (d.size() != 0 && d.size() != 4 && d.size() != 5) {
-    Fail(field + ".distortion", std::to_string(d.size()) +
-                                    " coefficients, expected 0, 4 or 5 (k1 k2 p1 p2 [k3])");
+    Fail(field + ".distortion",
+         std::to_string(d.size()) + " coefficients, expected 0, 4 or 5 (k1 k2 p1 p2 [k3])");
   }
   for (double v : d) {
     if (!std::isfinite(v)) Fail(field + ".distortion", "non-finite coefficient");
@@ -296,8 +303,8 @@ std::vector<Detection> DetectionsFromMsg(const msg::Detections& m) {
   std::vector<Detection> result;
   result.reserve(m.detections().size());
   for (size_t i = 0; i < m.detections().size(); ++i) {
-    result.push_back(DetectionFromMsg(m.detections()[i],
-                                      "Detections.detections[" + std::to_string(i) + "]"));
+    result.push_back(
+        DetectionFromMsg(m.detections()[i], "Detections.detections[" + std::to_string(i) + "]"));
   }
   return result;
 }

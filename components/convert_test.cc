@@ -1,11 +1,11 @@
 #include "components/convert.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <limits>
-#include <string>
-
-#include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "core/base/error.h"
 
@@ -66,8 +66,9 @@ TEST(Convert, TimeRoundTripIncludingNegative) {
 }
 
 TEST(Convert, PoseRoundTripAndValidation) {
-  const Rigid3d pose(Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())),
-                     Eigen::Vector3d(1.5, -2.0, 0.25));
+  const Rigid3d pose(
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())),
+      Eigen::Vector3d(1.5, -2.0, 0.25));
   const Rigid3d back = PoseFromMsg(PoseToMsg(pose), "p");
   EXPECT_LT((back.translation - pose.translation).norm(), 1e-12);
   EXPECT_LT(back.rotation.angularDistance(pose.rotation), 1e-12);
@@ -320,7 +321,8 @@ TEST(Convert, TrajectoryAndGroundTruthRoundTrip) {
   }
   msg::Trajectory bad = TrajectoryToMsg(poses, true);
   bad.poses()[2].world_from_cam().orientation().w(2.0);
-  ExpectInputError([&] { TrajectoryFromMsg(bad); }, "Trajectory.poses[2].world_from_cam.orientation");
+  ExpectInputError([&] { TrajectoryFromMsg(bad); },
+                   "Trajectory.poses[2].world_from_cam.orientation");
 
   const StampedPose gt = GroundTruthFromMsg(GroundTruthToMsg(poses[2], 2));
   EXPECT_EQ(gt.stamp, poses[2].stamp);

@@ -1,8 +1,8 @@
 #include "components/mapper_component.h"
 
-#include <sstream>
-
 #include <octomap/OcTree.h>
+
+#include <sstream>
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
@@ -29,7 +29,8 @@ void MapperCore::Process(const KeyframeData& keyframe, const PinholeCamera& came
     return;
   }
   if (keyframe.pose_update_only) {
-    if (builder_ != nullptr && builder_->UpdatePoses({{keyframe.id, keyframe.world_from_cam}}) > 0) {
+    if (builder_ != nullptr &&
+        builder_->UpdatePoses({{keyframe.id, keyframe.world_from_cam}}) > 0) {
       ++num_pose_updates_;
     }
     return;
@@ -107,8 +108,9 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
     announcer.Poll(status, keyframes.matched() > 0);
     if (stop->requested() && !flush_deadline) {
       // Stopping: slam publishes its last corrections as it stops; take them if it is there.
-      flush_deadline = std::chrono::steady_clock::now() +
-                       std::chrono::milliseconds(static_cast<int64_t>(options.flush_timeout_s * 1000));
+      flush_deadline =
+          std::chrono::steady_clock::now() +
+          std::chrono::milliseconds(static_cast<int64_t>(options.flush_timeout_s * 1000));
       if (keyframes.matched() == 0) *flush_deadline = std::chrono::steady_clock::now();
     }
     std::optional<msg::Keyframe> sample = queue.Pop(std::chrono::milliseconds(50));
@@ -117,8 +119,8 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
       // slam's DONE is written after its last keyframe (and after waiting for acknowledgements);
       // order is only kept per writer, so allow a short grace period (6 x 50 ms) after DONE.
       if (slam_done && ++idle_after_done >= 6) break;
-      if (flush_deadline && (std::chrono::steady_clock::now() >= *flush_deadline ||
-                             keyframes.matched() == 0)) {
+      if (flush_deadline &&
+          (std::chrono::steady_clock::now() >= *flush_deadline || keyframes.matched() == 0)) {
         break;
       }
       continue;
@@ -148,9 +150,9 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
   status.Write(done);
   updates.WaitForAcknowledgments(std::chrono::milliseconds(3000));
   status.WaitForAcknowledgments(std::chrono::milliseconds(2000));
-  LOG_INFO << "mapper: " << stats.keyframes_received << " keyframe messages (" << core.num_inserted()
-           << " new, " << core.num_pose_updates() << " pose updates, " << core.num_removed()
-           << " removed), " << core.num_keyframes() << " keyframes in the map"
+  LOG_INFO << "mapper: " << stats.keyframes_received << " keyframe messages ("
+           << core.num_inserted() << " new, " << core.num_pose_updates() << " pose updates, "
+           << core.num_removed() << " removed), " << core.num_keyframes() << " keyframes in the map"
            << (options.map_path.empty() ? "" : ", written to " + options.map_path);
   return stats;
 }

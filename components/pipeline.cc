@@ -38,7 +38,8 @@ struct SignalStopper::Impl {
   std::atomic<bool> quit{false};
   std::atomic<bool> signaled{false};
   std::thread watcher;
-  struct sigaction old_int {}, old_term {};
+  struct sigaction old_int {
+  }, old_term{};
 };
 
 SignalStopper::SignalStopper(StopSignalPtr stop) : impl_(std::make_unique<Impl>()) {
@@ -124,12 +125,26 @@ DetectorOptions DetectorOptionsFor(const PipelineOptions& options) {
 
 std::vector<std::string> ComponentArgs(const PipelineOptions& o) {
   std::vector<std::string> a = {
-      "--dataset", o.dataset_dir, "--out", o.output_dir, "--config", o.settings_path,
-      "--filter", ToString(o.system.filter_mode), "--detector-model", o.detector_model,
-      "--frames", std::to_string(o.first_entry) + ":" + (o.last_entry ? std::to_string(o.last_entry) : ""),
-      "--rate", Number(o.rate), "--window", std::to_string(o.window),
-      "--detection-wait-ms", std::to_string(o.detection_wait.count()),
-      "--domain", std::to_string(DomainId(o))};
+      "--dataset",
+      o.dataset_dir,
+      "--out",
+      o.output_dir,
+      "--config",
+      o.settings_path,
+      "--filter",
+      ToString(o.system.filter_mode),
+      "--detector-model",
+      o.detector_model,
+      "--frames",
+      std::to_string(o.first_entry) + ":" + (o.last_entry ? std::to_string(o.last_entry) : ""),
+      "--rate",
+      Number(o.rate),
+      "--window",
+      std::to_string(o.window),
+      "--detection-wait-ms",
+      std::to_string(o.detection_wait.count()),
+      "--domain",
+      std::to_string(DomainId(o))};
   if (!o.partition.empty()) a.insert(a.end(), {"--partition", o.partition});
   if (o.system.deterministic) a.push_back("--deterministic");
   if (o.progress) a.push_back("--progress");
@@ -137,8 +152,9 @@ std::vector<std::string> ComponentArgs(const PipelineOptions& o) {
   if (!o.run_detector) a.push_back("--no-detector");
   if (!o.run_mapper) a.push_back("--no-mapper");
   if (!o.system.detector.cfg_path.empty()) {
-    a.insert(a.end(), {"--detector-cfg", o.system.detector.cfg_path, "--detector-weights",
-                       o.system.detector.weights_path, "--detector-names", o.system.detector.names_path});
+    a.insert(a.end(),
+             {"--detector-cfg", o.system.detector.cfg_path, "--detector-weights",
+              o.system.detector.weights_path, "--detector-names", o.system.detector.names_path});
   }
   return a;
 }
@@ -244,8 +260,8 @@ int RunSingleProcess(const PipelineOptions& options, const StopSignalPtr& stop) 
 }
 
 int RunProcesses(const PipelineOptions& options, const StopSignalPtr& stop) {
-  const std::string exe = options.executable.empty() ? fs::read_symlink("/proc/self/exe").string()
-                                                     : options.executable;
+  const std::string exe =
+      options.executable.empty() ? fs::read_symlink("/proc/self/exe").string() : options.executable;
   const std::vector<std::string> args = ComponentArgs(options);
   std::map<pid_t, std::string> children;
   for (const std::string& name : ComponentNames(options)) {
@@ -278,7 +294,8 @@ int RunProcesses(const PipelineOptions& options, const StopSignalPtr& stop) {
         LOG_WARNING << "component " << name << " (pid " << pid << ") "
                     << (WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
                                             : "exited with " + std::to_string(WEXITSTATUS(status)));
-        if (name == "slam" || name == "recorder" || name == "mapper") slam_or_recorder_failed = true;
+        if (name == "slam" || name == "recorder" || name == "mapper")
+          slam_or_recorder_failed = true;
       }
       // The run is over when the recorder (and mapper) have written their outputs.
       bool outputs_done = true;
@@ -323,7 +340,8 @@ int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
   fs::create_directories(options.output_dir);
   auto stop = std::make_shared<StopSignal>();
   SignalStopper signals(stop);
-  const int code = options.processes ? RunProcesses(options, stop) : RunSingleProcess(options, stop);
+  const int code =
+      options.processes ? RunProcesses(options, stop) : RunSingleProcess(options, stop);
   if (signals.signaled()) {
     LOG_INFO << "stopped by signal; outputs flushed";
   }

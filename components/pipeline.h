@@ -1,8 +1,8 @@
 // The whole pipeline over DDS: player -> detector -> slam -> mapper + recorder.
 //
-//   PipelineOptions options;  options.dataset_dir = ...; options.system = SystemOptionsFromSettings(..);
-//   options.settings_path = ...;   // re-read by the child processes in --processes mode
-//   int code = RunPipeline(options);
+//   PipelineOptions options;  options.dataset_dir = ...; options.system =
+//   SystemOptionsFromSettings(..); options.settings_path = ...;   // re-read by the child processes
+//   in --processes mode int code = RunPipeline(options);
 //
 // Single-process mode (default): every component runs on its own thread in this process, all on
 // one DomainParticipant (Fast DDS intra-process delivery; no serialisation between components).
@@ -35,28 +35,28 @@ struct PipelineOptions {
   std::string output_dir = "out/run";
   // Settings file of `system` (children of --processes re-read it with the same flags).
   std::string settings_path;
-  SystemOptions system;  // camera, sensor, filter mode, deterministic, ...
+  SystemOptions system;    // camera, sensor, filter mode, deterministic, ...
   OctoMapOptions octomap;  // mapper (settings section OctoMap:)
   // Detector component model (DetectorOptionsForModel) unless system.detector.cfg_path is set.
   std::string detector_model = "yolo-fastest-1.1";
   size_t first_entry = 0, last_entry = 0;  // rgb.txt entries [first, last), last 0 = all
-  double rate = 0;                          // player: 0 = as fast as consumed, 1 = real time
-  int window = 2;                           // player back-pressure window
+  double rate = 0;                         // player: 0 = as fast as consumed, 1 = real time
+  int window = 2;                          // player back-pressure window
   std::chrono::milliseconds detection_wait{150};
   bool processes = false;
   bool run_detector = true;  // detector component (filter modes boxes/full); false: System's own
   bool run_mapper = true;
-  int domain_id = -1;        // -1: DYGSLAM_DOMAIN_ID or 0
+  int domain_id = -1;  // -1: DYGSLAM_DOMAIN_ID or 0
   // DDS partition of every component ("" = default partition). `dygslam run` sets a name unique
   // to the run, so concurrent runs on one domain stay apart.
   std::string partition;
-  bool progress = false;     // recorder prints a progress line on stderr
+  bool progress = false;  // recorder prints a progress line on stderr
   // The player waits for the STARTED announcement of every other component of this pipeline
   // (set by RunPipeline; `dygslam component player --wait-for-components` by hand).
   bool wait_for_components = false;
   // On stop: how long mapper and recorder wait for slam's last outputs (seconds).
   double flush_timeout_s = 5.0;
-  std::string executable;    // --processes: the dygslam binary (default /proc/self/exe)
+  std::string executable;  // --processes: the dygslam binary (default /proc/self/exe)
   void Check() const;
   bool NeedsDetectorComponent() const;
 };

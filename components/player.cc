@@ -97,9 +97,9 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   bool slam_done = false;
   std::set<std::string> started;  // components that announced STARTED
   dds::Writer<msg::RgbdFramePubSubType> frames(participant, dds::topics::kRgbdFrame,
-                                              dds::TopicKind::kRgbdFrame);
+                                               dds::TopicKind::kRgbdFrame);
   dds::Writer<msg::GroundTruthPosePubSubType> gt_writer(participant, dds::topics::kGroundTruth,
-                                                       dds::TopicKind::kGroundTruth);
+                                                        dds::TopicKind::kGroundTruth);
   dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
                                                   dds::TopicKind::kStreamStatus);
   dds::Reader<msg::CameraPosePubSubType> poses(
@@ -126,7 +126,8 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
       });
 
   const auto readers_deadline =
-      Clock::now() + std::chrono::milliseconds(static_cast<int64_t>(options.wait_for_readers_s * 1000));
+      Clock::now() +
+      std::chrono::milliseconds(static_cast<int64_t>(options.wait_for_readers_s * 1000));
   while (frames.matched() < options.expected_readers && Clock::now() < readers_deadline &&
          !stop->WaitFor(std::chrono::milliseconds(10))) {
   }
@@ -135,8 +136,9 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
                 << " frame readers after " << options.wait_for_readers_s << " s; playing anyway";
   }
   {
-    const auto deadline = Clock::now() + std::chrono::milliseconds(static_cast<int64_t>(
-                                              options.wait_for_components_s * 1000));
+    const auto deadline =
+        Clock::now() +
+        std::chrono::milliseconds(static_cast<int64_t>(options.wait_for_components_s * 1000));
     std::unique_lock<std::mutex> lock(mutex);
     auto missing = [&] {
       std::string names;
@@ -175,8 +177,8 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
     }
     if (options.window > 0 && i >= static_cast<size_t>(options.window)) {
       const int64_t need = static_cast<int64_t>(i) - options.window;
-      const auto deadline =
-          Clock::now() + std::chrono::milliseconds(static_cast<int64_t>(options.ack_timeout_s * 1000));
+      const auto deadline = Clock::now() + std::chrono::milliseconds(
+                                               static_cast<int64_t>(options.ack_timeout_s * 1000));
       std::unique_lock<std::mutex> lock(mutex);
       while (acked < need && !stop->requested() && Clock::now() < deadline) {
         cv.wait_for(lock, std::chrono::milliseconds(20));

@@ -23,9 +23,7 @@ void RecorderOptions::Check() const {
   DYGSLAM_CHECK_OPTION(flush_timeout_s >= 0, "recorder.flush_timeout_s");
 }
 
-RecorderCore::RecorderCore(const RecorderOptions& options) : options_(options) {
-  options_.Check();
-}
+RecorderCore::RecorderCore(const RecorderOptions& options) : options_(options) { options_.Check(); }
 
 std::string FramesCsvHeader() {
   return "stamp,state,keyframe,features,dynamic,tracked,orb_ms,detection_ms,matching_ms,"
@@ -79,11 +77,10 @@ namespace {
 std::vector<StampedPose> SortedUnique(std::vector<StampedPose> poses) {
   std::stable_sort(poses.begin(), poses.end(),
                    [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
-  poses.erase(std::unique(poses.begin(), poses.end(),
-                          [](const StampedPose& a, const StampedPose& b) {
-                            return a.stamp == b.stamp;
-                          }),
-              poses.end());
+  poses.erase(
+      std::unique(poses.begin(), poses.end(),
+                  [](const StampedPose& a, const StampedPose& b) { return a.stamp == b.stamp; }),
+      poses.end());
   return poses;
 }
 
@@ -123,8 +120,7 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
   dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
                                                   dds::TopicKind::kStreamStatus);
   dds::Reader<msg::CameraPosePubSubType> poses(
-      participant, dds::topics::kCameraPose, dds::TopicKind::kCameraPose,
-      [&](msg::CameraPose&& p) {
+      participant, dds::topics::kCameraPose, dds::TopicKind::kCameraPose, [&](msg::CameraPose&& p) {
         std::lock_guard<std::mutex> lock(mutex);
         try {
           core.AddPose(p);
@@ -149,8 +145,7 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
         }
       });
   dds::Reader<msg::TrajectoryPubSubType> trajectories(
-      participant, dds::topics::kTrajectory, dds::TopicKind::kTrajectory,
-      [&](msg::Trajectory&& t) {
+      participant, dds::topics::kTrajectory, dds::TopicKind::kTrajectory, [&](msg::Trajectory&& t) {
         std::lock_guard<std::mutex> lock(mutex);
         try {
           core.SetTrajectory(t);

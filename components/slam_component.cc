@@ -44,8 +44,7 @@ std::vector<KeyframeData> SlamCore::TakeKeyframes() {
   return out;
 }
 
-SlamOutput SlamCore::Process(const RgbdFrameData& frame,
-                             const std::vector<Detection>* detections) {
+SlamOutput SlamCore::Process(const RgbdFrameData& frame, const std::vector<Detection>* detections) {
   SlamOutput out;
   cv::Mat depth = frame.depth;
   if (depth.type() == CV_16UC1 &&
@@ -219,7 +218,8 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
     const SlamOutput out = core.Process(paired->frame, dets);
     ++stats.frames_processed;
     if (out.result.world_from_cam) ++stats.frames_tracked;
-    msg::CameraPose pose = CameraPoseToMsg(out.result, paired->frame.seq, paired->detections_missing);
+    msg::CameraPose pose =
+        CameraPoseToMsg(out.result, paired->frame.seq, paired->detections_missing);
     if (dets != nullptr && options.external_detections) pose.detection_ms(detection_ms);
     pose_writer.Write(pose);
     publish_keyframes(out.keyframes);
@@ -245,10 +245,10 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   LOG_INFO << "slam: " << stats.frames_processed << " frames (" << stats.frames_tracked
            << " tracked), " << stats.keyframes_published << " keyframe messages ("
            << stats.keyframes_published - stats.keyframe_pose_updates - stats.keyframes_removed
-           << " new, " << stats.keyframe_pose_updates << " pose updates, " << stats.keyframes_removed
-           << " removed); detections: "
-           << stats.pairing.with_detections << " paired, " << stats.pairing.missing_detections
-           << " missing" << (stats.detector_lost ? " (detector lost: geometry-only frames)" : "");
+           << " new, " << stats.keyframe_pose_updates << " pose updates, "
+           << stats.keyframes_removed << " removed); detections: " << stats.pairing.with_detections
+           << " paired, " << stats.pairing.missing_detections << " missing"
+           << (stats.detector_lost ? " (detector lost: geometry-only frames)" : "");
   return stats;
 }
 

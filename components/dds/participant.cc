@@ -1,15 +1,17 @@
 #include "components/dds/participant.h"
 
-#include <cstdlib>
-#include <stdexcept>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastrtps/attributes/LibrarySettingsAttributes.h>
+#include <fastrtps/xmlparser/XMLProfileManager.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 
+#include <cstdlib>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/publisher/qos/PublisherQos.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/subscriber/qos/SubscriberQos.hpp>
-#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
-#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+#include <stdexcept>
 
 #include "core/base/error.h"
 #include "core/base/log.h"
@@ -42,8 +44,29 @@ int DomainIdFromEnvironment(int fallback) {
   return static_cast<int>(value);
 }
 
+namespace {
+
+// Fast DDS 2.9's intra-process delivery runs the reader's listener on the writer's thread and
+// reaches the local reader through a raw pointer: a component that deletes its readers while
+// another component of the same process still writes (the end of a single-process run) can then
+// crash inside Fast DDS (seen as a rare SIGSEGV at the end of `dygslam run`). Local readers get
+// their samples through the shared-memory transport instead (one extra copy of a 1.5 MB frame,
+// ~0.5 ms), whose receive threads handle endpoint removal safely.
+void DisableIntraprocessDelivery() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    eprosima::fastrtps::LibrarySettingsAttributes settings =
+        eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings();
+    settings.intraprocess_delivery = eprosima::fastrtps::INTRAPROCESS_OFF;
+    eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(settings);
+  });
+}
+
+}  // namespace
+
 std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& options) {
   options.Check();
+  DisableIntraprocessDelivery();
   DomainParticipantFactory* factory = DomainParticipantFactory::get_instance();
   DomainParticipantQos qos;
   bool xml = false;

@@ -14,14 +14,13 @@
 #pragma once
 
 #include <cstdint>
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
-
-#include <fastdds/dds/domain/DomainParticipant.hpp>
-#include <fastdds/dds/topic/Topic.hpp>
-#include <fastdds/dds/topic/TypeSupport.hpp>
 
 namespace dygslam::dds {
 
@@ -74,7 +73,7 @@ class Participant {
  private:
   Participant() = default;
   eprosima::fastdds::dds::Topic* CreateTopicLocked(const std::string& name,
-                                                    eprosima::fastdds::dds::TypeSupport type);
+                                                   eprosima::fastdds::dds::TypeSupport type);
 
   std::mutex mutex_;
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;

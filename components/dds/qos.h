@@ -33,10 +33,9 @@
 // All DataWriters use PREALLOCATED_WITH_REALLOC memory (samples have unbounded sequences).
 #pragma once
 
-#include <string>
-
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
+#include <string>
 
 namespace dygslam::dds {
 

@@ -1,6 +1,8 @@
 // End-to-end pipeline over DDS on the shared Bonn frames (runs the dygslam binary; netns).
 // Every test uses its own DDS domain ids (111..129) so that tests running in parallel never meet
 // (/dev/shm is shared between network namespaces).
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -15,9 +17,6 @@
 #include <thread>
 #include <vector>
 
-#include <gtest/gtest.h>
-#include <octomap/OcTree.h>
-
 #include "core/eval/trajectory_eval.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
@@ -29,11 +28,14 @@ namespace {
 
 // <build>/apps/dygslam, found from this test executable (<build>/components/dds_pipeline).
 std::string Binary() {
-  if (const char* dir = std::getenv("DYGSLAM_BINARY_DIR")) return std::string(dir) + "/apps/dygslam";
+  if (const char* dir = std::getenv("DYGSLAM_BINARY_DIR"))
+    return std::string(dir) + "/apps/dygslam";
   const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe");
   return (self.parent_path().parent_path() / "apps" / "dygslam").string();
 }
-std::string Config() { return std::string(std::getenv("DYGSLAM_SOURCE_DIR")) + "/config/bonn.yaml"; }
+std::string Config() {
+  return std::string(std::getenv("DYGSLAM_SOURCE_DIR")) + "/config/bonn.yaml";
+}
 
 std::string ReadAll(const std::string& path) {
   std::ifstream in(path);
@@ -71,27 +73,50 @@ int Wait(pid_t pid) {
 // `dygslam run DATASET --config bonn.yaml --frames F --out OUT --domain D --quiet <extra>`.
 std::vector<std::string> RunArgs(const std::string& dataset, const std::string& out, int domain,
                                  const std::string& frames, const std::vector<std::string>& extra) {
-  std::vector<std::string> a = {Binary(), "run",  dataset,  "--config", Config(), "--frames",
-                                frames,   "--out", out,     "--domain", std::to_string(domain)};
+  std::vector<std::string> a = {Binary(),
+                                "run",
+                                dataset,
+                                "--config",
+                                Config(),
+                                "--frames",
+                                frames,
+                                "--out",
+                                out,
+                                "--domain",
+                                std::to_string(domain)};
   a.insert(a.end(), extra.begin(), extra.end());
   return a;
 }
 
-int RunToEnd(const std::vector<std::string>& args, const std::string& log) { return Wait(Spawn(args, log)); }
+int RunToEnd(const std::vector<std::string>& args, const std::string& log) {
+  return Wait(Spawn(args, log));
+}
 
 // Components by hand: `dygslam component NAME --dataset ... --domain D <extra>`.
 std::vector<std::string> ComponentArgs(const std::string& name, const std::string& dataset,
-                                       const std::string& out, int domain, const std::string& frames,
+                                       const std::string& out, int domain,
+                                       const std::string& frames,
                                        const std::vector<std::string>& extra = {}) {
-  std::vector<std::string> a = {Binary(), "component", name,   "--dataset", dataset,
-                                "--config", Config(),  "--out", out,        "--frames",
-                                frames,     "--domain", std::to_string(domain)};
+  std::vector<std::string> a = {Binary(),
+                                "component",
+                                name,
+                                "--dataset",
+                                dataset,
+                                "--config",
+                                Config(),
+                                "--out",
+                                out,
+                                "--frames",
+                                frames,
+                                "--domain",
+                                std::to_string(domain)};
   a.insert(a.end(), extra.begin(), extra.end());
   return a;
 }
 
 double AteRmse(const std::string& dataset, const std::string& trajectory) {
-  return ComputeAte(ReadTumTrajectory(dataset + "/groundtruth.txt"), ReadTumTrajectory(trajectory)).error.rmse;
+  return ComputeAte(ReadTumTrajectory(dataset + "/groundtruth.txt"), ReadTumTrajectory(trajectory))
+      .error.rmse;
 }
 
 size_t CsvRows(const std::string& path) {
@@ -117,12 +142,18 @@ TEST(Pipeline, DeterministicMultiProcessMatchesSingleProcess) {
   DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
   const std::string tmp = testing::MakeTempDir("dds_pipeline_det");
   const std::string frames = "0:120";
-  ASSERT_EQ(RunToEnd(RunArgs(dataset, tmp + "/single", 111, frames, {"--deterministic"}), tmp + "/single.log"), 0)
-      << ReadAll(tmp + "/single.log");
-  ASSERT_EQ(RunToEnd(RunArgs(dataset, tmp + "/multi", 112, frames, {"--deterministic", "--processes"}), tmp + "/multi.log"),
+  ASSERT_EQ(RunToEnd(RunArgs(dataset, tmp + "/single", 111, frames, {"--deterministic"}),
+                     tmp + "/single.log"),
             0)
+      << ReadAll(tmp + "/single.log");
+  ASSERT_EQ(
+      RunToEnd(RunArgs(dataset, tmp + "/multi", 112, frames, {"--deterministic", "--processes"}),
+               tmp + "/multi.log"),
+      0)
       << ReadAll(tmp + "/multi.log");
-  ASSERT_EQ(RunToEnd(RunArgs(dataset, tmp + "/direct", 0, frames, {"--deterministic", "--direct"}), tmp + "/direct.log"), 0)
+  ASSERT_EQ(RunToEnd(RunArgs(dataset, tmp + "/direct", 0, frames, {"--deterministic", "--direct"}),
+                     tmp + "/direct.log"),
+            0)
       << ReadAll(tmp + "/direct.log");
   const std::string single = ReadAll(tmp + "/single/trajectory.txt");
   EXPECT_GT(ReadTumTrajectory(tmp + "/single/trajectory.txt").size(), 100u);
@@ -147,16 +178,20 @@ TEST(Pipeline, NormalModeMultiProcessAteMatchesDeterministicRun) {
   DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
   const std::string tmp = testing::MakeTempDir("dds_pipeline_normal");
   const std::string frames = "0:150";
-  ASSERT_EQ(RunToEnd(RunArgs(dataset, tmp + "/reference", 0, frames, {"--deterministic", "--direct", "--no-map"}),
-                tmp + "/reference.log"),
+  ASSERT_EQ(RunToEnd(RunArgs(dataset, tmp + "/reference", 0, frames,
+                             {"--deterministic", "--direct", "--no-map"}),
+                     tmp + "/reference.log"),
             0)
       << ReadAll(tmp + "/reference.log");
-  ASSERT_EQ(RunToEnd(RunArgs(dataset, tmp + "/multi", 114, frames, {"--processes", "--no-map"}), tmp + "/multi.log"), 0)
+  ASSERT_EQ(RunToEnd(RunArgs(dataset, tmp + "/multi", 114, frames, {"--processes", "--no-map"}),
+                     tmp + "/multi.log"),
+            0)
       << ReadAll(tmp + "/multi.log");
   const double reference = AteRmse(dataset, tmp + "/reference/trajectory.txt");
   const double multi = AteRmse(dataset, tmp + "/multi/trajectory.txt");
   EXPECT_GT(ReadTumTrajectory(tmp + "/multi/trajectory.txt").size(), 140u);
-  EXPECT_LT(multi, 1.10 * reference + 0.003) << "reference " << reference << " m, multi-process " << multi << " m";
+  EXPECT_LT(multi, 1.10 * reference + 0.003)
+      << "reference " << reference << " m, multi-process " << multi << " m";
   EXPECT_FALSE(std::filesystem::exists(tmp + "/multi/map.bt"));  // --no-map
 }
 
@@ -167,10 +202,12 @@ TEST(Pipeline, SigintMidRunFlushesOutputs) {
   const std::string tmp = testing::MakeTempDir("dds_pipeline_sigint");
   const std::string log = tmp + "/run.log";
   // Progress line on (no --quiet): "[run] frame k/N" tells how far it got.
-  std::vector<std::string> args = RunArgs(dataset, tmp + "/out", 115, "0:360", {"--processes", "--filter", "geometry"});
+  std::vector<std::string> args =
+      RunArgs(dataset, tmp + "/out", 115, "0:360", {"--processes", "--filter", "geometry"});
   const pid_t pid = Spawn(args, log, /*new_group=*/true);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  while (ReadAll(log).find("[run] frame 40/") == std::string::npos && std::chrono::steady_clock::now() < deadline) {
+  while (ReadAll(log).find("[run] frame 40/") == std::string::npos &&
+         std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   ASSERT_NE(ReadAll(log).find("[run] frame 40/"), std::string::npos) << ReadAll(log);
@@ -202,7 +239,8 @@ TEST(Pipeline, SigtermSingleProcessAndDirectFlushOutputs) {
     if (mode == "direct") extra.push_back("--direct");
     const pid_t pid = Spawn(RunArgs(dataset, tmp + "/" + mode, domain++, "0:360", extra), log);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-    while (ReadAll(log).find("[run] frame 30/") == std::string::npos && std::chrono::steady_clock::now() < deadline) {
+    while (ReadAll(log).find("[run] frame 30/") == std::string::npos &&
+           std::chrono::steady_clock::now() < deadline) {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
     ASSERT_NE(ReadAll(log).find("[run] frame 30/"), std::string::npos) << ReadAll(log);
@@ -229,14 +267,18 @@ TEST(Pipeline, LateMapperReceivesAllKeyframes) {
     a.insert(a.end(), more.begin(), more.end());
     return a;
   };
-  const pid_t recorder = Spawn(ComponentArgs("recorder", dataset, out, domain, "0:120", geometry), tmp + "/recorder.log");
-  const pid_t slam = Spawn(ComponentArgs("slam", dataset, out, domain, "0:120", geometry), tmp + "/slam.log");
-  const pid_t player = Spawn(ComponentArgs("player", dataset, out, domain, "0:120", with(geometry, {"--rate", "1"})),
-                             tmp + "/player.log");
+  const pid_t recorder = Spawn(ComponentArgs("recorder", dataset, out, domain, "0:120", geometry),
+                               tmp + "/recorder.log");
+  const pid_t slam =
+      Spawn(ComponentArgs("slam", dataset, out, domain, "0:120", geometry), tmp + "/slam.log");
+  const pid_t player =
+      Spawn(ComponentArgs("player", dataset, out, domain, "0:120", with(geometry, {"--rate", "1"})),
+            tmp + "/player.log");
   // 120 frames in real time (4 s): the mapper joins once slam has published frames (the recorder
   // writes trajectory_online.txt only at the end, so watch slam's keyframes through time).
   std::this_thread::sleep_for(std::chrono::milliseconds(2500));
-  const pid_t mapper = Spawn(ComponentArgs("mapper", dataset, out, domain, "0:120", geometry), tmp + "/mapper.log");
+  const pid_t mapper =
+      Spawn(ComponentArgs("mapper", dataset, out, domain, "0:120", geometry), tmp + "/mapper.log");
   EXPECT_EQ(Wait(slam), 0) << ReadAll(tmp + "/slam.log");
   EXPECT_EQ(Wait(mapper), 0) << ReadAll(tmp + "/mapper.log");
   EXPECT_EQ(Wait(recorder), 0) << ReadAll(tmp + "/recorder.log");
@@ -244,10 +286,12 @@ TEST(Pipeline, LateMapperReceivesAllKeyframes) {
   std::smatch m;
   const std::string slam_log = ReadAll(tmp + "/slam.log");
   const std::string mapper_log = ReadAll(tmp + "/mapper.log");
-  ASSERT_TRUE(std::regex_search(slam_log, m, std::regex(R"((\d+) keyframe messages \((\d+) new)"))) << slam_log;
+  ASSERT_TRUE(std::regex_search(slam_log, m, std::regex(R"((\d+) keyframe messages \((\d+) new)")))
+      << slam_log;
   const int published = std::stoi(m[1]);
   const int published_new = std::stoi(m[2]);
-  ASSERT_TRUE(std::regex_search(mapper_log, m, std::regex(R"(mapper: (\d+) keyframe messages \((\d+) new)")))
+  ASSERT_TRUE(std::regex_search(mapper_log, m,
+                                std::regex(R"(mapper: (\d+) keyframe messages \((\d+) new)")))
       << mapper_log;
   EXPECT_GT(published_new, 5);
   EXPECT_EQ(std::stoi(m[1]), published) << mapper_log;
@@ -262,7 +306,8 @@ TEST(Pipeline, KillingTheDetectorDoesNotStopSlam) {
   const std::string tmp = testing::MakeTempDir("dds_pipeline_kill");
   const int domain = 113;
   auto run = [&](const std::string& name, const std::vector<std::string>& extra = {}) {
-    return Spawn(ComponentArgs(name, dataset, tmp + "/out", domain, "0:90", extra), tmp + "/" + name + ".log");
+    return Spawn(ComponentArgs(name, dataset, tmp + "/out", domain, "0:90", extra),
+                 tmp + "/" + name + ".log");
   };
   const std::vector<std::string> normal = {"--detection-wait-ms", "100"};
   const pid_t recorder = run("recorder");

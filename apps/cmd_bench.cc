@@ -503,9 +503,15 @@ int RunBench(const std::vector<std::string>& args) {
         if (cell.sequence != pr.sequence.name) continue;
         const BenchRun& run = *grouped[{cell.sequence, cell.config}][cell.median_run];
         if (!std::isfinite(run.ate.rmse)) continue;
-        const AteResult ate = ComputeAte(pr.groundtruth, ReadTumTrajectory(run.trajectory_path));
         const std::string pairs = (work_dir / base / (cell.config + "_median_pairs.txt")).string();
-        WritePairs(pairs, ate);
+        try {
+          fs::create_directories(work_dir / base);
+          WritePairs(pairs, ComputeAte(pr.groundtruth, ReadTumTrajectory(run.trajectory_path)));
+        } catch (const InputError& e) {  // --report-only after the run folders were removed
+          notes.push_back(cell.sequence + " " + cell.config + ": picture skipped: " + e.what());
+          std::cerr << "dygslam bench: picture skipped: " << e.what() << "\n";
+          continue;
+        }
         const std::string png = base + "_" + cell.config + ".png";
         pics.config_pngs[cell.config] = png;
         series << (first_series ? "" : ", ") << "{\"config\": " << JsonString(cell.config)

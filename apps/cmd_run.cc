@@ -17,6 +17,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <map>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -34,6 +35,7 @@
 #include "core/config/system_config.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
+#include "core/io/detections_io.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
@@ -127,6 +129,10 @@ struct RunSetup {
   fs::path out;
   bool map = true;
   bool progress = true;
+  // --detections FILE: boxes from a file (e.g. the ground-truth boxes of `dygslam synth`, or an
+  // external detector) instead of the internal detector. Direct mode only.
+  std::map<Timestamp, std::vector<Detection>> detections;
+  bool use_detection_file = false;
 };
 
 struct RunOutcome {
@@ -149,12 +155,26 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   std::string csv = kFramesCsvHeader;
   const auto t0 = std::chrono::steady_clock::now();
   const size_t total = s.last - s.first;
+  cv::Mat next_rgb;  // loaded one frame ahead so its detection overlaps this frame's tracking
   for (size_t k = s.first; k < s.last && !signals.signaled(); ++k) {
     const auto index = dataset.FrameForRgbEntry(k);
     if (!index) continue;
-    const cv::Mat rgb = dataset.LoadRgb(*index, s.system.camera.width, s.system.camera.height);
+    const cv::Mat rgb = next_rgb.empty()
+                            ? dataset.LoadRgb(*index, s.system.camera.width, s.system.camera.height)
+                            : next_rgb;
+    next_rgb = cv::Mat();
     const cv::Mat depth = dataset.LoadDepth(*index, s.system.camera.width, s.system.camera.height);
-    const FrameResult r = system.FeedRgbdFrame(rgb, depth, dataset.frame(*index).rgb_stamp);
+    const Timestamp stamp = dataset.frame(*index).rgb_stamp;
+    if (!s.use_detection_file && k + 1 < s.last) {
+      if (const auto next = dataset.FrameForRgbEntry(k + 1)) {
+        next_rgb = dataset.LoadRgb(*next, s.system.camera.width, s.system.camera.height);
+        system.PrefetchDetections(next_rgb, dataset.frame(*next).rgb_stamp);
+      }
+    }
+    const FrameResult r =
+        s.use_detection_file
+            ? system.FeedRgbdFrame(rgb, depth, stamp, cv::Mat(), &DetectionsNear(s.detections, stamp))
+            : system.FeedRgbdFrame(rgb, depth, stamp);
     ++outcome.processed;
     if (r.state == TrackingState::kLost) ++outcome.lost;
     csv += FramesCsvRow(r);
@@ -253,6 +273,9 @@ int RunRun(const std::vector<std::string>& args) {
   p.AddFlag("processes", "DDS pipeline with each component in its own process");
   p.AddFlag("direct", "no DDS: feed the System directly in this process");
   p.AddFlag("no-map", "do not build map.bt");
+  p.AddOption("detections", "FILE",
+              "boxes per frame from FILE ('timestamp x y w h class score', e.g. detections.txt of\n"
+              "`dygslam synth`) instead of the detector; implies --direct");
   p.AddOption("domain", "N", "DDS domain id (default: $DYGSLAM_DOMAIN_ID or 0)", "-1");
   p.AddFlag("quiet", "no progress line");
   if (!p.Parse(args)) return p.exit_code();
@@ -273,6 +296,11 @@ int RunRun(const std::vector<std::string>& args) {
     s.system.detector.num_threads = 1;
   }
   s.map = !p.Flag("no-map");
+  if (p.Has("detections")) {
+    if (p.Flag("processes")) return p.UsageError("--detections works with --direct only");
+    s.detections = ReadDetections(p.Get("detections"));
+    s.use_detection_file = true;
+  }
   s.progress = !p.Flag("quiet");
   int domain_id = -1;
   try {
@@ -297,7 +325,7 @@ int RunRun(const std::vector<std::string>& args) {
   RunOutcome outcome;
   const auto t0 = std::chrono::steady_clock::now();
 #ifdef DYGSLAM_HAVE_COMPONENTS
-  if (!p.Flag("direct")) {
+  if (!p.Flag("direct") && !s.use_detection_file) {
     mode = p.Flag("processes") ? "DDS pipeline, one process per component"
                                : "DDS pipeline, one process";
     outcome = RunThroughPipeline(s, p.Flag("processes"), domain_id);

@@ -53,11 +53,21 @@ RunOutput RunSystemOnSequence(const RgbdDataset& dataset, const SystemOptions& o
   System system(options);
   RunOutput out;
   const auto t0 = std::chrono::steady_clock::now();
+  cv::Mat next_rgb;  // loaded one frame ahead: its detection overlaps this frame's tracking
   for (size_t k = first; k < last; ++k) {
     const auto index = dataset.FrameForRgbEntry(k);
     if (!index) continue;
-    const cv::Mat rgb = dataset.LoadRgb(*index, options.camera.width, options.camera.height);
+    const cv::Mat rgb = next_rgb.empty()
+                            ? dataset.LoadRgb(*index, options.camera.width, options.camera.height)
+                            : next_rgb;
+    next_rgb = cv::Mat();
     const cv::Mat depth = dataset.LoadDepth(*index, options.camera.width, options.camera.height);
+    if (k + 1 < last) {
+      if (const auto next = dataset.FrameForRgbEntry(k + 1)) {
+        next_rgb = dataset.LoadRgb(*next, options.camera.width, options.camera.height);
+        system.PrefetchDetections(next_rgb, dataset.frame(*next).rgb_stamp);
+      }
+    }
     const FrameResult r = system.FeedRgbdFrame(rgb, depth, dataset.frame(*index).rgb_stamp);
     ++out.frames;
     if (r.state == TrackingState::kLost) ++out.lost;

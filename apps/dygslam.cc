@@ -20,7 +20,7 @@ const char* kPlannedSummaries[][2] = {
     {"eval", "evaluate a trajectory against ground truth (ATE/RPE)"},
     {"synth", "generate a synthetic dynamic RGB-D sequence"},
     {"map", "build a static map from keyframes"},
-    {"bench", "time the pipeline stages"},
+    {"bench", "accuracy and timing tables for every filter mode (BENCHMARKS.md)"},
     {"version", "print the version"},
     {"help", "list the commands"},
 };
@@ -48,7 +48,9 @@ void PrintHelp(std::ostream& out) {
   out << "\nRun 'dygslam <command> --help' for the options of a command.\n"
          "  dygslam run DATASET_DIR [--config FILE] [--filter none|boxes|geometry|full]\n"
          "              [--frames FIRST:LAST] [--out DIR] [--deterministic]\n"
-         "  dygslam eval GROUNDTRUTH ESTIMATE [--json] [--plot FILE.png]\n";
+         "              [--processes | --direct] [--no-map] [--detections FILE]\n"
+         "  dygslam eval GROUNDTRUTH ESTIMATE [--json] [--plot FILE.png]\n"
+         "  dygslam bench DATA_DIR [--runs N] [--quick] [--update-benchmarks BENCHMARKS.md]\n";
 }
 
 int Dispatch(const std::vector<std::string>& argv) {

@@ -19,7 +19,8 @@ mkdir -p "$out"
 echo "soak: $minutes min of $dataset (filter $filter) -> $out; load at start: $(cut -d' ' -f1-3 /proc/loadavg)"
 "$bin" "$dataset" --minutes "$minutes" --filter "$filter" --out "$out" | tee "$out/summary.txt"
 echo "load at end: $(cut -d' ' -f1-3 /proc/loadavg)" | tee -a "$out/summary.txt"
-python3 - "$out" <<'PY' || echo "(no plot: matplotlib missing)"
+py=python3; [ -x /usr/bin/python3 ] && py=/usr/bin/python3
+"$py" - "$out" <<'PY' || echo "(no plot: matplotlib missing)"
 import csv, sys
 import matplotlib
 matplotlib.use("Agg")

@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <algorithm>
 #include <chrono>
 #include <map>
 #include <csignal>
@@ -191,6 +192,18 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   outcome.interrupted = signals.signaled();
   if (outcome.interrupted) std::fprintf(stderr, "[run] interrupted: flushing outputs\n");
   system.Shutdown();
+  {
+    LocalMappingStats lm = system.LocalMappingStatistics();
+    std::vector<double> ms = lm.per_keyframe_ms;
+    double median = 0;
+    if (!ms.empty()) {
+      std::nth_element(ms.begin(), ms.begin() + ms.size() / 2, ms.end());
+      median = ms[ms.size() / 2];
+    }
+    std::printf("local mapping: %d keyframes, median %.1f ms per keyframe, %d points triangulated, "
+                "%d keyframes culled\n", lm.keyframes_processed, median, lm.points_triangulated,
+                lm.keyframes_culled);
+  }
   WriteFileAtomically((s.out / "frames.csv").string(), csv);
   WriteTumTrajectory((s.out / "trajectory.txt").string(), system.Trajectory());
   WriteTumTrajectory((s.out / "keyframes.txt").string(), system.KeyframeTrajectory());

@@ -118,6 +118,7 @@ class SystemImpl {
                    const std::vector<Detection>* detections);
 
   std::vector<StampedPose> Trajectory() const { return tracker_.Trajectory(); }
+  LocalMappingStats LocalMappingStatistics() const { return local_mapper_.stats(); }
   void Prefetch(const cv::Mat& rgb, Timestamp stamp) {
     if (!options_.NeedsDetections() || rgb.empty() || rgb.type() != CV_8UC3) return;
     EnsureDetector();
@@ -365,6 +366,7 @@ FrameResult System::FeedRgbdFrame(const cv::Mat& rgb, const cv::Mat& depth, Time
   return impl_->Feed(rgb, depth, stamp, mask, detections);
 }
 std::vector<StampedPose> System::Trajectory() const { return impl_->Trajectory(); }
+LocalMappingStats System::LocalMappingStatistics() const { return impl_->LocalMappingStatistics(); }
 std::vector<StampedPose> System::KeyframeTrajectory() const { return impl_->KeyframeTrajectory(); }
 void System::SetKeyframeCallback(std::function<void(const KeyframeData&)> callback) {
   impl_->SetKeyframeCallback(std::move(callback));

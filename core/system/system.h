@@ -106,6 +106,9 @@ class System {
   // Called (from the thread that produced it) for each new keyframe and for keyframe pose
   // corrections (pose_update_only = true).
   void SetKeyframeCallback(std::function<void(const KeyframeData&)> callback);
+  // Local mapping so far: keyframes processed, points triangulated/culled, keyframes culled, time
+  // per keyframe (its own thread; synchronous in deterministic mode).
+  LocalMappingStats LocalMappingStatistics() const;
   // Finishes local mapping; afterwards Trajectory() is final.
   void Shutdown();
 

@@ -38,38 +38,6 @@ namespace dygslam::cli {
 namespace {
 namespace fs = std::filesystem;
 
-// "FIRST:LAST" (either side may be empty) -> [first, last) of rgb.txt entries (as `dygslam run`).
-std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total) {
-  const auto colon = text.find(':');
-  if (colon == std::string::npos)
-    throw InvalidOptions("--frames: expected FIRST:LAST, got '" + text + "'");
-  auto parse = [&](const std::string& s, size_t def) -> size_t {
-    if (s.empty()) return def;
-    for (char c : s)
-      if (c < '0' || c > '9')
-        throw InvalidOptions("--frames: not a non-negative integer: '" + s + "'");
-    return std::stoul(s);
-  };
-  const size_t first = parse(text.substr(0, colon), 0);
-  const size_t last = std::min(parse(text.substr(colon + 1), total), total);
-  if (first >= last) throw InvalidOptions("--frames: empty range '" + text + "'");
-  return {first, last};
-}
-
-// Settings: DATASET_DIR/camera.yaml (generated sequences), else a preset by folder name (as
-// `dygslam run`).
-std::string DefaultSettingsFile(const std::string& dataset_dir) {
-  const fs::path own = fs::path(dataset_dir) / "camera.yaml";
-  if (fs::exists(own)) return own.string();
-  const std::string name = fs::path(dataset_dir).lexically_normal().filename().string();
-  const fs::path presets = fs::path(ScriptsDir()).parent_path() / "config";
-  std::string preset = "bonn.yaml";
-  if (name.find("freiburg1") != std::string::npos) preset = "tum1.yaml";
-  if (name.find("freiburg2") != std::string::npos) preset = "tum2.yaml";
-  if (name.find("freiburg3") != std::string::npos) preset = "tum3.yaml";
-  return (presets / preset).string();
-}
-
 double ParsePositive(const std::string& option, const std::string& text) {
   size_t used = 0;
   double value = 0;
@@ -151,7 +119,7 @@ int RunMap(const std::vector<std::string>& args) {
   }
 
   const std::string dataset_dir = p.Positional("DATASET_DIR");
-  const std::string config = p.Has("config") ? p.Get("config") : DefaultSettingsFile(dataset_dir);
+  const std::string config = p.Has("config") ? p.Get("config") : DefaultSettingsPath(dataset_dir, ConfigDir());
   const Settings settings = LoadSettings(config);
   SystemOptions options = SystemOptionsFromSettings(settings);
   options.filter_mode = ParseFilterMode(p.Get("filter"));

@@ -49,37 +49,6 @@ namespace dygslam::cli {
 namespace {
 namespace fs = std::filesystem;
 
-// "FIRST:LAST" (either side may be empty) -> [first, last) of rgb.txt entries.
-std::pair<size_t, size_t> ParseFrames(const std::string& text, size_t total) {
-  const auto colon = text.find(':');
-  if (colon == std::string::npos)
-    throw InvalidOptions("--frames: expected FIRST:LAST, got '" + text + "'");
-  auto parse = [&](const std::string& s, size_t def) -> size_t {
-    if (s.empty()) return def;
-    for (char c : s)
-      if (c < '0' || c > '9')
-        throw InvalidOptions("--frames: not a non-negative integer: '" + s + "'");
-    return std::stoul(s);
-  };
-  const size_t first = parse(text.substr(0, colon), 0);
-  const size_t last = std::min(parse(text.substr(colon + 1), total), total);
-  if (first >= last) throw InvalidOptions("--frames: empty range '" + text + "'");
-  return {first, last};
-}
-
-std::string DefaultConfig(const std::string& dataset_dir) {
-  // camera.yaml inside the dataset (generated sequences) wins; else a preset by folder name.
-  const fs::path own = fs::path(dataset_dir) / "camera.yaml";
-  if (fs::exists(own)) return own.string();
-  const std::string name = fs::path(dataset_dir).lexically_normal().filename().string();
-  const fs::path presets = fs::path(ScriptsDir()).parent_path() / "config";
-  std::string preset = "bonn.yaml";
-  if (name.find("freiburg1") != std::string::npos) preset = "tum1.yaml";
-  if (name.find("freiburg2") != std::string::npos) preset = "tum2.yaml";
-  if (name.find("freiburg3") != std::string::npos) preset = "tum3.yaml";
-  return (presets / preset).string();
-}
-
 // frames.csv: the same columns in every mode (the pipeline's recorder writes them from
 // CameraPose, components/recorder.cc FramesCsvHeader / FramesCsvRow).
 constexpr const char* kFramesCsvHeader =
@@ -297,7 +266,7 @@ int RunRun(const std::vector<std::string>& args) {
 
   RunSetup s;
   s.dataset_dir = p.Positional("DATASET_DIR");
-  s.config = p.Has("config") ? p.Get("config") : DefaultConfig(s.dataset_dir);
+  s.config = p.Has("config") ? p.Get("config") : DefaultSettingsPath(s.dataset_dir, ConfigDir());
   const Settings settings = LoadSettings(s.config);
   s.system = SystemOptionsFromSettings(settings);
   ReadOptions(settings.reader, &s.octomap);
@@ -325,7 +294,7 @@ int RunRun(const std::vector<std::string>& args) {
 
   const RgbdDataset dataset = RgbdDataset::Open(s.dataset_dir);
   std::tie(s.first, s.last) = p.Has("frames")
-                                  ? ParseFrames(p.Get("frames"), dataset.num_rgb_entries())
+                                  ? ParseFrameRange(p.Get("frames"), dataset.num_rgb_entries())
                                   : std::pair<size_t, size_t>{0, dataset.num_rgb_entries()};
   size_t skipped = 0;
   for (size_t k = s.first; k < s.last; ++k) {

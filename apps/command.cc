@@ -185,4 +185,8 @@ std::string ArgParser::Get(const std::string& option) const {
 
 bool ArgParser::Flag(const std::string& flag) const { return Has(flag); }
 
+std::string ConfigDir() {
+  return (std::filesystem::path(ScriptsDir()).parent_path() / "config").string();
+}
+
 }  // namespace dygslam::cli

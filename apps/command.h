@@ -90,5 +90,7 @@ const std::vector<std::string>& PlannedCommands();
 // Directory of the helper scripts (scripts/): $DYGSLAM_SCRIPTS_DIR, else the source tree's
 // scripts/ baked in at build time, else ../share/dygslam/scripts next to the executable.
 std::string ScriptsDir();
+// The settings presets folder (config/ beside scripts/).
+std::string ConfigDir();
 
 }  // namespace dygslam::cli

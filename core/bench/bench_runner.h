@@ -58,6 +58,6 @@ StageMeans MeanStageTimes(const std::vector<StageTimes>& times);
 
 // "FIRST:LAST" (either side may be empty) -> [first, last) clamped to `total`. Throws
 // InvalidOptions for malformed text or an empty range.
-std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total);
+// ParseFrameRange: core/io/dataset.h
 
 }  // namespace dygslam

@@ -49,17 +49,6 @@ void Collect(const fs::path& dir, const std::string& config_dir,
 
 }  // namespace
 
-std::string DefaultSettingsPath(const std::string& dataset_dir, const std::string& config_dir) {
-  const fs::path own = fs::path(dataset_dir) / "camera.yaml";
-  if (IsFile(own)) return own.string();
-  const std::string name = fs::path(dataset_dir).lexically_normal().filename().string();
-  std::string preset = "bonn.yaml";
-  if (name.find("freiburg1") != std::string::npos) preset = "tum1.yaml";
-  if (name.find("freiburg2") != std::string::npos) preset = "tum2.yaml";
-  if (name.find("freiburg3") != std::string::npos) preset = "tum3.yaml";
-  return (fs::path(config_dir) / preset).string();
-}
-
 std::vector<BenchSequence> FindBenchSequences(const std::string& data_dir,
                                               const std::string& config_dir,
                                               const std::string& settings_override,

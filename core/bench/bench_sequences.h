@@ -2,6 +2,8 @@
 // + groundtruth.txt) found in a data directory, with the settings file each one runs with.
 #pragma once
 
+#include "core/config/settings.h"
+
 #include <string>
 #include <vector>
 
@@ -16,7 +18,7 @@ struct BenchSequence {
 // The settings file for a dataset folder: <dir>/camera.yaml when present (generated sequences),
 // else a preset of `config_dir` chosen by the folder name: "freiburg1" -> tum1.yaml, "freiburg2"
 // -> tum2.yaml, "freiburg3" -> tum3.yaml, anything else (Bonn) -> bonn.yaml.
-std::string DefaultSettingsPath(const std::string& dataset_dir, const std::string& config_dir);
+// DefaultSettingsPath: core/config/settings.h
 
 // `data_dir` itself when it is a sequence folder, else its sub-folders up to `max_depth` levels
 // deep that are, sorted by name. Folders with rgb.txt and depth.txt but no groundtruth.txt cannot

@@ -1,5 +1,7 @@
 #include "core/config/settings.h"
 
+#include <filesystem>
+
 namespace dygslam {
 namespace {
 
@@ -43,6 +45,19 @@ Settings LoadSettings(const std::string& path) {
 
 Settings ParseSettings(const std::string& text, const std::string& name) {
   return ReadSettings(ConfigReader::FromString(text, name));
+}
+
+std::string DefaultSettingsPath(const std::string& dataset_dir, const std::string& config_dir) {
+  namespace fs = std::filesystem;
+  const fs::path own = fs::path(dataset_dir) / "camera.yaml";
+  std::error_code ec;
+  if (fs::is_regular_file(own, ec)) return own.string();
+  const std::string name = fs::path(dataset_dir).lexically_normal().filename().string();
+  std::string preset = "bonn.yaml";
+  if (name.find("freiburg1") != std::string::npos) preset = "tum1.yaml";
+  if (name.find("freiburg2") != std::string::npos) preset = "tum2.yaml";
+  if (name.find("freiburg3") != std::string::npos) preset = "tum3.yaml";
+  return (fs::path(config_dir) / preset).string();
 }
 
 }  // namespace dygslam

@@ -28,6 +28,10 @@ struct Settings {
 // Keys ORB-SLAM2 has but dygslam does not use (Camera.RGB, Viewer.*) are ignored.
 // Throws InputError naming the file, line and key (bad values, failed Check()).
 Settings LoadSettings(const std::string& path);
+
+// The settings file for a dataset folder: its own camera.yaml (generated sequences), else the
+// preset of `config_dir` by folder name (freiburg1/2/3 -> tum1/2/3.yaml, otherwise bonn.yaml).
+std::string DefaultSettingsPath(const std::string& dataset_dir, const std::string& config_dir);
 // Same from YAML text (`name` stands in for the file name in messages).
 Settings ParseSettings(const std::string& text, const std::string& name);
 

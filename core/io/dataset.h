@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/base/timestamp.h"
@@ -27,6 +28,10 @@ struct RgbdFrameEntry {
   Timestamp depth_stamp;
   std::string depth_path;  // absolute
 };
+
+// "FIRST:LAST" (either side may be empty) -> [first, last) of rgb.txt entries, LAST clamped to
+// `total`. Throws InvalidOptions naming --frames for anything else or an empty range.
+std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total);
 
 class RgbdDataset {
  public:

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <atomic>
+#include <cmath>
 #include <condition_variable>
 #include <deque>
 #include <functional>
@@ -33,6 +34,10 @@ struct LocalMappingOptions {
   void Check() const {
     DYGSLAM_CHECK_OPTION(triangulation_neighbors >= 1, "LocalMapping.triangulation_neighbors");
     DYGSLAM_CHECK_OPTION(redundancy_ratio > 0 && redundancy_ratio <= 1, "LocalMapping.redundancy_ratio");
+    DYGSLAM_CHECK_OPTION(redundancy_observations >= 1, "LocalMapping.redundancy_observations");
+    DYGSLAM_CHECK_OPTION(fusion_neighbors >= 0 && fusion_second_neighbors >= 0, "LocalMapping.fusion_neighbors");
+    DYGSLAM_CHECK_OPTION(fusion_radius_px > 0 && std::isfinite(fusion_radius_px), "LocalMapping.fusion_radius_px");
+    DYGSLAM_CHECK_OPTION(min_found_ratio >= 0 && min_found_ratio <= 1, "LocalMapping.min_found_ratio");
     optimizer.Check();
     matcher.Check();
   }

@@ -4,6 +4,7 @@
 // flush their outputs).
 // Compiled only when the bridge is built (dygslam_bridge defines DYGSLAM_HAVE_BRIDGE).
 #ifdef DYGSLAM_HAVE_BRIDGE
+#include <algorithm>
 #include <iostream>
 #include <map>
 #include <mutex>
@@ -42,34 +43,46 @@ int ParseInt(const std::string& option, const std::string& text) {
 }
 
 int RunBridgeCommand(const std::vector<std::string>& args) {
-  ArgParser p("bridge", "[--preset realsense] [--run-slam --config FILE] [--domain N] [options]",
-              "ROS 2 bridge: subscribes to a ROS 2 camera (colour + aligned depth + CameraInfo) and\n"
-              "feeds the pipeline; republishes pose, path, odometry, TF, detections and the OctoMap\n"
-              "as ROS 2 topics (ROS 2 type names, QoS and topic conventions; no ROS 2 needed).\n"
-              "Use the ROS_DOMAIN_ID of the robot as --domain.");
+  ArgParser p(
+      "bridge", "[--preset realsense] [--run-slam --config FILE] [--domain N] [options]",
+      "ROS 2 bridge: subscribes to a ROS 2 camera (colour + aligned depth + CameraInfo) and\n"
+      "feeds the pipeline; republishes pose, path, odometry, TF, detections and the OctoMap\n"
+      "as ROS 2 topics (ROS 2 type names, QoS and topic conventions; no ROS 2 needed).\n"
+      "Use the ROS_DOMAIN_ID of the robot as --domain.");
   ros2::RosBridgeOptions d;
-  p.AddOption("domain", "N", "DDS domain id = ROS_DOMAIN_ID (default DYGSLAM_DOMAIN_ID or 0)", "-1");
-  p.AddOption("preset", "NAME", "camera topics: realsense | realsense-legacy | azure-kinect | kinect",
-              "realsense");
+  p.AddOption("domain", "N", "DDS domain id = ROS_DOMAIN_ID (default DYGSLAM_DOMAIN_ID or 0)",
+              "-1");
+  p.AddOption("partition", "NAME",
+              "DDS partition of the pipeline's topics (as `dygslam component ... --partition`);\n"
+              "the ROS 2 topics stay in the default partition (default: none)");
+  p.AddOption("wait-for", "NAMES",
+              "comma-separated components whose start announcement the bridge waits for before\n"
+              "forwarding the first frame (default: slam; with --run-slam: the ones it runs)",
+              "slam");
+  p.AddOption("preset", "NAME",
+              "camera topics: realsense | realsense-legacy | azure-kinect | kinect", "realsense");
   p.AddOption("color-topic", "TOPIC", "colour sensor_msgs/Image (overrides the preset)");
   p.AddOption("depth-topic", "TOPIC", "depth aligned to colour, 16UC1 mm or 32FC1 m");
   p.AddOption("camera-info-topic", "TOPIC", "colour sensor_msgs/CameraInfo");
   p.AddOption("depth-unit", "M", "metres per 16UC1 depth count", "0.001");
   p.AddOption("max-stamp-diff", "S", "colour/depth pairing tolerance (s)", "0.02");
   p.AddOption("window", "N", "frames in flight to slam (back-pressure)", "2");
-  p.AddOption("max-pending", "N", "synchronised frames waiting for slam before the oldest is dropped",
-              "2");
+  p.AddOption("max-pending", "N",
+              "synchronised frames waiting for slam before the oldest is dropped", "2");
   p.AddOption("eos-idle", "S", "end the stream after S seconds without frames (0 = never)", "0");
   p.AddOption("pose-topic", "TOPIC", "geometry_msgs/PoseStamped", d.pose_topic);
   p.AddOption("odom-topic", "TOPIC", "nav_msgs/Odometry", d.odom_topic);
   p.AddOption("path-topic", "TOPIC", "nav_msgs/Path", d.path_topic);
   p.AddOption("tf-topic", "TOPIC", "tf2_msgs/TFMessage", d.tf_topic);
-  p.AddOption("tf-static-topic", "TOPIC", "tf2_msgs/TFMessage (transient local)", d.tf_static_topic);
+  p.AddOption("tf-static-topic", "TOPIC", "tf2_msgs/TFMessage (transient local)",
+              d.tf_static_topic);
   p.AddOption("detections-topic", "TOPIC", "vision_msgs/Detection2DArray", d.detections_topic);
   p.AddOption("octomap-topic", "TOPIC", "octomap_msgs/Octomap (binary)", d.octomap_topic);
   p.AddOption("map-frame", "FRAME", "fixed frame of pose / path / odometry / TF", d.map_frame);
-  p.AddOption("world-frame", "FRAME", "SLAM world frame (OctoMap), static TF from map", d.world_frame);
-  p.AddOption("camera-frame", "FRAME", "TF child frame of the camera (optical axes)", d.camera_frame);
+  p.AddOption("world-frame", "FRAME", "SLAM world frame (OctoMap), static TF from map",
+              d.world_frame);
+  p.AddOption("camera-frame", "FRAME", "TF child frame of the camera (optical axes)",
+              d.camera_frame);
   p.AddOption("image-frame", "FRAME", "frame of the detections (default: the images' frame_id)");
   p.AddOption("path-every", "N", "publish the online path every N poses", "10");
   p.AddFlag("no-ros-axes", "map = SLAM world axes (optical: z forward) instead of REP 103");
@@ -77,7 +90,8 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   p.AddFlag("no-inbound", "outbound only (the frames come from elsewhere, e.g. the player)");
   p.AddFlag("no-outbound", "inbound only");
   p.AddFlag("run-slam", "also run the detector, slam, mapper and recorder components here");
-  p.AddOption("config", "FILE", "--run-slam: settings YAML (camera intrinsics must match CameraInfo)");
+  p.AddOption("config", "FILE",
+              "--run-slam: settings YAML (camera intrinsics must match CameraInfo)");
   p.AddOption("filter", "MODE", "--run-slam: none | boxes | geometry | full", "full");
   p.AddOption("out", "DIR", "--run-slam: output folder (trajectory, map.bt)", "out/bridge");
   p.AddFlag("no-mapper", "--run-slam: no mapper component");
@@ -111,6 +125,17 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   o.publish_tf = !p.Flag("no-tf");
   o.inbound = !p.Flag("no-inbound");
   o.outbound = !p.Flag("no-outbound");
+  o.wait_for_components.clear();
+  {
+    const std::string list = p.Get("wait-for");
+    size_t begin = 0;
+    while (begin <= list.size()) {
+      const size_t end = std::min(list.find(',', begin), list.size());
+      if (end > begin) o.wait_for_components.push_back(list.substr(begin, end - begin));
+      begin = end + 1;
+    }
+  }
+  const std::string partition = p.Get("partition");
   o.Check();
 
   int domain = ParseInt("domain", p.Get("domain"));
@@ -127,6 +152,7 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
     pipeline.system.filter_mode = ParseFilterMode(p.Get("filter"));
     pipeline.run_mapper = !p.Flag("no-mapper");
     pipeline.domain_id = domain;
+    pipeline.partition = partition;
     pipeline.Check();
   }
 
@@ -139,6 +165,7 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
     std::vector<std::string> names = {"recorder", "slam"};
     if (pipeline.run_mapper) names.push_back("mapper");
     if (pipeline.NeedsDetectorComponent()) names.push_back("detector");
+    if (!p.Has("wait-for")) o.wait_for_components = names;
     for (const std::string& name : names) {
       threads.emplace_back([&, name] {
         try {
@@ -157,10 +184,12 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   dds::ParticipantOptions po;
   po.domain_id = domain;
   po.name = "dygslam_ros2_bridge";
-  LOG_INFO << "ros2 bridge on domain " << domain << ": in " << o.color_topic << " + "
-           << o.depth_topic << " + " << o.camera_info_topic << "; out " << o.pose_topic << ", "
-           << o.path_topic << ", " << o.odom_topic << ", " << o.tf_topic << ", "
-           << o.detections_topic << ", " << o.octomap_topic;
+  po.partition = partition;
+  LOG_INFO << "ros2 bridge on domain " << domain
+           << (partition.empty() ? "" : " (pipeline partition '" + partition + "')") << ": in "
+           << o.color_topic << " + " << o.depth_topic << " + " << o.camera_info_topic << "; out "
+           << o.pose_topic << ", " << o.path_topic << ", " << o.odom_topic << ", " << o.tf_topic
+           << ", " << o.detections_topic << ", " << o.octomap_topic;
   ros2::RosBridgeStats s;
   try {
     s = ros2::RunBridge(dds::Participant::Create(po), o, stop);

@@ -5,6 +5,7 @@
 #include <deque>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <thread>
 
 #include "bridge/rgbd_sync.h"
@@ -48,6 +49,11 @@ void RosBridgeOptions::Check() const {
     DYGSLAM_CHECK_OPTION(max_pending_frames >= 1, "max_pending_frames");
     DYGSLAM_CHECK_OPTION(ack_timeout_s > 0, "ack_timeout_s");
     DYGSLAM_CHECK_OPTION(end_of_stream_idle_s >= 0, "end_of_stream_idle_s");
+    DYGSLAM_CHECK_OPTION(wait_for_components_s >= 0 && std::isfinite(wait_for_components_s),
+                         "wait_for_components_s");
+    for (const std::string& name : wait_for_components) {
+      DYGSLAM_CHECK_OPTION(!name.empty(), "wait_for_components (empty name)");
+    }
   }
   if (outbound) {
     DdsTopicName(pose_topic, "pose_topic");
@@ -126,6 +132,9 @@ struct RosBridge::Impl {
   Clock::time_point last_frame_time = Clock::now();
   bool end_requested = false;
   bool slam_done = false;
+  std::set<std::string> started;  // STARTED announcements seen (component names)
+  bool consumers_ready = false;   // wait_for_components announced (or timed out)
+  Clock::time_point consumers_deadline;
 
   // Outbound (worker thread).
   BlockingQueue<std::function<void()>> outbound_jobs;
@@ -134,6 +143,7 @@ struct RosBridge::Impl {
   bool final_path = false;
   bool mapper_done = false;
 
+  std::shared_ptr<RosSession> ros;  // default-partition publisher / subscriber (ROS side)
   // Endpoints (writers first: readers' callbacks use them; readers are reset first).
   std::unique_ptr<dds::Writer<msg::RgbdFramePubSubType>> frame_writer;
   std::unique_ptr<dds::Writer<msg::StreamStatusPubSubType>> status_writer;
@@ -251,9 +261,9 @@ struct RosBridge::Impl {
       ++stats.camera_info_received;
       const bool first = !camera;
       if (first || c.camera.fx != camera->camera.fx || c.camera.width != camera->camera.width) {
-        LOG_INFO << "ros2 bridge: camera " << c.camera.width << "x" << c.camera.height
-                 << " fx " << c.camera.fx << " fy " << c.camera.fy << " cx " << c.camera.cx
-                 << " cy " << c.camera.cy << " (" << info.distortion_model() << ")"
+        LOG_INFO << "ros2 bridge: camera " << c.camera.width << "x" << c.camera.height << " fx "
+                 << c.camera.fx << " fy " << c.camera.fy << " cx " << c.camera.cx << " cy "
+                 << c.camera.cy << " (" << info.distortion_model() << ")"
                  << " from " << options.camera_info_topic
                  << "; the SLAM settings (Camera.*) must match";
         if (c.ignored_distortion) {
@@ -271,14 +281,53 @@ struct RosBridge::Impl {
     }
   }
 
+  // Components of wait_for_components that have not announced STARTED (locked).
+  std::string MissingComponentsLocked() const {
+    std::string names;
+    for (const std::string& name : options.wait_for_components) {
+      if (!started.count(name)) names += (names.empty() ? "" : ", ") + name;
+    }
+    return names;
+  }
+
+  int ExpectedFrameReaders() const {
+    int n = 0;
+    for (const std::string& name : options.wait_for_components) {
+      if (name == "slam" || name == "detector") ++n;
+    }
+    return n;
+  }
+
+  // True once the frame consumers are there (see RosBridgeOptions::wait_for_components).
+  bool ConsumersReadyLocked() {
+    if (consumers_ready) return true;
+    const std::string missing = MissingComponentsLocked();
+    const int readers = frame_writer->matched();
+    if (missing.empty() && readers >= ExpectedFrameReaders()) {
+      consumers_ready = true;
+      LOG_INFO << "ros2 bridge: pipeline ready (" << readers << " frame readers)";
+    } else if (Clock::now() > consumers_deadline) {
+      consumers_ready = true;
+      LOG_WARNING << "ros2 bridge: after " << options.wait_for_components_s << " s, "
+                  << (missing.empty() ? "" : "no start announcement from " + missing + "; ")
+                  << readers << " of " << ExpectedFrameReaders()
+                  << " frame readers; forwarding anyway";
+    }
+    return consumers_ready;
+  }
+
   // ---- Inbound: forwarding thread (back-pressure window as the player's).
   void InboundLoop() {
     std::unique_lock<std::mutex> lock(mutex);
     while (!quit) {
       if (!pending.empty()) {
+        if (!ConsumersReadyLocked()) {
+          cv.wait_for(lock, std::chrono::milliseconds(20));
+          continue;
+        }
         const int64_t k = static_cast<int64_t>(next_seq);
-        const bool window_open = options.window == 0 || k < options.window ||
-                                 acked_through >= k - options.window;
+        const bool window_open =
+            options.window == 0 || k < options.window || acked_through >= k - options.window;
         bool timed_out = false;
         if (!window_open) {
           if (!head_wait_start) head_wait_start = Clock::now();
@@ -416,6 +465,9 @@ struct RosBridge::Impl {
     auto& p = participant;
     const auto& o = options;
     const RosQos reliable = RosQos::Default();
+    ros = RosSession::Create(p);
+    consumers_deadline = Clock::now() + std::chrono::milliseconds(
+                                            static_cast<int64_t>(o.wait_for_components_s * 1000));
     if (o.inbound) {
       frame_writer = std::make_unique<dds::Writer<msg::RgbdFramePubSubType>>(
           p, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame);
@@ -424,20 +476,19 @@ struct RosBridge::Impl {
     }
     if (o.outbound) {
       pose_writer = std::make_unique<RosWriter<geometry_msgs::msg::PoseStampedPubSubType>>(
-          p, DdsTopicName(o.pose_topic, "pose_topic"), reliable);
+          ros, DdsTopicName(o.pose_topic, "pose_topic"), reliable);
       odom_writer = std::make_unique<RosWriter<nav_msgs::msg::OdometryPubSubType>>(
-          p, DdsTopicName(o.odom_topic, "odom_topic"), reliable);
+          ros, DdsTopicName(o.odom_topic, "odom_topic"), reliable);
       path_writer = std::make_unique<RosWriter<nav_msgs::msg::PathPubSubType>>(
-          p, DdsTopicName(o.path_topic, "path_topic"), reliable);
+          ros, DdsTopicName(o.path_topic, "path_topic"), reliable);
       tf_writer = std::make_unique<RosWriter<tf2_msgs::msg::TFMessagePubSubType>>(
-          p, DdsTopicName(o.tf_topic, "tf_topic"), RosQos{true, false, 100});
+          ros, DdsTopicName(o.tf_topic, "tf_topic"), RosQos{true, false, 100});
       tf_static_writer = std::make_unique<RosWriter<tf2_msgs::msg::TFMessagePubSubType>>(
-          p, DdsTopicName(o.tf_static_topic, "tf_static_topic"), RosQos::TransientLocal());
-      detections_writer =
-          std::make_unique<RosWriter<vision_msgs::msg::Detection2DArrayPubSubType>>(
-              p, DdsTopicName(o.detections_topic, "detections_topic"), reliable);
+          ros, DdsTopicName(o.tf_static_topic, "tf_static_topic"), RosQos::TransientLocal());
+      detections_writer = std::make_unique<RosWriter<vision_msgs::msg::Detection2DArrayPubSubType>>(
+          ros, DdsTopicName(o.detections_topic, "detections_topic"), reliable);
       octomap_writer = std::make_unique<RosWriter<octomap_msgs::msg::OctomapPubSubType>>(
-          p, DdsTopicName(o.octomap_topic, "octomap_topic"), RosQos::TransientLocal());
+          ros, DdsTopicName(o.octomap_topic, "octomap_topic"), RosQos::TransientLocal());
       // The static map -> SLAM world transform (the octree is expressed in the world frame).
       tf2_msgs::msg::TFMessage tf_static;
       tf_static.transforms().push_back(
@@ -454,10 +505,12 @@ struct RosBridge::Impl {
     status_reader = std::make_unique<dds::Reader<msg::StreamStatusPubSubType>>(
         p, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
         [this](msg::StreamStatus&& s) {
-          if (s.kind() != static_cast<uint8_t>(StreamEvent::kComponentDone)) return;
           std::lock_guard<std::mutex> lock(mutex);
-          if (s.source() == "slam") slam_done = true;
-          if (s.source() == "mapper") mapper_done = true;
+          if (s.kind() == static_cast<uint8_t>(StreamEvent::kStarted)) started.insert(s.source());
+          if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone)) {
+            if (s.source() == "slam") slam_done = true;
+            if (s.source() == "mapper") mapper_done = true;
+          }
           cv.notify_all();
         });
     if (o.outbound) {
@@ -474,13 +527,13 @@ struct RosBridge::Impl {
     if (o.inbound) {
       const RosQos sensor = RosQos::SensorData();
       color_reader = std::make_unique<RosReader<sensor_msgs::msg::ImagePubSubType>>(
-          p, DdsTopicName(o.color_topic, "color_topic"), sensor,
+          ros, DdsTopicName(o.color_topic, "color_topic"), sensor,
           [this](sensor_msgs::msg::Image&& m) { OnImage(std::move(m), true); });
       depth_reader = std::make_unique<RosReader<sensor_msgs::msg::ImagePubSubType>>(
-          p, DdsTopicName(o.depth_topic, "depth_topic"), sensor,
+          ros, DdsTopicName(o.depth_topic, "depth_topic"), sensor,
           [this](sensor_msgs::msg::Image&& m) { OnImage(std::move(m), false); });
       info_reader = std::make_unique<RosReader<sensor_msgs::msg::CameraInfoPubSubType>>(
-          p, DdsTopicName(o.camera_info_topic, "camera_info_topic"), sensor,
+          ros, DdsTopicName(o.camera_info_topic, "camera_info_topic"), sensor,
           [this](sensor_msgs::msg::CameraInfo&& m) { OnCameraInfo(std::move(m)); });
     }
   }
@@ -548,8 +601,7 @@ bool RosBridge::outputs_done() const {
 RosBridgeStats RosBridge::stats() const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   RosBridgeStats s = impl_->stats;
-  s.dropped_unsynchronized =
-      impl_->sync.stats().dropped_color + impl_->sync.stats().dropped_depth;
+  s.dropped_unsynchronized = impl_->sync.stats().dropped_color + impl_->sync.stats().dropped_depth;
   return s;
 }
 

@@ -18,11 +18,16 @@
 // vision_msgs/Detection2DArray (dygslam/detections, in image_frame); octomap_msgs/Octomap
 // (dygslam/map_update, binary, in world_frame); /tf_static map -> world_frame once
 // (transient-local). map_from_world = MapFromWorld(ros_axes).
+//
+// DDS partitions: the pipeline side (dygslam/* topics) uses the participant's partition
+// (dds::ParticipantOptions::partition = the pipeline's, e.g. `dygslam component ... --partition
+// NAME`), the ROS 2 side always the default partition (ROS 2 uses none).
 #pragma once
 
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "components/component_common.h"
 
@@ -42,11 +47,19 @@ struct RosBridgeOptions {
   std::string camera_info_topic = "/camera/camera/color/camera_info";
   double depth_unit = 0.001;  // metres per 16UC1 count (ROS convention: millimetres)
   double max_stamp_difference_s = 0.02;
-  int window = 2;                 // frames in flight to slam (0 = no back-pressure)
-  size_t max_pending_frames = 2;  // synchronised frames waiting for the window
-  double ack_timeout_s = 5.0;     // forward anyway after waiting this long for slam
+  int window = 2;                   // frames in flight to slam (0 = no back-pressure)
+  size_t max_pending_frames = 2;    // synchronised frames waiting for the window
+  double ack_timeout_s = 5.0;       // forward anyway after waiting this long for slam
   double end_of_stream_idle_s = 0;  // END_OF_STREAM after this long without frames (0 = never)
   bool end_of_stream_on_stop = false;
+  // The first frame is forwarded only once these components announced STARTED (StreamStatus,
+  // source = name; as the player waits for them) and the frame topic is matched by as many
+  // readers as there are frame consumers ("slam", "detector") among them: the frame topic is
+  // volatile, so a frame sent before then is lost for a component (and slam in --deterministic
+  // mode would wait forever for its detections). At most wait_for_components_s, then forwarding
+  // starts anyway (logged). Meanwhile frames queue up to max_pending_frames (oldest dropped).
+  std::vector<std::string> wait_for_components = {"slam"};
+  double wait_for_components_s = 60.0;
 
   // --- Outbound.
   bool outbound = true;
@@ -58,13 +71,13 @@ struct RosBridgeOptions {
   std::string detections_topic = "/dygslam/detections";
   std::string octomap_topic = "/dygslam/octomap_binary";
   std::string map_frame = "map";
-  std::string world_frame = "dygslam_world";  // the SLAM world (first camera, optical axes)
+  std::string world_frame = "dygslam_world";    // the SLAM world (first camera, optical axes)
   std::string camera_frame = "dygslam_camera";  // TF child (optical axes)
   // Frame of detections; "" = the frame_id of the incoming images (else "camera").
   std::string image_frame;
   bool ros_axes = true;  // map = REP 103 axes (x forward, y left, z up); false: map = world
   bool publish_tf = true;
-  int path_every = 10;   // online path every N tracked poses (0 = only the final trajectory)
+  int path_every = 10;  // online path every N tracked poses (0 = only the final trajectory)
 
   void Check() const;
   // Topic defaults of common ROS 2 camera drivers: "realsense" (realsense2_camera >= 4.54:

@@ -1,20 +1,20 @@
 // ROS 2 interop of the bridge with a second DDS implementation (Cyclone DDS, C API, types from
 // the same ROS 2 IDL, ROS 2 type names) as the ROS 2 stand-in, on the shared Bonn frames.
 // Runs inside run_in_netns.sh (loopback only); distinct domain ids per test.
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+
 #include <atomic>
 #include <cmath>
 #include <filesystem>
-#include <map>
 #include <iostream>
+#include <map>
 #include <mutex>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <set>
 #include <sstream>
 #include <thread>
-
-#include <gtest/gtest.h>
-#include <octomap/OcTree.h>
-#include <opencv2/core.hpp>
 
 #include "bridge/ros2_bridge.h"
 #include "bridge/tests/cyclone_peer.h"
@@ -45,10 +45,12 @@ std::string Config() {
   return std::string(std::getenv("DYGSLAM_SOURCE_DIR")) + "/config/bonn.yaml";
 }
 
-std::shared_ptr<dds::Participant> MakeParticipant(int domain, const std::string& name) {
+std::shared_ptr<dds::Participant> MakeParticipant(int domain, const std::string& name,
+                                                  const std::string& partition = "") {
   dds::ParticipantOptions o;
   o.domain_id = domain;
   o.name = name;
+  o.partition = partition;
   o.use_xml_profile = false;
   return dds::Participant::Create(o);
 }
@@ -81,11 +83,14 @@ bool WaitUntil(Pred pred, std::chrono::milliseconds timeout) {
 
 // Outbound: a Cyclone peer subscribed with ROS 2 type names receives pose, odometry, path, TF,
 // detections and the map of a dataset run, with the values the pipeline produced (read from the
-// pipeline's own topics with Fast DDS at the same time).
+// pipeline's own topics with Fast DDS at the same time). The run is in its own DDS partition (as
+// `dygslam run`'s): the bridge follows it on the pipeline side, while the ROS 2 peer (no
+// partition) still sees the bridge's ROS topics.
 TEST(Interop, CyclonePeerReceivesWhatThePipelineProduced) {
   DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
   const std::string tmp = dygslam::testing::MakeTempDir("bridge_outbound");
   const int domain = 171;
+  const std::string partition = "bridge_interop_171";
 
   CyclonePeer peer(domain);
   peer.Subscribe({});
@@ -95,7 +100,7 @@ TEST(Interop, CyclonePeerReceivesWhatThePipelineProduced) {
   std::map<int64_t, msg::Detections> ref_detections;
   std::vector<msg::MapUpdate> ref_maps;
   std::optional<msg::Trajectory> ref_trajectory;
-  auto ref = MakeParticipant(domain, "test_reference");
+  auto ref = MakeParticipant(domain, "test_reference", partition);
   auto stamp_ns = [](const msg::Time& t) { return int64_t{t.sec()} * 1000000000 + t.nanosec(); };
   dds::Reader<msg::CameraPosePubSubType> pose_reader(
       ref, dds::topics::kCameraPose, dds::TopicKind::kCameraPose, [&](msg::CameraPose&& m) {
@@ -122,7 +127,7 @@ TEST(Interop, CyclonePeerReceivesWhatThePipelineProduced) {
 
   ros2::RosBridgeOptions options;
   options.inbound = false;
-  ros2::RosBridge bridge(MakeParticipant(domain, "test_bridge"), options);
+  ros2::RosBridge bridge(MakeParticipant(domain, "test_bridge", partition), options);
   // The peer's 7 readers find the bridge's 7 writers (discovery across implementations).
   ASSERT_TRUE(WaitUntil([&] { return peer.MatchedWriters() >= 7; }, std::chrono::seconds(15)))
       << "matched " << peer.MatchedWriters() << " of 7 bridge writers";
@@ -135,6 +140,7 @@ TEST(Interop, CyclonePeerReceivesWhatThePipelineProduced) {
   po.first_entry = 100;  // people walk through from frame ~110
   po.last_entry = 150;
   po.domain_id = domain;
+  po.partition = partition;
   ASSERT_EQ(RunPipeline(po), 0);
 
   // Everything the pipeline published reaches the peer.
@@ -144,8 +150,7 @@ TEST(Interop, CyclonePeerReceivesWhatThePipelineProduced) {
     return ref_trajectory && !ref_maps.empty() && peer.poses.size() >= ref_poses.size() &&
            peer.detections.size() >= ref_detections.size() && !peer.maps.empty() &&
            peer.maps.back().stamp_ns == stamp_ns(ref_maps.back().header().stamp()) &&
-           !peer.paths.empty() &&
-           peer.paths.back().poses.size() == ref_trajectory->poses().size();
+           !peer.paths.empty() && peer.paths.back().poses.size() == ref_trajectory->poses().size();
   };
   EXPECT_TRUE(WaitUntil(complete, std::chrono::seconds(20)));
   std::lock_guard<std::mutex> lock(mutex);
@@ -171,10 +176,11 @@ TEST(Interop, CyclonePeerReceivesWhatThePipelineProduced) {
                  map_from_world * PoseFromMsg(ref_poses.at(tf.pose.stamp_ns).world_from_cam(), "r"),
                  "tf " + std::to_string(i));
     EXPECT_EQ(peer.odometry[i].child_frame_id, "dygslam_camera");
-    ExpectPoseEq(peer.odometry[i].pose,
-                 map_from_world *
-                     PoseFromMsg(ref_poses.at(peer.odometry[i].pose.stamp_ns).world_from_cam(), "r"),
-                 "odometry " + std::to_string(i));
+    ExpectPoseEq(
+        peer.odometry[i].pose,
+        map_from_world *
+            PoseFromMsg(ref_poses.at(peer.odometry[i].pose.stamp_ns).world_from_cam(), "r"),
+        "odometry " + std::to_string(i));
   }
   // A moving camera has a non-zero odometry twist somewhere.
   double max_speed = 0;
@@ -297,6 +303,17 @@ TEST(Interop, CameraOverRos2DrivesSlamWithinTenPercentOfDirectAte) {
   std::map<std::string, std::thread> threads;
   std::map<std::string, int> codes;
   std::mutex mutex;
+  // On any early return (a failed ASSERT): stop the components and join them.
+  struct Joiner {
+    std::shared_ptr<StopSignal> stop;
+    std::map<std::string, std::thread>* threads;
+    ~Joiner() {
+      stop->Request();
+      for (auto& [name, t] : *threads) {
+        if (t.joinable()) t.join();
+      }
+    }
+  } joiner{stop, &threads};
   for (const std::string& name : names) {
     threads[name] = std::thread([&, name] {
       int code = 1;
@@ -322,6 +339,7 @@ TEST(Interop, CameraOverRos2DrivesSlamWithinTenPercentOfDirectAte) {
   ros2::RosBridgeOptions bo;
   bo.outbound = false;
   bo.max_pending_frames = 1000;
+  bo.wait_for_components = names;  // as the player: no frame before every component is there
   auto bridge = std::make_unique<ros2::RosBridge>(MakeParticipant(domain, "test_bridge"), bo);
 
   CyclonePeer peer(domain);

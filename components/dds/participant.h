@@ -22,6 +22,8 @@
 #include <mutex>
 #include <string>
 
+#include "components/dds/guarded_type.h"
+
 namespace dygslam::dds {
 
 struct ParticipantOptions {
@@ -57,13 +59,14 @@ class Participant {
   int domain_id() const { return domain_id_; }
   bool uses_xml_profile() const { return uses_xml_profile_; }
 
-  // Registers `PubSubType` once and returns the topic `name` (created once).
+  // Registers `PubSubType` once, wrapped in GuardedType (malformed or oversized samples are
+  // dropped instead of throwing out of take), and returns the topic `name` (created once).
   template <class PubSubType>
   eprosima::fastdds::dds::Topic* GetTopic(const std::string& name) {
     std::lock_guard<std::mutex> lock(mutex_);
     auto it = topics_.find(name);
     if (it != topics_.end()) return it->second;
-    eprosima::fastdds::dds::TypeSupport type(new PubSubType());
+    eprosima::fastdds::dds::TypeSupport type(new GuardedType<PubSubType>());
     return CreateTopicLocked(name, type);
   }
 

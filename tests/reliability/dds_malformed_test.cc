@@ -1,11 +1,12 @@
 // A malformed sample on the wire from another participant (raw bytes published under the
 // dygslam CameraPose type name, boolean byte = 2): the generated deserialize() lets fastcdr's
 // BadParamException escape, so it comes out of DataReader::take_next_sample -- in a listener
-// without try/catch that is std::terminate, i.e. any participant on the domain can kill a
+// without try/catch that is std::terminate, i.e. any participant on the domain could kill a
 // component with one sample. Catching it around take_next_sample is not enough either: the
-// sample is not consumed and the next take throws again (pinned below). The fix that works:
-// register the types through a wrapper whose deserialize() catches every fastcdr exception and
-// returns false (Fast DDS then drops the sample); checked below with GuardedType.
+// sample is not consumed and the next take throws again (pinned below with the raw generated
+// type). The components therefore register every type through dds::GuardedType
+// (components/dds/guarded_type.h, used by Participant::GetTopic): its deserialize() catches every
+// exception and rejects oversized payloads, returns false, and Fast DDS drops the sample.
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -32,6 +33,10 @@
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 
 #include "components/convert.h"
+#include "components/dds/guarded_type.h"
+#include "components/dds/participant.h"
+#include "components/dds/pubsub.h"
+#include "components/dds/qos.h"
 #include "dygslam_msg/CameraPosePubSubTypes.h"
 #include "fuzz/dds_decoders.h"
 
@@ -48,7 +53,7 @@ class RawType : public TopicDataType {
  public:
   explicit RawType(const std::string& name) {
     setName(name.c_str());
-    m_typeSize = 4096;
+    m_typeSize = 4096;  // initial allocation; larger payloads are reallocated
     m_isGetKeyDefined = false;
   }
   bool serialize(void* data, eprosima::fastrtps::rtps::SerializedPayload_t* payload) override {
@@ -99,22 +104,6 @@ class CountingListener : public DataReaderListener {
   }
   void on_subscription_matched(DataReader*, const SubscriptionMatchedStatus& s) override { matched = s.current_count; }
   std::atomic<int> good{0}, exceptions{0}, stuck{0}, matched{0};
-};
-
-// The fix: the generated type with a deserialize() that never throws (proposed for
-// components/dds/pubsub.h / participant.h GetTopic).
-template <class PubSubType>
-class GuardedType : public PubSubType {
- public:
-  bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t* payload, void* data) override {
-    try {
-      return PubSubType::deserialize(payload, data);
-    } catch (const eprosima::fastcdr::exception::Exception&) {
-      ++rejected;
-      return false;
-    }
-  }
-  static inline std::atomic<int> rejected{0};
 };
 
 struct Result {
@@ -207,12 +196,66 @@ TEST(DdsMalformed, GuardedTypeDropsBadSamplesAndReadingGoesOn) {
   std::vector<uint8_t> bad, good;
   Payloads(&bad, &good);
   ASSERT_FALSE(bad.empty());
-  GuardedType<msg::CameraPosePubSubType>::rejected = 0;
-  const Result r = Exchange(new GuardedType<msg::CameraPosePubSubType>(), bad, good, 1);
+  using Guarded = dds::GuardedType<msg::CameraPosePubSubType>;
+  const int64_t rejected_before = Guarded::rejected_count();
+  const Result r = Exchange(new Guarded(), bad, good, 1);
   EXPECT_EQ(r.good, 5) << "valid samples after malformed ones were lost";
   EXPECT_EQ(r.exceptions, 0);
   EXPECT_EQ(r.stuck, 0);
-  EXPECT_EQ(GuardedType<msg::CameraPosePubSubType>::rejected.load(), 5);
+  EXPECT_EQ(Guarded::rejected_count() - rejected_before, 5);
+}
+
+// The components' own path: dds::Participant::GetTopic registers the type (GuardedType) and a
+// dds::Reader with the CameraPose QoS receives from an intruder that publishes malformed,
+// valid and oversized (valid + 1.1 MB of trailing bytes, above the 1 MB CameraPose limit)
+// samples. The reader's listener thread survives, every valid sample arrives, every bad one is
+// dropped.
+TEST(DdsMalformed, ComponentReaderSurvivesMalformedAndOversizedSamples) {
+  std::vector<uint8_t> bad, good;
+  Payloads(&bad, &good);
+  ASSERT_FALSE(bad.empty());
+  std::vector<uint8_t> oversized = good;
+  oversized.resize(good.size() + (1100u << 10), 0);
+
+  using Guarded = dds::GuardedType<msg::CameraPosePubSubType>;
+  const int64_t rejected_before = Guarded::rejected_count();
+  dds::ParticipantOptions options;
+  options.domain_id = kDomain + 2;
+  options.name = "slam";
+  options.use_xml_profile = false;
+  auto participant = dds::Participant::Create(options);
+  std::atomic<int> received{0};
+  dds::Reader<msg::CameraPosePubSubType> reader(participant, dds::topics::kCameraPose,
+                                               dds::TopicKind::kCameraPose,
+                                               [&received](msg::CameraPose&& pose) {
+                                                 if (pose.has_pose()) ++received;
+                                               });
+
+  DomainParticipant* writer_p = MakeParticipant("intruder", 2);
+  ASSERT_NE(writer_p, nullptr);
+  TypeSupport raw(new RawType(msg::CameraPosePubSubType().getName()));
+  ASSERT_EQ(raw.register_type(writer_p), ReturnCode_t::RETCODE_OK);
+  Topic* topic = writer_p->create_topic(dds::topics::kCameraPose, raw.get_type_name(), TOPIC_QOS_DEFAULT);
+  ASSERT_NE(topic, nullptr);
+  DataWriterQos wq = dds::WriterQos(dds::TopicKind::kCameraPose);
+  wq.history().kind = KEEP_ALL_HISTORY_QOS;
+  DataWriter* writer = writer_p->create_publisher(PUBLISHER_QOS_DEFAULT)->create_datawriter(topic, wq);
+  ASSERT_NE(writer, nullptr);
+  EXPECT_TRUE(reader.WaitForWriters(1, std::chrono::seconds(15)));
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_TRUE(writer->write(&bad));
+    EXPECT_TRUE(writer->write(&good));
+    EXPECT_TRUE(writer->write(&oversized));
+  }
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while ((received.load() < 5 || Guarded::rejected_count() - rejected_before < 10) &&
+         std::chrono::steady_clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  writer_p->delete_contained_entities();
+  DomainParticipantFactory::get_instance()->delete_participant(writer_p);
+  EXPECT_EQ(received.load(), 5) << "valid samples after malformed ones were lost";
+  EXPECT_EQ(Guarded::rejected_count() - rejected_before, 10) << "5 malformed + 5 oversized";
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <filesystem>
@@ -328,12 +329,22 @@ TEST(Interop, CameraOverRos2DrivesSlamWithinTenPercentOfDirectAte) {
   }
 
   std::set<int64_t> acknowledged;  // stamps slam has answered (CameraPose)
+  // Figures for BENCHMARKS.md (printed, not asserted): per frame, publish -> CameraPose round
+  // trip and the detector's / slam's own times.
+  struct Timing {
+    std::chrono::steady_clock::time_point answered;
+    double detection_ms = 0, total_ms = 0;
+  };
+  std::map<int64_t, Timing> timings;
   auto ref = MakeParticipant(domain, "test_acks");
   dds::Reader<msg::CameraPosePubSubType> acks(
       ref, dds::topics::kCameraPose, dds::TopicKind::kCameraPose, [&](msg::CameraPose&& m) {
+        const auto now = std::chrono::steady_clock::now();
+        const int64_t stamp =
+            int64_t{m.header().stamp().sec()} * 1000000000 + m.header().stamp().nanosec();
         std::lock_guard<std::mutex> lock(mutex);
-        acknowledged.insert(int64_t{m.header().stamp().sec()} * 1000000000 +
-                            m.header().stamp().nanosec());
+        acknowledged.insert(stamp);
+        timings.emplace(stamp, Timing{now, m.detection_ms(), m.total_ms()});
       });
 
   ros2::RosBridgeOptions bo;
@@ -361,14 +372,17 @@ TEST(Interop, CameraOverRos2DrivesSlamWithinTenPercentOfDirectAte) {
   // A driver that publishes the next frame once slam answered the previous one (lockstep, as
   // the player's back-pressure; a lost best-effort image is published again).
   size_t republished = 0;
+  std::vector<double> round_trip_ms, detection_ms, slam_ms;
   for (size_t i : indices) {
     const int64_t stamp = dataset.frame(i).rgb_stamp.nanoseconds();
     const cv::Mat rgb = dataset.LoadRgb(i);
     cv::Mat depth_mm;  // Bonn PNG: value / 5000 = m; ROS: millimetres
     dataset.LoadDepth(i).convertTo(depth_mm, CV_16UC1, 1000.0 / 5000.0);
     bool answered = false;
+    auto published = std::chrono::steady_clock::now();
     for (int attempt = 0; attempt < 5 && !answered; ++attempt) {
       if (attempt > 0) ++republished;
+      published = std::chrono::steady_clock::now();
       peer.PublishFrame(stamp, rgb, depth_mm, camera, "camera_color_optical_frame");
       answered = WaitUntil(
           [&] {
@@ -378,6 +392,12 @@ TEST(Interop, CameraOverRos2DrivesSlamWithinTenPercentOfDirectAte) {
           std::chrono::seconds(3));
     }
     ASSERT_TRUE(answered) << "slam never answered frame " << stamp;
+    std::lock_guard<std::mutex> lock(mutex);
+    const Timing& t = timings.at(stamp);
+    round_trip_ms.push_back(
+        std::chrono::duration<double, std::milli>(t.answered - published).count());
+    detection_ms.push_back(t.detection_ms);
+    slam_ms.push_back(t.total_ms);
   }
   bridge->EndInput();
   threads["slam"].join();
@@ -400,6 +420,15 @@ TEST(Interop, CameraOverRos2DrivesSlamWithinTenPercentOfDirectAte) {
   RecordProperty("bridge_ate_m", std::to_string(bridge_ate));
   std::cout << "ATE direct " << direct_ate << " m, through the ROS 2 bridge " << bridge_ate
             << " m (" << indices.size() << " frames, " << republished << " republished)\n";
+  auto percentile = [](std::vector<double> v, double q) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    return v[std::min(v.size() - 1, static_cast<size_t>(q * v.size()))];
+  };
+  std::cout << "publish -> CameraPose round trip: median " << percentile(round_trip_ms, 0.5)
+            << " ms, p90 " << percentile(round_trip_ms, 0.9) << " ms; detector inference median "
+            << percentile(detection_ms, 0.5) << " ms, slam total median "
+            << percentile(slam_ms, 0.5) << " ms\n";
   EXPECT_LE(std::abs(bridge_ate - direct_ate), 0.10 * direct_ate);
 }
 

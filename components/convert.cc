@@ -1,7 +1,9 @@
 #include "components/convert.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -431,6 +433,11 @@ std::vector<StampedPose> TrajectoryFromMsg(const msg::Trajectory& m) {
     poses.push_back(p);
   }
   return poses;
+}
+
+int64_t StreamFrameCountFromMsg(const msg::StreamStatus& status) {
+  constexpr uint64_t kMax = static_cast<uint64_t>(std::numeric_limits<int64_t>::max());
+  return static_cast<int64_t>(std::min(status.num_frames(), kMax));
 }
 
 }  // namespace dygslam

@@ -9,10 +9,9 @@
 #pragma once
 
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "core/base/camera.h"
 #include "core/base/rigid3.h"
@@ -83,5 +82,11 @@ StampedPose GroundTruthFromMsg(const msg::GroundTruthPose& pose);
 
 msg::Trajectory TrajectoryToMsg(const std::vector<StampedPose>& poses, bool keyframes_only);
 std::vector<StampedPose> TrajectoryFromMsg(const msg::Trajectory& trajectory);
+
+// StreamStatus.num_frames (uint64 on the wire) as the components count frames: saturated at
+// INT64_MAX, never negative (a plain cast turns an absurd value into -1, "no end announced", and
+// the component would wait forever). A count that large is never reached; the components then
+// finish on their idle timeout after END_OF_STREAM.
+int64_t StreamFrameCountFromMsg(const msg::StreamStatus& status);
 
 }  // namespace dygslam

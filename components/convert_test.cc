@@ -329,5 +329,22 @@ TEST(Convert, TrajectoryAndGroundTruthRoundTrip) {
   EXPECT_EQ(gt.world_from_cam.translation, poses[2].world_from_cam.translation);
 }
 
+// StreamStatus.num_frames is uint64 on the wire; the components compare it with int64 counters
+// where a negative value means "no end announced". An absurd count must not turn into one.
+TEST(Convert, StreamFrameCountSaturatesInsteadOfTurningNegative) {
+  msg::StreamStatus status;
+  status.num_frames(360);
+  EXPECT_EQ(StreamFrameCountFromMsg(status), 360);
+  status.num_frames(0);
+  EXPECT_EQ(StreamFrameCountFromMsg(status), 0);
+  const int64_t max = std::numeric_limits<int64_t>::max();
+  status.num_frames(static_cast<uint64_t>(max));
+  EXPECT_EQ(StreamFrameCountFromMsg(status), max);
+  for (uint64_t absurd : {static_cast<uint64_t>(max) + 1, ~uint64_t{0}}) {
+    status.num_frames(absurd);
+    EXPECT_EQ(StreamFrameCountFromMsg(status), max) << absurd;
+  }
+}
+
 }  // namespace
 }  // namespace dygslam

@@ -1,6 +1,7 @@
 #include "components/detector_component.h"
 
 #include <chrono>
+#include <limits>
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
@@ -44,7 +45,11 @@ DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
       [&](msg::StreamStatus&& s) {
         if (s.kind() == static_cast<uint8_t>(StreamEvent::kEndOfStream)) {
           std::lock_guard<std::mutex> lock(mutex);
-          end_frames = static_cast<int64_t>(s.num_frames());
+          end_frames = StreamFrameCountFromMsg(s);
+          if (end_frames == std::numeric_limits<int64_t>::max()) {
+            LOG_WARNING << "detector: END_OF_STREAM announces " << s.num_frames()
+                        << " frames; finishing when the stream goes idle";
+          }
         }
       });
 

@@ -1,6 +1,7 @@
 #include "components/slam_component.h"
 
 #include <condition_variable>
+#include <limits>
 #include <map>
 
 #include "components/dds/participant.h"
@@ -160,7 +161,11 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
       [&](msg::StreamStatus&& s) {
         std::lock_guard<std::mutex> lock(mutex);
         if (s.kind() == static_cast<uint8_t>(StreamEvent::kEndOfStream)) {
-          end_frames = static_cast<int64_t>(s.num_frames());
+          end_frames = StreamFrameCountFromMsg(s);
+          if (end_frames == std::numeric_limits<int64_t>::max()) {
+            LOG_WARNING << "slam: END_OF_STREAM announces " << s.num_frames()
+                        << " frames; finishing when the stream goes idle";
+          }
         }
         if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone) &&
             s.source() == "detector") {

@@ -16,11 +16,11 @@
 // Participant::GetTopic is instantiated.
 #pragma once
 
+#include <fastdds/rtps/common/SerializedPayload.h>
+
 #include <atomic>
 #include <cstdint>
 #include <exception>
-
-#include <fastdds/rtps/common/SerializedPayload.h>
 
 #include "core/base/log.h"
 #include "dygslam_msg/CameraPosePubSubTypes.h"
@@ -43,10 +43,10 @@ struct SampleSizeLimit {
   static constexpr uint32_t kBytes = kDefaultSampleSizeLimit;
 };
 
-#define DYGSLAM_SAMPLE_SIZE_LIMIT(Type, bytes)   \
-  template <>                                    \
-  struct SampleSizeLimit<Type> {                 \
-    static constexpr uint32_t kBytes = (bytes);  \
+#define DYGSLAM_SAMPLE_SIZE_LIMIT(Type, bytes)  \
+  template <>                                   \
+  struct SampleSizeLimit<Type> {                \
+    static constexpr uint32_t kBytes = (bytes); \
   }
 
 // Small messages: a few hundred bytes (Detections: ~100 boxes of ~60 B).

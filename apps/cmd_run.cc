@@ -196,7 +196,8 @@ std::string RunPartition() {
          std::to_string(rd() % 100000);
 }
 
-RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id) {
+RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
+                              const std::string& partition) {
   PipelineOptions o;
   o.dataset_dir = s.dataset_dir;
   o.output_dir = s.out.string();
@@ -208,7 +209,9 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id) 
   o.processes = processes;
   o.run_mapper = s.map;
   o.domain_id = domain_id;
-  o.partition = RunPartition();
+  o.partition = partition.empty() ? RunPartition() : partition;
+  std::fprintf(stderr, "[run] DDS partition '%s' (a bridge joins with --partition %s)\n", o.partition.c_str(),
+               o.partition.c_str());
   o.progress = s.progress;
   RunOutcome outcome;
   // The files a previous run left in DIR must not be mistaken for this run's.
@@ -259,6 +262,7 @@ int RunRun(const std::vector<std::string>& args) {
               "boxes per frame from FILE ('timestamp x y w h class score', e.g. detections.txt of\n"
               "`dygslam synth`) instead of the detector; implies --direct");
   p.AddOption("domain", "N", "DDS domain id (default: $DYGSLAM_DOMAIN_ID or 0)", "-1");
+  p.AddOption("partition", "NAME", "DDS partition of the pipeline topics (default: unique per run)");
   p.AddFlag("quiet", "no progress line");
   if (!p.Parse(args)) return p.exit_code();
   if (p.Flag("processes") && p.Flag("direct"))
@@ -310,7 +314,7 @@ int RunRun(const std::vector<std::string>& args) {
   if (!p.Flag("direct") && !s.use_detection_file) {
     mode = p.Flag("processes") ? "DDS pipeline, one process per component"
                                : "DDS pipeline, one process";
-    outcome = RunThroughPipeline(s, p.Flag("processes"), domain_id);
+    outcome = RunThroughPipeline(s, p.Flag("processes"), domain_id, p.Get("partition"));
   }
 #else
   if (p.Flag("processes")) {

@@ -421,7 +421,9 @@ TEST(DynamicFilterSteps, FirstFrameAndExpansionAndKalmanChain) {
   const cv::Mat bg_desc = RandomDescriptors(nb + 2, &rng);
   std::vector<Detection> dets(1);
   dets[0].box = cv::Rect2f(300, 150, 120, 200);
-  DynamicFilter filter{DynamicFilterOptions()};
+  DynamicFilterOptions options;
+  options.box_margin_fraction = 0;  // the exact box: the grid below is placed around it
+  DynamicFilter filter{options};
   KalmanProbability expected_a{0.6, 1.0};
   for (int k = 0; k < 3; ++k) {
     const cv::Point2f shift(2.f * k, 1.f * k);

@@ -30,6 +30,7 @@ void ParticipantOptions::Check() const {
   DYGSLAM_CHECK_OPTION(socket_buffer_size >= (64u << 10), "socket_buffer_size");
   DYGSLAM_CHECK_OPTION(partition.find_first_of("*?[]") == std::string::npos,
                        "partition (no wildcards)");
+  security.Check();
 }
 
 int DomainIdFromEnvironment(int fallback) {
@@ -101,7 +102,15 @@ std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& optio
   std::shared_ptr<Participant> result(new Participant());
   result->domain_id_ = options.domain_id;
   result->uses_xml_profile_ = xml;
+  ApplySecurity(options.security, &qos);
   result->participant_ = factory->create_participant(options.domain_id, qos);
+  if (result->participant_ == nullptr && options.security.enabled) {
+    throw InputError("DDS Security: participant '" + options.name +
+                     "' not created: the credentials were rejected (certificate " +
+                     options.security.identity_certificate + ", permissions " +
+                     options.security.permissions + ", governance " + options.security.governance +
+                     ", CA " + options.security.identity_ca + ")");
+  }
   if (result->participant_ == nullptr) {
     throw std::runtime_error("Fast DDS: cannot create participant '" + options.name +
                              "' on domain " + std::to_string(options.domain_id));
@@ -119,7 +128,8 @@ std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& optio
   }
   LOG_DEBUG << "participant '" << options.name << "' domain " << options.domain_id
             << (options.partition.empty() ? "" : " partition '" + options.partition + "'")
-            << (xml ? " (XML profile)" : " (SHM + UDPv4 127.0.0.1)");
+            << (xml ? " (XML profile)" : " (SHM + UDPv4 127.0.0.1)")
+            << (options.security.enabled ? " DDS Security on" : "");
   return result;
 }
 

@@ -23,6 +23,7 @@
 #include <string>
 
 #include "components/dds/guarded_type.h"
+#include "components/dds/security.h"
 
 namespace dygslam::dds {
 
@@ -39,6 +40,9 @@ struct ParticipantOptions {
   // `dygslam run` gives each run its own partition so that two runs on the same domain (two
   // users on one machine) never exchange samples; components started by hand use "".
   std::string partition;
+  // DDS Security (authentication, access control, encryption); off by default. Applied to the
+  // XML-profile and the default QoS alike.
+  SecurityOptions security;
   void Check() const;
 };
 

@@ -27,6 +27,9 @@
 #include <fastdds/dds/topic/TypeSupport.hpp>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 
+#include "components/dds/participant.h"
+#include "components/dds/pubsub.h"
+#include "components/dds/qos.h"
 #include "components/dds/security.h"
 #include "core/base/error.h"
 #include "dygslam_msg/CameraPosePubSubTypes.h"
@@ -246,6 +249,67 @@ TEST_F(DdsSecurity, TamperedPermissionsAreRejectedAtParticipantCreation) {
   std::ofstream(p) << text;
   Node node("tampered", dds::SecurityOptions::FromDirectory((dir / "viewer").string()));
   EXPECT_FALSE(node.ok()) << "a participant was created with tampered permissions";
+}
+
+// The components' own participants: ParticipantOptions::security goes through
+// Participant::Create (default transports, SHM + UDP loopback). Secured component participants
+// exchange poses; a component participant without security reads nothing; tampered credentials
+// are an InputError at creation.
+TEST_F(DdsSecurity, ComponentParticipantsApplySecurityOptions) {
+  auto make = [](const std::string& name, const dds::SecurityOptions& security) {
+    dds::ParticipantOptions options;
+    options.domain_id = kDomain + 1;
+    options.name = name;
+    options.use_xml_profile = false;
+    options.security = security;
+    return dds::Participant::Create(options);
+  };
+  auto slam = make("slam", Identity("slam"));
+  auto recorder = make("recorder", Identity("recorder"));
+  auto plain = make("eavesdropper", dds::SecurityOptions());
+  std::atomic<int> received{0}, eavesdropped{0};
+  dds::Reader<msg::CameraPosePubSubType> reader(recorder, dds::topics::kCameraPose,
+                                               dds::TopicKind::kCameraPose,
+                                               [&received](msg::CameraPose&&) { ++received; });
+  dds::Reader<msg::CameraPosePubSubType> eavesdropper(
+      plain, dds::topics::kCameraPose, dds::TopicKind::kCameraPose,
+      [&eavesdropped](msg::CameraPose&&) { ++eavesdropped; });
+  dds::Writer<msg::CameraPosePubSubType> writer(slam, dds::topics::kCameraPose,
+                                               dds::TopicKind::kCameraPose);
+  ASSERT_TRUE(writer.WaitForReaders(1, std::chrono::seconds(20)))
+      << "secured component participants never matched";
+  for (uint64_t i = 0; i < 10; ++i) {
+    msg::CameraPose pose;
+    pose.header().seq(i);
+    pose.has_pose(true);
+    pose.world_from_cam().orientation().w(1);
+    ASSERT_TRUE(writer.Write(pose));
+  }
+  EXPECT_TRUE(WaitFor([&] { return received.load() >= 10; }, std::chrono::seconds(10)))
+      << "secured reader got " << received.load() << " of 10 poses";
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  EXPECT_EQ(writer.matched(), 1) << "the secured writer matched an unauthenticated reader";
+  EXPECT_EQ(eavesdropper.matched(), 0);
+  EXPECT_EQ(eavesdropped.load(), 0) << "a component participant without security read poses";
+
+  // Tampered permissions: Create() throws an InputError naming the permissions file.
+  const fs::path dir = testing::MakeTempDir("dds_certs_component_tampered");
+  fs::copy(*certs_ + "/viewer", dir / "viewer");
+  const fs::path p = dir / "viewer" / "permissions.smime";
+  std::ifstream in(p);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  in.close();
+  const auto at = text.find("<max>232</max>");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 14, "<max>231</max>");
+  std::ofstream(p) << text;
+  try {
+    make("tampered", dds::SecurityOptions::FromDirectory((dir / "viewer").string()));
+    ADD_FAILURE() << "a component participant was created with tampered permissions";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("credentials were rejected"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(p.string()), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

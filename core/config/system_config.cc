@@ -70,6 +70,7 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   detector.ReadIfPresent("input_height", &options.detector.input_height);
   detector.ReadIfPresent("confidence_threshold", &options.detector.confidence_threshold);
   detector.ReadIfPresent("nms_threshold", &options.detector.nms_threshold);
+  detector.ReadIfPresent("num_threads", &options.detector.num_threads);
   std::vector<std::string> classes;
   if (detector.ReadIfPresent("dynamic_classes", &classes)) options.detector.dynamic_classes = classes;
   return options;

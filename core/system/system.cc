@@ -124,11 +124,13 @@ class SystemImpl {
     EnsureDetector();
     auto job = std::make_shared<DetectionJob>();
     job->stamp = stamp;
-    job->result = std::async(std::launch::async, [this, rgb, job]() {
+    // The task must not own the job (job -> future -> task -> job would never be freed).
+    auto ms = job->ms;
+    job->result = std::async(std::launch::async, [this, rgb, ms]() {
       const auto t0 = std::chrono::steady_clock::now();
       std::lock_guard<std::mutex> lock(detector_mutex_);
       auto found = detector_->Detect(rgb);
-      job->ms = MsSince(t0);
+      *ms = MsSince(t0);
       return found;
     });
     prefetched_ = job;
@@ -160,7 +162,7 @@ class SystemImpl {
   struct DetectionJob {
     Timestamp stamp;
     std::future<std::vector<Detection>> result;
-    double ms = 0;
+    std::shared_ptr<double> ms = std::make_shared<double>(0.0);
   };
   std::shared_ptr<DetectionJob> prefetched_;
   int64_t next_frame_id_ = 0;
@@ -273,7 +275,7 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
     const auto t_wait = std::chrono::steady_clock::now();
     if (prefetched) {
       own_detections = prefetched->result.get();
-      detection_ms = prefetched->ms;
+      detection_ms = *prefetched->ms;
     } else {
       own_detections = detection_job.get();
     }

@@ -5,6 +5,7 @@
 // Compiled only when the DDS components are built (dygslam_components defines
 // DYGSLAM_HAVE_COMPONENTS for its users).
 #ifdef DYGSLAM_HAVE_COMPONENTS
+#include <cstdlib>
 #include <iostream>
 #include <tuple>
 
@@ -61,6 +62,11 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   p.AddOption("detector-names", "FILE", "detector class names");
   p.AddOption("domain", "N", "DDS domain id (default DYGSLAM_DOMAIN_ID or 0)", "-1");
   p.AddOption("partition", "NAME", "DDS partition of every reader / writer (default: none)");
+  const char* security_env = std::getenv("DYGSLAM_DDS_SECURITY_DIR");
+  p.AddOption("security", "DIR",
+              "DDS Security credentials: an identity folder, or make_dds_certs.sh's OUT_DIR with "
+              "one folder per component (default: $DYGSLAM_DDS_SECURITY_DIR; none = off)",
+              security_env != nullptr ? security_env : "");
   p.AddFlag("progress", "recorder: progress line on stderr");
   p.AddFlag("wait-for-components", "player: wait for the other components' start announcements");
   p.AddFlag("deterministic", "slam waits for every frame's detections; synchronous local mapping");
@@ -94,6 +100,7 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   o.run_detector = !p.Flag("no-detector");
   o.run_mapper = !p.Flag("no-mapper");
   o.partition = p.Get("partition");
+  o.security_dir = p.Get("security");
   o.progress = p.Flag("progress");
   o.wait_for_components = p.Flag("wait-for-components");
 

@@ -21,6 +21,7 @@
 #include <map>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -197,7 +198,7 @@ std::string RunPartition() {
 }
 
 RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
-                              const std::string& partition) {
+                              const std::string& partition, const std::string& security_dir) {
   PipelineOptions o;
   o.dataset_dir = s.dataset_dir;
   o.output_dir = s.out.string();
@@ -210,6 +211,7 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
   o.run_mapper = s.map;
   o.domain_id = domain_id;
   o.partition = partition.empty() ? RunPartition() : partition;
+  o.security_dir = security_dir;
   std::fprintf(stderr, "[run] DDS partition '%s' (a bridge joins with --partition %s)\n", o.partition.c_str(),
                o.partition.c_str());
   o.progress = s.progress;
@@ -263,6 +265,11 @@ int RunRun(const std::vector<std::string>& args) {
               "`dygslam synth`) instead of the detector; implies --direct");
   p.AddOption("domain", "N", "DDS domain id (default: $DYGSLAM_DOMAIN_ID or 0)", "-1");
   p.AddOption("partition", "NAME", "DDS partition of the pipeline topics (default: unique per run)");
+  const char* security_env = std::getenv("DYGSLAM_DDS_SECURITY_DIR");
+  p.AddOption("security", "DIR",
+              "DDS Security: make_dds_certs.sh's OUT_DIR (one identity folder per component) or "
+              "one identity folder (default: $DYGSLAM_DDS_SECURITY_DIR; none = off)",
+              security_env != nullptr ? security_env : "");
   p.AddFlag("quiet", "no progress line");
   if (!p.Parse(args)) return p.exit_code();
   if (p.Flag("processes") && p.Flag("direct"))
@@ -314,7 +321,8 @@ int RunRun(const std::vector<std::string>& args) {
   if (!p.Flag("direct") && !s.use_detection_file) {
     mode = p.Flag("processes") ? "DDS pipeline, one process per component"
                                : "DDS pipeline, one process";
-    outcome = RunThroughPipeline(s, p.Flag("processes"), domain_id, p.Get("partition"));
+    outcome = RunThroughPipeline(s, p.Flag("processes"), domain_id, p.Get("partition"),
+                                 p.Get("security"));
   }
 #else
   if (p.Flag("processes")) {

@@ -146,6 +146,7 @@ std::vector<std::string> ComponentArgs(const PipelineOptions& o) {
       "--domain",
       std::to_string(DomainId(o))};
   if (!o.partition.empty()) a.insert(a.end(), {"--partition", o.partition});
+  if (!o.security_dir.empty()) a.insert(a.end(), {"--security", o.security_dir});
   if (o.system.deterministic) a.push_back("--deterministic");
   if (o.progress) a.push_back("--progress");
   if (o.wait_for_components) a.push_back("--wait-for-components");
@@ -224,12 +225,24 @@ int RunComponentOn(const std::string& name, const PipelineOptions& options,
                        "' (player | detector | slam | mapper | recorder)");
 }
 
+// PipelineOptions::security_dir -> the credentials of component `name`.
+dds::SecurityOptions ComponentSecurity(const std::string& dir, const std::string& name) {
+  if (dir.empty()) return dds::SecurityOptions();
+  const std::filesystem::path root(dir);
+  std::error_code ec;
+  if (std::filesystem::exists(root / "cert.pem", ec))
+    return dds::SecurityOptions::FromDirectory(dir);
+  return dds::SecurityOptions::FromDirectory(
+      (root / (name == "pipeline" ? "slam" : name)).string());
+}
+
 std::shared_ptr<dds::Participant> MakeParticipant(const PipelineOptions& options,
                                                   const std::string& name) {
   dds::ParticipantOptions p;
   p.domain_id = DomainId(options);
   p.name = "dygslam_" + name;
   p.partition = options.partition;
+  p.security = ComponentSecurity(options.security_dir, name);
   return dds::Participant::Create(p);
 }
 

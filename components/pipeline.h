@@ -50,6 +50,10 @@ struct PipelineOptions {
   // DDS partition of every component ("" = default partition). `dygslam run` sets a name unique
   // to the run, so concurrent runs on one domain stay apart.
   std::string partition;
+  // DDS Security credentials ("" = security off): either one identity folder (holding cert.pem;
+  // every component uses it) or the OUT_DIR of scripts/make_dds_certs.sh with one identity
+  // folder per component (OUT_DIR/player, .../slam, ...; the single-process pipeline uses slam's).
+  std::string security_dir;
   bool progress = false;  // recorder prints a progress line on stderr
   // The player waits for the STARTED announcement of every other component of this pipeline
   // (set by RunPipeline; `dygslam component player --wait-for-components` by hand).

@@ -69,8 +69,8 @@ make_identity() {  # ca_dir dir cn
       </validity>
       <allow_rule>
         <domains><id_range><min>0</min><max>232</max></id_range></domains>
-        <publish><topics><topic>*</topic></topics></publish>
-        <subscribe><topics><topic>*</topic></topics></subscribe>
+        <publish><topics><topic>*</topic></topics><partitions><partition>*</partition></partitions></publish>
+        <subscribe><topics><topic>*</topic></topics><partitions><partition>*</partition></partitions></subscribe>
       </allow_rule>
       <default>DENY</default>
     </grant>

@@ -327,5 +327,32 @@ TEST(Pipeline, KillingTheDetectorDoesNotStopSlam) {
   EXPECT_EQ(CsvRows(tmp + "/out/frames.csv"), 90u);
 }
 
+// `dygslam run --processes --security DIR`: every component process authenticates with its own
+// identity (DIR/<component> from scripts/make_dds_certs.sh) and the secured pipeline processes
+// every frame; a credentials folder that does not exist is a clear error naming it.
+TEST(Pipeline, SecureMultiProcessRunProcessesEveryFrame) {
+  DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
+  const std::string tmp = testing::MakeTempDir("dds_pipeline_secure");
+  const std::string certs = tmp + "/certs";
+  const std::string script =
+      std::string(std::getenv("DYGSLAM_SOURCE_DIR")) + "/scripts/make_dds_certs.sh";
+  ASSERT_EQ(std::system((script + " " + certs + " > " + tmp + "/certs.log 2>&1").c_str()), 0)
+      << ReadAll(tmp + "/certs.log");
+  ASSERT_EQ(RunToEnd(RunArgs(dataset, tmp + "/out", 117, "0:40",
+                             {"--processes", "--filter", "geometry", "--security", certs}),
+                     tmp + "/run.log"),
+            0)
+      << ReadAll(tmp + "/run.log");
+  EXPECT_EQ(CsvRows(tmp + "/out/frames.csv"), 40u) << ReadAll(tmp + "/run.log");
+
+  const std::string missing = tmp + "/no_such_certs";
+  EXPECT_NE(RunToEnd(RunArgs(dataset, tmp + "/bad", 118, "0:10",
+                             {"--filter", "geometry", "--security", missing}),
+                     tmp + "/bad.log"),
+            0);
+  EXPECT_NE(ReadAll(tmp + "/bad.log").find("no_such_certs"), std::string::npos)
+      << ReadAll(tmp + "/bad.log");
+}
+
 }  // namespace
 }  // namespace dygslam

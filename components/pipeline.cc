@@ -303,7 +303,12 @@ int RunProcesses(const PipelineOptions& options, const StopSignalPtr& stop) {
       const std::string name = children.count(pid) ? children[pid] : "?";
       children.erase(pid);
       const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-      if (!ok) {
+      // After the outputs are written the runner stops the others with SIGTERM; a component that
+      // was already tearing down (its handler restored) then dies of that signal: not a failure.
+      const bool stopped_by_runner = forwarded && WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM;
+      if (stopped_by_runner) {
+        LOG_INFO << "component " << name << " (pid " << pid << ") stopped at the end of the run";
+      } else if (!ok) {
         LOG_WARNING << "component " << name << " (pid " << pid << ") "
                     << (WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
                                             : "exited with " + std::to_string(WEXITSTATUS(status)));

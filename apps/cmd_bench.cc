@@ -249,18 +249,7 @@ std::string JsonString(const std::string& s) {
 
 // "t gt_x gt_y gt_z est_x est_y est_z error" per associated pair (scripts/plot_trajectory.py).
 void WritePairs(const std::string& path, const AteResult& ate) {
-  std::ostringstream text;
-  text << "# t gt_x gt_y gt_z est_x est_y est_z error (aligned estimate, metres)\n";
-  char line[256];
-  for (size_t i = 0; i < ate.num_pairs; ++i) {
-    const auto& g = ate.gt_positions[i];
-    const auto& e = ate.aligned_positions[i];
-    std::snprintf(line, sizeof(line), "%s %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n",
-                  ate.gt_stamps[i].ToString().c_str(), g.x(), g.y(), g.z(), e.x(), e.y(), e.z(),
-                  ate.errors[i]);
-    text << line;
-  }
-  WriteFileAtomically(path, text.str());
+  WriteFileAtomically(path, AtePairsText(ate));
 }
 
 std::string SafeName(const std::string& s) {

@@ -98,18 +98,7 @@ bool Plot(const std::string& png, const std::string& title, const AteResult& ate
   }
   const fs::path data =
       fs::temp_directory_path() / ("dygslam_plot_" + std::to_string(::getpid()) + ".txt");
-  std::ostringstream text;
-  text << "# t gt_x gt_y gt_z est_x est_y est_z error (aligned estimate, metres)\n";
-  char line[256];
-  for (size_t i = 0; i < ate.num_pairs; ++i) {
-    const auto& g = ate.gt_positions[i];
-    const auto& e = ate.aligned_positions[i];
-    std::snprintf(line, sizeof(line), "%s %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n",
-                  ate.gt_stamps[i].ToString().c_str(), g.x(), g.y(), g.z(), e.x(), e.y(), e.z(),
-                  ate.errors[i]);
-    text << line;
-  }
-  WriteFileAtomically(data.string(), text.str());
+  WriteFileAtomically(data.string(), AtePairsText(ate));
   const std::string cmd = "python3 " + ShellQuote(script) + " --data " + ShellQuote(data.string()) +
                           " --out " + ShellQuote(png) + " --title " + ShellQuote(title);
   const int status = std::system(cmd.c_str());

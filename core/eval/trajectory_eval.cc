@@ -1,5 +1,9 @@
 #include "core/eval/trajectory_eval.h"
 
+#include <string>
+
+#include <cstdio>
+
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -186,6 +190,20 @@ RpeResult ComputeRpe(const std::vector<StampedPose>& groundtruth,
   r.rot_mean = a.mean;
   r.rot_median = a.median;
   return r;
+}
+
+std::string AtePairsText(const AteResult& ate) {
+  std::string text = "# t gt_x gt_y gt_z est_x est_y est_z error (aligned estimate, metres)\n";
+  char line[256];
+  for (size_t i = 0; i < ate.num_pairs; ++i) {
+    const auto& g = ate.gt_positions[i];
+    const auto& e = ate.aligned_positions[i];
+    std::snprintf(line, sizeof(line), "%s %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n",
+                  ate.gt_stamps[i].ToString().c_str(), g.x(), g.y(), g.z(), e.x(), e.y(), e.z(),
+                  ate.errors[i]);
+    text += line;
+  }
+  return text;
 }
 
 }  // namespace dygslam

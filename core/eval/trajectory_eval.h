@@ -53,6 +53,10 @@ struct AteResult {
 AteResult ComputeAte(const std::vector<StampedPose>& groundtruth,
                      const std::vector<StampedPose>& estimate, const AteOptions& options = {});
 
+// "t gt_x gt_y gt_z est_x est_y est_z error" per associated pair, with a header comment line (the
+// input of scripts/plot_trajectory.py and the bench plots).
+std::string AtePairsText(const AteResult& ate);
+
 // Closed-form rigid alignment minimising sum ||target_i - (R * source_i + t)||^2 (Horn 1987 /
 // Umeyama 1991 without scale). Requires >= 3 points (throws std::invalid_argument otherwise).
 Rigid3d AlignRigid(const std::vector<Eigen::Vector3d>& source,

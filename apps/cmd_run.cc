@@ -31,6 +31,7 @@
 
 #include "apps/command.h"
 #include "core/base/error.h"
+#include "core/base/stop_signal.h"
 #include "core/base/log.h"
 #include "core/config/mapping_config.h"
 #include "core/config/settings.h"
@@ -67,28 +68,13 @@ std::string FramesCsvRow(const FrameResult& r) {
   return line;
 }
 
-// SIGINT / SIGTERM -> a flag the direct loop polls (restores the previous handlers on exit).
-volatile std::sig_atomic_t g_direct_signal = 0;
-extern "C" void OnDirectSignal(int sig) { g_direct_signal = sig; }
+// SIGINT / SIGTERM -> a flag the direct loop polls (shared with dygslam main's early scope).
 class DirectSignals {
  public:
-  DirectSignals() {
-    g_direct_signal = 0;
-    struct sigaction sa {};
-    sa.sa_handler = OnDirectSignal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, &old_int_);
-    sigaction(SIGTERM, &sa, &old_term_);
-  }
-  ~DirectSignals() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
-  }
-  bool signaled() const { return g_direct_signal != 0; }
+  bool signaled() const { return ScopedStopSignals::Received() != 0; }
 
  private:
-  struct sigaction old_int_ {
-  }, old_term_{};
+  ScopedStopSignals scope_;
 };
 
 struct RunSetup {

@@ -2,11 +2,13 @@
 #include <algorithm>
 #include <exception>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "apps/command.h"
 #include "core/base/error.h"
+#include "core/base/stop_signal.h"
 
 #ifndef DYGSLAM_VERSION
 #define DYGSLAM_VERSION "unknown"
@@ -99,5 +101,12 @@ int Dispatch(const std::vector<std::string>& argv) {
 }  // namespace dygslam::cli
 
 int main(int argc, char** argv) {
+  // Long-running commands catch SIGINT/SIGTERM from the first moment, so a stop request that
+  // arrives while they are still setting up ends them cleanly (outputs written), not abruptly.
+  std::optional<dygslam::ScopedStopSignals> stop_signals;
+  if (argc > 1) {
+    const std::string name = argv[1];
+    if (name == "run" || name == "component" || name == "bridge") stop_signals.emplace();
+  }
   return dygslam::cli::Dispatch(std::vector<std::string>(argv + 1, argv + argc));
 }

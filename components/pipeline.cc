@@ -8,7 +8,10 @@
 #include <csignal>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <map>
+#include <set>
 #include <thread>
 
 #include "components/dds/participant.h"
@@ -20,6 +23,7 @@
 #include "components/slam_component.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
+#include "core/base/stop_signal.h"
 
 namespace dygslam {
 
@@ -28,34 +32,23 @@ namespace fs = std::filesystem;
 // ---------------------------------------------------------------------------------------------
 // Signals.
 
-namespace {
-volatile std::sig_atomic_t g_signal = 0;
-extern "C" void OnStopSignal(int sig) { g_signal = sig; }
-}  // namespace
-
 struct SignalStopper::Impl {
   StopSignalPtr stop;
+  ScopedStopSignals
+      signals;  // shares the flag with an outer scope (dygslam main), see stop_signal.h
   std::atomic<bool> quit{false};
   std::atomic<bool> signaled{false};
   std::thread watcher;
-  struct sigaction old_int {
-  }, old_term{};
 };
 
 SignalStopper::SignalStopper(StopSignalPtr stop) : impl_(std::make_unique<Impl>()) {
   impl_->stop = std::move(stop);
-  g_signal = 0;
-  struct sigaction sa {};
-  sa.sa_handler = OnStopSignal;
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, &impl_->old_int);
-  sigaction(SIGTERM, &sa, &impl_->old_term);
   Impl* impl = impl_.get();
   impl_->watcher = std::thread([impl] {
     while (!impl->quit.load()) {
-      if (g_signal != 0) {
+      if (const int sig = ScopedStopSignals::Received(); sig != 0) {
         impl->signaled = true;
-        LOG_INFO << "signal " << static_cast<int>(g_signal) << ": stopping, flushing outputs";
+        LOG_INFO << "signal " << sig << ": stopping, flushing outputs";
         impl->stop->Request();
         return;
       }
@@ -67,8 +60,6 @@ SignalStopper::SignalStopper(StopSignalPtr stop) : impl_(std::make_unique<Impl>(
 SignalStopper::~SignalStopper() {
   impl_->quit = true;
   impl_->watcher.join();
-  sigaction(SIGINT, &impl_->old_int, nullptr);
-  sigaction(SIGTERM, &impl_->old_term, nullptr);
 }
 
 bool SignalStopper::signaled() const { return impl_->signaled.load(); }
@@ -272,6 +263,28 @@ int RunSingleProcess(const PipelineOptions& options, const StopSignalPtr& stop) 
   return result;
 }
 
+// True when child PID runs the component (exec done: between fork and exec it still carries the
+// runner's handlers, and a signal it takes there is lost) and /proc/PID/status lists `sig` among
+// the signals it catches (SigCgt: its main() has installed the handler).
+bool ComponentCatchesSignal(pid_t pid, const std::string& component, int sig) {
+  std::ifstream cmdline_file("/proc/" + std::to_string(pid) + "/cmdline");
+  const std::string cmdline((std::istreambuf_iterator<char>(cmdline_file)),
+                            std::istreambuf_iterator<char>());
+  if (cmdline.find(std::string("component") + '\0' + component + '\0') == std::string::npos)
+    return false;
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("SigCgt:", 0) != 0) continue;
+    try {
+      return (std::stoull(line.substr(7), nullptr, 16) >> (sig - 1)) & 1u;
+    } catch (const std::exception&) {
+      return false;
+    }
+  }
+  return false;
+}
+
 int RunProcesses(const PipelineOptions& options, const StopSignalPtr& stop) {
   const std::string exe =
       options.executable.empty() ? fs::read_symlink("/proc/self/exe").string() : options.executable;
@@ -294,6 +307,7 @@ int RunProcesses(const PipelineOptions& options, const StopSignalPtr& stop) {
   }
   int result = 0;
   bool forwarded = false;
+  std::set<pid_t> signalled;
   auto stop_time = std::chrono::steady_clock::time_point::max();
   bool slam_or_recorder_failed = false;
   while (!children.empty()) {
@@ -305,7 +319,8 @@ int RunProcesses(const PipelineOptions& options, const StopSignalPtr& stop) {
       const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
       // After the outputs are written the runner stops the others with SIGTERM; a component that
       // was already tearing down (its handler restored) then dies of that signal: not a failure.
-      const bool stopped_by_runner = forwarded && WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM;
+      const bool stopped_by_runner =
+          forwarded && WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM;
       if (stopped_by_runner) {
         LOG_INFO << "component " << name << " (pid " << pid << ") stopped at the end of the run";
       } else if (!ok) {
@@ -325,10 +340,18 @@ int RunProcesses(const PipelineOptions& options, const StopSignalPtr& stop) {
       }
       continue;
     }
-    if (stop->requested() && !forwarded) {
-      for (const auto& [p, n] : children) kill(p, SIGTERM);
+    if (stop->requested()) {
+      if (!forwarded) stop_time = std::chrono::steady_clock::now();
       forwarded = true;
-      stop_time = std::chrono::steady_clock::now();
+      // A child signalled before its main() has installed the handler would die without writing
+      // its outputs (or, between fork and exec, lose the signal): wait until it catches SIGTERM.
+      const bool late = std::chrono::steady_clock::now() - stop_time > std::chrono::seconds(10);
+      for (const auto& [p, n] : children) {
+        if (signalled.count(p) == 0 && (late || ComponentCatchesSignal(p, n, SIGTERM))) {
+          kill(p, SIGTERM);
+          signalled.insert(p);
+        }
+      }
     }
     if (forwarded && std::chrono::steady_clock::now() - stop_time > std::chrono::seconds(30)) {
       for (const auto& [p, n] : children) {

@@ -28,12 +28,17 @@ import matplotlib.pyplot as plt
 out = sys.argv[1]
 rows = list(csv.DictReader(open(out + "/soak.csv")))
 t = [float(r["wall_s"]) / 60 for r in rows]
-fig, ax = plt.subplots(3, 1, figsize=(9, 8), sharex=True)
-ax[0].plot(t, [float(r["rss_mb"]) for r in rows]); ax[0].set_ylabel("RSS (MB)")
+fig, ax = plt.subplots(4, 1, figsize=(9, 10), sharex=True)
+ax[0].plot(t, [float(r["rss_mb"]) for r in rows], label="resident")
+ax[0].plot(t, [float(r["heap_mb"]) for r in rows], label="heap in use")
+ax[0].set_ylabel("memory (MB)"); ax[0].legend()
 ax[1].plot(t, [float(r["total_ms"]) for r in rows], ",", alpha=0.5); ax[1].set_ylabel("frame time (ms)")
 ax[1].set_yscale("log")
-ax[2].plot(t, [int(r["keyframes"]) for r in rows]); ax[2].set_ylabel("live keyframes")
-ax[2].set_xlabel("wall time (min)")
+ax[2].plot(t, [int(r["keyframes"]) for r in rows]); ax[2].set_ylabel("keyframes in map")
+ax[3].plot(t, [int(r["map_points"]) for r in rows], label="in map")
+ax[3].plot(t, [int(r["live_points"]) for r in rows], label="alive")
+ax[3].set_ylabel("map points"); ax[3].legend()
+ax[3].set_xlabel("wall time (min)")
 fig.tight_layout(); fig.savefig(out + "/soak.png", dpi=90)
 print("plot: " + out + "/soak.png")
 PY

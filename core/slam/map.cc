@@ -24,7 +24,20 @@ KeyFrame::KeyFrame(int64_t kf_id, const Frame& frame)
       in_dynamic_region(frame.in_dynamic_region),
       grid(frame.grid),
       cam_from_world(frame.cam_from_world),
-      map_points(frame.map_points) {}
+      map_points(frame.map_points) {
+  ++live_count_;
+}
+
+MapStatistics Map::Statistics() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  MapStatistics s;
+  s.keyframes = keyframes_.size();
+  s.culled_keyframes = culled_.size();
+  s.map_points = points_.size();
+  s.live_keyframe_objects = KeyFrame::LiveCount();
+  s.live_point_objects = MapPoint::LiveCount();
+  return s;
+}
 
 std::vector<int64_t> KeyFrame::BestCovisibles(int n) const {
   if (static_cast<int>(ordered_connections.size()) <= n) return ordered_connections;
@@ -62,11 +75,13 @@ void Map::EraseObservation(const std::shared_ptr<MapPoint>& mp, int64_t kf_id) {
   auto it = mp->observations.find(kf_id);
   if (it == mp->observations.end()) return;
   auto kf = GetKeyFrame(kf_id);
-  if (kf && it->second < static_cast<int>(kf->map_points.size()) && kf->map_points[it->second] == mp) {
+  if (kf && it->second < static_cast<int>(kf->map_points.size()) &&
+      kf->map_points[it->second] == mp) {
     kf->map_points[it->second] = nullptr;
   }
   mp->observations.erase(it);
-  if (mp->ref_kf_id == kf_id && !mp->observations.empty()) mp->ref_kf_id = mp->observations.begin()->first;
+  if (mp->ref_kf_id == kf_id && !mp->observations.empty())
+    mp->ref_kf_id = mp->observations.begin()->first;
   // A point seen by fewer than two keyframes carries no constraint: drop it.
   if (mp->observations.size() <= 1) SetBad(mp);
 }
@@ -199,7 +214,8 @@ void Map::UpdateConnections(const std::shared_ptr<KeyFrame>& kf) {
     other->ordered_connections = order(other->connection_weights);
   }
   kf->ordered_connections = order(weights);
-  if (kf->parent_id < 0 && kf->id != keyframes_.begin()->first && best_id >= 0) kf->parent_id = best_id;
+  if (kf->parent_id < 0 && kf->id != keyframes_.begin()->first && best_id >= 0)
+    kf->parent_id = best_id;
 }
 
 void Map::SetBad(const std::shared_ptr<KeyFrame>& kf) {

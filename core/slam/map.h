@@ -8,13 +8,13 @@
 // nothing is deleted while another thread may hold it.
 #pragma once
 
+#include <Eigen/Core>
+#include <atomic>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <set>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/base/rigid3.h"
 #include "core/base/timestamp.h"
@@ -28,14 +28,21 @@ class KeyFrame;
 class MapPoint {
  public:
   MapPoint(int64_t id, const Eigen::Vector3d& position, int64_t first_kf_id)
-      : id(id), position(position), first_kf_id(first_kf_id) {}
+      : id(id), position(position), first_kf_id(first_kf_id) {
+    ++live_count_;
+  }
+  ~MapPoint() { --live_count_; }
+  MapPoint(const MapPoint&) = delete;
+  MapPoint& operator=(const MapPoint&) = delete;
+  // Objects alive in the process (in the map or still referenced elsewhere): a leak check.
+  static int64_t LiveCount() { return live_count_.load(); }
 
   const int64_t id;
   Eigen::Vector3d position;
   Descriptor descriptor{};
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // mean viewing direction (unit)
-  double min_distance = 0, max_distance = 0;          // scale-invariance distances
-  std::map<int64_t, int> observations;                // keyframe id -> keypoint index
+  double min_distance = 0, max_distance = 0;         // scale-invariance distances
+  std::map<int64_t, int> observations;               // keyframe id -> keypoint index
   int64_t ref_kf_id = -1;
   const int64_t first_kf_id;
   int visible_count = 1;  // times predicted visible in a tracked frame
@@ -56,11 +63,18 @@ class MapPoint {
   int NumObservations() const { return static_cast<int>(observations.size()); }
   double FoundRatio() const { return static_cast<double>(found_count) / visible_count; }
   int PredictScale(double distance, const CameraGeometry& g) const;
+
+ private:
+  static inline std::atomic<int64_t> live_count_{0};
 };
 
 class KeyFrame {
  public:
   KeyFrame(int64_t id, const Frame& frame);
+  ~KeyFrame() { --live_count_; }
+  KeyFrame(const KeyFrame&) = delete;
+  KeyFrame& operator=(const KeyFrame&) = delete;
+  static int64_t LiveCount() { return live_count_.load(); }
 
   const int64_t id;
   const int64_t frame_id;
@@ -93,6 +107,18 @@ class KeyFrame {
   std::vector<int64_t> BestCovisibles(int n) const;
   int NumTrackedPoints(int min_observations) const;
   Eigen::Vector3d UnprojectWorld(size_t i) const;
+
+ private:
+  static inline std::atomic<int64_t> live_count_{0};
+};
+
+// Sizes of the map, for memory monitoring.
+struct MapStatistics {
+  size_t keyframes = 0;               // active
+  size_t culled_keyframes = 0;        // kept as parent + relative pose only
+  size_t map_points = 0;              // in the map
+  int64_t live_keyframe_objects = 0;  // alive in the process (map + anything still holding one)
+  int64_t live_point_objects = 0;
 };
 
 class Map {
@@ -109,9 +135,11 @@ class Map {
   const std::map<int64_t, std::shared_ptr<MapPoint>>& map_points() const { return points_; }
   size_t NumKeyFrames() const { return keyframes_.size(); }
   size_t NumMapPoints() const { return points_.size(); }
+  MapStatistics Statistics() const;  // locks the map mutex
 
   // Observation bookkeeping.
-  void AddObservation(const std::shared_ptr<MapPoint>& mp, const std::shared_ptr<KeyFrame>& kf, int idx);
+  void AddObservation(const std::shared_ptr<MapPoint>& mp, const std::shared_ptr<KeyFrame>& kf,
+                      int idx);
   void EraseObservation(const std::shared_ptr<MapPoint>& mp, int64_t kf_id);
   void SetBad(const std::shared_ptr<MapPoint>& mp);
   // Replaces `mp` by `other` in every keyframe that observes it.

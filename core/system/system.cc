@@ -119,6 +119,7 @@ class SystemImpl {
 
   std::vector<StampedPose> Trajectory() const { return tracker_.Trajectory(); }
   LocalMappingStats LocalMappingStatistics() const { return local_mapper_.stats(); }
+  MapStatistics MapSizes() const { return map_->Statistics(); }
   void Prefetch(const cv::Mat& rgb, Timestamp stamp) {
     if (!options_.NeedsDetections() || rgb.empty() || rgb.type() != CV_8UC3) return;
     EnsureDetector();
@@ -369,6 +370,7 @@ FrameResult System::FeedRgbdFrame(const cv::Mat& rgb, const cv::Mat& depth, Time
 }
 std::vector<StampedPose> System::Trajectory() const { return impl_->Trajectory(); }
 LocalMappingStats System::LocalMappingStatistics() const { return impl_->LocalMappingStatistics(); }
+MapStatistics System::MapSizes() const { return impl_->MapSizes(); }
 std::vector<StampedPose> System::KeyframeTrajectory() const { return impl_->KeyframeTrajectory(); }
 void System::SetKeyframeCallback(std::function<void(const KeyframeData&)> callback) {
   impl_->SetKeyframeCallback(std::move(callback));

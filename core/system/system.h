@@ -109,6 +109,8 @@ class System {
   // Local mapping so far: keyframes processed, points triangulated/culled, keyframes culled, time
   // per keyframe (its own thread; synchronous in deterministic mode).
   LocalMappingStats LocalMappingStatistics() const;
+  // Map sizes and live object counts (memory monitoring in long runs).
+  MapStatistics MapSizes() const;
   // Finishes local mapping; afterwards Trajectory() is final.
   void Shutdown();
 

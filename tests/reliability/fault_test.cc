@@ -2,6 +2,7 @@
 // namespace): a killed mapper restarted mid-run gets every keyframe back (transient-local
 // keyframe history); a killed detector makes slam go geometry-only and, restarted, is used
 // again; SIGINT / SIGTERM at any time leave complete, loadable trajectory and map files.
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -16,8 +17,6 @@
 #include <thread>
 #include <vector>
 
-#include <gtest/gtest.h>
-
 #include "core/base/error.h"
 #include "core/io/trajectory_io.h"
 #include "tests/support/test_support.h"
@@ -27,7 +26,8 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string Binary() {
-  if (const char* dir = std::getenv("DYGSLAM_BINARY_DIR")) return std::string(dir) + "/apps/dygslam";
+  if (const char* dir = std::getenv("DYGSLAM_BINARY_DIR"))
+    return std::string(dir) + "/apps/dygslam";
   const fs::path self = fs::read_symlink("/proc/self/exe");
   return (self.parent_path().parent_path().parent_path() / "apps" / "dygslam").string();
 }
@@ -74,10 +74,22 @@ class Faults : public ::testing::Test {
     dataset_ = dir;
     if (!fs::exists(Binary())) GTEST_SKIP() << "dygslam binary not built: " << Binary();
   }
-  pid_t Run(const std::string& component, const std::string& tmp, int domain, const std::string& frames,
-            const std::vector<std::string>& extra = {}, const std::string& log_name = "") {
-    std::vector<std::string> args = {Binary(), "component", component, "--dataset", dataset_, "--config", Config(),
-                                      "--out", tmp + "/out", "--frames", frames, "--domain", std::to_string(domain)};
+  pid_t Run(const std::string& component, const std::string& tmp, int domain,
+            const std::string& frames, const std::vector<std::string>& extra = {},
+            const std::string& log_name = "") {
+    std::vector<std::string> args = {Binary(),
+                                     "component",
+                                     component,
+                                     "--dataset",
+                                     dataset_,
+                                     "--config",
+                                     Config(),
+                                     "--out",
+                                     tmp + "/out",
+                                     "--frames",
+                                     frames,
+                                     "--domain",
+                                     std::to_string(domain)};
     args.insert(args.end(), extra.begin(), extra.end());
     return Spawn(args, tmp + "/" + (log_name.empty() ? component : log_name) + ".log");
   }
@@ -143,6 +155,22 @@ TEST_F(Faults, DetectorKilledAndRestartedIsUsedAgain) {
   EXPECT_GT(ReadTumTrajectory(tmp + "/out/trajectory.txt").size(), 280u);
 }
 
+// True once /proc/PID/status lists `sig` among the caught signals (SigCgt), within 20 s.
+bool WaitUntilCatches(pid_t pid, int sig) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (std::chrono::steady_clock::now() < deadline) {
+    std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+    std::string line;
+    while (std::getline(status, line)) {
+      if (line.rfind("SigCgt:", 0) != 0) continue;
+      const unsigned long long mask = std::stoull(line.substr(7), nullptr, 16);
+      if (mask & (1ull << (sig - 1))) return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return false;
+}
+
 // SIGINT / SIGTERM at several moments (start-up, mid-run, late) into `dygslam run` in each mode
 // (DDS threads, DDS processes, direct): it exits 0 with every output complete and loadable
 // (trajectory files parse, map.bt is an OctoMap file) and no temporary file left behind.
@@ -152,24 +180,37 @@ TEST_F(Faults, StopSignalAtAnyTimeLeavesLoadableOutputs) {
     int signal;
     int after_ms;
   };
-  const std::vector<Case> cases = {{"", SIGINT, 300},          {"", SIGTERM, 2500},
-                                   {"--processes", SIGINT, 2500}, {"--direct", SIGINT, 400},
+  const std::vector<Case> cases = {{"", SIGTERM, 0},
+                                   {"", SIGINT, 300},
+                                   {"", SIGTERM, 2500},
+                                   {"--processes", SIGINT, 2500},
+                                   {"--processes", SIGTERM, 0},
+                                   {"--direct", SIGINT, 0},
+                                   {"--direct", SIGINT, 400},
                                    {"--direct", SIGTERM, 3000}};
   int domain = 123;
   for (const Case& c : cases) {
     SCOPED_TRACE("mode '" + c.mode + "' signal " + std::to_string(c.signal) + " after " +
                  std::to_string(c.after_ms) + " ms");
     const std::string tmp = testing::MakeTempDir("fault_signal");
-    std::vector<std::string> args = {Binary(), "run", dataset_, "--config", Config(), "--out", tmp + "/out",
-                                     "--frames", "0:300", "--filter", "geometry", "--quiet",
-                                     "--domain", std::to_string(domain++)};
+    std::vector<std::string> args = {Binary(),     "run",
+                                     dataset_,     "--config",
+                                     Config(),     "--out",
+                                     tmp + "/out", "--frames",
+                                     "0:300",      "--filter",
+                                     "geometry",   "--quiet",
+                                     "--domain",   std::to_string(domain++)};
     if (!c.mode.empty()) args.push_back(c.mode);
     const pid_t run = Spawn(args, tmp + "/run.log");
+    // Count from the moment the process catches the signal (dygslam's main installs the handler
+    // first thing): before that, exec and dynamic loading would end it like any program.
+    EXPECT_TRUE(WaitUntilCatches(run, c.signal)) << "dygslam run never installed a handler";
     std::this_thread::sleep_for(std::chrono::milliseconds(c.after_ms));
     kill(run, c.signal);
     const auto t0 = std::chrono::steady_clock::now();
     const int status = Wait(run);
-    const double stop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double stop_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const std::string log = ReadAll(tmp + "/run.log");
     EXPECT_EQ(status, 0) << log;
     EXPECT_LT(stop_s, 30.0) << "stopping took too long";
@@ -180,7 +221,9 @@ TEST_F(Faults, StopSignalAtAnyTimeLeavesLoadableOutputs) {
     for (const char* name : {"trajectory.txt", "keyframes.txt"}) {
       const std::string path = tmp + "/out/" + name;
       EXPECT_TRUE(fs::exists(path)) << name << " missing\n" << log;
-      if (fs::exists(path)) EXPECT_NO_THROW(ReadTumTrajectory(path)) << path;
+      if (fs::exists(path)) {
+        EXPECT_NO_THROW(ReadTumTrajectory(path)) << path;
+      }
     }
     if (c.after_ms >= 2000) {
       EXPECT_GT(ReadTumTrajectory(tmp + "/out/trajectory.txt").size(), 5u) << log;

@@ -284,7 +284,9 @@ TEST_F(SystemBadInput, AbsurdExternalDetectionsDoNotCrash) {
       continue;
     }
     EXPECT_EQ(r.world_from_cam.has_value(), HasPose(r.state));
-    if (r.world_from_cam) EXPECT_TRUE(r.world_from_cam->AllFinite());
+    if (r.world_from_cam) {
+      EXPECT_TRUE(r.world_from_cam->AllFinite());
+    }
   }
 }
 

@@ -1,0 +1,43 @@
+#include "core/base/stop_signal.h"
+
+#include <signal.h>
+
+#include <csignal>
+#include <mutex>
+
+namespace dygslam {
+namespace {
+
+volatile std::sig_atomic_t g_received = 0;
+extern "C" void OnStopSignal(int sig) {
+  if (g_received == 0) g_received = sig;
+}
+
+std::mutex g_mutex;
+int g_depth = 0;
+struct sigaction g_old_int {
+}, g_old_term{};
+
+}  // namespace
+
+ScopedStopSignals::ScopedStopSignals() {
+  std::lock_guard<std::mutex> lock(g_mutex);
+  if (g_depth++ > 0) return;
+  g_received = 0;
+  struct sigaction sa {};
+  sa.sa_handler = OnStopSignal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, &g_old_int);
+  sigaction(SIGTERM, &sa, &g_old_term);
+}
+
+ScopedStopSignals::~ScopedStopSignals() {
+  std::lock_guard<std::mutex> lock(g_mutex);
+  if (--g_depth > 0) return;
+  sigaction(SIGINT, &g_old_int, nullptr);
+  sigaction(SIGTERM, &g_old_term, nullptr);
+}
+
+int ScopedStopSignals::Received() { return g_received; }
+
+}  // namespace dygslam

@@ -57,6 +57,7 @@ const std::vector<std::string>& CsvColumns() {
                                                    "tracking_ms",
                                                    "local_mapping_ms",
                                                    "total_ms",
+                                                   "median_total_ms",
                                                    "loop_seconds",
                                                    "fps",
                                                    "peak_rss_mib"};
@@ -130,6 +131,8 @@ BenchCell Summarize(const std::vector<BenchRun>& runs) {
   cell.stages.local_mapping_ms =
       median_of([](const BenchRun& r) { return r.stages.local_mapping_ms; });
   cell.stages.total_ms = median_of([](const BenchRun& r) { return r.stages.total_ms; });
+  cell.stages.median_total_ms =
+      median_of([](const BenchRun& r) { return r.stages.median_total_ms; });
   cell.fps = median_of([](const BenchRun& r) { return r.fps; });
   cell.peak_rss_mib = median_of([](const BenchRun& r) { return r.peak_rss_mib; });
   std::vector<int> order(runs.size());
@@ -254,14 +257,16 @@ std::string RenderBenchMarkdown(const BenchContext& context, const std::vector<B
         "(`System::FeedRgbdFrame`, or one odometry step for the baseline), without image "
         "loading; local mapping runs on its own thread and is not part of it"
      << (context.deterministic ? " (deterministic mode: it is, column \"local mapping\")" : "")
-     << ". frames/s = frames / wall time of the whole loop including image loading. Peak "
-        "memory: maximum resident set of the run's process.\n\n";
+     << ". \"Median\" is the median over the frames of that wall time, and \"× no filter\" its "
+        "ratio to the no-filter row of the same bench run. frames/s = frames / wall time of the "
+        "whole loop including image loading. Peak memory: maximum resident set of the run's "
+        "process.\n\n";
   md << "| Sequence | System | ORB feature extraction | Object detection | (wait) | ORB feature "
         "matching | Update geometry probability | Tracking |"
      << (context.deterministic ? " Local mapping |" : "")
-     << " Total time | frames/s | peak memory (MiB) |\n";
+     << " Total time | Median | × no filter | frames/s | peak memory (MiB) |\n";
   md << "|---|---|---|---|---|---|---|---|" << (context.deterministic ? "---|" : "")
-     << "---|---|---|\n";
+     << "---|---|---|---|---|\n";
   for (const std::string& seq : sequences) {
     for (const std::string& config : configs) {
       const BenchCell* c = find(seq, config);
@@ -281,8 +286,12 @@ std::string RenderBenchMarkdown(const BenchContext& context, const std::vector<B
         md << "- | - | - | - | - | - | ";
         if (context.deterministic) md << "- | ";
       }
-      md << Fixed(s.total_ms, 2) << " | " << Fixed(c->fps, 1) << " | " << Fixed(c->peak_rss_mib, 0)
-         << " |\n";
+      const BenchCell* none = find(seq, "none");
+      const bool ratio =
+          none != nullptr && none->stages.median_total_ms > 0 && s.median_total_ms > 0;
+      md << Fixed(s.total_ms, 2) << " | " << Fixed(s.median_total_ms, 2) << " | "
+         << (ratio ? Fixed(s.median_total_ms / none->stages.median_total_ms, 2) : "-") << " | "
+         << Fixed(c->fps, 1) << " | " << Fixed(c->peak_rss_mib, 0) << " |\n";
     }
   }
   md << "\n";
@@ -341,8 +350,8 @@ std::string BenchRunsCsv(const std::vector<BenchRun>& runs) {
         << Num(r.ate.sd) << "," << Num(r.ate.min) << "," << Num(r.ate.max) << "," << Num(s.orb_ms)
         << "," << Num(s.detection_ms) << "," << Num(s.detection_wait_ms) << ","
         << Num(s.matching_ms) << "," << Num(s.probability_ms) << "," << Num(s.tracking_ms) << ","
-        << Num(s.local_mapping_ms) << "," << Num(s.total_ms) << "," << Num(r.loop_seconds) << ","
-        << Num(r.fps) << "," << Num(r.peak_rss_mib) << "\n";
+        << Num(s.local_mapping_ms) << "," << Num(s.total_ms) << "," << Num(s.median_total_ms) << ","
+        << Num(r.loop_seconds) << "," << Num(r.fps) << "," << Num(r.peak_rss_mib) << "\n";
   }
   return out.str();
 }
@@ -415,6 +424,7 @@ std::vector<BenchRun> ReadBenchRunsCsv(const std::string& path) {
     r.stages.tracking_ms = number();
     r.stages.local_mapping_ms = number();
     r.stages.total_ms = number();
+    r.stages.median_total_ms = number();
     r.loop_seconds = number();
     r.fps = number();
     r.peak_rss_mib = number();

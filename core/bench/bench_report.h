@@ -31,6 +31,7 @@ struct StageMeans {
   double tracking_ms = 0;
   double local_mapping_ms = 0;  // only in deterministic mode (synchronous local mapping)
   double total_ms = 0;          // wall time per frame (SLAM: FeedRgbdFrame; baseline: odometry)
+  double median_total_ms = 0;   // median over the frames of total_ms (the others are means)
 };
 
 struct BenchRun {

@@ -1,17 +1,16 @@
 #include "core/bench/bench_runner.h"
 
-#include "core/io/detections_io.h"
-
-#include <map>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "core/base/error.h"
 #include "core/eval/trajectory_eval.h"
+#include "core/io/detections_io.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 
@@ -62,10 +61,10 @@ RunOutput RunSystemOnSequence(const RgbdDataset& dataset, const SystemOptions& o
       }
     }
     const Timestamp stamp = dataset.frame(*index).rgb_stamp;
-    const FrameResult r =
-        use_file_detections
-            ? system.FeedRgbdFrame(rgb, depth, stamp, cv::Mat(), &DetectionsNear(file_detections, stamp))
-            : system.FeedRgbdFrame(rgb, depth, stamp);
+    const FrameResult r = use_file_detections
+                              ? system.FeedRgbdFrame(rgb, depth, stamp, cv::Mat(),
+                                                     &DetectionsNear(file_detections, stamp))
+                              : system.FeedRgbdFrame(rgb, depth, stamp);
     ++out.frames;
     if (r.state == TrackingState::kLost) ++out.lost;
     out.stamps.push_back(r.stamp);
@@ -200,6 +199,11 @@ BenchRun ScoreRun(const std::string& directory, const std::vector<StampedPose>& 
     times.push_back(t);
   }
   run.stages = MeanStageTimes(times);
+  {
+    std::vector<double> totals;
+    for (const StageTimes& t : times) totals.push_back(t.total_ms);
+    run.stages.median_total_ms = Median(totals);
+  }
   // trajectory.txt
   run.trajectory_path = (dir / "trajectory.txt").string();
   const std::vector<StampedPose> estimate = ReadTumTrajectory(run.trajectory_path);

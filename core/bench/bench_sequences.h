@@ -2,10 +2,10 @@
 // + groundtruth.txt) found in a data directory, with the settings file each one runs with.
 #pragma once
 
-#include "core/config/settings.h"
-
 #include <string>
 #include <vector>
+
+#include "core/config/settings.h"
 
 namespace dygslam {
 

@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 
+#include "core/dynamic/detection_worker.h"
 #include "tests/support/test_support.h"
 
 namespace dygslam {
@@ -257,6 +258,42 @@ TEST(YoloDetectorFiles, BadImage) {
   auto detector = YoloDetector::Create(DetectorOptionsForModel("yolo-fastest-1.1", models));
   EXPECT_THROW(detector->Detect(cv::Mat()), InputError);
   EXPECT_THROW(detector->Detect(cv::Mat(10, 10, CV_8UC1)), InputError);
+}
+
+}  // namespace
+}  // namespace dygslam
+
+namespace dygslam {
+namespace {
+
+// The worker gives the same boxes as calling the detector directly, in submission order, and
+// hands the detector's errors to the caller through the ticket.
+TEST(DetectionWorker, SameBoxesInOrderAndErrorsReachTheCaller) {
+  DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
+  DYGSLAM_REQUIRE_MODELS(models);
+  const DetectorOptions o = DetectorOptionsForModel("yolo-fastest-1.1", models);
+  auto direct = YoloDetector::Create(o);
+  std::vector<cv::Mat> images;
+  for (int entry : {10, 150, 250, 300})
+    images.push_back(cv::imread(RgbEntry(dataset, entry), cv::IMREAD_COLOR));
+  DetectionWorker worker(YoloDetector::Create(o));
+  std::vector<DetectionWorker::Ticket> tickets;
+  for (const cv::Mat& im : images) tickets.push_back(worker.Submit(im));
+  DetectionWorker::Ticket bad = worker.Submit(cv::Mat());  // empty image: the detector throws
+  size_t total = 0;
+  for (size_t i = 0; i < images.size(); ++i) {
+    const std::vector<Detection> got = tickets[i].result.get();
+    const std::vector<Detection> want = direct->Detect(images[i]);
+    ASSERT_EQ(got.size(), want.size()) << "image " << i;
+    for (size_t k = 0; k < got.size(); ++k) {
+      EXPECT_EQ(got[k].box, want[k].box);
+      EXPECT_FLOAT_EQ(got[k].score, want[k].score);
+    }
+    EXPECT_GT(*tickets[i].detect_ms, 0.0);
+    total += got.size();
+  }
+  EXPECT_GE(total, 2u) << "people frames should give boxes";
+  EXPECT_THROW(bad.result.get(), InputError);
 }
 
 }  // namespace

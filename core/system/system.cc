@@ -4,12 +4,12 @@
 #include <chrono>
 #include <future>
 #include <mutex>
-
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/base/error.h"
 #include "core/base/log.h"
+#include "core/dynamic/detection_worker.h"
 #include "core/slam/frame.h"
 #include "core/slam/local_mapping.h"
 #include "core/slam/tracking.h"
@@ -23,10 +23,14 @@ double MsSince(std::chrono::steady_clock::time_point t0) {
 
 const char* ToString(FilterMode mode) {
   switch (mode) {
-    case FilterMode::kNone: return "none";
-    case FilterMode::kBoxes: return "boxes";
-    case FilterMode::kGeometry: return "geometry";
-    case FilterMode::kFull: return "full";
+    case FilterMode::kNone:
+      return "none";
+    case FilterMode::kBoxes:
+      return "boxes";
+    case FilterMode::kGeometry:
+      return "geometry";
+    case FilterMode::kFull:
+      return "full";
   }
   return "unknown";
 }
@@ -52,10 +56,14 @@ void SystemOptions::Check() const {
 namespace {
 DynamicFilterMode ToDynamicMode(FilterMode mode) {
   switch (mode) {
-    case FilterMode::kNone: return DynamicFilterMode::kNone;
-    case FilterMode::kBoxes: return DynamicFilterMode::kBoxes;
-    case FilterMode::kGeometry: return DynamicFilterMode::kGeometry;
-    case FilterMode::kFull: return DynamicFilterMode::kFull;
+    case FilterMode::kNone:
+      return DynamicFilterMode::kNone;
+    case FilterMode::kBoxes:
+      return DynamicFilterMode::kBoxes;
+    case FilterMode::kGeometry:
+      return DynamicFilterMode::kGeometry;
+    case FilterMode::kFull:
+      return DynamicFilterMode::kFull;
   }
   return DynamicFilterMode::kNone;
 }
@@ -71,13 +79,16 @@ class SystemImpl {
   explicit SystemImpl(const SystemOptions& options)
       : options_(options),
         extractor_(options.orb),
-        geometry_(std::make_shared<CameraGeometry>(CameraGeometry::Create(options.camera, options.sensor, extractor_))),
+        geometry_(std::make_shared<CameraGeometry>(
+            CameraGeometry::Create(options.camera, options.sensor, extractor_))),
         map_(std::make_shared<Map>()),
         local_mapper_(map_, options.local_mapping, !options.deterministic),
         tracker_(options.tracking, map_, local_mapper_, options.deterministic),
         filter_(FilterOptionsOf(options)) {
     local_mapper_.SetPosesChangedCallback(
-        [this](const std::vector<int64_t>& moved, const std::vector<int64_t>& culled) { EmitMapChanges(moved, culled); });
+        [this](const std::vector<int64_t>& moved, const std::vector<int64_t>& culled) {
+          EmitMapChanges(moved, culled);
+        });
   }
 
   // Keyframe pose corrections (local BA) and culled keyframes, for the map.
@@ -125,24 +136,21 @@ class SystemImpl {
     EnsureDetector();
     auto job = std::make_shared<DetectionJob>();
     job->stamp = stamp;
-    // The task must not own the job (job -> future -> task -> job would never be freed).
-    auto ms = job->ms;
-    job->result = std::async(std::launch::async, [this, rgb, ms]() {
-      const auto t0 = std::chrono::steady_clock::now();
-      std::lock_guard<std::mutex> lock(detector_mutex_);
-      auto found = detector_->Detect(rgb);
-      *ms = MsSince(t0);
-      return found;
-    });
+    job->ticket = detection_worker_->Submit(rgb);
     prefetched_ = job;
   }
   void EnsureDetector() {
-    if (detector_) return;
+    if (detection_worker_) return;
     DetectorOptions d = options_.detector;
-    if (d.cfg_path.empty()) d = DetectorOptionsForModel("yolo-fastest-1.1");
-    detector_ = YoloDetector::Create(d);
+    if (d.cfg_path.empty()) {
+      const int threads = d.num_threads;
+      d = DetectorOptionsForModel("yolo-fastest-1.1");
+      d.num_threads = threads;
+    }
+    detection_worker_ = std::make_unique<DetectionWorker>(YoloDetector::Create(d));
   }
-  void TopUpStaticFeatures(const cv::Mat& gray, const std::vector<Detection>& detections, OrbFeatures* kept) const;
+  void TopUpStaticFeatures(const cv::Mat& gray, const std::vector<Detection>& detections,
+                           OrbFeatures* kept) const;
   std::vector<StampedPose> KeyframeTrajectory() const { return tracker_.KeyframeTrajectory(); }
   void SetKeyframeCallback(std::function<void(const KeyframeData&)> cb) {
     std::lock_guard<std::mutex> lock(callback_mutex_);
@@ -158,12 +166,10 @@ class SystemImpl {
   LocalMapper local_mapper_;
   Tracker tracker_;
   DynamicFilter filter_;
-  std::unique_ptr<YoloDetector> detector_;  // created on first use
-  std::mutex detector_mutex_;               // one inference at a time
+  std::unique_ptr<DetectionWorker> detection_worker_;  // created on first use
   struct DetectionJob {
     Timestamp stamp;
-    std::future<std::vector<Detection>> result;
-    std::shared_ptr<double> ms = std::make_shared<double>(0.0);
+    DetectionWorker::Ticket ticket;
   };
   std::shared_ptr<DetectionJob> prefetched_;
   int64_t next_frame_id_ = 0;
@@ -190,14 +196,17 @@ void SystemImpl::TopUpStaticFeatures(const cv::Mat& gray, const std::vector<Dete
   const int cols = gray.cols / kCell + 1, rows = gray.rows / kCell + 1;
   std::vector<std::vector<int>> grid(cols * rows);
   auto cell_of = [&](const cv::Point2f& p) {
-    return std::clamp(int(p.y) / kCell, 0, rows - 1) * cols + std::clamp(int(p.x) / kCell, 0, cols - 1);
+    return std::clamp(int(p.y) / kCell, 0, rows - 1) * cols +
+           std::clamp(int(p.x) / kCell, 0, cols - 1);
   };
-  for (size_t i = 0; i < kept->keypoints.size(); ++i) grid[cell_of(kept->keypoints[i].pt)].push_back(int(i));
+  for (size_t i = 0; i < kept->keypoints.size(); ++i)
+    grid[cell_of(kept->keypoints[i].pt)].push_back(int(i));
   const size_t original = kept->keypoints.size();
   for (size_t j = 0; j < extra.keypoints.size(); ++j) {
     const cv::KeyPoint& kp = extra.keypoints[j];
     bool duplicate = false;
-    const int cx = std::clamp(int(kp.pt.x) / kCell, 0, cols - 1), cy = std::clamp(int(kp.pt.y) / kCell, 0, rows - 1);
+    const int cx = std::clamp(int(kp.pt.x) / kCell, 0, cols - 1),
+              cy = std::clamp(int(kp.pt.y) / kCell, 0, rows - 1);
     for (int y = std::max(0, cy - 1); y <= std::min(rows - 1, cy + 1) && !duplicate; ++y) {
       for (int x = std::max(0, cx - 1); x <= std::min(cols - 1, cx + 1) && !duplicate; ++x) {
         for (int i : grid[y * cols + x]) {
@@ -216,24 +225,27 @@ void SystemImpl::TopUpStaticFeatures(const cv::Mat& gray, const std::vector<Dete
   }
 }
 
-FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp, const cv::Mat& mask,
-                             const std::vector<Detection>* detections) {
+FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp,
+                             const cv::Mat& mask, const std::vector<Detection>* detections) {
   const auto t_start = std::chrono::steady_clock::now();
   const PinholeCamera& cam = options_.camera;
   if (rgb.empty() || (rgb.type() != CV_8UC3 && rgb.type() != CV_8UC1))
-    throw InputError("rgb image: expected CV_8UC3 (or CV_8UC1), got type " + std::to_string(rgb.type()));
+    throw InputError("rgb image: expected CV_8UC3 (or CV_8UC1), got type " +
+                     std::to_string(rgb.type()));
   if (rgb.cols != cam.width || rgb.rows != cam.height)
-    throw InputError("rgb image: size " + std::to_string(rgb.cols) + "x" + std::to_string(rgb.rows) +
-                     " does not match Camera.width/height " + std::to_string(cam.width) + "x" + std::to_string(cam.height));
+    throw InputError("rgb image: size " + std::to_string(rgb.cols) + "x" +
+                     std::to_string(rgb.rows) + " does not match Camera.width/height " +
+                     std::to_string(cam.width) + "x" + std::to_string(cam.height));
   if (depth.empty() || (depth.type() != CV_16UC1 && depth.type() != CV_32FC1))
     throw InputError("depth image: expected CV_16UC1 or CV_32FC1");
   if (depth.size() != rgb.size()) throw InputError("depth image: size differs from the rgb image");
   if (!mask.empty() && (mask.type() != CV_8UC1 || mask.size() != rgb.size()))
-    throw InputError("mask: expected CV_8UC1 " + std::to_string(rgb.cols) + "x" + std::to_string(rgb.rows) +
-                     ", got type " + std::to_string(mask.type()) + " " + std::to_string(mask.cols) + "x" +
-                     std::to_string(mask.rows));
+    throw InputError("mask: expected CV_8UC1 " + std::to_string(rgb.cols) + "x" +
+                     std::to_string(rgb.rows) + ", got type " + std::to_string(mask.type()) + " " +
+                     std::to_string(mask.cols) + "x" + std::to_string(mask.rows));
   if (has_last_stamp_ && stamp <= last_stamp_)
-    throw InputError("frame stamp " + stamp.ToString() + " is not after the previous frame " + last_stamp_.ToString());
+    throw InputError("frame stamp " + stamp.ToString() + " is not after the previous frame " +
+                     last_stamp_.ToString());
   last_stamp_ = stamp;
   has_last_stamp_ = true;
 
@@ -253,20 +265,16 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   }
   // Detection runs on another thread while ORB features are extracted.
   std::vector<Detection> own_detections;
-  std::future<std::vector<Detection>> detection_job;
-  double detection_ms = 0;
   const bool need_detections = options_.NeedsDetections();
-  std::shared_ptr<DetectionJob> prefetched;
-  if (prefetched_ && prefetched_->stamp == stamp) prefetched.swap(prefetched_);
-  if (need_detections && detections == nullptr && !prefetched) {
+  std::shared_ptr<DetectionJob> detection_job;
+  if (prefetched_ && prefetched_->stamp == stamp) detection_job.swap(prefetched_);
+  if (need_detections && detections == nullptr && !detection_job) {
+    if (rgb.channels() != 3)
+      throw InputError("rgb image: the detector needs CV_8UC3 BGR, got one channel");
     EnsureDetector();
-    detection_job = std::async(std::launch::async, [this, &rgb, &detection_ms]() {
-      const auto t0 = std::chrono::steady_clock::now();
-      std::lock_guard<std::mutex> lock(detector_mutex_);
-      auto found = detector_->Detect(rgb.channels() == 3 ? rgb : cv::Mat());
-      detection_ms = MsSince(t0);
-      return found;
-    });
+    detection_job = std::make_shared<DetectionJob>();
+    detection_job->stamp = stamp;
+    detection_job->ticket = detection_worker_->Submit(rgb);
   }
   const auto t_orb = std::chrono::steady_clock::now();
   OrbFeatures features = extractor_.Extract(gray, mask);
@@ -274,14 +282,9 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   result.num_features = static_cast<int>(features.keypoints.size());
   if (need_detections && detections == nullptr) {
     const auto t_wait = std::chrono::steady_clock::now();
-    if (prefetched) {
-      own_detections = prefetched->result.get();
-      detection_ms = *prefetched->ms;
-    } else {
-      own_detections = detection_job.get();
-    }
+    own_detections = detection_job->ticket.result.get();
     result.times.detection_wait_ms = MsSince(t_wait);
-    result.times.detection_ms = detection_ms;
+    result.times.detection_ms = *detection_job->ticket.detect_ms;
     detections = &own_detections;
   }
   result.detections_used = need_detections && detections != nullptr;
@@ -289,13 +292,14 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   // Dynamic filter in front of tracking.
   static const std::vector<Detection> kNoDetections;
   const cv::Mat descriptor_matrix = features.DescriptorMatrix();
-  FilterInput input(features.keypoints, descriptor_matrix, detections ? *detections : kNoDetections);
+  FilterInput input(features.keypoints, descriptor_matrix,
+                    detections ? *detections : kNoDetections);
   std::vector<cv::Point2f> undistorted;
   if (options_.camera.HasDistortion() && !features.keypoints.empty()) {
     std::vector<cv::Point2f> points(features.keypoints.size());
     for (size_t i = 0; i < points.size(); ++i) points[i] = features.keypoints[i].pt;
-    cv::undistortPoints(points, undistorted, options_.camera.K(), options_.camera.DistCoeffs(), cv::noArray(),
-                        options_.camera.K());
+    cv::undistortPoints(points, undistorted, options_.camera.K(), options_.camera.DistCoeffs(),
+                        cv::noArray(), options_.camera.K());
     input.undistorted_points = &undistorted;
   }
   const FilterResult filtered = filter_.Process(input);
@@ -309,7 +313,10 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
     kept.keypoints.push_back(features.keypoints[i]);
     kept.descriptors.push_back(features.descriptors[i]);
     // Inside a detection box (geometry mode treats the whole image as one region: no boxes).
-    kept_in_region.push_back(filtered.features[i].in_dynamic_region && options_.filter_mode != FilterMode::kGeometry ? 1 : 0);
+    kept_in_region.push_back(filtered.features[i].in_dynamic_region &&
+                                     options_.filter_mode != FilterMode::kGeometry
+                                 ? 1
+                                 : 0);
   }
   result.num_dynamic = filtered.num_dynamic;
   if (detections && !detections->empty() && options_.static_top_up_fraction > 0) {
@@ -318,7 +325,8 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
 
   const auto t_track = std::chrono::steady_clock::now();
   kept_in_region.resize(kept.keypoints.size(), 0);  // top-up features lie outside the boxes
-  Frame frame(next_frame_id_++, stamp, std::move(kept), depth_m, geometry_, std::move(kept_in_region));
+  Frame frame(next_frame_id_++, stamp, std::move(kept), depth_m, geometry_,
+              std::move(kept_in_region));
   TrackResult tracked = tracker_.Track(std::move(frame));
   result.times.tracking_ms = MsSince(t_track);
   result.state = tracked.state;
@@ -338,8 +346,9 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
       data.world_from_cam = *result.world_from_cam;
       data.rgb = rgb;
       data.depth = depth_m;
-      data.dynamic_mask = ComputeDynamicMask(rgb.size(), depth_m, detections ? *detections : kNoDetections,
-                                             features.keypoints, dynamic, options_.dynamic_mask);
+      data.dynamic_mask =
+          ComputeDynamicMask(rgb.size(), depth_m, detections ? *detections : kNoDetections,
+                             features.keypoints, dynamic, options_.dynamic_mask);
       data.keypoints = features.keypoints;
       data.keypoint_dynamic = dynamic;
       if (detections) data.detections = *detections;
@@ -355,7 +364,9 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   return result;
 }
 
-void System::PrefetchDetections(const cv::Mat& rgb, Timestamp stamp) { impl_->Prefetch(rgb, stamp); }
+void System::PrefetchDetections(const cv::Mat& rgb, Timestamp stamp) {
+  impl_->Prefetch(rgb, stamp);
+}
 
 System::System(const SystemOptions& options) {
   options.Check();
@@ -364,8 +375,8 @@ System::System(const SystemOptions& options) {
 System::~System() {
   if (impl_) impl_->Shutdown();
 }
-FrameResult System::FeedRgbdFrame(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp, const cv::Mat& mask,
-                                  const std::vector<Detection>* detections) {
+FrameResult System::FeedRgbdFrame(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp,
+                                  const cv::Mat& mask, const std::vector<Detection>* detections) {
   return impl_->Feed(rgb, depth, stamp, mask, detections);
 }
 std::vector<StampedPose> System::Trajectory() const { return impl_->Trajectory(); }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <deque>
 #include <future>
 #include <mutex>
 #include <opencv2/calib3d.hpp>
@@ -137,7 +138,10 @@ class SystemImpl {
     auto job = std::make_shared<DetectionJob>();
     job->stamp = stamp;
     job->ticket = detection_worker_->Submit(rgb);
-    prefetched_ = job;
+    // Several frames may be prefetched ahead (the caller loads t+1 before feeding t); keep them in
+    // stamp order, a bounded number (a caller that prefetches and never feeds loses the oldest).
+    prefetched_.push_back(job);
+    while (prefetched_.size() > kMaxPrefetched) prefetched_.pop_front();
   }
   void EnsureDetector() {
     if (detection_worker_) return;
@@ -171,7 +175,8 @@ class SystemImpl {
     Timestamp stamp;
     DetectionWorker::Ticket ticket;
   };
-  std::shared_ptr<DetectionJob> prefetched_;
+  static constexpr size_t kMaxPrefetched = 4;
+  std::deque<std::shared_ptr<DetectionJob>> prefetched_;
   int64_t next_frame_id_ = 0;
   Timestamp last_stamp_;
   bool has_last_stamp_ = false;
@@ -267,7 +272,12 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   std::vector<Detection> own_detections;
   const bool need_detections = options_.NeedsDetections();
   std::shared_ptr<DetectionJob> detection_job;
-  if (prefetched_ && prefetched_->stamp == stamp) detection_job.swap(prefetched_);
+  // Prefetched detections of this frame; those of earlier stamps were never fed: dropped.
+  while (!prefetched_.empty() && prefetched_.front()->stamp < stamp) prefetched_.pop_front();
+  if (!prefetched_.empty() && prefetched_.front()->stamp == stamp) {
+    detection_job = prefetched_.front();
+    prefetched_.pop_front();
+  }
   if (need_detections && detections == nullptr && !detection_job) {
     if (rgb.channels() != 3)
       throw InputError("rgb image: the detector needs CV_8UC3 BGR, got one channel");

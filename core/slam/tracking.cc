@@ -336,7 +336,7 @@ bool Tracker::TrackLocalMap(Frame& frame) {
     matcher_.SearchByProjection(frame, local_points_, radius);
   }
   OptimizePose(frame, options_.optimizer);
-  int inliers = 0;
+  int inliers = 0, static_inliers = 0;
   for (size_t i = 0; i < frame.size(); ++i) {
     const auto& mp = frame.map_points[i];
     if (!mp) continue;
@@ -346,13 +346,20 @@ bool Tracker::TrackLocalMap(Frame& frame) {
       continue;
     }
     mp->found_count++;
-    if (mp->NumObservations() > 0) ++inliers;
+    if (mp->NumObservations() > 0) {
+      ++inliers;
+      if (frame.in_dynamic_region.empty() || !frame.in_dynamic_region[i]) ++static_inliers;
+    }
   }
   last_inliers_ = inliers;
+  // The pose must rest on enough points outside the dynamic regions: features kept inside a
+  // person's box (judged static by the geometry probability) can still move with the person,
+  // and when a person fills the view the few background points left cannot hold the pose.
   const int needed = frame.id < last_relocalization_frame_id_ + options_.max_frames_between_keyframes
                          ? options_.relocalized_min_inliers
                          : options_.local_map_min_inliers;
-  return inliers >= needed || (inliers >= options_.local_map_min_inliers && last_relocalization_frame_id_ < 0);
+  return static_inliers >= needed ||
+         (static_inliers >= options_.local_map_min_inliers && last_relocalization_frame_id_ < 0);
 }
 
 bool Tracker::NeedNewKeyFrame(const Frame& frame) const {

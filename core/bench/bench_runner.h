@@ -8,7 +8,7 @@
 // Run folder:
 //   trajectory.txt  TUM trajectory (world_from_cam) of every frame with a pose
 //   frames.csv      one line per frame: stamp,ok,orb_ms,detection_ms,detection_wait_ms,
-//                   matching_ms,probability_ms,tracking_ms,local_mapping_ms,total_ms
+//                   matching_ms,probability_ms,tracking_ms,local_mapping_ms,total_ms,top_up_ms
 //   summary.txt     "key value" lines: frames, lost, loop_seconds
 #pragma once
 

@@ -2,18 +2,17 @@
 
 #include <algorithm>
 #include <cmath>
-#include <queue>
 #include <cstring>
-
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <queue>
 
 namespace dygslam {
 namespace {
 
-constexpr int kPatchRadius = 15;   // circular patch for orientation and descriptor (31 px diameter)
+constexpr int kPatchRadius = 15;  // circular patch for orientation and descriptor (31 px diameter)
 constexpr int kBorder = kPatchRadius + 1;
-constexpr int kCellSize = 30;      // FAST threshold fallback cell size (pixels at each level)
+constexpr int kCellSize = 30;  // FAST threshold fallback cell size (pixels at each level)
 
 // Standard normal samples from a fixed-seed 64-bit LCG + Box-Muller: identical on every platform.
 class PatternRng {
@@ -110,15 +109,19 @@ void OrbExtractor::DistributeQuadtree(std::vector<cv::KeyPoint>& candidates, con
   std::vector<Node> nodes;
   const float root_w = float(area.width) / roots;
   for (int r = 0; r < roots; ++r) {
-    nodes.push_back({area.x + r * root_w, float(area.y), area.x + (r + 1) * root_w,
-                     float(area.y + area.height), {}});
+    nodes.push_back({area.x + r * root_w,
+                     float(area.y),
+                     area.x + (r + 1) * root_w,
+                     float(area.y + area.height),
+                     {}});
   }
   for (int i = 0; i < static_cast<int>(candidates.size()); ++i) {
     const int r = std::min(roots - 1, static_cast<int>((candidates[i].pt.x - area.x) / root_w));
     nodes[std::max(r, 0)].members.push_back(i);
   }
-  nodes.erase(std::remove_if(nodes.begin(), nodes.end(), [](const Node& n) { return n.members.empty(); }),
-              nodes.end());
+  nodes.erase(
+      std::remove_if(nodes.begin(), nodes.end(), [](const Node& n) { return n.members.empty(); }),
+      nodes.end());
   // Split the most populated node until there are enough nodes or nothing can be split.
   auto cmp = [&](int a, int b) {
     if (nodes[a].members.size() != nodes[b].members.size())
@@ -135,8 +138,10 @@ void OrbExtractor::DistributeQuadtree(std::vector<cv::KeyPoint>& candidates, con
     Node node = nodes[idx];
     if (node.members.size() <= 1 || (node.x1 - node.x0) < 1.0f) continue;  // cannot split further
     const float mx = 0.5f * (node.x0 + node.x1), my = 0.5f * (node.y0 + node.y1);
-    Node children[4] = {{node.x0, node.y0, mx, my, {}}, {mx, node.y0, node.x1, my, {}},
-                        {node.x0, my, mx, node.y1, {}}, {mx, my, node.x1, node.y1, {}}};
+    Node children[4] = {{node.x0, node.y0, mx, my, {}},
+                        {mx, node.y0, node.x1, my, {}},
+                        {node.x0, my, mx, node.y1, {}},
+                        {mx, my, node.x1, node.y1, {}}};
     for (int m : node.members) {
       const cv::Point2f& p = candidates[m].pt;
       children[(p.x >= mx ? 1 : 0) + (p.y >= my ? 2 : 0)].members.push_back(m);
@@ -163,42 +168,66 @@ void OrbExtractor::DistributeQuadtree(std::vector<cv::KeyPoint>& candidates, con
     winners.push_back(best);
   }
   if (static_cast<int>(winners.size()) > target) {
-    std::stable_sort(winners.begin(), winners.end(), [&](int a, int b) {
-      return candidates[a].response > candidates[b].response;
-    });
+    std::stable_sort(winners.begin(), winners.end(),
+                     [&](int a, int b) { return candidates[a].response > candidates[b].response; });
     winners.resize(target);
   }
   std::sort(winners.begin(), winners.end());
   for (int w : winners) kept->push_back(candidates[w]);
 }
 
-OrbFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& mask, int num_features) const {
+OrbFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& mask, int num_features,
+                                  OrbExtractionCache* cache) const {
   CV_Assert(gray.type() == CV_8UC1);
-  const int levels = options_.num_levels;
-  const std::vector<int> features_per_level = FeaturesPerLevel(num_features > 0 ? num_features : options_.num_features);
+  OrbExtractionCache local;
+  OrbExtractionCache& c = cache != nullptr ? *cache : local;
+  if (!c.IsFor(gray)) {
+    // Pyramid and FAST corners (once at the low threshold) of every level.
+    c = OrbExtractionCache();
+    c.data_ = gray.data;
+    c.size_ = gray.size();
+    c.source_ = gray;
+    cv::Mat level_img = gray;
+    for (int level = 0; level < options_.num_levels; ++level) {
+      if (level > 0) {
+        const cv::Size size(static_cast<int>(std::lround(gray.cols / scales_[level])),
+                            static_cast<int>(std::lround(gray.rows / scales_[level])));
+        if (size.width < 2 * kBorder + 8 || size.height < 2 * kBorder + 8) break;
+        cv::Mat next;
+        cv::resize(level_img, next, size, 0, 0, cv::INTER_LINEAR);
+        level_img = next;
+      }
+      const cv::Rect area(kBorder, kBorder, level_img.cols - 2 * kBorder,
+                          level_img.rows - 2 * kBorder);
+      if (area.width <= 0 || area.height <= 0) break;
+      std::vector<cv::KeyPoint> corners;
+      cv::FAST(level_img(area), corners, options_.min_th_fast, true);
+      for (cv::KeyPoint& kp : corners) {
+        kp.pt.x += area.x;
+        kp.pt.y += area.y;
+      }
+      c.levels_.push_back(level_img);
+      c.corners_.push_back(std::move(corners));
+      c.blurred_.emplace_back();
+    }
+  }
+  const int levels = static_cast<int>(c.levels_.size());
+  const std::vector<int> features_per_level =
+      FeaturesPerLevel(num_features > 0 ? num_features : options_.num_features);
   OrbFeatures out;
   const auto& pattern = Pattern();
-  cv::Mat level_img = gray;
   for (int level = 0; level < levels; ++level) {
-    if (level > 0) {
-      const cv::Size size(static_cast<int>(std::lround(gray.cols / scales_[level])),
-                          static_cast<int>(std::lround(gray.rows / scales_[level])));
-      if (size.width < 2 * kBorder + 8 || size.height < 2 * kBorder + 8) break;
-      cv::resize(level_img, level_img, size, 0, 0, cv::INTER_LINEAR);
-    }
-    const cv::Rect area(kBorder, kBorder, level_img.cols - 2 * kBorder, level_img.rows - 2 * kBorder);
-    if (area.width <= 0 || area.height <= 0) break;
-    // FAST once at the low threshold; per cell, prefer the corners that pass the initial threshold.
-    std::vector<cv::KeyPoint> corners;
-    cv::FAST(level_img(area), corners, options_.min_th_fast, true);
+    const cv::Mat& level_img = c.levels_[level];
+    const cv::Rect area(kBorder, kBorder, level_img.cols - 2 * kBorder,
+                        level_img.rows - 2 * kBorder);
+    // Per cell, prefer the corners that pass the initial threshold.
+    const std::vector<cv::KeyPoint>& corners = c.corners_[level];
     cv::Mat level_mask;
     if (!mask.empty()) cv::resize(mask, level_mask, level_img.size(), 0, 0, cv::INTER_NEAREST);
     const int cells_x = (area.width + kCellSize - 1) / kCellSize;
     const int cells_y = (area.height + kCellSize - 1) / kCellSize;
     std::vector<uint8_t> cell_has_strong(cells_x * cells_y, 0);
-    for (cv::KeyPoint& kp : corners) {
-      kp.pt.x += area.x;
-      kp.pt.y += area.y;
+    for (const cv::KeyPoint& kp : corners) {
       if (kp.response >= options_.ini_th_fast) {
         const int cx = static_cast<int>(kp.pt.x - area.x) / kCellSize;
         const int cy = static_cast<int>(kp.pt.y - area.y) / kCellSize;
@@ -243,8 +272,9 @@ OrbFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& mask, int 
       kp.angle = angle;
     }
     // Steered binary tests on the smoothed level image.
-    cv::Mat blurred;
-    cv::GaussianBlur(level_img, blurred, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
+    if (c.blurred_[level].empty())
+      cv::GaussianBlur(level_img, c.blurred_[level], cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
+    const cv::Mat& blurred = c.blurred_[level];
     const float scale = static_cast<float>(scales_[level]);
     for (cv::KeyPoint& kp : kept) {
       const float a = kp.angle * static_cast<float>(M_PI / 180.0);

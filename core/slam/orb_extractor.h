@@ -4,20 +4,19 @@
 
 #include <array>
 #include <cstdint>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "core/base/error.h"
 
 namespace dygslam {
 
 struct OrbExtractorOptions {
-  int num_features = 1000;     // ORBextractor.nFeatures
-  double scale_factor = 1.2;   // ORBextractor.scaleFactor
-  int num_levels = 8;          // ORBextractor.nLevels
-  int ini_th_fast = 20;        // ORBextractor.iniThFAST
-  int min_th_fast = 7;         // ORBextractor.minThFAST
+  int num_features = 1000;    // ORBextractor.nFeatures
+  double scale_factor = 1.2;  // ORBextractor.scaleFactor
+  int num_levels = 8;         // ORBextractor.nLevels
+  int ini_th_fast = 20;       // ORBextractor.iniThFAST
+  int min_th_fast = 7;        // ORBextractor.minThFAST
   void Check() const {
     DYGSLAM_CHECK_OPTION(num_features > 0 && num_features <= 100000, "ORBextractor.nFeatures");
     DYGSLAM_CHECK_OPTION(scale_factor > 1.0 && scale_factor < 4.0, "ORBextractor.scaleFactor");
@@ -48,13 +47,36 @@ struct OrbFeatures {
   cv::Mat DescriptorMatrix() const;
 };
 
+// What Extract computes per pyramid level before selecting features (level images, FAST
+// corners, smoothed images), kept so that a second extraction on the same image with another mask
+// and budget (System's top-up outside the detection boxes) costs only the selection and the
+// descriptors. Belongs to one image: Extract recomputes it when given another image.
+class OrbExtractionCache {
+ public:
+  bool IsFor(const cv::Mat& gray) const {
+    return !levels_.empty() && gray.data == data_ && gray.size() == size_;
+  }
+
+ private:
+  friend class OrbExtractor;
+  const uint8_t* data_ = nullptr;
+  cv::Size size_;
+  cv::Mat source_;  // keeps the image alive while the cache refers to it
+  std::vector<cv::Mat> levels_;
+  std::vector<std::vector<cv::KeyPoint>>
+      corners_;                   // all FAST corners at min_th_fast, level coordinates
+  std::vector<cv::Mat> blurred_;  // computed on first use
+};
+
 class OrbExtractor {
  public:
   explicit OrbExtractor(const OrbExtractorOptions& options);
 
   // gray: CV_8UC1. mask (optional, CV_8UC1): features are not detected where mask != 0.
   // num_features > 0 overrides the options' budget for this call.
-  OrbFeatures Extract(const cv::Mat& gray, const cv::Mat& mask = cv::Mat(), int num_features = -1) const;
+  // cache (optional): reused when it holds this image's pyramid, else filled for it.
+  OrbFeatures Extract(const cv::Mat& gray, const cv::Mat& mask = cv::Mat(), int num_features = -1,
+                      OrbExtractionCache* cache = nullptr) const;
 
   const OrbExtractorOptions& options() const { return options_; }
   double scale(int level) const { return scales_[level]; }

@@ -62,6 +62,38 @@ TEST(OrbExtractor, DeterministicAndMaskRespected) {
   for (const auto& kp : m.keypoints) EXPECT_GE(kp.pt.x, 318.0f);
 }
 
+// A cache filled by one extraction gives a second extraction on the same image (another mask and
+// budget, as System's top-up) exactly what an extraction without cache gives; another image
+// refills it.
+TEST(OrbExtractor, CacheReuseGivesIdenticalFeatures) {
+  OrbExtractor extractor(OrbExtractorOptions{});
+  const cv::Mat img = TexturedImage(4), other = TexturedImage(5);
+  cv::Mat mask = cv::Mat::zeros(img.size(), CV_8UC1);
+  mask(cv::Rect(100, 50, 300, 300)).setTo(255);
+  auto expect_same = [](const OrbFeatures& a, const OrbFeatures& b) {
+    ASSERT_EQ(a.keypoints.size(), b.keypoints.size());
+    for (size_t i = 0; i < a.keypoints.size(); ++i) {
+      EXPECT_EQ(a.keypoints[i].pt, b.keypoints[i].pt);
+      EXPECT_EQ(a.keypoints[i].octave, b.keypoints[i].octave);
+      EXPECT_FLOAT_EQ(a.keypoints[i].angle, b.keypoints[i].angle);
+      EXPECT_EQ(a.descriptors[i], b.descriptors[i]);
+    }
+  };
+  OrbExtractionCache cache;
+  EXPECT_FALSE(cache.IsFor(img));
+  expect_same(extractor.Extract(img, cv::Mat(), -1, &cache), extractor.Extract(img));
+  EXPECT_TRUE(cache.IsFor(img));
+  const OrbFeatures top_up = extractor.Extract(img, mask, 300, &cache);
+  expect_same(top_up, extractor.Extract(img, mask, 300));
+  EXPECT_GT(top_up.keypoints.size(), 200u);
+  for (const auto& kp : top_up.keypoints) {
+    EXPECT_FALSE(kp.pt.x >= 101 && kp.pt.x < 399 && kp.pt.y >= 51 && kp.pt.y < 349) << kp.pt;
+  }
+  expect_same(extractor.Extract(other, cv::Mat(), -1, &cache), extractor.Extract(other));
+  EXPECT_TRUE(cache.IsFor(other));
+  EXPECT_FALSE(cache.IsFor(img));
+}
+
 // Steered descriptors are rotation invariant: for keypoints re-detected at the rotated position
 // (same octave), the nearest neighbour among all descriptors of the rotated image is the true
 // partner, and its distance is small.

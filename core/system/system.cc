@@ -153,7 +153,8 @@ class SystemImpl {
     }
     detection_worker_ = std::make_unique<DetectionWorker>(YoloDetector::Create(d));
   }
-  void TopUpStaticFeatures(const cv::Mat& gray, const std::vector<Detection>& detections,
+  void TopUpStaticFeatures(const cv::Mat& gray, const cv::Mat& mask,
+                           const std::vector<Detection>& detections, OrbExtractionCache* cache,
                            OrbFeatures* kept) const;
   std::vector<StampedPose> KeyframeTrajectory() const { return tracker_.KeyframeTrajectory(); }
   void SetKeyframeCallback(std::function<void(const KeyframeData&)> cb) {
@@ -184,18 +185,20 @@ class SystemImpl {
   std::function<void(const KeyframeData&)> keyframe_callback_;
 };
 
-void SystemImpl::TopUpStaticFeatures(const cv::Mat& gray, const std::vector<Detection>& detections,
-                                     OrbFeatures* kept) const {
+void SystemImpl::TopUpStaticFeatures(const cv::Mat& gray, const cv::Mat& mask,
+                                     const std::vector<Detection>& detections,
+                                     OrbExtractionCache* cache, OrbFeatures* kept) const {
   const int budget = options_.orb.num_features;
   const int shortfall = budget - static_cast<int>(kept->keypoints.size());
   if (kept->keypoints.size() >= options_.static_top_up_fraction * budget) return;
-  cv::Mat box_mask = cv::Mat::zeros(gray.size(), CV_8UC1);
+  cv::Mat box_mask = mask.empty() ? cv::Mat::zeros(gray.size(), CV_8UC1) : mask.clone();
   const cv::Rect image(0, 0, gray.cols, gray.rows);
   for (const Detection& d : detections) {
     const cv::Rect r = cv::Rect(DynamicRegion(d, options_.filter)) & image;
     box_mask(r).setTo(255);
   }
-  OrbFeatures extra = extractor_.Extract(gray, box_mask, shortfall);
+  OrbFeatures extra =
+      extractor_.Extract(gray, box_mask, shortfall, cache);  // pyramid and corners reused
   // Skip corners already kept (same level, within 2 px).
   constexpr int kCell = 8;
   const int cols = gray.cols / kCell + 1, rows = gray.rows / kCell + 1;
@@ -287,7 +290,8 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
     detection_job->ticket = detection_worker_->Submit(rgb);
   }
   const auto t_orb = std::chrono::steady_clock::now();
-  OrbFeatures features = extractor_.Extract(gray, mask);
+  OrbExtractionCache extraction_cache;
+  OrbFeatures features = extractor_.Extract(gray, mask, -1, &extraction_cache);
   result.times.orb_extraction_ms = MsSince(t_orb);
   result.num_features = static_cast<int>(features.keypoints.size());
   if (need_detections && detections == nullptr) {
@@ -330,7 +334,9 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   }
   result.num_dynamic = filtered.num_dynamic;
   if (detections && !detections->empty() && options_.static_top_up_fraction > 0) {
-    TopUpStaticFeatures(gray, *detections, &kept);
+    const auto t_top_up = std::chrono::steady_clock::now();
+    TopUpStaticFeatures(gray, mask, *detections, &extraction_cache, &kept);
+    result.times.top_up_ms = MsSince(t_top_up);
   }
 
   const auto t_track = std::chrono::steady_clock::now();

@@ -35,6 +35,7 @@ struct StageTimes {
   double detection_wait_ms = 0;   // time tracking waited for the detector after extraction
   double matching_ms = 0;         // dynamic filter: feature matching to previous frame
   double probability_ms = 0;      // dynamic filter: F estimation + probability update
+  double top_up_ms = 0;           // crowded frames: extra extraction outside the boxes
   double tracking_ms = 0;         // pose tracking (motion model / reference KF / local map)
   double local_mapping_ms = 0;  // synchronous local mapping (deterministic mode only)
   double total_ms = 0;            // wall time of FeedRgbdFrame

@@ -1,6 +1,6 @@
 // Typed Fast DDS DataWriter / DataReader on a ROS 2 topic ("rt/" + name) with a ROS 2 QoS
-// profile, over a shared dds::Participant (RAII, like components/dds/pubsub.h, whose endpoints
-// are tied to the pipeline's own topic table).
+// profile, over a shared dds::Participant (the same RAII endpoints as the pipeline's,
+// components/dds/endpoint.h, with ROS 2 QoS instead of the pipeline's topic table).
 //
 // Partitions: ROS 2 (rmw_fastrtps, rmw_cyclonedds) puts every endpoint in the default partition,
 // while the participant's own publisher / subscriber carry the pipeline's partition
@@ -27,6 +27,7 @@
 #include <thread>
 
 #include "bridge/ros2_qos.h"
+#include "components/dds/endpoint.h"
 #include "components/dds/participant.h"
 
 namespace dygslam::ros2 {
@@ -65,93 +66,22 @@ class RosSession {
 };
 
 template <class PubSubType>
-class RosWriter {
+class RosWriter : public dds::TypedWriter<PubSubType> {
  public:
-  using Message = typename PubSubType::type;
   // topic: the DDS name (DdsTopicName()).
   RosWriter(std::shared_ptr<RosSession> session, const std::string& topic, const RosQos& qos)
-      : session_(std::move(session)) {
-    auto* t = session_->participant().template GetTopic<PubSubType>(topic);
-    writer_ = session_->publisher()->create_datawriter(t, RosWriterQos(qos));
-    if (writer_ == nullptr) throw std::runtime_error("Fast DDS: cannot create writer on " + topic);
-  }
-  ~RosWriter() {
-    if (writer_ != nullptr) session_->publisher()->delete_datawriter(writer_);
-  }
-  RosWriter(const RosWriter&) = delete;
-  RosWriter& operator=(const RosWriter&) = delete;
-
-  bool Write(const Message& message) { return writer_->write(const_cast<Message*>(&message)); }
-  int matched() const {
-    eprosima::fastdds::dds::PublicationMatchedStatus status;
-    writer_->get_publication_matched_status(status);
-    return status.current_count;
-  }
-  bool WaitForAcknowledgments(std::chrono::milliseconds timeout) {
-    const eprosima::fastrtps::Duration_t d(
-        static_cast<int32_t>(timeout.count() / 1000),
-        static_cast<uint32_t>(timeout.count() % 1000) * 1000000u);
-    return writer_->wait_for_acknowledgments(d) ==
-           eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
-  }
-
- private:
-  std::shared_ptr<RosSession> session_;
-  eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
+      : dds::TypedWriter<PubSubType>(session, session->participant(), session->publisher(), topic,
+                                     RosWriterQos(qos)) {}
 };
 
 template <class PubSubType>
-class RosReader {
+class RosReader : public dds::TypedReader<PubSubType> {
  public:
-  using Message = typename PubSubType::type;
-  using Callback = std::function<void(Message&&)>;
-
-  // callback runs on a DDS listener thread: keep it short.
+  using Callback = typename dds::TypedReader<PubSubType>::Callback;
   RosReader(std::shared_ptr<RosSession> session, const std::string& topic, const RosQos& qos,
             Callback callback)
-      : session_(std::move(session)), listener_(std::move(callback)) {
-    auto* t = session_->participant().template GetTopic<PubSubType>(topic);
-    reader_ = session_->subscriber()->create_datareader(t, RosReaderQos(qos), &listener_);
-    if (reader_ == nullptr) throw std::runtime_error("Fast DDS: cannot create reader on " + topic);
-  }
-  ~RosReader() {
-    if (reader_ != nullptr) {
-      reader_->set_listener(nullptr);
-      session_->subscriber()->delete_datareader(reader_);
-    }
-  }
-  RosReader(const RosReader&) = delete;
-  RosReader& operator=(const RosReader&) = delete;
-
-  int matched() const { return listener_.matched.load(); }
-
- private:
-  class Listener : public eprosima::fastdds::dds::DataReaderListener {
-   public:
-    explicit Listener(Callback cb) : callback(std::move(cb)) {}
-    void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
-      eprosima::fastdds::dds::SampleInfo info;
-      while (true) {
-        Message message;
-        if (reader->take_next_sample(&message, &info) !=
-            eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
-          break;
-        }
-        if (info.valid_data) callback(std::move(message));
-      }
-    }
-    void on_subscription_matched(
-        eprosima::fastdds::dds::DataReader*,
-        const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
-      matched.store(status.current_count);
-    }
-    Callback callback;
-    std::atomic<int> matched{0};
-  };
-
-  std::shared_ptr<RosSession> session_;
-  Listener listener_;
-  eprosima::fastdds::dds::DataReader* reader_ = nullptr;
+      : dds::TypedReader<PubSubType>(session, session->participant(), session->subscriber(), topic,
+                                     RosReaderQos(qos), std::move(callback)) {}
 };
 
 }  // namespace dygslam::ros2

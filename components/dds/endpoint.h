@@ -1,0 +1,148 @@
+// Typed DataWriter / DataReader (RAII) on any publisher / subscriber of a Participant: the one
+// implementation behind the pipeline's endpoints (components/dds/pubsub.h: Writer / Reader with
+// the pipeline's QoS table) and the ROS 2 bridge's (bridge/ros2_endpoint.h: ROS 2 QoS profiles on
+// a partition-less publisher / subscriber).
+//
+// `owner` keeps whatever owns the publisher / subscriber alive (the Participant, or the bridge's
+// RosSession) until the endpoint has been deleted.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include "components/dds/participant.h"
+
+namespace dygslam::dds {
+
+namespace internal {
+// Polls `matched` every 5 ms until it reaches `count`; false on timeout.
+template <class Matched>
+bool WaitForMatched(const Matched& matched, int count, std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (matched() < count) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return true;
+}
+}  // namespace internal
+
+template <class PubSubType>
+class TypedWriter {
+ public:
+  using Message = typename PubSubType::type;
+
+  TypedWriter(std::shared_ptr<const void> owner, Participant& participant,
+              eprosima::fastdds::dds::Publisher* publisher, const std::string& topic,
+              const eprosima::fastdds::dds::DataWriterQos& qos)
+      : owner_(std::move(owner)), publisher_(publisher) {
+    auto* t = participant.template GetTopic<PubSubType>(topic);
+    writer_ = publisher_->create_datawriter(t, qos);
+    if (writer_ == nullptr) throw std::runtime_error("Fast DDS: cannot create writer on " + topic);
+  }
+  ~TypedWriter() {
+    if (writer_ != nullptr) publisher_->delete_datawriter(writer_);
+  }
+  TypedWriter(const TypedWriter&) = delete;
+  TypedWriter& operator=(const TypedWriter&) = delete;
+
+  // False if the middleware refused the sample (e.g. blocked longer than max_blocking_time).
+  bool Write(const Message& message) { return writer_->write(const_cast<Message*>(&message)); }
+  int matched() const {
+    eprosima::fastdds::dds::PublicationMatchedStatus status;
+    writer_->get_publication_matched_status(status);
+    return status.current_count;
+  }
+  // Waits until at least `count` readers are matched; false on timeout.
+  bool WaitForReaders(int count, std::chrono::milliseconds timeout) const {
+    return internal::WaitForMatched([this] { return matched(); }, count, timeout);
+  }
+  // Waits until every matched reliable reader acknowledged all samples; false on timeout.
+  bool WaitForAcknowledgments(std::chrono::milliseconds timeout) {
+    const eprosima::fastrtps::Duration_t d(
+        static_cast<int32_t>(timeout.count() / 1000),
+        static_cast<uint32_t>(timeout.count() % 1000) * 1000000u);
+    return writer_->wait_for_acknowledgments(d) ==
+           eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
+  }
+
+ private:
+  std::shared_ptr<const void> owner_;  // destroyed last
+  eprosima::fastdds::dds::Publisher* publisher_;
+  eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
+};
+
+template <class PubSubType>
+class TypedReader {
+ public:
+  using Message = typename PubSubType::type;
+  using Callback = std::function<void(Message&&)>;
+
+  // callback runs on a DDS listener thread: keep it short (enqueue + notify).
+  TypedReader(std::shared_ptr<const void> owner, Participant& participant,
+              eprosima::fastdds::dds::Subscriber* subscriber, const std::string& topic,
+              const eprosima::fastdds::dds::DataReaderQos& qos, Callback callback)
+      : owner_(std::move(owner)), subscriber_(subscriber), listener_(std::move(callback)) {
+    auto* t = participant.template GetTopic<PubSubType>(topic);
+    reader_ = subscriber_->create_datareader(t, qos, &listener_);
+    if (reader_ == nullptr) throw std::runtime_error("Fast DDS: cannot create reader on " + topic);
+  }
+  ~TypedReader() {
+    if (reader_ != nullptr) {
+      reader_->set_listener(nullptr);
+      subscriber_->delete_datareader(reader_);
+    }
+  }
+  TypedReader(const TypedReader&) = delete;
+  TypedReader& operator=(const TypedReader&) = delete;
+
+  int matched() const { return listener_.matched.load(); }
+  bool WaitForWriters(int count, std::chrono::milliseconds timeout) const {
+    return internal::WaitForMatched([this] { return matched(); }, count, timeout);
+  }
+
+ private:
+  class Listener : public eprosima::fastdds::dds::DataReaderListener {
+   public:
+    explicit Listener(Callback cb) : callback(std::move(cb)) {}
+    void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
+      eprosima::fastdds::dds::SampleInfo info;
+      while (true) {
+        Message message;
+        if (reader->take_next_sample(&message, &info) !=
+            eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
+          break;
+        }
+        if (info.valid_data) callback(std::move(message));
+      }
+    }
+    void on_subscription_matched(
+        eprosima::fastdds::dds::DataReader*,
+        const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
+      matched.store(status.current_count);
+    }
+    Callback callback;
+    std::atomic<int> matched{0};
+  };
+
+  std::shared_ptr<const void> owner_;  // destroyed last
+  eprosima::fastdds::dds::Subscriber* subscriber_;
+  Listener listener_;
+  eprosima::fastdds::dds::DataReader* reader_ = nullptr;
+};
+
+}  // namespace dygslam::dds

@@ -19,6 +19,7 @@ void MapperOptions::Check() const {
   octomap.Check();
   DYGSLAM_CHECK_OPTION(update_every_keyframes >= 0, "mapper.update_every_keyframes");
   DYGSLAM_CHECK_OPTION(flush_timeout_s >= 0, "mapper.flush_timeout_s");
+  DYGSLAM_CHECK_OPTION(writer_gone_s > 0, "mapper.writer_gone_s");
 }
 
 MapperCore::MapperCore(const MapperOptions& options) : options_(options) { options_.Check(); }
@@ -102,6 +103,8 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
 
   size_t since_update = 0;
   int idle_after_done = 0;
+  bool writer_seen = false;
+  std::optional<std::chrono::steady_clock::time_point> writer_gone_since;
   std::optional<std::chrono::steady_clock::time_point> flush_deadline;
   StartAnnouncer announcer("mapper");
   while (true) {
@@ -113,8 +116,22 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
           std::chrono::milliseconds(static_cast<int64_t>(options.flush_timeout_s * 1000));
       if (keyframes.matched() == 0) *flush_deadline = std::chrono::steady_clock::now();
     }
+    const bool writer_matched = keyframes.matched() > 0;
+    writer_seen = writer_seen || writer_matched;
+    if (writer_matched || !writer_seen) {
+      writer_gone_since.reset();
+    } else if (!writer_gone_since) {
+      writer_gone_since = std::chrono::steady_clock::now();
+    }
     std::optional<msg::Keyframe> sample = queue.Pop(std::chrono::milliseconds(50));
     if (!sample) {
+      if (writer_gone_since &&
+          std::chrono::steady_clock::now() - *writer_gone_since >
+              std::chrono::milliseconds(static_cast<int64_t>(options.writer_gone_s * 1000))) {
+        LOG_WARNING << "mapper: slam's keyframe writer left " << options.writer_gone_s
+                    << " s ago without announcing the end of its run; writing the map";
+        break;
+      }
       std::lock_guard<std::mutex> lock(mutex);
       // slam's DONE is written after its last keyframe (and after waiting for acknowledgements);
       // order is only kept per writer, so allow a short grace period (6 x 50 ms) after DONE.

@@ -5,7 +5,8 @@
 // Core: MapperCore (no DDS). Shell: RunMapper, ends after slam's COMPONENT_DONE and the keyframe
 // queue is drained. On stop (SIGINT / SIGTERM) it keeps draining until slam's COMPONENT_DONE
 // (slam publishes its last corrections when it stops) for at most flush_timeout_s while a
-// keyframe writer is matched, then writes the map.
+// keyframe writer is matched, then writes the map. If slam's keyframe writer goes away (slam
+// ended or died) without a COMPONENT_DONE reaching the mapper, it ends after writer_gone_s.
 #pragma once
 
 #include <memory>
@@ -29,6 +30,10 @@ struct MapperOptions {
   int update_every_keyframes = 5;
   // After stop: longest wait for slam's last keyframe messages (seconds).
   double flush_timeout_s = 5.0;
+  // Keyframe writer matched before and gone for this long, no COMPONENT_DONE: the run is over
+  // (slam's DONE can be missed when it exits before the mapper's status reader matched). A slam
+  // restarted within this time is simply followed.
+  double writer_gone_s = 10.0;
   void Check() const;
 };
 

@@ -121,6 +121,36 @@ TEST_F(Faults, MapperKilledAndRestartedGetsEveryKeyframeBack) {
   EXPECT_GT(fs::file_size(tmp + "/out/map.bt"), 1000u);
 }
 
+// slam dies (SIGKILL: no COMPONENT_DONE is ever sent): the mapper does not wait forever; once
+// slam's keyframe writer is gone (participant lease) and stays gone for writer_gone_s it writes
+// the map with what it received and exits 0, saying why.
+TEST_F(Faults, MapperEndsWhenSlamDiesWithoutAnnouncingTheEnd) {
+  const std::string tmp = testing::MakeTempDir("fault_slam_gone");
+  const int domain = 124;
+  const pid_t mapper = Run("mapper", tmp, domain, "0:300");
+  const pid_t slam = Run("slam", tmp, domain, "0:300", {"--filter", "none"});
+  const pid_t player = Run("player", tmp, domain, "0:300", {"--rate", "1", "--no-detector"});
+  // Let slam make keyframes, then kill it.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!fs::exists(tmp + "/out/map.bt") && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_TRUE(fs::exists(tmp + "/out/map.bt")) << "mapper never wrote a map\n"
+                                               << ReadAll(tmp + "/mapper.log");
+  kill(slam, SIGKILL);
+  EXPECT_EQ(Wait(slam), 128 + SIGKILL);
+  kill(player, SIGINT);
+  Wait(player);
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(Wait(mapper), 0) << ReadAll(tmp + "/mapper.log");
+  const double waited =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string log = ReadAll(tmp + "/mapper.log");
+  EXPECT_NE(log.find("without announcing the end"), std::string::npos) << log;
+  EXPECT_LT(waited, 60.0) << "participant lease (20 s) + writer_gone_s (10 s) should bound it";
+  EXPECT_GT(Extract(log, R"((\d+) keyframes in the map)"), 0) << log;
+}
+
 TEST_F(Faults, DetectorKilledAndRestartedIsUsedAgain) {
   const std::string tmp = testing::MakeTempDir("fault_detector");
   const int domain = 122;

@@ -59,21 +59,6 @@ const char* kUsage =
     "       [--out DIR] [--work DIR] [--update-benchmarks FILE] [--config FILE] [--deterministic]\n"
     "       [--features-frame K] [--quiet]";
 
-std::string ShellQuote(const std::string& s) {
-  if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-                                        "0123456789-_./:=,+@") == std::string::npos)
-    return s;
-  std::string out = "'";
-  for (char c : s) {
-    if (c == '\'') {
-      out += "'\\''";
-    } else {
-      out += c;
-    }
-  }
-  return out + "'";
-}
-
 std::string ReadFirstLine(const std::string& path) {
   std::ifstream in(path);
   std::string line;

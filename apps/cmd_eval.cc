@@ -58,18 +58,6 @@ std::string JsonNumber(double v) {
   return buf;
 }
 
-std::string ShellQuote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) {
-    if (c == '\'') {
-      out += "'\\''";
-    } else {
-      out += c;
-    }
-  }
-  return out + "'";
-}
-
 double ParseSeconds(const ArgParser& p, const std::string& option) {
   const std::string text = p.Get(option);
   char* end = nullptr;

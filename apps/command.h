@@ -92,5 +92,7 @@ const std::vector<std::string>& PlannedCommands();
 std::string ScriptsDir();
 // The settings presets folder (config/ beside scripts/).
 std::string ConfigDir();
+// `s` as one POSIX shell word: unchanged when it has only safe characters, else single-quoted.
+std::string ShellQuote(const std::string& s);
 
 }  // namespace dygslam::cli

@@ -13,6 +13,8 @@ import json
 import os
 import sys
 
+from plot_common import import_pyplot
+
 COLORS = {"none": "tab:red", "boxes": "tab:orange", "geometry": "tab:purple", "full": "tab:blue",
           "rgbd_icp_odometry": "tab:gray"}
 
@@ -103,18 +105,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--manifest", required=True)
     args = ap.parse_args()
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        # A python3 without matplotlib first on PATH (pyenv, venv): try the system one.
-        system = "/usr/bin/python3"
-        if os.path.exists(system) and os.path.realpath(sys.executable) != os.path.realpath(system) \
-                and not os.environ.get("DYGSLAM_PLOT_NO_REEXEC"):
-            os.environ["DYGSLAM_PLOT_NO_REEXEC"] = "1"
-            os.execv(system, [system] + sys.argv)
-        print("bench_plots.py: python3-matplotlib is not installed", file=sys.stderr)
+    plt = import_pyplot("bench_plots.py")
+    if plt is None:
         return 3
     try:
         with open(args.manifest) as f:

@@ -9,6 +9,8 @@ import argparse
 import os
 import sys
 
+from plot_common import import_pyplot
+
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
@@ -17,18 +19,8 @@ def main():
     ap.add_argument("--title", default="", help="figure title")
     args = ap.parse_args()
 
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        # A python3 without matplotlib first on PATH (pyenv, venv): try the system one.
-        system = "/usr/bin/python3"
-        if os.path.exists(system) and os.path.realpath(sys.executable) != os.path.realpath(system) \
-                and not os.environ.get("DYGSLAM_PLOT_NO_REEXEC"):
-            os.environ["DYGSLAM_PLOT_NO_REEXEC"] = "1"
-            os.execv(system, [system] + sys.argv)
-        print("plot_trajectory.py: python3-matplotlib is not installed", file=sys.stderr)
+    plt = import_pyplot("plot_trajectory.py")
+    if plt is None:
         return 3
 
     rows = []

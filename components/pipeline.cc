@@ -272,17 +272,7 @@ bool ComponentCatchesSignal(pid_t pid, const std::string& component, int sig) {
                             std::istreambuf_iterator<char>());
   if (cmdline.find(std::string("component") + '\0' + component + '\0') == std::string::npos)
     return false;
-  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind("SigCgt:", 0) != 0) continue;
-    try {
-      return (std::stoull(line.substr(7), nullptr, 16) >> (sig - 1)) & 1u;
-    } catch (const std::exception&) {
-      return false;
-    }
-  }
-  return false;
+  return ProcessCatchesSignal(pid, sig);
 }
 
 int RunProcesses(const PipelineOptions& options, const StopSignalPtr& stop) {

@@ -7,6 +7,7 @@
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
+#include "components/stream_status.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "core/io/trajectory_io.h"
@@ -67,21 +68,6 @@ std::vector<StampedPose> DatasetPlayer::GroundTruth() const {
   }
   return result;
 }
-
-namespace {
-
-msg::StreamStatus MakeStatus(StreamEvent event, const std::string& source, uint64_t num_frames,
-                             uint64_t seq) {
-  msg::StreamStatus s;
-  s.kind(static_cast<uint8_t>(event));
-  s.source(source);
-  s.num_frames(num_frames);
-  s.header().seq(seq);
-  s.header().frame_id("");
-  return s;
-}
-
-}  // namespace
 
 PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const PlayerOptions& options,
                       const StopSignalPtr& stop) {
@@ -155,7 +141,7 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
                   << options.wait_for_components_s << " s; playing anyway";
     }
   }
-  status.Write(MakeStatus(StreamEvent::kStarted, "player", player.num_frames(), 0));
+  status.Write(MakeStreamStatus(StreamEvent::kStarted, "player", player.num_frames(), 0));
 
   if (options.publish_ground_truth) {
     uint64_t seq = 0;
@@ -197,7 +183,8 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
     ++stats.frames_published;
   }
   const uint64_t last_seq = stats.frames_published == 0 ? 0 : stats.frames_published - 1;
-  status.Write(MakeStatus(StreamEvent::kEndOfStream, "player", stats.frames_published, last_seq));
+  status.Write(
+      MakeStreamStatus(StreamEvent::kEndOfStream, "player", stats.frames_published, last_seq));
   LOG_INFO << "player: published " << stats.frames_published << " frames, end of stream";
   // Stay alive (frames and ground truth remain available to late readers) until slam is done.
   {

@@ -3,7 +3,9 @@
 #include <signal.h>
 
 #include <csignal>
+#include <fstream>
 #include <mutex>
+#include <string>
 
 namespace dygslam {
 namespace {
@@ -39,5 +41,19 @@ ScopedStopSignals::~ScopedStopSignals() {
 }
 
 int ScopedStopSignals::Received() { return g_received; }
+
+bool ProcessCatchesSignal(pid_t pid, int sig) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("SigCgt:", 0) != 0) continue;
+    try {
+      return (std::stoull(line.substr(7), nullptr, 16) >> (sig - 1)) & 1u;
+    } catch (const std::exception&) {
+      return false;
+    }
+  }
+  return false;
+}
 
 }  // namespace dygslam

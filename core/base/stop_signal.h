@@ -10,7 +10,13 @@
 // restores the previous handlers when it ends. Nested scopes only add a reference.
 #pragma once
 
+#include <sys/types.h>
+
 namespace dygslam {
+
+// True when /proc/PID/status lists `sig` among the signals process PID catches (SigCgt): its
+// handler is installed, so the signal will not end it by the default action. Linux only.
+bool ProcessCatchesSignal(pid_t pid, int sig);
 
 class ScopedStopSignals {
  public:

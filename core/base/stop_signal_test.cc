@@ -1,8 +1,8 @@
 #include "core/base/stop_signal.h"
 
-#include <signal.h>
-
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
 
 namespace dygslam {
 namespace {
@@ -15,8 +15,11 @@ bool HandlerInstalled(int sig) {
 
 TEST(StopSignals, NestedScopesShareTheFlagAndTheOutermostRestoresHandlers) {
   ASSERT_FALSE(HandlerInstalled(SIGTERM));
+  EXPECT_FALSE(ProcessCatchesSignal(getpid(), SIGTERM));
   {
     ScopedStopSignals outer;
+    EXPECT_TRUE(ProcessCatchesSignal(getpid(), SIGTERM));  // as /proc shows it to other processes
+    EXPECT_TRUE(ProcessCatchesSignal(getpid(), SIGINT));
     EXPECT_TRUE(HandlerInstalled(SIGINT));
     EXPECT_TRUE(HandlerInstalled(SIGTERM));
     EXPECT_EQ(ScopedStopSignals::Received(), 0);

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/base/error.h"
+#include "core/base/stop_signal.h"
 #include "core/io/trajectory_io.h"
 #include "tests/support/test_support.h"
 
@@ -185,17 +186,11 @@ TEST_F(Faults, DetectorKilledAndRestartedIsUsedAgain) {
   EXPECT_GT(ReadTumTrajectory(tmp + "/out/trajectory.txt").size(), 280u);
 }
 
-// True once /proc/PID/status lists `sig` among the caught signals (SigCgt), within 20 s.
+// True once process PID catches `sig` (its handler is installed), within 20 s.
 bool WaitUntilCatches(pid_t pid, int sig) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (std::chrono::steady_clock::now() < deadline) {
-    std::ifstream status("/proc/" + std::to_string(pid) + "/status");
-    std::string line;
-    while (std::getline(status, line)) {
-      if (line.rfind("SigCgt:", 0) != 0) continue;
-      const unsigned long long mask = std::stoull(line.substr(7), nullptr, 16);
-      if (mask & (1ull << (sig - 1))) return true;
-    }
+    if (ProcessCatchesSignal(pid, sig)) return true;
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
   return false;

@@ -207,7 +207,7 @@ int RunWorker(const ArgParser& p) {
                                    RgbdOdometryOptions(), first, last, report);
   } else {
     SystemOptions options = SystemOptionsFromSettings(settings);
-    options.filter_mode = ParseFilterMode(config);
+    ApplyFilterConfiguration(config, &options);
     options.deterministic = p.Flag("deterministic");
     output = RunSystemOnSequence(dataset, options, first, last, report);
   }
@@ -290,7 +290,10 @@ int RunBench(const std::vector<std::string>& args) {
   const int runs = (quick && !p.Has("runs")) ? 1 : ParseCount(p, "runs", 1, 100);
   std::vector<std::string> configs = SplitList(p.Get("configs"));
   if (configs.empty()) return p.UsageError("--configs: empty list");
-  for (const std::string& c : configs) ParseFilterMode(c);  // throws InvalidOptions naming it
+  for (const std::string& c : configs) {  // throws InvalidOptions naming it
+    SystemOptions check;
+    ApplyFilterConfiguration(c, &check);
+  }
   std::vector<std::string> all_configs = configs;
   if (!p.Flag("no-baseline")) all_configs.push_back(kBaselineConfig);
   const bool quiet = p.Flag("quiet");
@@ -334,6 +337,10 @@ int RunBench(const std::vector<std::string>& args) {
       pr.last = pr.first + 60;
     }
     pr.groundtruth = ReadTumTrajectory(dataset.groundtruth_path());
+    std::error_code ec;
+    if (fs::is_regular_file(fs::path(s.directory) / "detections.txt", ec))
+      std::cerr << "dygslam bench: " << s.name << ": person boxes from " << s.directory
+                << "/detections.txt (not the detector); its box rows are marked ‡ in the report\n";
     prepared.push_back(std::move(pr));
   }
 
@@ -571,6 +578,11 @@ int RunBench(const std::vector<std::string>& args) {
   context.frames = p.Has("frames") ? "rgb.txt entries " + p.Get("frames")
                                    : (quick ? "at most 60 from the middle of each sequence" : "");
   context.configs = all_configs;
+  for (const Prepared& pr : prepared) {
+    std::error_code ec;
+    if (fs::is_regular_file(fs::path(pr.sequence.directory) / "detections.txt", ec))
+      context.file_detection_sequences.push_back(pr.sequence.name);
+  }
   for (const std::string& s : skipped) notes.push_back("skipped " + s);
   context.notes = notes;
   const std::string report =

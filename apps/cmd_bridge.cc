@@ -92,7 +92,7 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   p.AddFlag("run-slam", "also run the detector, slam, mapper and recorder components here");
   p.AddOption("config", "FILE",
               "--run-slam: settings YAML (camera intrinsics must match CameraInfo)");
-  p.AddOption("filter", "MODE", "--run-slam: none | boxes | geometry | full", "full");
+  p.AddOption("filter", "MODE", "--run-slam: none | boxes | geometry | full | paper (+margin, +margin+demotion)", "full");
   p.AddOption("out", "DIR", "--run-slam: output folder (trajectory, map.bt)", "out/bridge");
   p.AddFlag("no-mapper", "--run-slam: no mapper component");
   if (!p.Parse(args)) return p.exit_code();
@@ -149,7 +149,7 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
     pipeline.settings_path = p.Get("config");
     pipeline.output_dir = p.Get("out");
     pipeline.system = SystemOptionsFromSettings(LoadSettings(pipeline.settings_path));
-    pipeline.system.filter_mode = ParseFilterMode(p.Get("filter"));
+    ApplyFilterConfiguration(p.Get("filter"), &pipeline.system);
     pipeline.run_mapper = !p.Flag("no-mapper");
     pipeline.domain_id = domain;
     pipeline.partition = partition;

@@ -50,7 +50,7 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   p.AddOption("dataset", "DIR", "dataset folder (player)");
   p.AddOption("config", "FILE", "settings YAML (camera, sensor, modules)");
   p.AddOption("out", "DIR", "output folder (recorder, mapper)", "out/run");
-  p.AddOption("filter", "MODE", "none | boxes | geometry | full", "full");
+  p.AddOption("filter", "MODE", "none | boxes | geometry | full | paper (+margin, +margin+demotion)", "full");
   p.AddOption("frames", "FIRST:LAST", "rgb.txt entries [FIRST, LAST) (player)", "0:");
   p.AddOption("rate", "R", "player: 0 = as fast as consumed, 1 = real time", "0");
   p.AddOption("window", "N", "player back-pressure window in frames", "2");
@@ -84,7 +84,7 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   const Settings settings = LoadSettings(o.settings_path);
   o.system = SystemOptionsFromSettings(settings);
   ReadOptions(settings.reader, &o.octomap);
-  o.system.filter_mode = ParseFilterMode(p.Get("filter"));
+  ApplyFilterConfiguration(p.Get("filter"), &o.system);
   o.system.deterministic = p.Flag("deterministic");
   if (p.Has("detector-cfg")) {
     o.system.detector.cfg_path = p.Get("detector-cfg");

@@ -1,4 +1,4 @@
-// dygslam map DATASET_DIR [--config FILE] [--filter none|boxes|geometry|full] [--frames FIRST:LAST]
+// dygslam map DATASET_DIR [--config FILE] [--filter none|boxes|geometry|paper|full] [--frames FIRST:LAST]
 //              [--out DIR] [--trajectory FILE [--every N] [--bonn-marker]] [--deterministic]
 //              [--resolution R] [--no-mask] [--reference-until K] [--save-every SECONDS]
 //
@@ -64,7 +64,7 @@ std::string Count(uint64_t n) { return std::to_string(n); }
 int RunMap(const std::vector<std::string>& args) {
   ArgParser p(
       "map",
-      "DATASET_DIR [--config FILE] [--filter none|boxes|geometry|full] [--frames FIRST:LAST] "
+      "DATASET_DIR [--config FILE] [--filter none|boxes|geometry|paper|full] [--frames FIRST:LAST] "
       "[--out DIR]\n"
       "            [--trajectory FILE [--every N] [--bonn-marker]] [--deterministic] [--resolution "
       "R]\n"
@@ -83,7 +83,7 @@ int RunMap(const std::vector<std::string>& args) {
       "settings.");
   p.AddPositional("DATASET_DIR", "folder with rgb.txt, depth.txt (groundtruth.txt optional)");
   p.AddOption("config", "FILE", "settings YAML; default: DATASET_DIR/camera.yaml or a preset");
-  p.AddOption("filter", "MODE", "dynamic filter of the SLAM: none | boxes | geometry | full",
+  p.AddOption("filter", "MODE", "dynamic filter of the SLAM: none | boxes | geometry | full | paper (+margin, +margin+demotion)",
               "full");
   p.AddOption("frames", "FIRST:LAST",
               "rgb.txt entries FIRST (inclusive, 0-based) to LAST (exclusive)");
@@ -122,7 +122,7 @@ int RunMap(const std::vector<std::string>& args) {
   const std::string config = p.Has("config") ? p.Get("config") : DefaultSettingsPath(dataset_dir, ConfigDir());
   const Settings settings = LoadSettings(config);
   SystemOptions options = SystemOptionsFromSettings(settings);
-  options.filter_mode = ParseFilterMode(p.Get("filter"));
+  ApplyFilterConfiguration(p.Get("filter"), &options);
   options.deterministic = p.Flag("deterministic");
   OctoMapOptions map_options;
   ReadOptions(settings.reader, &map_options);

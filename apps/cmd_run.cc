@@ -1,4 +1,4 @@
-// dygslam run DATASET_DIR [--config FILE] [--filter none|boxes|geometry|full] [--frames FIRST:LAST]
+// dygslam run DATASET_DIR [--config FILE] [--filter none|boxes|geometry|paper|full] [--frames FIRST:LAST]
 //              [--out DIR] [--deterministic] [--processes | --direct] [--no-map] [--domain N]
 //              [--quiet]
 //
@@ -224,7 +224,7 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
 int RunRun(const std::vector<std::string>& args) {
   ArgParser p(
       "run",
-      "DATASET_DIR [--config FILE] [--filter none|boxes|geometry|full] [--frames FIRST:LAST] "
+      "DATASET_DIR [--config FILE] [--filter none|boxes|geometry|paper|full] [--frames FIRST:LAST] "
       "[--out DIR] "
       "[--deterministic] [--processes | --direct] [--no-map]",
       "Runs the SLAM on a TUM/Bonn dataset folder; writes DIR/trajectory.txt (TUM format, every "
@@ -237,7 +237,7 @@ int RunRun(const std::vector<std::string>& args) {
   p.AddPositional("DATASET_DIR", "folder with rgb.txt, depth.txt (groundtruth.txt optional)");
   p.AddOption("config", "FILE",
               "settings YAML (ORB-SLAM2 keys); default: DATASET_DIR/camera.yaml or a preset");
-  p.AddOption("filter", "MODE", "dynamic filter: none | boxes | geometry | full", "full");
+  p.AddOption("filter", "MODE", "dynamic filter: none | boxes | geometry | full | paper (+margin, +margin+demotion)", "full");
   p.AddOption("frames", "FIRST:LAST",
               "rgb.txt entries FIRST (inclusive, 0-based) to LAST (exclusive)");
   p.AddOption("out", "DIR", "output folder", "out/run");
@@ -267,7 +267,7 @@ int RunRun(const std::vector<std::string>& args) {
   const Settings settings = LoadSettings(s.config);
   s.system = SystemOptionsFromSettings(settings);
   ReadOptions(settings.reader, &s.octomap);
-  s.system.filter_mode = ParseFilterMode(p.Get("filter"));
+  ApplyFilterConfiguration(p.Get("filter"), &s.system);
   s.system.deterministic = p.Flag("deterministic");
   if (s.system.deterministic) {
     // One OpenCV thread for the detector in every mode (the pipeline's detector component uses
@@ -337,7 +337,7 @@ int RunRun(const std::vector<std::string>& args) {
   std::printf("frames: %zu processed, %zu tracked, %zu lost, %zu without depth partner; %.1f fps\n",
               outcome.processed, trajectory.size(), outcome.lost, skipped,
               outcome.processed / std::max(elapsed, 1e-9));
-  std::printf("filter: %s%s\n", ToString(s.system.filter_mode),
+  std::printf("filter: %s%s\n", p.Get("filter").c_str(),
               s.system.deterministic ? " (deterministic)" : "");
   if (dataset.has_groundtruth() && trajectory.size() >= 3) {
     const AteResult ate = ComputeAte(ReadTumTrajectory(dataset.groundtruth_path()), trajectory);

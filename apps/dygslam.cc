@@ -48,7 +48,7 @@ void PrintHelp(std::ostream& out) {
     out << left << command.summary << "\n";
   }
   out << "\nRun 'dygslam <command> --help' for the options of a command.\n"
-         "  dygslam run DATASET_DIR [--config FILE] [--filter none|boxes|geometry|full]\n"
+         "  dygslam run DATASET_DIR [--config FILE] [--filter none|boxes|geometry|paper|full]\n"
          "              [--frames FIRST:LAST] [--out DIR] [--deterministic]\n"
          "              [--processes | --direct] [--no-map] [--detections FILE]\n"
          "  dygslam eval GROUNDTRUTH ESTIMATE [--json] [--plot FILE.png]\n"

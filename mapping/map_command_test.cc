@@ -53,7 +53,7 @@ size_t OccupiedLeaves(const octomap::OcTree& tree) {
 
 TEST(MapCommand, GroundTruthMapWithReferenceWritesEverything) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
-  if (!fs::exists(Binary())) GTEST_SKIP() << "dygslam binary not built: " << Binary();
+  DYGSLAM_REQUIRE_FILE(Binary(), "dygslam binary");
   const std::string out = testing::MakeTempDir("map_command");
   const Result r = RunDygslam("map " + dir + " --trajectory " + dir +
                               "/groundtruth.txt --bonn-marker --every 20 --quiet" +
@@ -79,7 +79,7 @@ TEST(MapCommand, GroundTruthMapWithReferenceWritesEverything) {
 
 TEST(MapCommand, SlamRunWritesLevelledMapAndTrajectory) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
-  if (!fs::exists(Binary())) GTEST_SKIP() << "dygslam binary not built: " << Binary();
+  DYGSLAM_REQUIRE_FILE(Binary(), "dygslam binary");
   const std::string out = testing::MakeTempDir("map_command_slam");
   const Result r = RunDygslam(
       "map " + dir +
@@ -101,7 +101,7 @@ TEST(MapCommand, SlamRunWritesLevelledMapAndTrajectory) {
 }
 
 TEST(MapCommand, BadInputIsNamed) {
-  if (!fs::exists(Binary())) GTEST_SKIP() << "dygslam binary not built: " << Binary();
+  DYGSLAM_REQUIRE_FILE(Binary(), "dygslam binary");
   const std::string tmp = testing::MakeTempDir("map_command_bad");
   // Usage errors: exit 2.
   Result r = RunDygslam("map " + tmp + " --resolution -1");

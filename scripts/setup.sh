@@ -13,6 +13,7 @@ BUILD_PACKAGES=(
   cyclonedds-dev cyclonedds-tools
   iproute2 python3 python3-matplotlib python3-numpy
   docker-compose
+  clang libclang-rt-14-dev
 )
 
 # Runtime (docker/Dockerfile): the packages of the shared libraries `dygslam` links (readelf

@@ -96,6 +96,9 @@ struct BenchContext {
   std::string frames;  // which frames, e.g. "rgb.txt entries 100:200"; "" = all
   std::vector<std::string> configs;
   std::vector<std::string> notes;  // extra lines (skipped sequences, failures)
+  // Sequences whose boxes came from their detections.txt (generated data) instead of the
+  // detector: their box-using rows are marked in the report.
+  std::vector<std::string> file_detection_sequences;
 };
 
 // The report. `image_prefix` is prepended to every picture path (e.g. "docs/benchmarks/" when the

@@ -77,6 +77,15 @@ DetectorOptions DetectorOptionsForModel(const std::string& name,
 // the header (biases, batch-norm scales/means/variances and kernels of every [convolutional]
 // layer, in file order) and the number of classes of its [yolo]/[region] layers (-1 if none).
 struct DarknetCfgInfo {
+  // One [convolutional] layer as its weights are stored: biases (filters), then for
+  // batch_normalize scales, rolling means, rolling variances (filters each), then the kernels
+  // (filters * input_channels / groups * size * size).
+  struct ConvLayer {
+    int filters = 0;
+    int kernel_values = 0;  // input_channels / groups * size * size per filter
+    bool batch_normalize = false;
+  };
+  std::vector<ConvLayer> conv_layers;
   int64_t num_parameters = 0;
   int num_classes = -1;
   int num_conv_layers = 0;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -14,18 +15,6 @@
 namespace dygslam {
 namespace {
 namespace fs = std::filesystem;
-
-std::string RequireModels() {
-  const std::string dir = testing::ModelsDir();
-  return dir;
-}
-
-#define DYGSLAM_REQUIRE_MODELS(var)                                                     \
-  const std::string var = RequireModels();                                              \
-  if (var.empty()) {                                                                    \
-    if (std::getenv("DYGSLAM_REQUIRE_DATA") != nullptr) FAIL() << "models dir missing"; \
-    GTEST_SKIP() << "models directory not found (set DYGSLAM_MODELS_DIR)";              \
-  }
 
 // Path of the `index`-th image entry (0-based, comments skipped) of <dataset>/rgb.txt.
 std::string RgbEntry(const std::string& dataset, int index) {
@@ -214,42 +203,114 @@ TEST(YoloDetectorFiles, MissingAndCorruptFilesNameTheFile) {
   ExpectThrowsNaming([&] { YoloDetector::Create(o); }, o.cfg_path);
 }
 
-// YOLOv3-tiny / CYTI (weights not available offline): the cfg, the weights size check and the
-// standard two-[yolo]-layer output path, with a generated weights file of the exact size.
-void WriteGeneratedWeights(const std::string& path, int64_t num_parameters) {
+// YOLOv3-tiny / CYTI, the paper's detector (its weights are not available offline): the network
+// built from the real cfg runs the whole decode path with generated weights whose output is known.
+// Every kernel is 0 and every batch-norm layer outputs 0, so each detection head (the convs without
+// batch norm, linear, in front of the [yolo] layers) outputs its biases in every cell: tx = ty = tw
+// = th = 0 (box of exactly the anchor's size at the cell centre), objectness `objectness_logit`,
+// +8 for the class `person` and -8 for the others.
+void WriteGeneratedWeights(const std::string& path, const DarknetCfgInfo& info, int person_class,
+                           float objectness_logit) {
   std::ofstream out(path, std::ios::binary);
   const int32_t header[3] = {0, 2, 0};
   const uint64_t seen = 0;
   out.write(reinterpret_cast<const char*>(header), sizeof(header));
   out.write(reinterpret_cast<const char*>(&seen), sizeof(seen));
-  std::vector<float> values(static_cast<size_t>(num_parameters), 0.01f);
-  out.write(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(float));
+  auto write = [&](const std::vector<float>& v) {
+    out.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * 4));
+  };
+  for (const DarknetCfgInfo::ConvLayer& layer : info.conv_layers) {
+    const size_t n = static_cast<size_t>(layer.filters);
+    std::vector<float> biases(n, 0.f);
+    if (!layer.batch_normalize) {  // a detection head: per anchor tx ty tw th obj class...
+      const int per_anchor = 5 + info.num_classes;
+      ASSERT_EQ(layer.filters % per_anchor, 0);
+      for (size_t c = 0; c < n; ++c) {
+        const int k = static_cast<int>(c) % per_anchor;
+        if (k == 4) biases[c] = objectness_logit;
+        if (k >= 5) biases[c] = (k - 5 == person_class) ? 8.f : -8.f;
+      }
+    }
+    write(biases);
+    if (layer.batch_normalize) {
+      write(std::vector<float>(n, 0.f));  // scales: the layer outputs its bias (0)
+      write(std::vector<float>(n, 0.f));  // rolling means
+      write(std::vector<float>(n, 1.f));  // rolling variances
+    }
+    write(std::vector<float>(n * static_cast<size_t>(layer.kernel_values), 0.f));
+  }
 }
 
-TEST(YoloDetectorFiles, Yolov3TinyCfgRunsWithGeneratedWeights) {
+TEST(YoloDetectorFiles, Yolov3TinyCfgDecodesKnownOutputs) {
   DYGSLAM_REQUIRE_MODELS(models);
   const std::string dir = testing::MakeTempDir("tiny");
+  // The anchors of both cfgs (pixels at the network input).
+  const std::vector<cv::Size2f> anchors = {{10, 14}, {23, 27},   {37, 58},
+                                           {81, 82}, {135, 169}, {344, 319}};
   for (const char* name : {"yolov3-tiny", "CYTI"}) {
+    SCOPED_TRACE(name);
     DetectorOptions o = DetectorOptionsForModel(name, models);
     // The real weights are absent here: the error names the file.
     if (!fs::exists(o.weights_path)) {
       ExpectThrowsNaming([&] { YoloDetector::Create(o); }, o.weights_path, "not found");
     }
     const DarknetCfgInfo info = ParseDarknetCfg(o.cfg_path);
-    o.weights_path = dir + "/" + name + ".weights";
-    WriteGeneratedWeights(o.weights_path, info.num_parameters);
-    auto detector = YoloDetector::Create(o);
-    EXPECT_EQ(static_cast<int>(detector->class_names().size()), info.num_classes);
+    ASSERT_EQ(info.conv_layers.size(), static_cast<size_t>(info.num_conv_layers));
+    int64_t counted = 0;
+    for (const auto& l : info.conv_layers)
+      counted += int64_t{l.filters} * ((l.batch_normalize ? 4 : 1) + l.kernel_values);
+    EXPECT_EQ(counted, info.num_parameters);
+    int person = -1;
+    {
+      std::ifstream names(o.names_path);
+      std::string line;
+      for (int id = 0; std::getline(names, line); ++id)
+        if (line == "person") person = id;
+    }
+    ASSERT_GE(person, 0);
     cv::Mat image(480, 640, CV_8UC3);
     cv::randu(image, 0, 255);
+
+    // Objectness logit -8 (score 3e-4): nothing is detected.
+    o.weights_path = dir + "/" + name + "_none.weights";
+    WriteGeneratedWeights(o.weights_path, info, person, -8.f);
+    EXPECT_TRUE(YoloDetector::Create(o)->Detect(image).empty());
+
+    // Objectness +8: person boxes of exactly the anchors' sizes, scaled from the network input
+    // to the image (plain resize), centred on cell centres.
+    o.weights_path = dir + "/" + name + "_all.weights";
+    WriteGeneratedWeights(o.weights_path, info, person, 8.f);
+    auto detector = YoloDetector::Create(o);
+    EXPECT_EQ(static_cast<int>(detector->class_names().size()), info.num_classes);
     const std::vector<Detection> dets = detector->Detect(image);
+    ASSERT_FALSE(dets.empty());
+    const float sx = 640.f / static_cast<float>(o.input_width);
+    const float sy = 480.f / static_cast<float>(o.input_height);
+    int anchor_sized = 0;
     for (const Detection& d : dets) {
+      EXPECT_EQ(d.class_id, person);
       EXPECT_TRUE(detector->IsDynamicClass(d.class_id));
+      EXPECT_GT(d.score, 0.99f);
       EXPECT_GE(d.box.x, 0.f);
+      EXPECT_GE(d.box.y, 0.f);
       EXPECT_LE(d.box.x + d.box.width, 640.f + 1e-3f);
+      EXPECT_LE(d.box.y + d.box.height, 480.f + 1e-3f);
+      const bool clipped = d.box.x <= 1e-3f || d.box.y <= 1e-3f ||
+                           d.box.x + d.box.width >= 640.f - 1e-3f ||
+                           d.box.y + d.box.height >= 480.f - 1e-3f;
+      bool matches = false;
+      for (const cv::Size2f& a : anchors)
+        matches |= std::abs(d.box.width - a.width * sx) < 1.f &&
+                   std::abs(d.box.height - a.height * sy) < 1.f;
+      if (!clipped) {
+        EXPECT_TRUE(matches) << d.box.x << " " << d.box.y << " " << d.box.width << "x"
+                             << d.box.height;
+      }
+      anchor_sized += matches ? 1 : 0;
     }
-    std::printf("%s with generated weights: %zu boxes (meaningless values, path check only)\n",
-                name, dets.size());
+    EXPECT_GE(anchor_sized, 1);
+    std::printf("%s with generated weights: %zu person boxes, %d of anchor size\n", name,
+                dets.size(), anchor_sized);
   }
 }
 

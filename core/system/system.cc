@@ -41,7 +41,38 @@ FilterMode ParseFilterMode(const std::string& text) {
   if (text == "boxes") return FilterMode::kBoxes;
   if (text == "geometry") return FilterMode::kGeometry;
   if (text == "full") return FilterMode::kFull;
-  throw InvalidOptions("invalid filter mode '" + text + "': expected none|boxes|geometry|full");
+  throw InvalidOptions("invalid filter mode '" + text +
+                       "': expected none|boxes|geometry|full (or paper, paper+margin, "
+                       "paper+margin+demotion)");
+}
+
+const std::vector<std::string>& FilterConfigurationNames() {
+  static const std::vector<std::string> names = {
+      "none", "boxes", "geometry", "paper", "paper+margin", "paper+margin+demotion", "full"};
+  return names;
+}
+
+void ApplyFilterConfiguration(const std::string& name, SystemOptions* options) {
+  const bool paper_family = name.rfind("paper", 0) == 0;
+  if (!paper_family) {
+    options->filter_mode = ParseFilterMode(name);
+    return;
+  }
+  const auto& names = FilterConfigurationNames();
+  if (std::find(names.begin(), names.end(), name) == names.end()) {
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : "|") + n;
+    throw InvalidOptions("invalid filter configuration '" + name + "': expected " + list);
+  }
+  options->filter_mode = FilterMode::kFull;
+  options->filter.box_margin = 0.0;
+  options->filter.box_margin_fraction = 0.0;
+  options->demote_in_box_features = false;
+  options->static_top_up_fraction = 0.0;
+  if (name == "paper+margin" || name == "paper+margin+demotion") {
+    options->filter.box_margin_fraction = 0.1;
+  }
+  if (name == "paper+margin+demotion") options->demote_in_box_features = true;
 }
 
 void SystemOptions::Check() const {
@@ -328,7 +359,8 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
     kept.descriptors.push_back(features.descriptors[i]);
     // Inside a detection box (geometry mode treats the whole image as one region: no boxes).
     kept_in_region.push_back(filtered.features[i].in_dynamic_region &&
-                                     options_.filter_mode != FilterMode::kGeometry
+                                     options_.filter_mode != FilterMode::kGeometry &&
+                                     options_.demote_in_box_features
                                  ? 1
                                  : 0);
   }

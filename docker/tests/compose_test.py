@@ -38,6 +38,13 @@ import sys
 import time
 
 SKIP = 77
+
+
+def require_data():
+    """In CI (CI=true) and `make test` (DYGSLAM_REQUIRE_DATA=1) what a test needs must be there."""
+    def on(name):
+        return os.environ.get(name, "") not in ("", "0", "false")
+    return on("DYGSLAM_REQUIRE_DATA") or on("CI")
 FAILURES = []
 
 
@@ -282,7 +289,7 @@ def cmd_lint(a):
     # The npm linter.
     lint_dir = os.path.join(a.work, "npm")
     linter = os.path.join(lint_dir, "node_modules", ".bin", "dockerfilelint")
-    required = os.environ.get("DYGSLAM_REQUIRE_DOCKER_LINT") == "1"
+    required = os.environ.get("DYGSLAM_REQUIRE_DOCKER_LINT") == "1" or require_data()
 
     def skip(reason):
         print(("FAILED  " if required else "SKIPPED ") + reason)
@@ -473,8 +480,8 @@ def cmd_run(a):
     a.dataset, a.models = os.path.realpath(a.dataset), os.path.realpath(a.models)
     if not os.path.isdir(a.dataset) or not os.path.isfile(os.path.join(a.dataset, "rgb.txt")):
         msg = "dataset missing: %s" % a.dataset
-        if os.environ.get("DYGSLAM_REQUIRE_DATA"):
-            print("FAILED  " + msg)
+        if require_data():
+            print("FAILED  " + msg + " (required in CI / make test; set DYGSLAM_DATA_DIR)")
             return 1
         print("SKIPPED " + msg)
         return SKIP

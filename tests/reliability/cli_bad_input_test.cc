@@ -56,7 +56,7 @@ class CliBadInput : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(CliBadInput, TruncatedFrameMidRunIsAClearErrorOrACountedSkip) {
   DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
-  if (!fs::exists(Binary())) GTEST_SKIP() << "dygslam binary not built: " << Binary();
+  DYGSLAM_REQUIRE_FILE(Binary(), "dygslam binary");
   // A 30-frame copy of the dataset (images linked, frame 15's colour image truncated).
   const fs::path dir = testing::MakeTempDir("cli_truncated");
   const RgbdDataset d = RgbdDataset::Open(source);

@@ -73,7 +73,7 @@ class Faults : public ::testing::Test {
   void SetUp() override {
     DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
     dataset_ = dir;
-    if (!fs::exists(Binary())) GTEST_SKIP() << "dygslam binary not built: " << Binary();
+    DYGSLAM_REQUIRE_FILE(Binary(), "dygslam binary");
   }
   pid_t Run(const std::string& component, const std::string& tmp, int domain,
             const std::string& frames, const std::vector<std::string>& extra = {},

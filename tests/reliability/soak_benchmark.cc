@@ -111,7 +111,7 @@ int main(int argc, char** argv) {
   try {
     if (config.empty()) config = std::string(DYGSLAM_SOURCE_DIR) + "/config/bonn.yaml";
     SystemOptions options = SystemOptionsFromSettings(LoadSettings(config));
-    options.filter_mode = ParseFilterMode(filter);
+    ApplyFilterConfiguration(filter, &options);
     const RgbdDataset dataset = RgbdDataset::Open(dataset_dir);
     const size_t n = max_frames > 0 ? std::min(max_frames, dataset.size()) : dataset.size();
     if (n < 2) throw InputError(dataset_dir, 0, "need at least 2 frames");

@@ -157,6 +157,10 @@ TEST(SlamAccuracy, DeterministicModeIsRepeatable) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
   const RunOutput a = RunBonn(dir, 100, 160, FilterMode::kFull);
   const RunOutput b = RunBonn(dir, 100, 160, FilterMode::kFull);
+  // Frames 100..159 (people entering) are all tracked in deterministic runs (60 poses, measured
+  // 2026-12-01); an empty or mostly-lost run must not pass as "repeatable".
+  std::cout << "bonn_crowd_part 100:160 full filter: " << a.trajectory.size() << " poses, " << a.lost << " lost\n";
+  ASSERT_GE(a.trajectory.size(), 55u);
   ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
   for (size_t i = 0; i < a.trajectory.size(); ++i) {
     EXPECT_EQ(a.trajectory[i].stamp, b.trajectory[i].stamp);
@@ -177,7 +181,9 @@ TEST(DynamicFilterAccuracy, BonnCrowdFullMethod) {
             << ate_full.num_pairs << " tracked, " << full.lost << " lost)\n";
   EXPECT_LE(ate_full.error.rmse, 0.020);
   EXPECT_GE(ate_none / ate_full.error.rmse, 10.0);
-  EXPECT_GE(ate_full.num_pairs, 340u);
+  // Deterministic runs track 340 of 360 frames (2026-12-01); the margin of 10 frames absorbs
+  // floating-point differences between machines, not a regression of the tracker.
+  EXPECT_GE(ate_full.num_pairs, 330u);
 }
 
 }  // namespace

@@ -35,6 +35,16 @@ std::string DatasetDir(const std::string& name) {
 
 std::string ModelsDir() { return ::dygslam::ModelsDir(); }
 
+bool RequireData() {
+  auto set = [](const char* name) {
+    const char* v = std::getenv(name);
+    if (v == nullptr) return false;
+    const std::string s(v);
+    return !s.empty() && s != "0" && s != "false";
+  };
+  return set("DYGSLAM_REQUIRE_DATA") || set("CI");
+}
+
 std::string MakeTempDir(const std::string& prefix) {
   static std::atomic<int> counter{0};
   const char* bin = std::getenv("DYGSLAM_BINARY_DIR");

@@ -1,6 +1,8 @@
 // Helpers for tests: shared data lookup and scratch directories.
 #pragma once
 
+#include <cstdlib>
+#include <filesystem>
 #include <string>
 
 namespace dygslam::testing {
@@ -11,16 +13,44 @@ std::string DataDir();
 std::string DatasetDir(const std::string& name);
 // Models directory ("" when absent).
 std::string ModelsDir();
+// True when tests that need data, models or built tools must fail instead of skipping: in CI
+// (CI=true), in `make test` (DYGSLAM_REQUIRE_DATA=1, set by scripts/run_tests.sh).
+bool RequireData();
+// How to make a missing dataset or model available (appended to skip and failure messages).
+inline constexpr const char* kHowToGetData =
+    "get it with `scripts/fetch_data.sh bonn_crowd_part` (models: `scripts/fetch_data.sh "
+    "yolov3-tiny`, or the project's shared models folder) and set DYGSLAM_DATA_DIR / "
+    "DYGSLAM_MODELS_DIR";
 // A fresh empty directory under the build tree (or /tmp), unique per call.
 std::string MakeTempDir(const std::string& prefix);
 
 }  // namespace dygslam::testing
 
-// Skips the test (GTEST_SKIP) with a clear reason when a dataset is not available... except in
-// CI (DYGSLAM_REQUIRE_DATA=1), where a missing dataset fails the test.
-#define DYGSLAM_REQUIRE_DATASET(var, name)                                                   \
-  const std::string var = ::dygslam::testing::DatasetDir(name);                              \
-  if (var.empty()) {                                                                         \
-    if (std::getenv("DYGSLAM_REQUIRE_DATA") != nullptr) FAIL() << "dataset missing: " << name; \
-    GTEST_SKIP() << "dataset " << name << " not found (set DYGSLAM_DATA_DIR)";               \
+// Skips the test (GTEST_SKIP) with a clear reason when a dataset is not available, for someone
+// running one test by hand without data... except in CI and `make test` (RequireData()), where a
+// missing dataset fails the test.
+#define DYGSLAM_REQUIRE_DATASET(var, name)                                                 \
+  const std::string var = ::dygslam::testing::DatasetDir(name);                            \
+  if (var.empty()) {                                                                       \
+    if (::dygslam::testing::RequireData())                                                 \
+      FAIL() << "dataset " << name << " missing (required in CI / make test); "           \
+             << ::dygslam::testing::kHowToGetData;                                         \
+    GTEST_SKIP() << "dataset " << name << " not found; " << ::dygslam::testing::kHowToGetData; \
+  }
+
+// The same for the detector models folder.
+#define DYGSLAM_REQUIRE_MODELS(var)                                                        \
+  const std::string var = ::dygslam::testing::ModelsDir();                                 \
+  if (var.empty()) {                                                                       \
+    if (::dygslam::testing::RequireData())                                                 \
+      FAIL() << "models folder missing (required in CI / make test); "                    \
+             << ::dygslam::testing::kHowToGetData;                                         \
+    GTEST_SKIP() << "models folder not found; " << ::dygslam::testing::kHowToGetData;      \
+  }
+
+// The same for a built tool (e.g. the `dygslam` binary) that a test runs.
+#define DYGSLAM_REQUIRE_FILE(path, what)                                                   \
+  if (!std::filesystem::exists(path)) {                                                    \
+    if (::dygslam::testing::RequireData()) FAIL() << what << " missing: " << (path);       \
+    GTEST_SKIP() << what << " not found: " << (path);                                      \
   }

@@ -1,0 +1,73 @@
+// Named filter configurations: the paper's method as written and the ablation steps to ours.
+#include <gtest/gtest.h>
+
+#include "core/base/error.h"
+#include "core/system/system.h"
+
+namespace dygslam {
+namespace {
+
+TEST(FilterConfiguration, PaperFamilyAddsOneExtensionAtATime) {
+  struct Expected {
+    const char* name;
+    double margin_fraction;
+    bool demotion;
+    bool top_up;
+  };
+  const SystemOptions defaults;
+  for (const Expected& e :
+       {Expected{"paper", 0.0, false, false}, Expected{"paper+margin", 0.1, false, false},
+        Expected{"paper+margin+demotion", 0.1, true, false},
+        Expected{"full", defaults.filter.box_margin_fraction, true, true}}) {
+    SCOPED_TRACE(e.name);
+    SystemOptions o;
+    o.filter_mode = FilterMode::kNone;
+    ApplyFilterConfiguration(e.name, &o);
+    EXPECT_EQ(o.filter_mode, FilterMode::kFull);
+    EXPECT_TRUE(o.NeedsDetections());
+    EXPECT_DOUBLE_EQ(o.filter.box_margin_fraction, e.margin_fraction);
+    EXPECT_EQ(o.demote_in_box_features, e.demotion);
+    EXPECT_EQ(o.static_top_up_fraction > 0, e.top_up);
+    o.filter.Check();
+  }
+  // The paper's parameters are untouched by the presets (C1, alpha, Q, R, P_init, C2, delta).
+  SystemOptions paper;
+  ApplyFilterConfiguration("paper", &paper);
+  EXPECT_EQ(paper.filter.c1, 2.0);
+  EXPECT_EQ(paper.filter.alpha, 0.4);
+  EXPECT_EQ(paper.filter.q, 0.09);
+  EXPECT_EQ(paper.filter.r, 1.0);
+  EXPECT_EQ(paper.filter.p_init, 0.6);
+  EXPECT_EQ(paper.filter.c2, 1.0);
+  EXPECT_EQ(paper.filter.delta, 60.0);
+  EXPECT_EQ(paper.filter.threshold, 0.5);
+  EXPECT_EQ(paper.filter.box_margin, 0.0);
+}
+
+TEST(FilterConfiguration, ModesKeepTheSettingsFileValues) {
+  SystemOptions o;
+  o.filter.box_margin_fraction = 0.25;  // as if from the settings file
+  o.static_top_up_fraction = 0.5;
+  for (const char* name : {"none", "boxes", "geometry", "full"}) {
+    ApplyFilterConfiguration(name, &o);
+    EXPECT_EQ(ToString(o.filter_mode), std::string(name));
+    EXPECT_EQ(o.filter.box_margin_fraction, 0.25);
+    EXPECT_EQ(o.static_top_up_fraction, 0.5);
+  }
+}
+
+TEST(FilterConfiguration, UnknownNameIsAnErrorListingTheNames) {
+  SystemOptions o;
+  for (const char* bad : {"", "Paper", "paper+demotion", "papers", "full+"}) {
+    try {
+      ApplyFilterConfiguration(bad, &o);
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const InvalidOptions& e) {
+      EXPECT_NE(std::string(e.what()).find("paper+margin+demotion"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(FilterConfigurationNames().size(), 7u);
+}
+
+}  // namespace
+}  // namespace dygslam

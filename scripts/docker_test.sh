@@ -40,12 +40,19 @@ fail() { echo "docker-test: FAILED: $*" >&2; exit 1; }
 SUDO=""
 if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
 
+# Stops our dockerd: the pid in its pid file (inside the namespace, `unshare` is its parent) and
+# the process we started; also one left over by an interrupted earlier run.
 stop_daemon() {
-  if [[ -n "$DAEMON_PID" ]] && kill -0 "$DAEMON_PID" 2>/dev/null; then
-    $SUDO kill "$DAEMON_PID" 2>/dev/null || true
-    for _ in $(seq 1 60); do kill -0 "$DAEMON_PID" 2>/dev/null || break; sleep 0.5; done
-    $SUDO kill -9 "$DAEMON_PID" 2>/dev/null || true
-  fi
+  local pids=()
+  [[ -n "$DAEMON_PID" ]] && pids+=("$DAEMON_PID")
+  [[ -s "$WORK/dockerd.pid" ]] && pids+=("$(cat "$WORK/dockerd.pid")")
+  for pid in "${pids[@]}"; do
+    kill -0 "$pid" 2>/dev/null || continue
+    $SUDO kill "$pid" 2>/dev/null || true
+    for _ in $(seq 1 60); do kill -0 "$pid" 2>/dev/null || break; sleep 0.5; done
+    $SUDO kill -9 "$pid" 2>/dev/null || true
+  done
+  rm -f "$WORK/dockerd.pid"
   DAEMON_PID=""
 }
 trap stop_daemon EXIT
@@ -97,6 +104,7 @@ if [[ -x /usr/bin/docker ]]; then DOCKER=(/usr/bin/docker -H "unix://$SOCK"); fi
 done_step
 
 step "dockerd (host namespace, for the image build)"
+stop_daemon
 start_daemon host
 done_step
 
@@ -104,7 +112,7 @@ step "base images debian:12 and debian:12-slim (debootstrap minbase bookworm, ca
 if ! "${DOCKER[@]}" image inspect debian:12 >/dev/null 2>&1; then
   rootfs_tar=$CACHE/bookworm-minbase.tar
   if [[ ! -s $rootfs_tar ]]; then
-    rootfs=$WORK/rootfs
+    rootfs=$CACHE/rootfs
     $SUDO rm -rf "$rootfs"
     $SUDO debootstrap --variant=minbase bookworm "$rootfs" http://deb.debian.org/debian \
       >"$WORK/debootstrap.log" 2>&1 || { tail -n 20 "$WORK/debootstrap.log" >&2; fail "debootstrap"; }
@@ -137,11 +145,19 @@ export DYGSLAM_IMAGE=$IMAGE DYGSLAM_DATASET=$DATASET DYGSLAM_MODELS=$MODELS_DIR 
   DYGSLAM_DOMAIN_ID=${DOCKER_TEST_DOMAIN:-198} DYGSLAM_DDS_PROFILE=$ROOT/docker/fastdds_profile.xml
 compose=(docker-compose -p dygslam-docker-test -f "$ROOT/docker/docker-compose.yml")
 rc=0
-timeout 900 "${compose[@]}" up --no-build --abort-on-container-exit --exit-code-from eval \
-  >"$WORK/compose.log" 2>&1 || rc=$?
+# Every service ends by itself at the end of the stream (the player announces it), so `up`
+# returns; then each container's exit code is checked.
+timeout 900 "${compose[@]}" up --no-build >"$WORK/compose.log" 2>&1 || rc=$?
 tail -n 25 "$WORK/compose.log"
+bad=()
+for id in $("${compose[@]}" ps -q); do
+  state=$("${DOCKER[@]}" inspect -f '{{.Name}} {{.State.ExitCode}}' "$id")
+  echo "   container ${state#/}"
+  [[ ${state##* } == 0 ]] || bad+=("${state#/}")
+done
 "${compose[@]}" down >/dev/null 2>&1 || true
 [[ $rc -eq 0 ]] || fail "docker-compose up exited $rc (log: $WORK/compose.log)"
+[[ ${#bad[@]} -eq 0 ]] || fail "containers exited non-zero: ${bad[*]} (log: $WORK/compose.log)"
 done_step
 
 step "outputs"
@@ -156,7 +172,7 @@ check_eval='
 import json, sys
 e = json.load(open(sys.argv[1]))
 ate, limit = e["ate_rmse"], float(sys.argv[2])
-print(f"docker-test: {sys.argv[3]} poses / {sys.argv[4]} frames, {e[\"pairs\"]} pairs, ATE RMSE {ate} m (limit {limit} m)")
+print(f"docker-test: {sys.argv[3]} poses / {sys.argv[4]} frames, {e.get(chr(112)+'airs')} pairs, ATE RMSE {ate} m (limit {limit} m)")
 sys.exit(0 if ate is not None and ate <= limit else 1)
 '
 python3 -c "$check_eval" "$OUT/eval.json" "$MAX_ATE" "$poses" "$FRAMES" ||

@@ -206,8 +206,17 @@ TEST(OctoMapBuilder, StaticStructureOccupiedAndFreeSpaceCleared) {
   EXPECT_GT(stats.num_free_leaves, 100u);
   EXPECT_GE(stats.num_occupied_voxels, stats.num_occupied_leaves);
   EXPECT_GT(stats.num_free_voxels, stats.num_free_leaves);  // free space prunes into big leaves
-  EXPECT_GT(stats.memory_bytes, 0u);
+  // The counts agree with the tree itself, not only "something ran".
+  EXPECT_EQ(stats.memory_bytes, tree.memoryUsage());
+  EXPECT_EQ(stats.num_leaves, tree.getNumLeafNodes());
+  EXPECT_EQ(stats.num_occupied_leaves + stats.num_free_leaves, stats.num_leaves);
+  EXPECT_EQ(stats.num_insertions, static_cast<size_t>(kWalkFrames + kAfterFrames));
+  EXPECT_GT(stats.num_stored_points, stats.num_occupied_leaves);
+  // Times are a median over the insertions: finite, positive and the CPU time of the inserting
+  // thread cannot exceed the wall time by more than clock granularity.
+  EXPECT_TRUE(std::isfinite(stats.median_insert_ms));
   EXPECT_GT(stats.median_insert_ms, 0.0);
+  EXPECT_LE(stats.median_insert_cpu_ms, stats.median_insert_ms * 1.05 + 0.5);
   EXPECT_EQ(stats.num_rebuilds, 0u);
 }
 

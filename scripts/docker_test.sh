@@ -168,14 +168,15 @@ min_poses=$((FRAMES * 9 / 10))
 [[ -s $OUT/map.bt ]] || fail "no map.bt in $OUT"
 head -c 64 "$OUT/map.bt" | grep -qi "octree binary file" || fail "map.bt has no OctoMap header"
 [[ -s $OUT/eval.json ]] || fail "no eval.json in $OUT"
-check_eval='
+cat >"$WORK/check_eval.py" <<'PYEOF'
 import json, sys
 e = json.load(open(sys.argv[1]))
 ate, limit = e["ate_rmse"], float(sys.argv[2])
-print(f"docker-test: {sys.argv[3]} poses / {sys.argv[4]} frames, {e.get(chr(112)+'airs')} pairs, ATE RMSE {ate} m (limit {limit} m)")
+print("docker-test: %s poses / %s frames, %s pairs, ATE RMSE %s m (limit %s m)"
+      % (sys.argv[3], sys.argv[4], e.get("pairs"), ate, limit))
 sys.exit(0 if ate is not None and ate <= limit else 1)
-'
-python3 -c "$check_eval" "$OUT/eval.json" "$MAX_ATE" "$poses" "$FRAMES" ||
+PYEOF
+python3 "$WORK/check_eval.py" "$OUT/eval.json" "$MAX_ATE" "$poses" "$FRAMES" ||
   fail "ATE above $MAX_ATE m (or eval.json unreadable): $OUT/eval.json"
 done_step
 echo "docker-test: PASSED"

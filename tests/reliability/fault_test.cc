@@ -182,7 +182,11 @@ TEST_F(Faults, DetectorKilledAndRestartedIsUsedAgain) {
   // (slam did not stay geometry-only; under load some still miss the wait window).
   EXPECT_NE(slam_log.find("geometry-only"), std::string::npos) << slam_log;
   EXPECT_NE(slam_log.find("arriving again"), std::string::npos) << slam_log;
-  EXPECT_GE(paired, detector2_frames / 2) << slam_log << det_log;
+  // Event-based, not a share of detector2's frames (how many of those miss slam's 100 ms window
+  // depends on the load of the cores): the player sends at most 30 frames/s, so detector1 (killed
+  // 2.5 s after start) can have supplied at most 75 paired detections; more than 75 + 10 means at
+  // least 10 detections of the restarted detector were paired.
+  EXPECT_GE(paired, 85) << slam_log << det_log;
   EXPECT_GT(ReadTumTrajectory(tmp + "/out/trajectory.txt").size(), 280u);
 }
 

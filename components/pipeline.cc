@@ -1,5 +1,6 @@
 #include "components/pipeline.h"
 
+#include <malloc.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -11,6 +12,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <mutex>
 #include <set>
 #include <thread>
 
@@ -87,6 +89,18 @@ bool PipelineOptions::NeedsDetectorComponent() const {
 }
 
 namespace {
+
+// glibc gives each thread that allocates concurrently its own malloc arena (up to 8 per core) and
+// an arena keeps freed memory for reuse by its own threads. The pipeline has dozens of threads
+// (Fast DDS receive / event threads, one per component, local mapping, OpenCV) that allocate
+// and free 0.3-2.5 MB image buffers: with the default, resident memory of `dygslam run` rose
+// ~0.2 MB per frame even with bounded DDS histories (second half of 360 frames; 0.03 MB per
+// frame with 2 arenas, measured, BENCHMARKS.md issue 19). Called before any component thread
+// starts; applies to the arenas created after it.
+void BoundMallocArenas() {
+  static std::once_flag once;
+  std::call_once(once, [] { mallopt(M_ARENA_MAX, 2); });
+}
 
 int DomainId(const PipelineOptions& options) {
   return options.domain_id >= 0 ? options.domain_id : dds::DomainIdFromEnvironment(0);
@@ -361,11 +375,13 @@ int RunProcesses(const PipelineOptions& options, const StopSignalPtr& stop) {
 int RunComponent(const std::string& name, const PipelineOptions& options,
                  const StopSignalPtr& stop) {
   options.Check();
+  BoundMallocArenas();
   return RunComponentOn(name, options, MakeParticipant(options, name), stop);
 }
 
 int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
   pipeline_options.Check();
+  BoundMallocArenas();
   PipelineOptions options = pipeline_options;
   options.wait_for_components = true;
   fs::create_directories(options.output_dir);

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstring>
 #include <filesystem>
@@ -81,6 +82,7 @@ void PipelineOptions::Check() const {
                        "settings_path (required with --processes: the children re-read it)");
   DYGSLAM_CHECK_OPTION(last_entry == 0 || last_entry > first_entry, "frames (empty range)");
   DYGSLAM_CHECK_OPTION(flush_timeout_s >= 0, "flush_timeout_s");
+  DYGSLAM_CHECK_OPTION(loop_minutes >= 0 && std::isfinite(loop_minutes), "loop_minutes");
 }
 
 bool PipelineOptions::NeedsDetectorComponent() const {
@@ -151,6 +153,7 @@ std::vector<std::string> ComponentArgs(const PipelineOptions& o) {
       "--domain",
       std::to_string(DomainId(o))};
   if (!o.partition.empty()) a.insert(a.end(), {"--partition", o.partition});
+  if (o.loop_minutes > 0) a.insert(a.end(), {"--loop-minutes", Number(o.loop_minutes)});
   if (!o.security_dir.empty()) a.insert(a.end(), {"--security", o.security_dir});
   if (o.system.deterministic) a.push_back("--deterministic");
   if (o.progress) a.push_back("--progress");
@@ -188,6 +191,7 @@ int RunComponentOn(const std::string& name, const PipelineOptions& options,
     p.first_entry = options.first_entry;
     p.last_entry = options.last_entry;
     p.window = options.window;
+    p.loop_minutes = options.loop_minutes;
     p.expected_readers = options.NeedsDetectorComponent() ? 2 : 1;
     if (options.wait_for_components) {
       for (const std::string& component : ComponentNames(options)) {

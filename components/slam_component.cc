@@ -187,8 +187,9 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   };
 
   StartAnnouncer announcer("slam");
-  std::optional<Clock::time_point> wait_since;  // after the first frame: waiting since
-  bool waited_with_frames = false;              // a frame was pending during that wait
+  bool waiting = false;  // after the first frame: no frame ready since wait_since
+  Clock::time_point wait_since = Clock::now();
+  bool waited_with_frames = false;  // a frame was pending during that wait
   while (!stop->requested()) {
     announcer.Poll(status, frames.matched() > 0 &&
                                (!pairing_options.needs_detections || detections.matched() > 0));
@@ -201,7 +202,10 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
       pairer.SetDetectorAlive(detector_done || !(detector_writers_seen > 0 && writers == 0));
       paired = pairer.Next(Clock::now());
       if (!paired) {
-        if (stats.frames_processed > 0 && !wait_since) wait_since = Clock::now();
+        if (stats.frames_processed > 0 && !waiting) {
+          waiting = true;
+          wait_since = Clock::now();
+        }
         waited_with_frames = waited_with_frames || pairer.pending_frames() > 0;
         const bool all_in = end_frames >= 0 &&
                             static_cast<int64_t>(frames_received + stats.bad_samples) >= end_frames;
@@ -225,10 +229,10 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
       inference_ms.erase(inference_ms.begin(), inference_ms.upper_bound(stamp));
     }
     const auto busy_begin = Clock::now();
-    if (wait_since) {
-      const double waited = std::chrono::duration<double>(busy_begin - *wait_since).count();
+    if (waiting) {
+      const double waited = std::chrono::duration<double>(busy_begin - wait_since).count();
       (waited_with_frames ? stats.wait_for_detections_s : stats.wait_for_frames_s) += waited;
-      wait_since.reset();
+      waiting = false;
       waited_with_frames = false;
     }
     const SlamOutput out = core.Process(paired->frame, dets);

@@ -176,7 +176,11 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
 
   auto publish_keyframes = [&](const std::vector<KeyframeData>& keyframes) {
     for (const KeyframeData& k : keyframes) {
-      keyframe_writer.Write(KeyframeToMsg(k, core.camera()));
+      if (!keyframe_writer.Write(KeyframeToMsg(k, core.camera()))) {
+        // The bounded history was full of samples a reader had not acknowledged for
+        // max_blocking_time (1 s): that reader misses this message.
+        LOG_WARNING << "slam: keyframe message " << k.id << " not accepted by the writer";
+      }
       ++stats.keyframes_published;
       if (k.removed) {
         ++stats.keyframes_removed;

@@ -54,6 +54,7 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   p.AddOption("frames", "FIRST:LAST", "rgb.txt entries [FIRST, LAST) (player)", "0:");
   p.AddOption("rate", "R", "player: 0 = as fast as consumed, 1 = real time", "0");
   p.AddOption("window", "N", "player back-pressure window in frames", "2");
+  p.AddOption("loop-minutes", "M", "player: replay the frames for M minutes (soak)", "0");
   p.AddOption("detection-wait-ms", "MS", "slam: longest wait for a frame's detections", "150");
   p.AddOption("detector-model", "NAME", "detector model (DetectorOptionsForModel)",
               "yolo-fastest-1.1");
@@ -95,6 +96,7 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   std::tie(o.first_entry, o.last_entry) = ParseEntryRange(p.Get("frames"));
   o.rate = std::stod(p.Get("rate"));
   o.window = std::stoi(p.Get("window"));
+  o.loop_minutes = std::stod(p.Get("loop-minutes"));
   o.detection_wait = std::chrono::milliseconds(std::stoi(p.Get("detection-wait-ms")));
   o.domain_id = std::stoi(p.Get("domain"));
   o.run_detector = !p.Flag("no-detector");

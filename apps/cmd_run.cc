@@ -86,6 +86,7 @@ struct RunSetup {
   fs::path out;
   bool map = true;
   bool progress = true;
+  double loop_minutes = 0;  // DDS modes: player replays the frames (soak)
   // --detections FILE: boxes from a file (e.g. the ground-truth boxes of `dygslam synth`, or an
   // external detector) instead of the internal detector. Direct mode only.
   std::map<Timestamp, std::vector<Detection>> detections;
@@ -201,6 +202,7 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
   std::fprintf(stderr, "[run] DDS partition '%s' (a bridge joins with --partition %s)\n", o.partition.c_str(),
                o.partition.c_str());
   o.progress = s.progress;
+  o.loop_minutes = s.loop_minutes;
   RunOutcome outcome;
   // The files a previous run left in DIR must not be mistaken for this run's.
   for (const char* name : {"trajectory.txt", "keyframes.txt", "frames.csv", "map.bt"}) {
@@ -256,6 +258,9 @@ int RunRun(const std::vector<std::string>& args) {
               "DDS Security: make_dds_certs.sh's OUT_DIR (one identity folder per component) or "
               "one identity folder (default: $DYGSLAM_DDS_SECURITY_DIR; none = off)",
               security_env != nullptr ? security_env : "");
+  p.AddOption("loop-minutes", "M",
+              "DDS modes: the player replays the frames for M minutes, stamps continuing (soak)",
+              "0");
   p.AddFlag("quiet", "no progress line");
   if (!p.Parse(args)) return p.exit_code();
   if (p.Flag("processes") && p.Flag("direct"))
@@ -281,6 +286,15 @@ int RunRun(const std::vector<std::string>& args) {
     s.use_detection_file = true;
   }
   s.progress = !p.Flag("quiet");
+  try {
+    s.loop_minutes = std::stod(p.Get("loop-minutes"));
+  } catch (const std::exception&) {
+    return p.UsageError("--loop-minutes: not a number: '" + p.Get("loop-minutes") + "'");
+  }
+  if (!(s.loop_minutes >= 0 && s.loop_minutes < 1e6))
+    return p.UsageError("--loop-minutes: expected a number >= 0");
+  if (s.loop_minutes > 0 && p.Flag("direct"))
+    return p.UsageError("--loop-minutes works with the DDS modes only (not --direct)");
   int domain_id = -1;
   try {
     domain_id = std::stoi(p.Get("domain"));

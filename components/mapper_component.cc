@@ -18,6 +18,7 @@ namespace dygslam {
 void MapperOptions::Check() const {
   octomap.Check();
   DYGSLAM_CHECK_OPTION(update_every_keyframes >= 0, "mapper.update_every_keyframes");
+  DYGSLAM_CHECK_OPTION(max_update_share > 0 && max_update_share <= 1, "mapper.max_update_share");
   DYGSLAM_CHECK_OPTION(flush_timeout_s >= 0, "mapper.flush_timeout_s");
   DYGSLAM_CHECK_OPTION(writer_gone_s > 0, "mapper.writer_gone_s");
 }
@@ -93,12 +94,18 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
         }
       });
 
+  using Clock = std::chrono::steady_clock;
+  std::optional<Clock::time_point> next_update_allowed;
   auto publish = [&] {
     if (!core.has_map()) return;
+    const auto begin = Clock::now();
     core.Write();
     if (!options.map_path.empty()) ++stats.map_writes;
     updates.Write(core.MakeUpdate());
     ++stats.updates_published;
+    const auto end = Clock::now();
+    next_update_allowed = end + std::chrono::duration_cast<Clock::duration>(
+                                    (end - begin) * (1.0 / options.max_update_share - 1.0));
   };
 
   size_t since_update = 0;
@@ -150,7 +157,8 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
       ++stats.keyframes_received;
       if (!k.pose_update_only) ++since_update;
       if (options.update_every_keyframes > 0 &&
-          since_update >= static_cast<size_t>(options.update_every_keyframes) && !flush_deadline) {
+          since_update >= static_cast<size_t>(options.update_every_keyframes) && !flush_deadline &&
+          (!next_update_allowed || Clock::now() >= *next_update_allowed)) {
         publish();
         since_update = 0;
       }

@@ -26,8 +26,14 @@ class Participant;
 struct MapperOptions {
   OctoMapOptions octomap;
   std::string map_path = "map.bt";  // "" = do not write
-  // Write map.bt + publish MapUpdate every this many inserted keyframes (0 = only at the end).
+  // Write map.bt + publish MapUpdate every this many inserted keyframes (0 = only at the end)...
   int update_every_keyframes = 5;
+  // ... but at most this share of the wall time: after an update that took d seconds the next
+  // one waits until d / max_update_share have passed. An update reads the tree, i.e. rebuilds it
+  // after local-BA pose corrections (~25 ms CPU per stored keyframe), so with a fixed keyframe
+  // interval its cost grew with the map and the mapper took CPU from slam on 2 cores (issue 19).
+  // Same idea as KeyframeMapperOptions::max_rebuild_share of the direct mode. 1 = no limit.
+  double max_update_share = 0.2;
   // After stop: longest wait for slam's last keyframe messages (seconds).
   double flush_timeout_s = 5.0;
   // Keyframe writer matched before and gone for this long, no COMPONENT_DONE: the run is over

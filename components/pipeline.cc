@@ -1,16 +1,19 @@
 #include "components/pipeline.h"
 
+#include <malloc.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <mutex>
 #include <set>
 #include <thread>
 
@@ -79,6 +82,7 @@ void PipelineOptions::Check() const {
                        "settings_path (required with --processes: the children re-read it)");
   DYGSLAM_CHECK_OPTION(last_entry == 0 || last_entry > first_entry, "frames (empty range)");
   DYGSLAM_CHECK_OPTION(flush_timeout_s >= 0, "flush_timeout_s");
+  DYGSLAM_CHECK_OPTION(loop_minutes >= 0 && std::isfinite(loop_minutes), "loop_minutes");
 }
 
 bool PipelineOptions::NeedsDetectorComponent() const {
@@ -87,6 +91,18 @@ bool PipelineOptions::NeedsDetectorComponent() const {
 }
 
 namespace {
+
+// glibc gives each thread that allocates concurrently its own malloc arena (up to 8 per core) and
+// an arena keeps freed memory for reuse by its own threads. The pipeline has dozens of threads
+// (Fast DDS receive / event threads, one per component, local mapping, OpenCV) that allocate
+// and free 0.3-2.5 MB image buffers: with the default, resident memory of `dygslam run` rose
+// ~0.2 MB per frame even with bounded DDS histories (second half of 360 frames; 0.03 MB per
+// frame with 2 arenas, measured, BENCHMARKS.md issue 19). Called before any component thread
+// starts; applies to the arenas created after it.
+void BoundMallocArenas() {
+  static std::once_flag once;
+  std::call_once(once, [] { mallopt(M_ARENA_MAX, 2); });
+}
 
 int DomainId(const PipelineOptions& options) {
   return options.domain_id >= 0 ? options.domain_id : dds::DomainIdFromEnvironment(0);
@@ -107,7 +123,9 @@ DetectorOptions DetectorOptionsFor(const PipelineOptions& options) {
     d.confidence_threshold = options.system.detector.confidence_threshold;
   }
   // One OpenCV thread: the detector shares the 2 cores with slam; same count in both modes so
-  // single- and multi-process runs compute identical detections.
+  // single- and multi-process runs compute identical detections. (cv::setNumThreads is
+  // process-wide; the settings' count instead was measured in issue 19: no gain on the loaded
+  // 2-core machine, 0.97x frames/s, see BENCHMARKS.md.)
   d.num_threads = 1;
   return d;
 }
@@ -137,6 +155,7 @@ std::vector<std::string> ComponentArgs(const PipelineOptions& o) {
       "--domain",
       std::to_string(DomainId(o))};
   if (!o.partition.empty()) a.insert(a.end(), {"--partition", o.partition});
+  if (o.loop_minutes > 0) a.insert(a.end(), {"--loop-minutes", Number(o.loop_minutes)});
   if (!o.security_dir.empty()) a.insert(a.end(), {"--security", o.security_dir});
   if (o.system.deterministic) a.push_back("--deterministic");
   if (o.progress) a.push_back("--progress");
@@ -174,6 +193,7 @@ int RunComponentOn(const std::string& name, const PipelineOptions& options,
     p.first_entry = options.first_entry;
     p.last_entry = options.last_entry;
     p.window = options.window;
+    p.loop_minutes = options.loop_minutes;
     p.expected_readers = options.NeedsDetectorComponent() ? 2 : 1;
     if (options.wait_for_components) {
       for (const std::string& component : ComponentNames(options)) {
@@ -361,11 +381,13 @@ int RunProcesses(const PipelineOptions& options, const StopSignalPtr& stop) {
 int RunComponent(const std::string& name, const PipelineOptions& options,
                  const StopSignalPtr& stop) {
   options.Check();
+  BoundMallocArenas();
   return RunComponentOn(name, options, MakeParticipant(options, name), stop);
 }
 
 int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
   pipeline_options.Check();
+  BoundMallocArenas();
   PipelineOptions options = pipeline_options;
   options.wait_for_components = true;
   fs::create_directories(options.output_dir);

@@ -42,6 +42,7 @@ struct PipelineOptions {
   size_t first_entry = 0, last_entry = 0;  // rgb.txt entries [first, last), last 0 = all
   double rate = 0;                         // player: 0 = as fast as consumed, 1 = real time
   int window = 2;                          // player back-pressure window
+  double loop_minutes = 0;                 // player: replay the range for this long (soak)
   std::chrono::milliseconds detection_wait{150};
   bool processes = false;
   bool run_detector = true;  // detector component (filter modes boxes/full); false: System's own

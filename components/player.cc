@@ -27,6 +27,7 @@ void PlayerOptions::Check() const {
   DYGSLAM_CHECK_OPTION(ack_timeout_s > 0, "player.ack_timeout_s");
   DYGSLAM_CHECK_OPTION(wait_for_readers_s >= 0, "player.wait_for_readers_s");
   DYGSLAM_CHECK_OPTION(expected_readers >= 0, "player.expected_readers");
+  DYGSLAM_CHECK_OPTION(loop_minutes >= 0 && std::isfinite(loop_minutes), "player.loop_minutes");
 }
 
 DatasetPlayer::DatasetPlayer(const PlayerOptions& options)
@@ -52,6 +53,11 @@ RgbdFrameData DatasetPlayer::Frame(size_t i) const {
   f.rgb = dataset_.LoadRgb(k, options_.camera.width, options_.camera.height);
   f.depth = dataset_.LoadDepth(k, options_.camera.width, options_.camera.height);
   return f;
+}
+
+Timestamp DatasetPlayer::Stamp(size_t i) const {
+  if (i >= num_frames()) throw std::out_of_range("DatasetPlayer::Stamp: index out of range");
+  return dataset_.frame(indices_[i]).rgb_stamp;
 }
 
 std::vector<StampedPose> DatasetPlayer::GroundTruth() const {
@@ -152,17 +158,31 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   }
 
   Timestamp first_stamp;
-  for (size_t i = 0; i < player.num_frames() && !stop->requested(); ++i) {
-    RgbdFrameData frame = player.Frame(i);
-    if (i == 0) first_stamp = frame.stamp;
+  const int64_t replay_shift_ns = player.num_frames() == 0
+                                      ? 0
+                                      : player.Stamp(player.num_frames() - 1).nanoseconds() -
+                                            player.Stamp(0).nanoseconds() + 1000000000LL;
+  const auto loop_end =
+      start + std::chrono::milliseconds(static_cast<int64_t>(options.loop_minutes * 60000));
+  const size_t frames_per_loop = player.num_frames();
+  for (size_t n = 0; frames_per_loop > 0 && !stop->requested(); ++n) {
+    const size_t loop = n / frames_per_loop;
+    if (n % frames_per_loop == 0 && loop > 0 &&
+        (options.loop_minutes <= 0 || Clock::now() >= loop_end)) {
+      break;
+    }
+    RgbdFrameData frame = player.Frame(n % frames_per_loop);
+    frame.seq = n;
+    frame.stamp = Timestamp::FromNanoseconds(frame.stamp.nanoseconds() + loop * replay_shift_ns);
+    if (n == 0) first_stamp = frame.stamp;
     if (options.rate > 0) {
       const auto due =
           start + std::chrono::nanoseconds(static_cast<int64_t>(
                       (frame.stamp.nanoseconds() - first_stamp.nanoseconds()) / options.rate));
       if (stop->WaitFor(due - Clock::now())) break;
     }
-    if (options.window > 0 && i >= static_cast<size_t>(options.window)) {
-      const int64_t need = static_cast<int64_t>(i) - options.window;
+    if (options.window > 0 && n >= static_cast<size_t>(options.window)) {
+      const int64_t need = static_cast<int64_t>(n) - options.window;
       const auto deadline = Clock::now() + std::chrono::milliseconds(
                                                static_cast<int64_t>(options.ack_timeout_s * 1000));
       std::unique_lock<std::mutex> lock(mutex);
@@ -172,12 +192,12 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
       if (acked < need && !stop->requested()) {
         ++stats.ack_timeouts;
         LOG_WARNING << "player: no acknowledgement of frame " << need << " after "
-                    << options.ack_timeout_s << " s; sending frame " << i;
+                    << options.ack_timeout_s << " s; sending frame " << n;
       }
     }
     if (stop->requested()) break;
     if (!frames.Write(RgbdFrameToMsg(frame))) {
-      LOG_WARNING << "player: frame " << i << " was not accepted by the writer";
+      LOG_WARNING << "player: frame " << n << " was not accepted by the writer";
       continue;
     }
     ++stats.frames_published;

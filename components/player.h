@@ -49,6 +49,9 @@ struct PlayerOptions {
   std::vector<std::string> wait_for_components;
   double wait_for_components_s = 60.0;
   bool publish_ground_truth = true;
+  // > 0: replay the range again and again until this much wall time has passed (soak runs); each
+  // replay's stamps continue after the previous one's (+ 1 s), seq keeps counting.
+  double loop_minutes = 0;
   void Check() const;
 };
 
@@ -58,6 +61,8 @@ class DatasetPlayer {
   size_t num_frames() const { return indices_.size(); }
   // Frame `i` of the played range (seq = i): BGR colour, 16UC1 depth, camera, stamps.
   RgbdFrameData Frame(size_t i) const;
+  // Colour stamp of frame `i` (no image loaded).
+  Timestamp Stamp(size_t i) const;
   // Ground truth within the played time span (empty if the dataset has none).
   std::vector<StampedPose> GroundTruth() const;
 

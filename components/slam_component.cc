@@ -176,7 +176,11 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
 
   auto publish_keyframes = [&](const std::vector<KeyframeData>& keyframes) {
     for (const KeyframeData& k : keyframes) {
-      keyframe_writer.Write(KeyframeToMsg(k, core.camera()));
+      if (!keyframe_writer.Write(KeyframeToMsg(k, core.camera()))) {
+        // The bounded history was full of samples a reader had not acknowledged for
+        // max_blocking_time (1 s): that reader misses this message.
+        LOG_WARNING << "slam: keyframe message " << k.id << " not accepted by the writer";
+      }
       ++stats.keyframes_published;
       if (k.removed) {
         ++stats.keyframes_removed;
@@ -187,6 +191,9 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   };
 
   StartAnnouncer announcer("slam");
+  bool waiting = false;  // after the first frame: no frame ready since wait_since
+  Clock::time_point wait_since = Clock::now();
+  bool waited_with_frames = false;  // a frame was pending during that wait
   while (!stop->requested()) {
     announcer.Poll(status, frames.matched() > 0 &&
                                (!pairing_options.needs_detections || detections.matched() > 0));
@@ -199,6 +206,11 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
       pairer.SetDetectorAlive(detector_done || !(detector_writers_seen > 0 && writers == 0));
       paired = pairer.Next(Clock::now());
       if (!paired) {
+        if (stats.frames_processed > 0 && !waiting) {
+          waiting = true;
+          wait_since = Clock::now();
+        }
+        waited_with_frames = waited_with_frames || pairer.pending_frames() > 0;
         const bool all_in = end_frames >= 0 &&
                             static_cast<int64_t>(frames_received + stats.bad_samples) >= end_frames;
         const bool stale_end = end_frames >= 0 && pairer.pending_frames() == 0 &&
@@ -220,6 +232,13 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
       if (it != inference_ms.end() && dets != nullptr) detection_ms = it->second;
       inference_ms.erase(inference_ms.begin(), inference_ms.upper_bound(stamp));
     }
+    const auto busy_begin = Clock::now();
+    if (waiting) {
+      const double waited = std::chrono::duration<double>(busy_begin - wait_since).count();
+      (waited_with_frames ? stats.wait_for_detections_s : stats.wait_for_frames_s) += waited;
+      waiting = false;
+      waited_with_frames = false;
+    }
     const SlamOutput out = core.Process(paired->frame, dets);
     ++stats.frames_processed;
     if (out.result.world_from_cam) ++stats.frames_tracked;
@@ -228,6 +247,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
     if (dets != nullptr && options.external_detections) pose.detection_ms(detection_ms);
     pose_writer.Write(pose);
     publish_keyframes(out.keyframes);
+    stats.busy_s += std::chrono::duration<double>(Clock::now() - busy_begin).count();
   }
 
   publish_keyframes(core.Finish());
@@ -253,7 +273,9 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
            << " new, " << stats.keyframe_pose_updates << " pose updates, "
            << stats.keyframes_removed << " removed); detections: " << stats.pairing.with_detections
            << " paired, " << stats.pairing.missing_detections << " missing"
-           << (stats.detector_lost ? " (detector lost: geometry-only frames)" : "");
+           << (stats.detector_lost ? " (detector lost: geometry-only frames)" : "") << "; busy "
+           << stats.busy_s << " s, waited " << stats.wait_for_frames_s << " s for frames, "
+           << stats.wait_for_detections_s << " s for detections";
   return stats;
 }
 

@@ -73,6 +73,11 @@ struct SlamStats {
   size_t keyframes_removed = 0;
   size_t bad_samples = 0;
   bool detector_lost = false;
+  // Where slam waited between its first and its last frame (seconds): no frame had arrived
+  // (upstream: player / transport), or the oldest frame waited for its detections (detector).
+  double wait_for_frames_s = 0;
+  double wait_for_detections_s = 0;
+  double busy_s = 0;  // processing frames (System + publishing)
 };
 
 SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,

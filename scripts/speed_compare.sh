@@ -7,8 +7,67 @@
 # included), ATE RMSE, and the ratio full / none.
 #   scripts/speed_compare.sh [BUILD_DIR] [DATASET_DIR] [RUNS] [OUT_DIR] [-- extra run arguments]
 # Defaults: build-rel, $DYGSLAM_DATA_DIR/bonn_crowd_part (or ../shared/data/...), 3, out/speed.
+#
+# Pipeline modes instead (issue 19): RUNS interleaved runs of `dygslam run DATASET --filter FILTER`
+# in each mode (--direct, default = DDS components as threads, --processes), DDS runs inside a
+# private network namespace; per mode the median frames/s (dygslam's own figure: frames over the
+# whole run, start-up included), its ratio to --direct, and CPU (user + sys of all processes) per
+# frame:
+#   scripts/speed_compare.sh --modes [BUILD_DIR] [DATASET_DIR] [RUNS] [OUT_DIR] [-- extra run args]
+# FILTER: $SPEED_FILTER (default full). DYGSLAM_DOMAIN_ID sets the DDS domain.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
+if [ "${1:-}" = "--modes" ]; then
+  shift
+  build=${1:-$here/build-rel}
+  data_root=${DYGSLAM_DATA_DIR:-$here/../shared/data}
+  dataset=${2:-$data_root/bonn_crowd_part}
+  runs=${3:-3}
+  out=${4:-$here/out/speed_modes}
+  shift $(($# < 4 ? $# : 4))
+  [ "${1:-}" = "--" ] && shift
+  filter=${SPEED_FILTER:-full}
+  bin=$build/apps/dygslam
+  [ -x "$bin" ] || { echo "speed_compare.sh: $bin not built" >&2; exit 1; }
+  mkdir -p "$out"
+  echo "speed: $runs interleaved runs of direct/default/processes, filter $filter, extra args '$*' on $dataset;" \
+       "$(nproc) cores; load at start: $(cut -d' ' -f1-3 /proc/loadavg)"
+  for r in $(seq 1 "$runs"); do
+    for mode in direct default processes; do
+      case $mode in direct) flag=--direct ;; default) flag= ;; processes) flag=--processes ;; esac
+      dir=$out/$mode-$r
+      rm -rf "$dir"
+      unshare -n bash -c 'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$@"' speed \
+        /usr/bin/time -f "cpu_s %U %S" "$bin" run "$dataset" --filter "$filter" --out "$dir" --quiet \
+        ${DYGSLAM_DOMAIN_ID:+--domain $DYGSLAM_DOMAIN_ID} $flag "$@" > "$dir.log" 2>&1 ||
+        { echo "run $mode-$r failed:" >&2; tail -n 20 "$dir.log" >&2; exit 1; }
+      echo "  $mode run $r: $(grep -o '[0-9.]* fps' "$dir.log" | head -1), $(grep -o 'ATE RMSE [0-9.]* m' "$dir.log" | head -1), $(grep -a 'cpu_s' "$dir.log")"
+    done
+  done
+  echo "load at end: $(cut -d' ' -f1-3 /proc/loadavg)"
+  py=python3; [ -x /usr/bin/python3 ] && py=/usr/bin/python3
+  "$py" - "$out" "$runs" <<'PY'
+import re, statistics as st, sys
+out, runs = sys.argv[1], int(sys.argv[2])
+rows = {}
+for mode in ("direct", "default", "processes"):
+    fps, cpu, ate = [], [], []
+    for r in range(1, runs + 1):
+        log = open(f"{out}/{mode}-{r}.log", errors="replace").read()
+        fps.append(float(re.search(r"([\d.]+) fps", log).group(1)))
+        frames = int(re.search(r"frames: (\d+) processed", log).group(1))
+        u, s = map(float, re.search(r"cpu_s ([\d.]+) ([\d.]+)", log).groups())
+        cpu.append(1000 * (u + s) / frames)
+        m = re.search(r"ATE RMSE ([\d.]+)", log); ate.append(float(m.group(1)) if m else float("nan"))
+    rows[mode] = dict(fps=st.median(fps), spread=(min(fps), max(fps)), cpu=st.median(cpu), ate=st.median(ate))
+print("| mode | frames/s (median, min-max) | x direct | CPU ms per frame (user+sys, median) | ATE RMSE (m, median) |")
+print("|---|---|---|---|---|")
+for mode, r in rows.items():
+    print(f"| {mode} | {r['fps']:.1f} ({r['spread'][0]:.1f}-{r['spread'][1]:.1f}) | {r['fps'] / rows['direct']['fps']:.2f} | "
+          f"{r['cpu']:.1f} | {r['ate']:.4f} |")
+PY
+  exit 0
+fi
 build=${1:-$here/build-rel}
 data_root=${DYGSLAM_DATA_DIR:-$here/../shared/data}
 dataset=${2:-$data_root/bonn_crowd_part}

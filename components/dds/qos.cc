@@ -1,5 +1,7 @@
 #include "components/dds/qos.h"
 
+#include <algorithm>
+
 namespace dygslam::dds {
 
 using namespace eprosima::fastdds::dds;  // NOLINT
@@ -10,7 +12,11 @@ struct Policy {
   bool reliable = true;
   bool transient_local = false;
   bool keep_all = false;
-  int depth = 1;
+  int depth = 1;         // keep-last: history depth
+  int max_samples = -1;  // keep-all: bound of the history (-1 = unbounded)
+  // Payloads allocated per sample at their size and freed with it: a history that mixes large and
+  // small samples (keyframes with images, pose updates) holds what it stores, not n x the largest.
+  bool exact_size_payloads = false;
 };
 
 Policy PolicyFor(TopicKind kind) {
@@ -22,7 +28,7 @@ Policy PolicyFor(TopicKind kind) {
     case TopicKind::kCameraPose:
       return {true, true, false, 64};
     case TopicKind::kKeyframe:
-      return {true, true, true, 0};
+      return {true, true, true, 0, kKeyframeHistoryDepth, true};
     case TopicKind::kMapUpdate:
       return {true, true, false, 1};
     case TopicKind::kGroundTruth:
@@ -46,11 +52,15 @@ void Apply(const Policy& p, Qos* qos) {
     qos->history().kind = KEEP_LAST_HISTORY_QOS;
     qos->history().depth = p.depth;
   }
-  qos->resource_limits().max_samples = -1;  // unlimited (keep-all topics)
+  qos->resource_limits().max_samples = p.max_samples;
   qos->resource_limits().max_instances = 1;
-  qos->resource_limits().max_samples_per_instance = -1;
+  qos->resource_limits().max_samples_per_instance = p.max_samples;
+  if (p.max_samples > 0) {
+    qos->resource_limits().allocated_samples = std::min(p.max_samples, 8);
+  }
   qos->endpoint().history_memory_policy =
-      eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+      p.exact_size_payloads ? eprosima::fastrtps::rtps::DYNAMIC_RESERVE_MEMORY_MODE
+                            : eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
 }
 
 }  // namespace

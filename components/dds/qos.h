@@ -5,7 +5,7 @@
 // | dygslam/rgbd_frame     | RgbdFrame          | reliable    | volatile        | keep-last 4  |
 // | dygslam/detections     | Detections         | reliable    | transient-local | keep-last 32 |
 // | dygslam/camera_pose    | CameraPose         | reliable    | transient-local | keep-last 64 |
-// | dygslam/keyframe       | Keyframe           | reliable    | transient-local | keep-all     |
+// | dygslam/keyframe       | Keyframe           | reliable    | transient-local | keep-all 64  |
 // | dygslam/map_update     | MapUpdate          | reliable    | transient-local | keep-last 1  |
 // | dygslam/ground_truth   | GroundTruthPose    | reliable    | transient-local | keep-all     |
 // | dygslam/trajectory     | Trajectory         | reliable    | transient-local | keep-last 2  |
@@ -24,13 +24,21 @@
 //   discovery is pairwise, so a reader (recorder, slam) may be matched by its writer a few ms
 //   after the first samples went out; the writer then delivers them from its history (frames.csv
 //   and the deterministic pairing need every one).
-// - Keyframes are reliable + transient-local keep-all: a mapper that starts late (or restarts)
-//   receives the whole keyframe history (memory grows with the number of keyframes, ~2.4 MB each).
+// - Keyframes are reliable + transient-local keep-all bounded to kKeyframeHistoryDepth samples:
+//   a mapper that starts late (or restarts) receives the newest kKeyframeHistoryDepth keyframe
+//   messages (new keyframes with images, local-BA pose updates, removals), then everything after.
+//   Unbounded, the writer kept every keyframe ever made (~2.5 MB each with colour, depth in metres
+//   and mask) plus every pose update: `dygslam run` grew ~0.5 MB per frame (issue 19). Keep-all
+//   with a bound (not keep-last) so a live reader never loses a message: when the history is full
+//   the writer drops the oldest sample only once every matched reader acknowledged it (waiting up
+//   to max_blocking_time). Payloads are sized per sample (DYNAMIC_RESERVE), so the ~16 small pose
+//   updates per new keyframe do not each pin a 2.5 MB buffer: ~10 MB typical, 64 x 2.5 MB at most.
 // - The map update carries the whole octree: only the newest one matters (keep-last 1), and a
 //   late viewer gets it (transient-local).
 // - Ground truth, the final trajectory and stream status are small and must not be missed by a
 //   late recorder: transient-local.
-// All DataWriters use PREALLOCATED_WITH_REALLOC memory (samples have unbounded sequences).
+// DataWriters use PREALLOCATED_WITH_REALLOC memory (samples have unbounded sequences), except the
+// keyframe writer (DYNAMIC_RESERVE, see above).
 #pragma once
 
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
@@ -64,6 +72,8 @@ enum class TopicKind {
 // Depth of the frame topic's keep-last history (the player's back-pressure window must be
 // smaller).
 inline constexpr int kFrameHistoryDepth = 4;
+// Bound of the keyframe topic's transient-local history (messages), see above.
+inline constexpr int kKeyframeHistoryDepth = 64;
 
 eprosima::fastdds::dds::DataWriterQos WriterQos(TopicKind kind);
 eprosima::fastdds::dds::DataReaderQos ReaderQos(TopicKind kind);

@@ -101,8 +101,9 @@ KeyframeData SmallKeyframe(int64_t id) {
   return k;
 }
 
-// Keyframes are transient-local keep-all: a mapper that subscribes after all keyframes were
-// published still receives every one of them, in order.
+// Keyframes are transient-local with a bounded history: a mapper that subscribes after all
+// keyframes were published still receives every one of them, in order (fewer than
+// kKeyframeHistoryDepth here).
 TEST(Transport, LateKeyframeSubscriberReceivesHistory) {
   const int domain = 102;
   PinholeCamera camera;
@@ -133,6 +134,47 @@ TEST(Transport, LateKeyframeSubscriberReceivesHistory) {
   ASSERT_TRUE(cv.wait_for(lock, 20s, [&] { return ids.size() >= kCount; }))
       << "late subscriber got " << ids.size() << " of " << kCount;
   for (int i = 0; i < kCount; ++i) EXPECT_EQ(ids[i], i);
+}
+
+// The bound: after more than kKeyframeHistoryDepth messages, a late subscriber receives exactly
+// the newest kKeyframeHistoryDepth, in order (the writer's history no longer grows with the run).
+TEST(Transport, LateKeyframeSubscriberReceivesBoundedHistory) {
+  const int domain = 103;
+  PinholeCamera camera;
+  camera.fx = camera.fy = 50;
+  camera.cx = 32;
+  camera.cy = 24;
+  camera.width = 64;
+  camera.height = 48;
+  auto pub = MakeParticipant(domain, "test_slam");
+  dds::Writer<msg::KeyframePubSubType> writer(pub, dds::topics::kKeyframe,
+                                              dds::TopicKind::kKeyframe);
+  const int kCount = dds::kKeyframeHistoryDepth + 40;
+  for (int i = 0; i < kCount; ++i) {
+    KeyframeData k = SmallKeyframe(i);
+    k.pose_update_only = i % 3 != 0;  // mixed sizes, like new keyframes + local-BA updates
+    ASSERT_TRUE(writer.Write(KeyframeToMsg(k, camera))) << "message " << i;
+  }
+  std::this_thread::sleep_for(300ms);
+  auto sub = MakeParticipant(domain, "test_late_mapper");
+  std::mutex mutex;
+  std::condition_variable cv;
+  std::vector<int64_t> ids;
+  dds::Reader<msg::KeyframePubSubType> reader(
+      sub, dds::topics::kKeyframe, dds::TopicKind::kKeyframe, [&](msg::Keyframe&& m) {
+        const KeyframeData k = KeyframeFromMsg(m);
+        std::lock_guard<std::mutex> lock(mutex);
+        ids.push_back(k.id);
+        cv.notify_all();
+      });
+  std::unique_lock<std::mutex> lock(mutex);
+  ASSERT_TRUE(cv.wait_for(lock, 20s, [&] { return ids.size() >= dds::kKeyframeHistoryDepth; }))
+      << "late subscriber got " << ids.size() << " of " << dds::kKeyframeHistoryDepth;
+  cv.wait_for(lock, 500ms);  // nothing more arrives
+  ASSERT_EQ(ids.size(), static_cast<size_t>(dds::kKeyframeHistoryDepth));
+  for (int i = 0; i < dds::kKeyframeHistoryDepth; ++i) {
+    EXPECT_EQ(ids[i], kCount - dds::kKeyframeHistoryDepth + i);
+  }
 }
 
 }  // namespace

@@ -87,6 +87,8 @@ class KeyFrame {
   const std::vector<float> u_right;
   const std::vector<uint8_t> in_dynamic_region;
   const FeatureGrid grid;
+  const BowVector bow_vector;      // copied from the frame (empty without a vocabulary)
+  const FeatureVector bow_features;
   bool CanSeedPoint(size_t i) const { return depth[i] > 0 && !in_dynamic_region[i]; }
 
   // Mutable state, guarded by Map::mutex().

@@ -50,6 +50,7 @@ void SystemOptions::Check() const {
   orb.Check();
   tracking.Check();
   local_mapping.Check();
+  loop_closing.Check();
   filter.Check();
   dynamic_mask.Check();  // used only when a keyframe is made: fail here, not mid-run
 }
@@ -86,6 +87,11 @@ class SystemImpl {
         local_mapper_(map_, options.local_mapping, !options.deterministic),
         tracker_(options.tracking, map_, local_mapper_, options.deterministic),
         filter_(FilterOptionsOf(options)) {
+    if (!options.loop_closing.vocabulary.empty()) {
+      vocabulary_ = std::make_shared<Vocabulary>(Vocabulary::Load(options.loop_closing.vocabulary));
+      database_ = std::make_shared<KeyFrameDatabase>();
+      tracker_.SetPlaceRecognition(vocabulary_, database_);
+    }
     local_mapper_.SetPosesChangedCallback(
         [this](const std::vector<int64_t>& moved, const std::vector<int64_t>& culled) {
           EmitMapChanges(moved, culled);
@@ -94,6 +100,8 @@ class SystemImpl {
 
   // Keyframe pose corrections (local BA) and culled keyframes, for the map.
   void EmitMapChanges(const std::vector<int64_t>& moved, const std::vector<int64_t>& culled) {
+    if (database_)
+      for (int64_t id : culled) database_->Erase(id);
     std::function<void(const KeyframeData&)> cb;
     {
       std::lock_guard<std::mutex> lock(callback_mutex_);
@@ -168,6 +176,8 @@ class SystemImpl {
   OrbExtractor extractor_;
   std::shared_ptr<const CameraGeometry> geometry_;
   std::shared_ptr<Map> map_;
+  std::shared_ptr<const Vocabulary> vocabulary_;  // null without a vocabulary file
+  std::shared_ptr<KeyFrameDatabase> database_;
   LocalMapper local_mapper_;
   Tracker tracker_;
   DynamicFilter filter_;

@@ -18,6 +18,7 @@
 #include "core/dynamic/dynamic_mask.h"
 #include "core/dynamic/yolo_detector.h"
 #include "core/slam/local_mapping.h"
+#include "core/slam/loop_closing_options.h"
 #include "core/slam/orb_extractor.h"
 #include "core/slam/tracking.h"
 
@@ -59,6 +60,8 @@ struct SystemOptions {
   OrbExtractorOptions orb;
   TrackingOptions tracking;
   LocalMappingOptions local_mapping;
+  // Place recognition (vocabulary) and loop closing; no vocabulary: neither.
+  LoopClosingOptions loop_closing;
   FilterMode filter_mode = FilterMode::kFull;
   // The paper's parameters (filter.mode is set from filter_mode).
   DynamicFilterOptions filter;

@@ -10,19 +10,14 @@
 namespace dygslam {
 namespace {
 
-// 20 views along one synthetic path (every 30th frame, a scene not used for training) as
+// 12 views along one synthetic path (every 45th frame, a scene not used for training) as
 // keyframes; queries are the same views re-rendered with colour noise (other features).
 class KeyFrameDatabaseTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    SyntheticTrainingOptions t;
-    t.num_scenes = 2;
-    t.frames_per_scene = 6;
-    t.frame_stride = 150;
-    VocabularyOptions v;
-    v.branching = 8;
-    v.depth = 3;
-    vocabulary_ = new Vocabulary(Vocabulary::Train(SyntheticTrainingDescriptors(t), v));
+    // The shipped vocabulary (trained on other synthetic scenes, see `dygslam vocab`).
+    vocabulary_ = new Vocabulary(
+        Vocabulary::Load(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/vocabulary.dygvoc"));
     keyframes_ = new std::vector<BowVector>(Views(0.0));
     queries_ = new std::vector<BowVector>(Views(4.0));
   }
@@ -50,7 +45,7 @@ class KeyFrameDatabaseTest : public ::testing::Test {
     }
     return out;
   }
-  static constexpr int kViews = 20, kStride = 30;
+  static constexpr int kViews = 12, kStride = 45;
   static Vocabulary* vocabulary_;
   static std::vector<BowVector>* keyframes_;
   static std::vector<BowVector>* queries_;
@@ -74,8 +69,8 @@ TEST_F(KeyFrameDatabaseTest, QueryFindsTheSameView) {
     EXPECT_NEAR(c[0].score, db.ScoreAgainst((*queries_)[i], c[0].keyframe_id), 1e-12);
     top1 += c[0].keyframe_id == 100 + i;
   }
-  // Views 1 s apart on a handheld path overlap; the same view must still win almost always.
-  EXPECT_GE(top1, kViews - 2);
+  // Views 1.5 s apart on a handheld path overlap; the same view must still win almost always.
+  EXPECT_GE(top1, kViews - 1);
 }
 
 TEST_F(KeyFrameDatabaseTest, EraseAndExclude) {

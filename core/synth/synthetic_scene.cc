@@ -80,6 +80,12 @@ void SyntheticOptions::Check() const {
   DYGSLAM_CHECK_OPTION(std::abs(pitch_offset_deg) + std::abs(pitch_amplitude_deg) <= 45,
                        "pitch_offset_deg/pitch_amplitude_deg");
   DYGSLAM_CHECK_OPTION(std::abs(roll_amplitude_deg) <= 20, "roll_amplitude_deg");
+  DYGSLAM_CHECK_OPTION(loop_semi_axes.allFinite() && loop_semi_axes.minCoeff() >= 0 &&
+                           (loop_semi_axes.x() == 0) == (loop_semi_axes.y() == 0) &&
+                           loop_semi_axes.x() + 1.0 <= room_size.x() / 2 &&
+                           loop_semi_axes.y() + 1.0 <= room_size.y() / 2,
+                       "loop_semi_axes (both zero, or both positive and 1 m inside the walls)");
+  DYGSLAM_CHECK_OPTION(loop_speed > 0 && loop_speed <= 5 && std::isfinite(loop_speed), "loop_speed");
   DYGSLAM_CHECK_OPTION(object_size.allFinite() && object_size.minCoeff() >= 0.1 &&
                            object_size.x() <= 1.0 && object_size.y() <= 1.0 &&
                            object_size.z() <= room_size.z() - 0.2,
@@ -182,6 +188,25 @@ double SyntheticScene::FrameTime(int frame) const {
 Rigid3d SyntheticScene::WorldFromCamAtTime(double t) const {
   const SyntheticOptions& o = options_;
   const double w = 2 * kPi;
+  if (o.loop_semi_axes.x() > 0) {
+    // Ellipse (a cos th, b sin th), th uniform in time (Ramanujan's perimeter for the period),
+    // looking along the outward normal.
+    const double a = o.loop_semi_axes.x(), b = o.loop_semi_axes.y();
+    const double perimeter = kPi * (3 * (a + b) - std::sqrt((3 * a + b) * (a + 3 * b)));
+    const double th = w * t * o.loop_speed / perimeter;
+    const Eigen::Vector3d position(a * std::cos(th), b * std::sin(th),
+                                   o.camera_height + 0.05 * std::sin(w * t / (0.8 * o.path_period) + 0.5));
+    const double yaw = std::atan2(std::sin(th) / b, std::cos(th) / a);
+    const double pitch =
+        (o.pitch_offset_deg + o.pitch_amplitude_deg * std::sin(w * t / o.pitch_period)) * kDeg;
+    const double roll = o.roll_amplitude_deg * kDeg * std::sin(w * t / (1.3 * o.pitch_period) + 0.7);
+    Eigen::Matrix3d look_x;
+    look_x << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+    const Eigen::Matrix3d rotation = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+                                     Eigen::AngleAxisd(-pitch, Eigen::Vector3d::UnitY()).toRotationMatrix() *
+                                     look_x * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    return Rigid3d(rotation, position);
+  }
   const Eigen::Vector3d position(
       CameraBaseX(o) + o.path_amplitude * std::sin(w * t / o.path_period),
       0.8 * o.path_amplitude * std::sin(w * t / (1.37 * o.path_period) + 1.0),

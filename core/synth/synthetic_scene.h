@@ -59,6 +59,13 @@ struct SyntheticOptions {
   double pitch_amplitude_deg = 8.0;
   double pitch_period = 5.5;  // seconds
   double roll_amplitude_deg = 3.0;
+  // Loop path (loop_semi_axes > 0): instead of the sinusoids around one spot, the camera goes
+  // round an ellipse centred in the room with these semi-axes (x, y; metres) at loop_speed,
+  // looking outwards at the walls (2 m away when the room is 4 m larger than the ellipse),
+  // starting at (+a, 0) and going anticlockwise; pitch and roll keep their sinusoids. One lap
+  // takes perimeter / loop_speed seconds (e.g. 12.5 x 6.5 m: 61 m).
+  Eigen::Vector2d loop_semi_axes{0.0, 0.0};
+  double loop_speed = 1.0;  // m/s along the ellipse (on average)
 
   // Moving objects: boxes of object_size (width x depth x height), walking along world y on lanes
   // at increasing distance in front of the camera, back and forth at ~object_speed (+-20 %).

@@ -91,6 +91,14 @@ class SystemImpl {
       vocabulary_ = std::make_shared<Vocabulary>(Vocabulary::Load(options.loop_closing.vocabulary));
       database_ = std::make_shared<KeyFrameDatabase>();
       tracker_.SetPlaceRecognition(vocabulary_, database_);
+      loop_closer_ = std::make_unique<LoopCloser>(map_, database_, options.loop_closing,
+                                                  options.local_mapping.optimizer,
+                                                  options.local_mapping.matcher, !options.deterministic);
+      loop_closer_->SetCorrectionCallback(
+          [this](const std::vector<int64_t>& moved) { EmitMapChanges(moved, {}); });
+      LoopCloser* closer = loop_closer_.get();
+      local_mapper_.SetKeyFrameDoneCallback(
+          [closer](const std::shared_ptr<KeyFrame>& kf) { closer->InsertKeyFrame(kf); });
     }
     local_mapper_.SetPosesChangedCallback(
         [this](const std::vector<int64_t>& moved, const std::vector<int64_t>& culled) {
@@ -139,6 +147,9 @@ class SystemImpl {
 
   std::vector<StampedPose> Trajectory() const { return tracker_.Trajectory(); }
   LocalMappingStats LocalMappingStatistics() const { return local_mapper_.stats(); }
+  LoopClosingStats LoopClosingStatistics() const {
+    return loop_closer_ ? loop_closer_->stats() : LoopClosingStats{};
+  }
   MapStatistics MapSizes() const { return map_->Statistics(); }
   void Prefetch(const cv::Mat& rgb, Timestamp stamp) {
     if (!options_.NeedsDetections() || rgb.empty() || rgb.type() != CV_8UC3) return;
@@ -169,7 +180,10 @@ class SystemImpl {
     std::lock_guard<std::mutex> lock(callback_mutex_);
     keyframe_callback_ = std::move(cb);
   }
-  void Shutdown() { local_mapper_.Finish(); }
+  void Shutdown() {
+    local_mapper_.Finish();
+    if (loop_closer_) loop_closer_->Finish();
+  }
 
  private:
   SystemOptions options_;
@@ -178,6 +192,7 @@ class SystemImpl {
   std::shared_ptr<Map> map_;
   std::shared_ptr<const Vocabulary> vocabulary_;  // null without a vocabulary file
   std::shared_ptr<KeyFrameDatabase> database_;
+  std::unique_ptr<LoopCloser> loop_closer_;  // declared before the mapper: outlives its callback
   LocalMapper local_mapper_;
   Tracker tracker_;
   DynamicFilter filter_;
@@ -407,6 +422,7 @@ FrameResult System::FeedRgbdFrame(const cv::Mat& rgb, const cv::Mat& depth, Time
 }
 std::vector<StampedPose> System::Trajectory() const { return impl_->Trajectory(); }
 LocalMappingStats System::LocalMappingStatistics() const { return impl_->LocalMappingStatistics(); }
+LoopClosingStats System::LoopClosingStatistics() const { return impl_->LoopClosingStatistics(); }
 MapStatistics System::MapSizes() const { return impl_->MapSizes(); }
 std::vector<StampedPose> System::KeyframeTrajectory() const { return impl_->KeyframeTrajectory(); }
 void System::SetKeyframeCallback(std::function<void(const KeyframeData&)> callback) {

@@ -18,7 +18,7 @@
 #include "core/dynamic/dynamic_mask.h"
 #include "core/dynamic/yolo_detector.h"
 #include "core/slam/local_mapping.h"
-#include "core/slam/loop_closing_options.h"
+#include "core/slam/loop_closing.h"
 #include "core/slam/orb_extractor.h"
 #include "core/slam/tracking.h"
 
@@ -113,9 +113,13 @@ class System {
   // Local mapping so far: keyframes processed, points triangulated/culled, keyframes culled, time
   // per keyframe (its own thread; synchronous in deterministic mode).
   LocalMappingStats LocalMappingStatistics() const;
+  // Loop closing so far (zeros without a vocabulary): loops detected/closed, points fused,
+  // global bundle adjustments.
+  LoopClosingStats LoopClosingStatistics() const;
   // Map sizes and live object counts (memory monitoring in long runs).
   MapStatistics MapSizes() const;
-  // Finishes local mapping; afterwards Trajectory() is final.
+  // Finishes local mapping and loop closing (and a global bundle adjustment still running);
+  // afterwards Trajectory() is final.
   void Shutdown();
 
  private:

@@ -161,6 +161,9 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
     std::printf("local mapping: %d keyframes, median %.1f ms per keyframe, %d points triangulated, "
                 "%d keyframes culled\n", lm.keyframes_processed, median, lm.points_triangulated,
                 lm.keyframes_culled);
+    const MapStatistics sizes = system.MapSizes();
+    std::printf("map: %zu keyframes (%zu culled), %zu map points\n", sizes.keyframes,
+                sizes.culled_keyframes, sizes.map_points);
     const LoopClosingStats lc = system.LoopClosingStatistics();
     std::printf("loop closing: %d loops closed (%d consistent candidates, %d rejected), %d points fused, "
                 "%d global BA (%d discarded), %d keyframes checked\n",
@@ -356,7 +359,8 @@ int RunRun(const std::vector<std::string>& args) {
                 ate.error.mean, ate.error.median, ate.error.max, ate.num_pairs);
   }
   const bool has_map = fs::exists(s.out / "map.bt");
-  std::printf("outputs: %s/{trajectory.txt,keyframes.txt,frames.csv%s}\n", s.out.string().c_str(),
+  std::printf("outputs: %s/{trajectory.txt,trajectory_online.txt,keyframes.txt,frames.csv%s}\n",
+              s.out.string().c_str(),
               has_map ? ",map.bt" : "");
   if (outcome.exit_code != 0) {
     std::fprintf(stderr, "dygslam run: a pipeline component failed (see the messages above)\n");

@@ -329,6 +329,8 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
         best_flags = flags;
       }
     }
+    LOG_DEBUG << "loop closing: keyframe " << kf->id << " vs " << c->id << ": " << pairs.size()
+              << " BoW matches, " << best << " RANSAC inliers";
     if (best < options_.min_ransac_inliers) continue;
     // Refinement: least squares on the inliers, re-scored, twice.
     for (int round = 0; round < 2; ++round) {

@@ -61,7 +61,7 @@ int RunSynth(const std::vector<std::string>& args) {
   p.AddOption("supersampling", "N", "N x N colour samples per pixel (1..4)", "2");
   p.AddOption("room", "X,Y,Z", "room size in metres (at least 5,4,2.5)", "6,5,3");
   p.AddOption("loop-path", "A,B",
-              "camera goes round an ellipse with these semi-axes (m), looking out at the walls\n"
+              "camera goes round a rounded rectangle with these half sizes (m), looking out at the walls\n"
               "                (e.g. --room 29,17,3 --loop-path 12.5,6.5: a 61 m closed path); 0,0 = "
               "the default handheld sway",
               "0,0");

@@ -22,7 +22,8 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   const ConfigReader tracking = root.Section("Tracking");
   tracking.ReadIfPresent("init_min_features", &options.tracking.init_min_features);
   tracking.ReadIfPresent("motion_radius_px", &options.tracking.motion_radius_px);
-  tracking.ReadIfPresent("max_frames_between_keyframes", &options.tracking.max_frames_between_keyframes);
+  tracking.ReadIfPresent("max_frames_between_keyframes",
+                         &options.tracking.max_frames_between_keyframes);
   tracking.ReadIfPresent("ref_ratio", &options.tracking.ref_ratio);
   tracking.CheckOptions(options.tracking);
   const ConfigReader mapping = root.Section("LocalMapping");
@@ -32,8 +33,9 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   mapping.CheckOptions(options.local_mapping);
 
   // LoopClosing: place recognition and loop closing. vocabulary: a path relative to the settings
-  // file, "none" (no place recognition: brute-force relocalization, no loops), or absent: the
-  // shipped config/vocabulary.dygvoc ($DYGSLAM_VOCABULARY overrides).
+  // file, "none" (no place recognition: brute-force relocalization, no loops), or absent:
+  // $DYGSLAM_VOCABULARY, else vocabulary.dygvoc beside the settings file, else the shipped
+  // config/vocabulary.dygvoc of the source tree. A missing file fails when the system starts.
   const ConfigReader loops = root.Section("LoopClosing");
   LoopClosingOptions& lc = options.loop_closing;
   std::string vocabulary;
@@ -45,12 +47,21 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
       if (path.is_relative() && !settings.path.empty())
         path = std::filesystem::path(settings.path).parent_path() / path;
       lc.vocabulary = path.lexically_normal().string();
-      if (!std::filesystem::exists(lc.vocabulary)) loops.Fail("vocabulary", "file not found: " + lc.vocabulary);
+      if (!std::filesystem::exists(lc.vocabulary))
+        loops.Fail("vocabulary", "file not found: " + lc.vocabulary);
     }
   } else if (const char* env = std::getenv("DYGSLAM_VOCABULARY"); env != nullptr && *env != '\0') {
     lc.vocabulary = env;
   } else {
-    lc.vocabulary = DYGSLAM_DEFAULT_VOCABULARY;
+    // Beside the settings file (the presets in config/, also where the Docker image installs
+    // them), else the source tree's (generated sequences carry their own camera.yaml).
+    const std::filesystem::path beside =
+        settings.path.empty()
+            ? std::filesystem::path()
+            : std::filesystem::path(settings.path).parent_path() / "vocabulary.dygvoc";
+    lc.vocabulary = !beside.empty() && std::filesystem::exists(beside)
+                        ? beside.string()
+                        : std::string(DYGSLAM_DEFAULT_VOCABULARY);
   }
   loops.ReadIfPresent("enabled", &lc.enabled);
   loops.ReadIfPresent("min_keyframe_gap", &lc.min_keyframe_gap);
@@ -115,7 +126,8 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   detector.ReadIfPresent("nms_threshold", &options.detector.nms_threshold);
   detector.ReadIfPresent("num_threads", &options.detector.num_threads);
   std::vector<std::string> classes;
-  if (detector.ReadIfPresent("dynamic_classes", &classes)) options.detector.dynamic_classes = classes;
+  if (detector.ReadIfPresent("dynamic_classes", &classes))
+    options.detector.dynamic_classes = classes;
   return options;
 }
 

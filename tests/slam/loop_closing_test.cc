@@ -16,8 +16,8 @@ struct LoopRun {
   size_t poses = 0;
 };
 
-// A small loop: a 5 x 3 m ellipse (12.8 m) in a 9 x 7 m room at 1.2 m/s, 15 frames/s, rendered
-// at 320 x 240 so the test takes seconds. `laps` < 1: the path never comes back.
+// A small loop: a 5 x 3 m rounded rectangle (13.4 m) in a 9 x 7 m room at 1.2 m/s, 15 frames/s,
+// rendered at 320 x 240 so the test takes seconds. `laps` < 1: the path never comes back.
 LoopRun RunLoop(double laps, bool loop_closing) {
   SyntheticOptions synth;
   synth.seed = 17;
@@ -33,7 +33,7 @@ LoopRun RunLoop(double laps, bool loop_closing) {
   synth.camera.cx = 159.5;
   synth.camera.cy = 119.5;
   synth.depth_noise = true;
-  const double perimeter = 12.76;
+  const double perimeter = 4 * (2.5 + 1.5) - 8 * 1.5 + 2 * M_PI * 1.5;  // rounded rectangle: 13.4 m
   synth.num_frames = static_cast<int>(laps * perimeter / synth.loop_speed * synth.sensor.fps);
   const SyntheticScene scene(synth);
   SystemOptions options;
@@ -43,7 +43,8 @@ LoopRun RunLoop(double laps, bool loop_closing) {
   options.filter_mode = FilterMode::kNone;
   options.deterministic = true;
   options.tracking.max_frames_between_keyframes = 15;
-  options.loop_closing.vocabulary = std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/vocabulary.dygvoc";
+  options.loop_closing.vocabulary =
+      std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/vocabulary.dygvoc";
   options.loop_closing.enabled = loop_closing;
   System system(options);
   std::vector<StampedPose> gt;
@@ -64,14 +65,15 @@ LoopRun RunLoop(double laps, bool loop_closing) {
 TEST(LoopClosing, GeneratedLoopIsClosedAndNoFalseLoopWithoutReturn) {
   const LoopRun on = RunLoop(1.25, true);
   const LoopRun off = RunLoop(1.25, false);
-  std::printf("generated loop: %d loops closed, ATE %.4f m with loop closing, %.4f m without (%zu poses)\n",
-              on.loops.loops_closed, on.ate, off.ate, on.poses);
+  std::printf(
+      "generated loop: %d loops closed, ATE %.4f m with loop closing, %.4f m without (%zu poses)\n",
+      on.loops.loops_closed, on.ate, off.ate, on.poses);
   EXPECT_GE(on.loops.loops_closed, 1);
   EXPECT_EQ(off.loops.loops_closed, 0);
   EXPECT_LE(on.ate, off.ate);
   const LoopRun open = RunLoop(0.75, true);
-  std::printf("open path: %d loops closed, %d consistent candidates, ATE %.4f m\n", open.loops.loops_closed,
-              open.loops.candidates_detected, open.ate);
+  std::printf("open path: %d loops closed, %d consistent candidates, ATE %.4f m\n",
+              open.loops.loops_closed, open.loops.candidates_detected, open.ate);
   EXPECT_EQ(open.loops.loops_closed, 0);
 }
 

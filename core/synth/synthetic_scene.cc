@@ -208,10 +208,9 @@ Rigid3d SyntheticScene::WorldFromCamAtTime(double t) const {
                                arc,   straight_x, arc,        b - r};
     for (int seg = 0; seg < 9; ++seg) {
       const double step = std::min(d, lengths[seg]);
-      if (seg % 2 == 0) {  // straight: sides at x = +-a (even 0, 4, 8) or y = +-b (2, 6)
-        const int side =
-            seg /
-            2;  // 0: right (up), 1: top (left), 2: left (down), 3: bottom (right), 4: right (up)
+      if (seg % 2 == 0) {
+        // Straight sides: 0 right (going +y), 1 top (-x), 2 left (-y), 3 bottom (+x), 4 right.
+        const int side = seg / 2;
         const Eigen::Vector2d dirs[5] = {{0, 1}, {-1, 0}, {0, -1}, {1, 0}, {0, 1}};
         const Eigen::Vector2d normals[5] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 0}};
         const Eigen::Vector2d starts[5] = {

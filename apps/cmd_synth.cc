@@ -65,6 +65,8 @@ int RunSynth(const std::vector<std::string>& args) {
               "                (e.g. --room 29,17,3 --loop-path 12.5,6.5: a 61 m closed path); 0,0 = "
               "the default handheld sway",
               "0,0");
+  p.AddOption("loop-corner", "R", "corner radius of the loop path (m; = the smaller half size: a stadium)",
+              "1.5");
   p.AddOption("speed", "V", "camera speed on the loop path (m/s)", "1");
   p.AddOption("texels", "T", "texture resolution (texels per metre, 50..1000; lower for big rooms)", "250");
   p.AddFlag("quiet", "no progress line");
@@ -122,6 +124,8 @@ int RunSynth(const std::vector<std::string>& args) {
   if (!parse_list("loop-path", 2, &list))
     return p.UsageError("--loop-path: expected A,B in metres, got '" + p.Get("loop-path") + "'");
   options.loop_semi_axes = Eigen::Vector2d(list[0], list[1]);
+  if (!ParseNumber(p.Get("loop-corner"), &options.loop_corner_radius))
+    return p.UsageError("--loop-corner: expected a number, got '" + p.Get("loop-corner") + "'");
   if (!ParseNumber(p.Get("speed"), &options.loop_speed))
     return p.UsageError("--speed: expected a number, got '" + p.Get("speed") + "'");
   if (!ParseNumber(p.Get("texels"), &options.texels_per_metre))

@@ -29,8 +29,7 @@ RunOutput RunSynthetic(const SyntheticOptions& synth, FilterMode mode, bool use_
   RunOutput out;
   for (int i = 0; i < scene.num_frames(); ++i) {
     const SyntheticFrame f = scene.RenderFrame(i);
-    const FrameResult r =
-        system.FeedRgbdFrame(f.rgb, f.depth, f.stamp, cv::Mat(), use_boxes ? &f.boxes : nullptr);
+    const FrameResult r = system.FeedRgbdFrame(f.rgb, f.depth, f.stamp, cv::Mat(), use_boxes ? &f.boxes : nullptr);
     if (r.state == TrackingState::kLost) ++out.lost;
   }
   system.Shutdown();
@@ -41,8 +40,7 @@ RunOutput RunSynthetic(const SyntheticOptions& synth, FilterMode mode, bool use_
 std::vector<StampedPose> GroundTruth(const SyntheticOptions& synth) {
   SyntheticScene scene(synth);
   std::vector<StampedPose> gt;
-  for (int i = 0; i < scene.num_frames(); ++i)
-    gt.push_back(StampedPose{scene.FrameStamp(i), scene.WorldFromCam(i)});
+  for (int i = 0; i < scene.num_frames(); ++i) gt.push_back(StampedPose{scene.FrameStamp(i), scene.WorldFromCam(i)});
   return gt;
 }
 
@@ -55,8 +53,7 @@ TEST(SlamAccuracy, GeneratedStaticSequenceWithin5mm) {
   EXPECT_EQ(run.lost, 0);
   ASSERT_EQ(static_cast<int>(run.trajectory.size()), synth.num_frames);
   const AteResult ate = ComputeAte(GroundTruth(synth), run.trajectory);
-  std::cout << "generated static sequence: ATE RMSE " << ate.error.rmse << " m over "
-            << ate.num_pairs << " frames\n";
+  std::cout << "generated static sequence: ATE RMSE " << ate.error.rmse << " m over " << ate.num_pairs << " frames\n";
   EXPECT_LE(ate.error.rmse, 0.005);
 }
 
@@ -70,8 +67,7 @@ TEST(SlamAccuracy, GeneratedDynamicSequenceFilterBeatsNoFilter) {
   const RunOutput full = RunSynthetic(synth, FilterMode::kFull, true);
   const double ate_none = ComputeAte(gt, none.trajectory).error.rmse;
   const double ate_full = ComputeAte(gt, full.trajectory).error.rmse;
-  std::cout << "generated dynamic sequence: ATE none " << ate_none << " m, full " << ate_full
-            << " m\n";
+  std::cout << "generated dynamic sequence: ATE none " << ate_none << " m, full " << ate_full << " m\n";
   EXPECT_LE(ate_full, 0.01);
   EXPECT_LE(ate_full, ate_none);
 }
@@ -90,8 +86,7 @@ TEST(SlamRelocalization, LostFramesHaveNoPoseAndTrackingRecovers) {
   options.filter_mode = FilterMode::kNone;
   options.deterministic = true;
   System system(options);
-  const cv::Mat blank_rgb(synth.camera.height, synth.camera.width, CV_8UC3,
-                          cv::Scalar(128, 128, 128));
+  const cv::Mat blank_rgb(synth.camera.height, synth.camera.width, CV_8UC3, cv::Scalar(128, 128, 128));
   const cv::Mat blank_depth(synth.camera.height, synth.camera.width, CV_16UC1, cv::Scalar(0));
   std::vector<int> fed;
   for (int i = 0; i < 60; ++i) fed.push_back(i);
@@ -101,8 +96,7 @@ TEST(SlamRelocalization, LostFramesHaveNoPoseAndTrackingRecovers) {
   for (size_t n = 0; n < fed.size(); ++n) {
     if (n == 60) {
       for (int b = 0; b < 5; ++b) {
-        const Timestamp t =
-            Timestamp::FromNanoseconds(scene.FrameStamp(59).nanoseconds() + (++fake_ns) * 1000000);
+        const Timestamp t = Timestamp::FromNanoseconds(scene.FrameStamp(59).nanoseconds() + (++fake_ns) * 1000000);
         const FrameResult r = system.FeedRgbdFrame(blank_rgb, blank_depth, t);
         EXPECT_EQ(r.state, TrackingState::kLost);
         EXPECT_FALSE(r.world_from_cam.has_value());
@@ -124,15 +118,14 @@ TEST(SlamRelocalization, LostFramesHaveNoPoseAndTrackingRecovers) {
   std::vector<StampedPose> gt;
   for (int i : fed) gt.push_back(StampedPose{scene.FrameStamp(i), scene.WorldFromCam(i)});
   const AteResult ate = ComputeAte(gt, system.Trajectory());
-  std::cout << "kidnapped sequence: " << relocalized << " relocalized, " << lost << " lost, ATE "
-            << ate.error.rmse << " m over " << ate.num_pairs << " poses\n";
+  std::cout << "kidnapped sequence: " << relocalized << " relocalized, " << lost << " lost, ATE " << ate.error.rmse
+            << " m over " << ate.num_pairs << " poses\n";
   EXPECT_GE(ate.num_pairs, fed.size() - 3);
   EXPECT_LE(ate.error.rmse, 0.01);
 }
 
 RunOutput RunBonn(const std::string& dir, size_t first, size_t last, FilterMode mode) {
-  const Settings settings =
-      LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
+  const Settings settings = LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
   SystemOptions options = SystemOptionsFromSettings(settings);
   options.filter_mode = mode;
   options.deterministic = true;
@@ -142,8 +135,7 @@ RunOutput RunBonn(const std::string& dir, size_t first, size_t last, FilterMode 
   for (size_t k = first; k < last; ++k) {
     const auto i = dataset.FrameForRgbEntry(k);
     if (!i) continue;
-    const FrameResult r = system.FeedRgbdFrame(dataset.LoadRgb(*i), dataset.LoadDepth(*i),
-                                               dataset.frame(*i).rgb_stamp);
+    const FrameResult r = system.FeedRgbdFrame(dataset.LoadRgb(*i), dataset.LoadDepth(*i), dataset.frame(*i).rgb_stamp);
     if (r.state == TrackingState::kLost) ++out.lost;
   }
   system.Shutdown();
@@ -168,10 +160,8 @@ TEST(SlamAccuracy, DeterministicModeIsRepeatable) {
   ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
   for (size_t i = 0; i < a.trajectory.size(); ++i) {
     EXPECT_EQ(a.trajectory[i].stamp, b.trajectory[i].stamp);
-    EXPECT_EQ(a.trajectory[i].world_from_cam.translation,
-              b.trajectory[i].world_from_cam.translation);
-    EXPECT_EQ(a.trajectory[i].world_from_cam.rotation.coeffs(),
-              b.trajectory[i].world_from_cam.rotation.coeffs());
+    EXPECT_EQ(a.trajectory[i].world_from_cam.translation, b.trajectory[i].world_from_cam.translation);
+    EXPECT_EQ(a.trajectory[i].world_from_cam.rotation.coeffs(), b.trajectory[i].world_from_cam.rotation.coeffs());
   }
 }
 
@@ -183,9 +173,8 @@ TEST(DynamicFilterAccuracy, BonnCrowdFullMethod) {
   const RunOutput full = RunBonn(dir, 0, 360, FilterMode::kFull);
   const double ate_none = ComputeAte(gt, none.trajectory).error.rmse;
   const AteResult ate_full = ComputeAte(gt, full.trajectory);
-  std::cout << "bonn_crowd_part 360 frames: ATE none " << ate_none << " m, full "
-            << ate_full.error.rmse << " m (" << ate_full.num_pairs << " tracked, " << full.lost
-            << " lost)\n";
+  std::cout << "bonn_crowd_part 360 frames: ATE none " << ate_none << " m, full " << ate_full.error.rmse << " m ("
+            << ate_full.num_pairs << " tracked, " << full.lost << " lost)\n";
   EXPECT_LE(ate_full.error.rmse, 0.020);
   EXPECT_GE(ate_none / ate_full.error.rmse, 10.0);
   EXPECT_GE(ate_full.num_pairs, 340u);

@@ -22,8 +22,7 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   const ConfigReader tracking = root.Section("Tracking");
   tracking.ReadIfPresent("init_min_features", &options.tracking.init_min_features);
   tracking.ReadIfPresent("motion_radius_px", &options.tracking.motion_radius_px);
-  tracking.ReadIfPresent("max_frames_between_keyframes",
-                         &options.tracking.max_frames_between_keyframes);
+  tracking.ReadIfPresent("max_frames_between_keyframes", &options.tracking.max_frames_between_keyframes);
   tracking.ReadIfPresent("ref_ratio", &options.tracking.ref_ratio);
   tracking.CheckOptions(options.tracking);
   const ConfigReader mapping = root.Section("LocalMapping");
@@ -126,8 +125,7 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   detector.ReadIfPresent("nms_threshold", &options.detector.nms_threshold);
   detector.ReadIfPresent("num_threads", &options.detector.num_threads);
   std::vector<std::string> classes;
-  if (detector.ReadIfPresent("dynamic_classes", &classes))
-    options.detector.dynamic_classes = classes;
+  if (detector.ReadIfPresent("dynamic_classes", &classes)) options.detector.dynamic_classes = classes;
   return options;
 }
 

@@ -111,6 +111,7 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   }
   DirectSignals signals;
   std::string csv = kFramesCsvHeader;
+  std::vector<StampedPose> online;  // the pose known when each frame was tracked
   const auto t0 = std::chrono::steady_clock::now();
   const size_t total = s.last - s.first;
   cv::Mat next_rgb;  // loaded one frame ahead so its detection overlaps this frame's tracking
@@ -135,6 +136,7 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
             : system.FeedRgbdFrame(rgb, depth, stamp);
     ++outcome.processed;
     if (r.state == TrackingState::kLost) ++outcome.lost;
+    if (r.world_from_cam) online.push_back({r.stamp, *r.world_from_cam});
     csv += FramesCsvRow(r);
     if (s.progress && (outcome.processed % 10 == 0 || k + 1 == s.last)) {
       const double elapsed =
@@ -160,9 +162,21 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
     std::printf("local mapping: %d keyframes, median %.1f ms per keyframe, %d points triangulated, "
                 "%d keyframes culled\n", lm.keyframes_processed, median, lm.points_triangulated,
                 lm.keyframes_culled);
+    const MapStatistics sizes = system.MapSizes();
+    std::printf("map: %zu keyframes (%zu culled), %zu map points\n", sizes.keyframes,
+                sizes.culled_keyframes, sizes.map_points);
+    const LoopClosingStats lc = system.LoopClosingStatistics();
+    std::printf("loop closing: %d loops closed (%d consistent candidates, %d rejected), %d points fused, "
+                "%d global BA (%d discarded), %d keyframes checked\n",
+                lc.loops_closed, lc.candidates_detected, lc.loops_rejected, lc.points_fused,
+                lc.global_ba_runs, lc.global_ba_discarded, lc.keyframes_checked);
+    for (const auto& [frame, loop_frame] : lc.loop_frames)
+      std::printf("loop: frame %lld closed with frame %lld\n", static_cast<long long>(frame),
+                  static_cast<long long>(loop_frame));
   }
   WriteFileAtomically((s.out / "frames.csv").string(), csv);
   WriteTumTrajectory((s.out / "trajectory.txt").string(), system.Trajectory());
+  WriteTumTrajectory((s.out / "trajectory_online.txt").string(), online);
   WriteTumTrajectory((s.out / "keyframes.txt").string(), system.KeyframeTrajectory());
   if (mapper) {
     mapper->Flush();
@@ -359,7 +373,8 @@ int RunRun(const std::vector<std::string>& args) {
                 ate.error.mean, ate.error.median, ate.error.max, ate.num_pairs);
   }
   const bool has_map = fs::exists(s.out / "map.bt");
-  std::printf("outputs: %s/{trajectory.txt,keyframes.txt,frames.csv%s}\n", s.out.string().c_str(),
+  std::printf("outputs: %s/{trajectory.txt,trajectory_online.txt,keyframes.txt,frames.csv%s}\n",
+              s.out.string().c_str(),
               has_map ? ",map.bt" : "");
   if (outcome.exit_code != 0) {
     std::fprintf(stderr, "dygslam run: a pipeline component failed (see the messages above)\n");

@@ -59,6 +59,16 @@ int RunSynth(const std::vector<std::string>& args) {
               "0");
   p.AddOption("max-depth", "M", "depth beyond M metres reads 0 (invalid); 0 = no limit", "0");
   p.AddOption("supersampling", "N", "N x N colour samples per pixel (1..4)", "2");
+  p.AddOption("room", "X,Y,Z", "room size in metres (at least 5,4,2.5)", "6,5,3");
+  p.AddOption("loop-path", "A,B",
+              "camera goes round a rounded rectangle with these half sizes (m), looking out at the walls\n"
+              "                (e.g. --room 29,17,3 --loop-path 12.5,6.5: a 61 m closed path); 0,0 = "
+              "the default handheld sway",
+              "0,0");
+  p.AddOption("loop-corner", "R", "corner radius of the loop path (m; = the smaller half size: a stadium)",
+              "1.5");
+  p.AddOption("speed", "V", "camera speed on the loop path (m/s)", "1");
+  p.AddOption("texels", "T", "texture resolution (texels per metre, 50..1000; lower for big rooms)", "250");
   p.AddFlag("quiet", "no progress line");
   if (!p.Parse(args)) return p.exit_code();
 
@@ -93,6 +103,33 @@ int RunSynth(const std::vector<std::string>& args) {
   if (!ParseNumber(p.Get("max-depth"), &options.max_depth)) {
     return p.UsageError("--max-depth: expected a number, got '" + p.Get("max-depth") + "'");
   }
+  auto parse_list = [&](const std::string& option, size_t n, std::vector<double>* out) {
+    out->clear();
+    std::string text = p.Get(option);
+    size_t start = 0;
+    while (start <= text.size()) {
+      const size_t comma = text.find(',', start);
+      double v = 0;
+      if (!ParseNumber(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start), &v))
+        return false;
+      out->push_back(v);
+      if (comma == std::string::npos) break;
+      start = comma + 1;
+    }
+    return out->size() == n;
+  };
+  std::vector<double> list;
+  if (!parse_list("room", 3, &list)) return p.UsageError("--room: expected X,Y,Z in metres, got '" + p.Get("room") + "'");
+  options.room_size = Eigen::Vector3d(list[0], list[1], list[2]);
+  if (!parse_list("loop-path", 2, &list))
+    return p.UsageError("--loop-path: expected A,B in metres, got '" + p.Get("loop-path") + "'");
+  options.loop_semi_axes = Eigen::Vector2d(list[0], list[1]);
+  if (!ParseNumber(p.Get("loop-corner"), &options.loop_corner_radius))
+    return p.UsageError("--loop-corner: expected a number, got '" + p.Get("loop-corner") + "'");
+  if (!ParseNumber(p.Get("speed"), &options.loop_speed))
+    return p.UsageError("--speed: expected a number, got '" + p.Get("speed") + "'");
+  if (!ParseNumber(p.Get("texels"), &options.texels_per_metre))
+    return p.UsageError("--texels: expected a number, got '" + p.Get("texels") + "'");
   if (p.Flag("noise")) {
     options.depth_noise = true;
     options.rgb_noise_sigma = 2.0;

@@ -1,6 +1,13 @@
 #include "core/config/system_config.h"
 
+#include <cstdlib>
+#include <filesystem>
+
 #include "core/base/error.h"
+
+#ifndef DYGSLAM_DEFAULT_VOCABULARY
+#define DYGSLAM_DEFAULT_VOCABULARY ""
+#endif
 
 namespace dygslam {
 
@@ -23,6 +30,52 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   mapping.ReadIfPresent("cull_keyframes", &options.local_mapping.cull_keyframes);
   mapping.ReadIfPresent("redundancy_ratio", &options.local_mapping.redundancy_ratio);
   mapping.CheckOptions(options.local_mapping);
+
+  // LoopClosing: place recognition and loop closing. vocabulary: a path relative to the settings
+  // file, "none" (no place recognition: brute-force relocalization, no loops), or absent:
+  // $DYGSLAM_VOCABULARY, else vocabulary.dygvoc beside the settings file, else the shipped
+  // config/vocabulary.dygvoc of the source tree. A missing file fails when the system starts.
+  const ConfigReader loops = root.Section("LoopClosing");
+  LoopClosingOptions& lc = options.loop_closing;
+  std::string vocabulary;
+  if (loops.ReadIfPresent("vocabulary", &vocabulary)) {
+    if (vocabulary == "none") {
+      lc.vocabulary.clear();
+    } else {
+      std::filesystem::path path(vocabulary);
+      if (path.is_relative() && !settings.path.empty())
+        path = std::filesystem::path(settings.path).parent_path() / path;
+      lc.vocabulary = path.lexically_normal().string();
+      if (!std::filesystem::exists(lc.vocabulary))
+        loops.Fail("vocabulary", "file not found: " + lc.vocabulary);
+    }
+  } else if (const char* env = std::getenv("DYGSLAM_VOCABULARY"); env != nullptr && *env != '\0') {
+    lc.vocabulary = env;
+  } else {
+    // Beside the settings file (the presets in config/, also where the Docker image installs
+    // them), else the source tree's (generated sequences carry their own camera.yaml).
+    const std::filesystem::path beside =
+        settings.path.empty()
+            ? std::filesystem::path()
+            : std::filesystem::path(settings.path).parent_path() / "vocabulary.dygvoc";
+    lc.vocabulary = !beside.empty() && std::filesystem::exists(beside)
+                        ? beside.string()
+                        : std::string(DYGSLAM_DEFAULT_VOCABULARY);
+  }
+  loops.ReadIfPresent("enabled", &lc.enabled);
+  loops.ReadIfPresent("min_keyframe_gap", &lc.min_keyframe_gap);
+  loops.ReadIfPresent("consistency", &lc.consistency);
+  loops.ReadIfPresent("min_bow_matches", &lc.min_bow_matches);
+  loops.ReadIfPresent("ransac_iterations", &lc.ransac_iterations);
+  loops.ReadIfPresent("ransac_threshold_px", &lc.ransac_threshold_px);
+  loops.ReadIfPresent("min_ransac_inliers", &lc.min_ransac_inliers);
+  loops.ReadIfPresent("min_projection_matches", &lc.min_projection_matches);
+  loops.ReadIfPresent("fusion_radius_px", &lc.fusion_radius_px);
+  loops.ReadIfPresent("essential_min_weight", &lc.essential_min_weight);
+  loops.ReadIfPresent("pose_graph_iterations", &lc.pose_graph_iterations);
+  loops.ReadIfPresent("global_bundle_adjustment", &lc.global_bundle_adjustment);
+  loops.ReadIfPresent("global_ba_iterations", &lc.global_ba_iterations);
+  loops.CheckOptions(lc);
 
   // DynamicFilter: the paper's parameters (defaults in DynamicFilterOptions).
   const ConfigReader filter = root.Section("DynamicFilter");

@@ -11,6 +11,7 @@
 #include "core/base/camera.h"
 #include "core/base/rigid3.h"
 #include "core/base/timestamp.h"
+#include "core/place/vocabulary.h"
 #include "core/slam/orb_extractor.h"
 
 namespace dygslam {
@@ -68,6 +69,13 @@ class Frame {
   std::vector<uint8_t> in_dynamic_region;   // 1: never seeds a map point
   bool CanSeedPoint(size_t i) const { return depth[i] > 0 && !in_dynamic_region[i]; }
   FeatureGrid grid;
+  // Bag of words (empty until ComputeBow): relocalization, reference-keyframe tracking, loops.
+  BowVector bow_vector;
+  FeatureVector bow_features;  // direct index at kBowDirectIndexLevel
+  static constexpr int kBowDirectIndexLevel = 2;
+  void ComputeBow(const Vocabulary& vocabulary) {
+    if (bow_vector.empty()) vocabulary.Transform(descriptors, &bow_vector, &bow_features, kBowDirectIndexLevel);
+  }
 
   // Tracking state built per frame.
   std::vector<std::shared_ptr<MapPoint>> map_points;

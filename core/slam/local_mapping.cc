@@ -21,6 +21,11 @@ void LocalMapper::SetPosesChangedCallback(MapChangedCallback callback) {
   poses_changed_ = std::move(callback);
 }
 
+void LocalMapper::SetKeyFrameDoneCallback(KeyFrameDoneCallback callback) {
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  keyframe_done_ = std::move(callback);
+}
+
 void LocalMapper::InsertKeyFrame(std::shared_ptr<KeyFrame> kf) {
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
@@ -126,13 +131,16 @@ void LocalMapper::Process(const std::shared_ptr<KeyFrame>& kf) {
     stats_.per_keyframe_ms.push_back(ms);
   }
   MapChangedCallback callback;
+  KeyFrameDoneCallback done;
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     callback = poses_changed_;
+    done = keyframe_done_;
   }
   std::vector<int64_t> culled;
   culled.swap(culled_since_callback_);
   if (callback && (!changed.empty() || !culled.empty())) callback(changed, culled);
+  if (done) done(kf);
 }
 
 void LocalMapper::CullRecentPoints(const std::shared_ptr<KeyFrame>& kf) {

@@ -69,6 +69,10 @@ class LocalMapper {
   // pose bundle adjustment changed and the ids of keyframes culled.
   using MapChangedCallback = std::function<void(const std::vector<int64_t>& moved, const std::vector<int64_t>& culled)>;
   void SetPosesChangedCallback(MapChangedCallback callback);
+  // Called (from the mapping thread) with each keyframe once local mapping is done with it (loop
+  // closing takes it from there).
+  using KeyFrameDoneCallback = std::function<void(const std::shared_ptr<KeyFrame>&)>;
+  void SetKeyFrameDoneCallback(KeyFrameDoneCallback callback);
   LocalMappingStats stats() const;
 
  private:
@@ -93,6 +97,7 @@ class LocalMapper {
   std::atomic<bool> abort_ba_{false};
   std::list<std::shared_ptr<MapPoint>> recent_points_;  // local mapping thread only
   MapChangedCallback poses_changed_;
+  KeyFrameDoneCallback keyframe_done_;
   std::vector<int64_t> culled_since_callback_;
   mutable std::mutex stats_mutex_;
   LocalMappingStats stats_;

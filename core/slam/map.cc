@@ -23,6 +23,8 @@ KeyFrame::KeyFrame(int64_t kf_id, const Frame& frame)
       u_right(frame.u_right),
       in_dynamic_region(frame.in_dynamic_region),
       grid(frame.grid),
+      bow_vector(frame.bow_vector),
+      bow_features(frame.bow_features),
       cam_from_world(frame.cam_from_world),
       map_points(frame.map_points) {
   ++live_count_;

@@ -87,6 +87,8 @@ class KeyFrame {
   const std::vector<float> u_right;
   const std::vector<uint8_t> in_dynamic_region;
   const FeatureGrid grid;
+  const BowVector bow_vector;      // copied from the frame (empty without a vocabulary)
+  const FeatureVector bow_features;
   bool CanSeedPoint(size_t i) const { return depth[i] > 0 && !in_dynamic_region[i]; }
 
   // Mutable state, guarded by Map::mutex().
@@ -152,10 +154,15 @@ class Map {
   void SetBad(const std::shared_ptr<KeyFrame>& kf);
   // cam_from_world of any keyframe ever created (culled ones via their parent chain).
   Rigid3d ResolvedPose(int64_t kf_id) const;
+  // Changes whenever a loop correction or global bundle adjustment moved the whole map: an
+  // optimisation that copied poses before must not write them back (they are stale).
+  int64_t CorrectionEpoch() const { return correction_epoch_.load(); }
+  void BumpCorrectionEpoch() { ++correction_epoch_; }
 
  private:
   mutable std::mutex mutex_;
   int64_t next_kf_id_ = 0, next_point_id_ = 0;
+  std::atomic<int64_t> correction_epoch_{0};
   std::map<int64_t, std::shared_ptr<KeyFrame>> keyframes_;  // active
   // Culled keyframes keep only what the trajectory needs (their parent and the relative pose),
   // so memory does not grow with the features of keyframes that are gone.

@@ -321,3 +321,102 @@ int Matcher::Fuse(Map& map, const std::shared_ptr<KeyFrame>& kf,
 }
 
 }  // namespace dygslam
+
+namespace dygslam {
+namespace {
+
+// Shared body of the two BoW searches: for each feature i of `a` with a usable map point, the
+// best feature of `b` in the same direct-index node (Hamming <= th_low, ratio test), one owner
+// per feature of `b`, then the rotation-consistency check. Returns (b index -> a index).
+template <typename UsableA, typename UsableB>
+std::vector<std::pair<int, int>> MatchWithinNodes(const FeatureVector& fa, const std::vector<Descriptor>& da,
+                                                  const std::vector<cv::KeyPoint>& ka, const FeatureVector& fb,
+                                                  const std::vector<Descriptor>& db, const std::vector<cv::KeyPoint>& kb,
+                                                  const MatcherOptions& options, double ratio, UsableA usable_a,
+                                                  UsableB usable_b) {
+  std::vector<int> best_for_b(db.size(), 256), owner(db.size(), -1);
+  auto ia = fa.begin();
+  auto ib = fb.begin();
+  while (ia != fa.end() && ib != fb.end()) {
+    if (ia->first < ib->first) {
+      ia = fa.lower_bound(ib->first);
+      continue;
+    }
+    if (ib->first < ia->first) {
+      ib = fb.lower_bound(ia->first);
+      continue;
+    }
+    for (int i : ia->second) {
+      if (!usable_a(i)) continue;
+      int best = 256, second = 256, best_idx = -1;
+      for (int c : ib->second) {
+        if (!usable_b(c)) continue;
+        const int d = HammingDistance(da[i], db[c]);
+        if (d < best) {
+          second = best;
+          best = d;
+          best_idx = c;
+        } else if (d < second) {
+          second = d;
+        }
+      }
+      if (best_idx < 0 || best > options.th_low || best > ratio * second) continue;
+      if (best >= best_for_b[best_idx]) continue;
+      best_for_b[best_idx] = best;
+      owner[best_idx] = i;
+    }
+    ++ia;
+    ++ib;
+  }
+  std::vector<std::pair<int, int>> pairs;
+  std::vector<float> rotations;
+  for (size_t c = 0; c < db.size(); ++c) {
+    if (owner[c] < 0) continue;
+    pairs.push_back({static_cast<int>(c), owner[c]});
+    rotations.push_back(AngleDifference(ka[owner[c]].angle, kb[c].angle));
+  }
+  if (options.check_orientation) {
+    std::vector<uint8_t> drop(pairs.size(), 0);
+    for (int k : RotationConsistencyOutliers(rotations)) drop[k] = 1;
+    std::vector<std::pair<int, int>> kept;
+    for (size_t k = 0; k < pairs.size(); ++k)
+      if (!drop[k]) kept.push_back(pairs[k]);
+    pairs.swap(kept);
+  }
+  return pairs;
+}
+
+}  // namespace
+
+int Matcher::SearchByBow(const KeyFrame& kf, Frame& frame, double ratio) const {
+  const auto pairs = MatchWithinNodes(
+      kf.bow_features, kf.descriptors, kf.undistorted, frame.bow_features, frame.descriptors, frame.undistorted,
+      options_, ratio,
+      [&](int i) {
+        const auto& mp = kf.map_points[i];
+        return mp && !mp->bad;
+      },
+      [](int) { return true; });
+  for (const auto& [c, i] : pairs) frame.map_points[c] = kf.map_points[i];
+  return static_cast<int>(pairs.size());
+}
+
+int Matcher::SearchByBow(const KeyFrame& kf1, const KeyFrame& kf2, double ratio,
+                         std::vector<std::shared_ptr<MapPoint>>* matches) const {
+  matches->assign(kf1.size(), nullptr);
+  const auto pairs = MatchWithinNodes(
+      kf2.bow_features, kf2.descriptors, kf2.undistorted, kf1.bow_features, kf1.descriptors, kf1.undistorted,
+      options_, ratio,
+      [&](int i) {
+        const auto& mp = kf2.map_points[i];
+        return mp && !mp->bad;
+      },
+      [&](int c) {
+        const auto& mp = kf1.map_points[c];
+        return mp && !mp->bad;
+      });
+  for (const auto& [c, i] : pairs) (*matches)[c] = kf2.map_points[i];
+  return static_cast<int>(pairs.size());
+}
+
+}  // namespace dygslam

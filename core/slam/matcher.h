@@ -33,6 +33,14 @@ class Matcher {
                          double radius_factor) const;
   // Descriptor matching of the keyframe's map points against the frame (no pose needed).
   int SearchByDescriptors(const KeyFrame& kf, Frame& frame, double ratio) const;
+  // Same as SearchByDescriptors, but features are compared only within the same vocabulary node
+  // (direct index: both bow_features must be computed), so the cost no longer grows with the
+  // product of the feature counts.
+  int SearchByBow(const KeyFrame& kf, Frame& frame, double ratio) const;
+  // Map points of kf1 against map points of kf2 within the same vocabulary node (loop closing):
+  // matches[i] = kf2's point matched to kf1's feature i (nullptr: none). Returns the count.
+  int SearchByBow(const KeyFrame& kf1, const KeyFrame& kf2, double ratio,
+                  std::vector<std::shared_ptr<MapPoint>>* matches) const;
   // Projects the keyframe's map points using the frame's pose guess (relocalization refinement).
   int SearchByProjection(Frame& frame, const KeyFrame& kf,
                          const std::set<const MapPoint*>& already_found, double radius_px,

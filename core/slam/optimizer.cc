@@ -121,9 +121,11 @@ void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf, const 
   std::map<int64_t, Eigen::Vector3d> points;
   std::vector<ObsCopy> observations;
   ProjectionModel model;
+  int64_t epoch = 0;
   {
     std::lock_guard<std::mutex> lock(map.mutex());
     if (kf->bad) return;
+    epoch = map.CorrectionEpoch();
     model = ModelOf(*kf->geometry);
     std::vector<std::shared_ptr<KeyFrame>> local = {kf};
     for (int64_t id : kf->ordered_connections) {
@@ -219,6 +221,8 @@ void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf, const 
   classify();
 
   std::lock_guard<std::mutex> lock(map.mutex());
+  // A loop correction moved the map meanwhile: this solution is relative to the old poses.
+  if (map.CorrectionEpoch() != epoch) return;
   // Drop outlier observations, then write back poses and points.
   for (size_t k = 0; k < observations.size(); ++k) {
     if (!outlier[k]) continue;

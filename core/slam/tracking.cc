@@ -7,6 +7,8 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include "core/slam/relocalization.h"
+
 namespace dygslam {
 
 Tracker::Tracker(const TrackingOptions& options, std::shared_ptr<Map> map, LocalMapper& local_mapper,
@@ -70,6 +72,12 @@ TrackResult Tracker::Track(Frame frame) {
   return result;
 }
 
+void Tracker::SetPlaceRecognition(std::shared_ptr<const Vocabulary> vocabulary,
+                                  std::shared_ptr<KeyFrameDatabase> database) {
+  vocabulary_ = std::move(vocabulary);
+  database_ = std::move(database);
+}
+
 void Tracker::HandOffKeyFrame(const std::shared_ptr<KeyFrame>& kf) {
   local_mapper_.InsertKeyFrame(kf);
   if (deterministic_) local_mapper_.ProcessPending();
@@ -85,8 +93,10 @@ bool Tracker::Initialize(Frame& frame, TrackResult* result) {
   }
   frame.cam_from_world = Rigid3d::Identity();
   frame.has_pose = true;
+  if (vocabulary_) frame.ComputeBow(*vocabulary_);
   auto kf = std::make_shared<KeyFrame>(map_->NextKeyFrameId(), frame);
   map_->AddKeyFrame(kf);
+  if (database_) database_->Add(kf->id, kf->bow_vector);
   for (size_t i = 0; i < frame.size(); ++i) {
     if (!frame.CanSeedPoint(i)) continue;
     auto mp = std::make_shared<MapPoint>(map_->NextMapPointId(), frame.UnprojectWorld(i), kf->id);
@@ -175,80 +185,36 @@ bool Tracker::TrackReferenceKeyFrame(Frame& frame) {
     if (map_->keyframes().empty()) return false;
     reference_kf_ = map_->keyframes().rbegin()->second;
   }
-  std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
-  const int matches = matcher_.SearchByDescriptors(*reference_kf_, frame, 0.7);
-  if (matches < 15) return false;
-  frame.cam_from_world = last_frame_.has_pose ? last_frame_.cam_from_world : reference_kf_->cam_from_world;
-  frame.has_pose = true;
-  OptimizePose(frame, options_.optimizer);
-  return DiscardOutliers(frame) >= options_.min_inliers;
+  // Brute force against this one keyframe (its cost does not grow with the map; on
+  // bonn_crowd_part, deterministic, ATE 0.0140 m this way vs 0.0158 m with the direct index
+  // first), then, when that fails, through the vocabulary's direct index (other candidate pairs:
+  // the ratio test within a node).
+  const bool use_bow = vocabulary_ && !reference_kf_->bow_features.empty();
+  for (int attempt = 1; attempt >= (use_bow ? 0 : 1); --attempt) {
+    std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+    int matches = 0;
+    if (attempt == 0) {
+      frame.ComputeBow(*vocabulary_);
+      matches = matcher_.SearchByBow(*reference_kf_, frame, 0.7);
+    } else {
+      matches = matcher_.SearchByDescriptors(*reference_kf_, frame, 0.7);
+    }
+    if (matches < 15) continue;
+    frame.cam_from_world = last_frame_.has_pose ? last_frame_.cam_from_world : reference_kf_->cam_from_world;
+    frame.has_pose = true;
+    OptimizePose(frame, options_.optimizer);
+    if (DiscardOutliers(frame) >= options_.min_inliers) return true;
+  }
+  return false;
 }
 
 bool Tracker::Relocalize(Frame& frame) {
-  const CameraGeometry& g = *frame.geometry;
-  // Rank keyframes by descriptor matches (no vocabulary: brute force on the map points).
-  std::vector<std::pair<int, std::shared_ptr<KeyFrame>>> ranked;
-  for (const auto& [id, kf] : map_->keyframes()) {
-    Frame probe = frame;
-    std::fill(probe.map_points.begin(), probe.map_points.end(), nullptr);
-    const int n = matcher_.SearchByDescriptors(*kf, probe, 0.75);
-    if (n >= 15) ranked.push_back({n, kf});
-  }
-  std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-  if (static_cast<int>(ranked.size()) > options_.relocalization_candidates) ranked.resize(options_.relocalization_candidates);
-  const cv::Mat k = g.camera.K();
-  for (const auto& [score, kf] : ranked) {
-    std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
-    std::fill(frame.outlier.begin(), frame.outlier.end(), 0);
-    matcher_.SearchByDescriptors(*kf, frame, 0.75);
-    std::vector<cv::Point3f> object;
-    std::vector<cv::Point2f> image;
-    std::vector<size_t> index;
-    for (size_t i = 0; i < frame.size(); ++i) {
-      const auto& mp = frame.map_points[i];
-      if (!mp) continue;
-      object.emplace_back(float(mp->position.x()), float(mp->position.y()), float(mp->position.z()));
-      image.push_back(frame.undistorted[i].pt);
-      index.push_back(i);
-    }
-    if (object.size() < 15) continue;
-    cv::Mat rvec, tvec;
-    std::vector<int> inliers;
-    cv::setRNGSeed(static_cast<int>(frame.id));
-    const bool solved = cv::solvePnPRansac(object, image, k, cv::noArray(), rvec, tvec, false, 200, 4.0f, 0.99,
-                                           inliers, cv::SOLVEPNP_EPNP);
-    if (!solved || inliers.size() < 10) continue;
-    cv::Mat rmat;
-    cv::Rodrigues(rvec, rmat);
-    Eigen::Matrix3d r;
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) r(a, b) = rmat.at<double>(a, b);
-    frame.cam_from_world = Rigid3d(r, Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
-    frame.has_pose = true;
-    std::vector<uint8_t> keep(frame.size(), 0);
-    for (int in : inliers) keep[index[in]] = 1;
-    for (size_t i = 0; i < frame.size(); ++i)
-      if (!keep[i]) frame.map_points[i] = nullptr;
-    int good = OptimizePose(frame, options_.optimizer);
-    if (good < 10) continue;
-    DiscardOutliers(frame);
-    if (good < options_.relocalized_min_inliers) {
-      std::set<const MapPoint*> found;
-      for (const auto& mp : frame.map_points)
-        if (mp) found.insert(mp.get());
-      matcher_.SearchByProjection(frame, *kf, found, 10, 100);
-      good = OptimizePose(frame, options_.optimizer);
-      DiscardOutliers(frame);
-    }
-    if (good >= options_.relocalized_min_inliers) {
-      last_relocalization_frame_id_ = frame.id;
-      reference_kf_ = kf;
-      return true;
-    }
-  }
-  std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
-  frame.has_pose = false;
-  return false;
+  const RelocalizationResult r =
+      RelocalizeFrame(frame, *map_, database_.get(), vocabulary_.get(), matcher_, options_);
+  if (!r.ok) return false;
+  last_relocalization_frame_id_ = frame.id;
+  reference_kf_ = r.keyframe;
+  return true;
 }
 
 void Tracker::UpdateLocalMap(Frame& frame) {
@@ -394,8 +360,10 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
 }
 
 std::shared_ptr<KeyFrame> Tracker::CreateKeyFrame(Frame& frame) {
+  if (vocabulary_) frame.ComputeBow(*vocabulary_);
   auto kf = std::make_shared<KeyFrame>(map_->NextKeyFrameId(), frame);
   map_->AddKeyFrame(kf);
+  if (database_) database_->Add(kf->id, kf->bow_vector);
   // Observations of the points tracked in this frame.
   for (size_t i = 0; i < kf->size(); ++i) {
     const auto& mp = kf->map_points[i];

@@ -12,6 +12,7 @@
 #include "core/slam/map.h"
 #include "core/slam/matcher.h"
 #include "core/slam/optimizer.h"
+#include "core/slam/place_recognition.h"
 
 namespace dygslam {
 
@@ -29,6 +30,7 @@ struct TrackingOptions {
   int new_points_min = 100;          // new keyframe: at least this many points from depth
   int local_keyframes_max = 80;
   int relocalization_candidates = 5;
+  PlaceRecognitionOptions place;  // candidates from the BoW index (when a vocabulary is set)
   OptimizerOptions optimizer;
   MatcherOptions matcher;
   void Check() const {
@@ -36,6 +38,7 @@ struct TrackingOptions {
     DYGSLAM_CHECK_OPTION(motion_radius_px > 0, "Tracking.motion_radius_px");
     DYGSLAM_CHECK_OPTION(ref_ratio > 0 && ref_ratio <= 1, "Tracking.ref_ratio");
     DYGSLAM_CHECK_OPTION(max_frames_between_keyframes >= 1, "Tracking.max_frames_between_keyframes");
+    place.Check();
     optimizer.Check();
     matcher.Check();
   }
@@ -66,6 +69,10 @@ class Tracker {
   // mapper (HandOffKeyFrame) after it has announced it, so corrections never precede it.
   TrackResult Track(Frame frame);
   void HandOffKeyFrame(const std::shared_ptr<KeyFrame>& kf);
+  // Bag-of-words place recognition: relocalization candidates from `database`, BoW-accelerated
+  // matching in relocalization and reference-keyframe tracking; new keyframes get BoW vectors and
+  // are added to `database`. Without it (nullptr) both fall back to brute-force matching.
+  void SetPlaceRecognition(std::shared_ptr<const Vocabulary> vocabulary, std::shared_ptr<KeyFrameDatabase> database);
 
   // World poses of all tracked frames (resolved through current keyframe poses).
   std::vector<StampedPose> Trajectory() const;
@@ -88,6 +95,8 @@ class Tracker {
   std::shared_ptr<Map> map_;
   LocalMapper& local_mapper_;
   Matcher matcher_;
+  std::shared_ptr<const Vocabulary> vocabulary_;
+  std::shared_ptr<KeyFrameDatabase> database_;
   bool deterministic_;
   int64_t frames_seen_ = 0;
 

@@ -80,6 +80,15 @@ void SyntheticOptions::Check() const {
   DYGSLAM_CHECK_OPTION(std::abs(pitch_offset_deg) + std::abs(pitch_amplitude_deg) <= 45,
                        "pitch_offset_deg/pitch_amplitude_deg");
   DYGSLAM_CHECK_OPTION(std::abs(roll_amplitude_deg) <= 20, "roll_amplitude_deg");
+  DYGSLAM_CHECK_OPTION(loop_semi_axes.allFinite() && loop_semi_axes.minCoeff() >= 0 &&
+                           (loop_semi_axes.x() == 0) == (loop_semi_axes.y() == 0) &&
+                           loop_semi_axes.x() + 1.0 <= room_size.x() / 2 &&
+                           loop_semi_axes.y() + 1.0 <= room_size.y() / 2,
+                       "loop_semi_axes (both zero, or both positive and 1 m inside the walls)");
+  DYGSLAM_CHECK_OPTION(loop_corner_radius > 0 && std::isfinite(loop_corner_radius),
+                       "loop_corner_radius");
+  DYGSLAM_CHECK_OPTION(loop_speed > 0 && loop_speed <= 5 && std::isfinite(loop_speed),
+                       "loop_speed");
   DYGSLAM_CHECK_OPTION(object_size.allFinite() && object_size.minCoeff() >= 0.1 &&
                            object_size.x() <= 1.0 && object_size.y() <= 1.0 &&
                            object_size.z() <= room_size.z() - 0.2,
@@ -182,6 +191,56 @@ double SyntheticScene::FrameTime(int frame) const {
 Rigid3d SyntheticScene::WorldFromCamAtTime(double t) const {
   const SyntheticOptions& o = options_;
   const double w = 2 * kPi;
+  if (o.loop_semi_axes.x() > 0) {
+    // Rounded rectangle (half sizes a x b, corner radius r) walked anticlockwise at loop_speed from
+    // (a, 0), looking along the outward normal: the walls stay at the same distance on the sides.
+    const double a = o.loop_semi_axes.x(), b = o.loop_semi_axes.y();
+    const double r = std::min({o.loop_corner_radius, a, b});
+    const double perimeter = 4 * (a + b) - 8 * r + 2 * kPi * r;
+    double d = std::fmod(t * o.loop_speed, perimeter);
+    if (d < 0) d += perimeter;
+    // Segments: straight (start point, direction, length) or arc (centre, start angle).
+    Eigen::Vector2d xy(a, 0.0), normal(1.0, 0.0);
+    const double straight_x = 2 * (a - r), straight_y = 2 * (b - r), arc = 0.5 * kPi * r;
+    const Eigen::Vector2d centres[4] = {
+        {a - r, b - r}, {-(a - r), b - r}, {-(a - r), -(b - r)}, {a - r, -(b - r)}};
+    const double lengths[9] = {b - r, arc,        straight_x, arc,  straight_y,
+                               arc,   straight_x, arc,        b - r};
+    for (int seg = 0; seg < 9; ++seg) {
+      const double step = std::min(d, lengths[seg]);
+      if (seg % 2 == 0) {
+        // Straight sides: 0 right (going +y), 1 top (-x), 2 left (-y), 3 bottom (+x), 4 right.
+        const int side = seg / 2;
+        const Eigen::Vector2d dirs[5] = {{0, 1}, {-1, 0}, {0, -1}, {1, 0}, {0, 1}};
+        const Eigen::Vector2d normals[5] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 0}};
+        const Eigen::Vector2d starts[5] = {
+            {a, 0}, {a - r, b}, {-a, b - r}, {-(a - r), -b}, {a, -(b - r)}};
+        xy = starts[side] + step * dirs[side];
+        normal = normals[side];
+      } else {
+        const int corner = seg / 2;
+        const double phi = 0.5 * kPi * corner + step / r;
+        normal = Eigen::Vector2d(std::cos(phi), std::sin(phi));
+        xy = centres[corner] + r * normal;
+      }
+      if (d <= lengths[seg]) break;
+      d -= lengths[seg];
+    }
+    const Eigen::Vector3d position(
+        xy.x(), xy.y(), o.camera_height + 0.05 * std::sin(w * t / (0.8 * o.path_period) + 0.5));
+    const double yaw = std::atan2(normal.y(), normal.x());
+    const double pitch =
+        (o.pitch_offset_deg + o.pitch_amplitude_deg * std::sin(w * t / o.pitch_period)) * kDeg;
+    const double roll =
+        o.roll_amplitude_deg * kDeg * std::sin(w * t / (1.3 * o.pitch_period) + 0.7);
+    Eigen::Matrix3d look_x;
+    look_x << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+    const Eigen::Matrix3d rotation =
+        Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+        Eigen::AngleAxisd(-pitch, Eigen::Vector3d::UnitY()).toRotationMatrix() * look_x *
+        Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    return Rigid3d(rotation, position);
+  }
   const Eigen::Vector3d position(
       CameraBaseX(o) + o.path_amplitude * std::sin(w * t / o.path_period),
       0.8 * o.path_amplitude * std::sin(w * t / (1.37 * o.path_period) + 1.0),

@@ -59,6 +59,15 @@ struct SyntheticOptions {
   double pitch_amplitude_deg = 8.0;
   double pitch_period = 5.5;  // seconds
   double roll_amplitude_deg = 3.0;
+  // Loop path (loop_semi_axes > 0): instead of the sinusoids around one spot, the camera goes
+  // round a rounded rectangle centred in the room with these half sizes (x, y; metres) and
+  // corner radius, at loop_speed, looking outwards at the walls (at a constant distance on the
+  // sides: half the difference of the sizes), starting at (+a, 0) and going anticlockwise; pitch
+  // and roll keep their sinusoids. One lap is 4 (a + b) - 8 r + 2 pi r metres (e.g. 12 x 6 m,
+  // r = 1.5: 69 m).
+  Eigen::Vector2d loop_semi_axes{0.0, 0.0};
+  double loop_corner_radius = 1.5;
+  double loop_speed = 1.0;  // m/s
 
   // Moving objects: boxes of object_size (width x depth x height), walking along world y on lanes
   // at increasing distance in front of the camera, back and forth at ~object_speed (+-20 %).

@@ -81,6 +81,7 @@ void SystemOptions::Check() const {
   orb.Check();
   tracking.Check();
   local_mapping.Check();
+  loop_closing.Check();
   filter.Check();
   dynamic_mask.Check();  // used only when a keyframe is made: fail here, not mid-run
 }
@@ -117,6 +118,19 @@ class SystemImpl {
         local_mapper_(map_, options.local_mapping, !options.deterministic),
         tracker_(options.tracking, map_, local_mapper_, options.deterministic),
         filter_(FilterOptionsOf(options)) {
+    if (!options.loop_closing.vocabulary.empty()) {
+      vocabulary_ = std::make_shared<Vocabulary>(Vocabulary::Load(options.loop_closing.vocabulary));
+      database_ = std::make_shared<KeyFrameDatabase>();
+      tracker_.SetPlaceRecognition(vocabulary_, database_);
+      loop_closer_ = std::make_unique<LoopCloser>(map_, database_, options.loop_closing,
+                                                  options.local_mapping.optimizer,
+                                                  options.local_mapping.matcher, !options.deterministic);
+      loop_closer_->SetCorrectionCallback(
+          [this](const std::vector<int64_t>& moved) { EmitMapChanges(moved, {}); });
+      LoopCloser* closer = loop_closer_.get();
+      local_mapper_.SetKeyFrameDoneCallback(
+          [closer](const std::shared_ptr<KeyFrame>& kf) { closer->InsertKeyFrame(kf); });
+    }
     local_mapper_.SetPosesChangedCallback(
         [this](const std::vector<int64_t>& moved, const std::vector<int64_t>& culled) {
           EmitMapChanges(moved, culled);
@@ -125,6 +139,8 @@ class SystemImpl {
 
   // Keyframe pose corrections (local BA) and culled keyframes, for the map.
   void EmitMapChanges(const std::vector<int64_t>& moved, const std::vector<int64_t>& culled) {
+    if (database_)
+      for (int64_t id : culled) database_->Erase(id);
     std::function<void(const KeyframeData&)> cb;
     {
       std::lock_guard<std::mutex> lock(callback_mutex_);
@@ -162,6 +178,9 @@ class SystemImpl {
 
   std::vector<StampedPose> Trajectory() const { return tracker_.Trajectory(); }
   LocalMappingStats LocalMappingStatistics() const { return local_mapper_.stats(); }
+  LoopClosingStats LoopClosingStatistics() const {
+    return loop_closer_ ? loop_closer_->stats() : LoopClosingStats{};
+  }
   MapStatistics MapSizes() const { return map_->Statistics(); }
   void Prefetch(const cv::Mat& rgb, Timestamp stamp) {
     if (!options_.NeedsDetections() || rgb.empty() || rgb.type() != CV_8UC3) return;
@@ -192,13 +211,19 @@ class SystemImpl {
     std::lock_guard<std::mutex> lock(callback_mutex_);
     keyframe_callback_ = std::move(cb);
   }
-  void Shutdown() { local_mapper_.Finish(); }
+  void Shutdown() {
+    local_mapper_.Finish();
+    if (loop_closer_) loop_closer_->Finish();
+  }
 
  private:
   SystemOptions options_;
   OrbExtractor extractor_;
   std::shared_ptr<const CameraGeometry> geometry_;
   std::shared_ptr<Map> map_;
+  std::shared_ptr<const Vocabulary> vocabulary_;  // null without a vocabulary file
+  std::shared_ptr<KeyFrameDatabase> database_;
+  std::unique_ptr<LoopCloser> loop_closer_;  // declared before the mapper: outlives its callback
   LocalMapper local_mapper_;
   Tracker tracker_;
   DynamicFilter filter_;
@@ -429,6 +454,7 @@ FrameResult System::FeedRgbdFrame(const cv::Mat& rgb, const cv::Mat& depth, Time
 }
 std::vector<StampedPose> System::Trajectory() const { return impl_->Trajectory(); }
 LocalMappingStats System::LocalMappingStatistics() const { return impl_->LocalMappingStatistics(); }
+LoopClosingStats System::LoopClosingStatistics() const { return impl_->LoopClosingStatistics(); }
 MapStatistics System::MapSizes() const { return impl_->MapSizes(); }
 std::vector<StampedPose> System::KeyframeTrajectory() const { return impl_->KeyframeTrajectory(); }
 void System::SetKeyframeCallback(std::function<void(const KeyframeData&)> callback) {

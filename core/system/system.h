@@ -18,6 +18,7 @@
 #include "core/dynamic/dynamic_mask.h"
 #include "core/dynamic/yolo_detector.h"
 #include "core/slam/local_mapping.h"
+#include "core/slam/loop_closing.h"
 #include "core/slam/orb_extractor.h"
 #include "core/slam/tracking.h"
 
@@ -60,6 +61,8 @@ struct SystemOptions {
   OrbExtractorOptions orb;
   TrackingOptions tracking;
   LocalMappingOptions local_mapping;
+  // Place recognition (vocabulary) and loop closing; no vocabulary: neither.
+  LoopClosingOptions loop_closing;
   FilterMode filter_mode = FilterMode::kFull;
   // The paper's parameters (filter.mode is set from filter_mode).
   DynamicFilterOptions filter;
@@ -132,9 +135,13 @@ class System {
   // Local mapping so far: keyframes processed, points triangulated/culled, keyframes culled, time
   // per keyframe (its own thread; synchronous in deterministic mode).
   LocalMappingStats LocalMappingStatistics() const;
+  // Loop closing so far (zeros without a vocabulary): loops detected/closed, points fused,
+  // global bundle adjustments.
+  LoopClosingStats LoopClosingStatistics() const;
   // Map sizes and live object counts (memory monitoring in long runs).
   MapStatistics MapSizes() const;
-  // Finishes local mapping; afterwards Trajectory() is final.
+  // Finishes local mapping and loop closing (and a global bundle adjustment still running);
+  // afterwards Trajectory() is final.
   void Shutdown();
 
  private:

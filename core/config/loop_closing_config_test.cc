@@ -1,0 +1,66 @@
+// LoopClosing section: vocabulary resolution, the on/off switch, bad values named.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "core/config/settings.h"
+#include "core/config/system_config.h"
+
+namespace dygslam {
+namespace {
+
+std::string Preset() {
+  const char* src = std::getenv("DYGSLAM_SOURCE_DIR");
+  const std::string path = std::string(src ? src : ".") + "/config/bonn.yaml";
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+SystemOptions Options(const std::string& section) {
+  const char* src = std::getenv("DYGSLAM_SOURCE_DIR");
+  // Named as if it were config/loops.yaml: relative vocabulary paths resolve against config/.
+  return SystemOptionsFromSettings(ParseSettings(
+      Preset() + "\n" + section, std::string(src ? src : ".") + "/config/loops.yaml"));
+}
+
+TEST(LoopClosingConfig, DefaultsUseTheShippedVocabulary) {
+  const SystemOptions o = Options("");
+  EXPECT_TRUE(o.loop_closing.enabled);
+  EXPECT_NE(o.loop_closing.vocabulary.find("vocabulary.dygvoc"), std::string::npos);
+  std::ifstream file(o.loop_closing.vocabulary);
+  EXPECT_TRUE(file.good()) << o.loop_closing.vocabulary;
+  EXPECT_EQ(o.loop_closing.consistency, LoopClosingOptions{}.consistency);
+}
+
+TEST(LoopClosingConfig, SwitchOffAndNoVocabulary) {
+  const SystemOptions off = Options("LoopClosing:\n  enabled: false\n  consistency: 4\n");
+  EXPECT_FALSE(off.loop_closing.enabled);
+  EXPECT_EQ(off.loop_closing.consistency, 4);
+  EXPECT_FALSE(off.loop_closing.vocabulary.empty());  // relocalization still uses the index
+  const SystemOptions none = Options("LoopClosing:\n  vocabulary: none\n");
+  EXPECT_TRUE(none.loop_closing.vocabulary.empty());
+}
+
+TEST(LoopClosingConfig, MissingVocabularyAndBadValuesAreNamed) {
+  try {
+    Options("LoopClosing:\n  vocabulary: nowhere.dygvoc\n");
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("LoopClosing.vocabulary"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("nowhere.dygvoc"), std::string::npos) << e.what();
+  }
+  try {
+    Options("LoopClosing:\n  consistency: 0\n");
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("LoopClosing.consistency"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace dygslam

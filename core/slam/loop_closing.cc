@@ -1,0 +1,671 @@
+#include "core/slam/loop_closing.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <map>
+
+#include "core/base/log.h"
+#include "core/slam/cost_functions.h"
+#include "core/slam/pose_graph.h"
+
+namespace dygslam {
+
+struct LoopCloser::Loop {
+  std::shared_ptr<KeyFrame> loop_kf;
+  Rigid3d cam_from_world;                              // corrected pose of the current keyframe
+  std::vector<std::shared_ptr<MapPoint>> matches;      // per feature of the current keyframe
+  std::vector<std::shared_ptr<MapPoint>> loop_points;  // the loop keyframe's neighbourhood
+  int inliers = 0, projected = 0;
+};
+
+namespace {
+
+// Rigid transform dst_from_src minimising the squared distances (Horn / Umeyama, no scale).
+Rigid3d AlignPoints(const std::vector<Eigen::Vector3d>& src,
+                    const std::vector<Eigen::Vector3d>& dst) {
+  Eigen::Matrix3Xd a(3, src.size()), b(3, dst.size());
+  for (size_t i = 0; i < src.size(); ++i) {
+    a.col(i) = src[i];
+    b.col(i) = dst[i];
+  }
+  const Eigen::Matrix4d m = Eigen::umeyama(a, b, false);
+  return Rigid3d(Eigen::Matrix3d(m.topLeftCorner<3, 3>()),
+                 Eigen::Vector3d(m.topRightCorner<3, 1>()));
+}
+
+bool Reprojects(const KeyFrame& kf, int idx, const Eigen::Vector3d& p_cam, double threshold2) {
+  if (p_cam.z() <= 0) return false;
+  const auto& g = *kf.geometry;
+  const double u = g.camera.fx * p_cam.x() / p_cam.z() + g.camera.cx;
+  const double v = g.camera.fy * p_cam.y() / p_cam.z() + g.camera.cy;
+  const cv::KeyPoint& kp = kf.undistorted[idx];
+  const double e2 = (u - kp.pt.x) * (u - kp.pt.x) + (v - kp.pt.y) * (v - kp.pt.y);
+  return e2 < threshold2 * g.sigma2[kp.octave];
+}
+
+// Matches `points` (not yet in matches) into kf seen from `cam_from_world`; returns added count.
+int SearchByProjection(const KeyFrame& kf, const Rigid3d& cam_from_world,
+                       const std::vector<std::shared_ptr<MapPoint>>& points, double radius_px,
+                       int max_distance, std::vector<std::shared_ptr<MapPoint>>* matches) {
+  const auto& g = *kf.geometry;
+  const Eigen::Vector3d center = cam_from_world.Inverse().translation;
+  std::set<const MapPoint*> already;
+  for (const auto& m : *matches)
+    if (m) already.insert(m.get());
+  int added = 0;
+  for (const auto& mp : points) {
+    if (!mp || mp->bad || already.count(mp.get())) continue;
+    const Eigen::Vector3d p = cam_from_world * mp->position;
+    if (p.z() <= 0) continue;
+    const double u = g.camera.fx * p.x() / p.z() + g.camera.cx;
+    const double v = g.camera.fy * p.y() / p.z() + g.camera.cy;
+    if (!g.InBounds(u, v)) continue;
+    const Eigen::Vector3d po = mp->position - center;
+    const double dist = po.norm();
+    if (dist < 0.8 * mp->min_distance || dist > 1.2 * mp->max_distance) continue;
+    if (po.dot(mp->normal) < 0.5 * dist) continue;
+    const int level = mp->PredictScale(dist, g);
+    int best = 256, best_idx = -1;
+    for (int c : kf.grid.Query(kf.undistorted, u, v, radius_px * g.scales[level],
+                               std::max(0, level - 1), level + 1)) {
+      if ((*matches)[c]) continue;
+      const int d = HammingDistance(mp->descriptor, kf.descriptors[c]);
+      if (d < best) {
+        best = d;
+        best_idx = c;
+      }
+    }
+    if (best_idx >= 0 && best <= max_distance) {
+      (*matches)[best_idx] = mp;
+      already.insert(mp.get());
+      ++added;
+    }
+  }
+  return added;
+}
+
+}  // namespace
+
+LoopCloser::LoopCloser(std::shared_ptr<Map> map, std::shared_ptr<KeyFrameDatabase> database,
+                       const LoopClosingOptions& options, const OptimizerOptions& optimizer,
+                       const MatcherOptions& matcher, bool threaded)
+    : map_(std::move(map)),
+      database_(std::move(database)),
+      options_(options),
+      optimizer_(optimizer),
+      matcher_(matcher),
+      threaded_(threaded) {
+  options_.Check();
+  if (threaded_) thread_ = std::thread([this] { Run(); });
+}
+
+LoopCloser::~LoopCloser() { Finish(); }
+
+void LoopCloser::SetCorrectionCallback(CorrectionCallback callback) {
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  callback_ = std::move(callback);
+}
+
+LoopClosingStats LoopCloser::stats() const {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  return stats_;
+}
+
+void LoopCloser::InsertKeyFrame(std::shared_ptr<KeyFrame> kf) {
+  if (!threaded_) {
+    Process(kf);
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    if (stop_) return;
+    queue_.push_back(std::move(kf));
+  }
+  queue_cv_.notify_one();
+}
+
+void LoopCloser::Finish() {
+  if (threaded_) {
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      done_cv_.wait(lock, [this] { return (queue_.empty() && !busy_) || stop_; });
+      stop_ = true;
+    }
+    queue_cv_.notify_all();
+    if (thread_.joinable()) thread_.join();
+  }
+  std::lock_guard<std::mutex> lock(global_ba_mutex_);
+  if (global_ba_thread_.joinable()) global_ba_thread_.join();
+}
+
+void LoopCloser::Run() {
+  while (true) {
+    std::shared_ptr<KeyFrame> kf;
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      queue_cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
+      if (queue_.empty() && stop_) break;
+      kf = queue_.front();
+      queue_.pop_front();
+      busy_ = true;
+    }
+    Process(kf);
+    {
+      std::lock_guard<std::mutex> lock(queue_mutex_);
+      busy_ = false;
+    }
+    done_cv_.notify_all();
+  }
+}
+
+void LoopCloser::Report(const std::vector<int64_t>& moved) {
+  CorrectionCallback callback;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    callback = callback_;
+  }
+  if (callback && !moved.empty()) callback(moved);
+}
+
+void LoopCloser::Process(const std::shared_ptr<KeyFrame>& kf) {
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.keyframes_checked++;
+  }
+  if (!options_.enabled) return;
+  const auto candidates = DetectLoop(kf);
+  if (candidates.empty()) return;
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.candidates_detected += static_cast<int>(candidates.size());
+  }
+  Loop loop;
+  if (!ComputeTransform(kf, candidates, &loop)) {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.loops_rejected++;
+    return;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  CorrectLoop(kf, loop);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.correction_ms_total += ms;
+  }
+  if (options_.global_bundle_adjustment) StartGlobalBundleAdjustment(kf->id);
+}
+
+std::vector<std::shared_ptr<KeyFrame>> LoopCloser::DetectLoop(const std::shared_ptr<KeyFrame>& kf) {
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  if (kf->bad || kf->bow_vector.empty()) return {};
+  if (last_loop_kf_id_ >= 0 && kf->id < last_loop_kf_id_ + options_.min_keyframe_gap) return {};
+  if (static_cast<int>(map_->NumKeyFrames()) <= options_.min_keyframe_gap) return {};
+  // The keyframe's worst covisible neighbour sets the bar.
+  double min_score = 1.0;
+  bool any = false;
+  for (int64_t id : kf->ordered_connections) {
+    auto n = map_->GetKeyFrame(id);
+    if (!n || n->bad || n->bow_vector.empty()) continue;
+    min_score = std::min(min_score, Vocabulary::Score(kf->bow_vector, n->bow_vector));
+    any = true;
+  }
+  if (!any) min_score = 0;
+  const auto candidates = LoopCandidates(
+      *map_, *database_, *kf, min_score,
+      [&](int64_t id) {
+        return id > kf->id - options_.min_keyframe_gap || kf->connection_weights.count(id) > 0;
+      },
+      options_.place);
+  if (candidates.empty()) {
+    consistent_groups_.clear();
+    return {};
+  }
+  // Consistency: a candidate group that overlaps a group of the previous keyframe inherits its
+  // count + 1; enough consecutive overlaps make the candidate a loop.
+  std::vector<ConsistentGroup> current;
+  std::vector<uint8_t> used(consistent_groups_.size(), 0);
+  std::vector<std::shared_ptr<KeyFrame>> enough;
+  for (const auto& c : candidates) {
+    std::set<int64_t> group = {c->id};
+    for (const auto& [id, w] : c->connection_weights) group.insert(id);
+    bool consistent_any = false, added = false;
+    for (size_t g = 0; g < consistent_groups_.size(); ++g) {
+      bool overlap = false;
+      for (int64_t id : group) {
+        if (consistent_groups_[g].keyframes.count(id)) {
+          overlap = true;
+          break;
+        }
+      }
+      if (!overlap) continue;
+      consistent_any = true;
+      const int consistency = consistent_groups_[g].consistency + 1;
+      if (!used[g]) {
+        current.push_back({group, consistency});
+        used[g] = 1;
+      }
+      if (consistency >= options_.consistency && !added) {
+        enough.push_back(c);
+        added = true;
+      }
+    }
+    if (!consistent_any) current.push_back({group, 0});
+  }
+  consistent_groups_ = std::move(current);
+  return enough;
+}
+
+bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
+                                  const std::vector<std::shared_ptr<KeyFrame>>& candidates,
+                                  Loop* loop) {
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  if (kf->bad) return false;
+  const double th2 = options_.ransac_threshold_px * options_.ransac_threshold_px;
+  uint64_t rng = static_cast<uint64_t>(kf->id) * 2654435761ULL + 1;
+  auto next = [&rng]() {
+    rng = rng * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<uint32_t>(rng >> 33);
+  };
+  for (const auto& c : candidates) {
+    if (c->bad) continue;
+    std::vector<std::shared_ptr<MapPoint>> matches;
+    if (matcher_.SearchByBow(*kf, *c, 0.75, &matches) < options_.min_bow_matches) continue;
+    // Correspondences in each camera's frame.
+    struct Pair {
+      int idx1, idx2;
+      Eigen::Vector3d p1, p2;
+    };
+    std::vector<Pair> pairs;
+    for (size_t i = 0; i < matches.size(); ++i) {
+      const auto& lp = matches[i];
+      const auto& mp = kf->map_points[i];
+      if (!lp || !mp || lp->bad || mp->bad) continue;
+      auto obs = lp->observations.find(c->id);
+      if (obs == lp->observations.end()) continue;
+      pairs.push_back({static_cast<int>(i), obs->second, kf->cam_from_world * mp->position,
+                       c->cam_from_world * lp->position});
+    }
+    if (static_cast<int>(pairs.size()) < options_.min_bow_matches) continue;
+    auto count_inliers = [&](const Rigid3d& t12, std::vector<uint8_t>* flags) {
+      const Rigid3d t21 = t12.Inverse();
+      int n = 0;
+      flags->assign(pairs.size(), 0);
+      for (size_t k = 0; k < pairs.size(); ++k) {
+        if (Reprojects(*kf, pairs[k].idx1, t12 * pairs[k].p2, th2) &&
+            Reprojects(*c, pairs[k].idx2, t21 * pairs[k].p1, th2)) {
+          (*flags)[k] = 1;
+          ++n;
+        }
+      }
+      return n;
+    };
+    int best = 0;
+    Rigid3d best_t12;
+    std::vector<uint8_t> flags, best_flags;
+    for (int it = 0; it < options_.ransac_iterations; ++it) {
+      std::array<size_t, 3> s;
+      s[0] = next() % pairs.size();
+      do s[1] = next() % pairs.size();
+      while (s[1] == s[0]);
+      do s[2] = next() % pairs.size();
+      while (s[2] == s[0] || s[2] == s[1]);
+      std::vector<Eigen::Vector3d> src, dst;
+      for (size_t k : s) {
+        src.push_back(pairs[k].p2);
+        dst.push_back(pairs[k].p1);
+      }
+      const Rigid3d t12 = AlignPoints(src, dst);
+      if (!t12.AllFinite()) continue;
+      const int n = count_inliers(t12, &flags);
+      if (n > best) {
+        best = n;
+        best_t12 = t12;
+        best_flags = flags;
+      }
+    }
+    LOG_DEBUG << "loop closing: keyframe " << kf->id << " vs " << c->id << ": " << pairs.size()
+              << " BoW matches, " << best << " RANSAC inliers";
+    if (best < options_.min_ransac_inliers) continue;
+    // Refinement: least squares on the inliers, re-scored, twice.
+    for (int round = 0; round < 2; ++round) {
+      std::vector<Eigen::Vector3d> src, dst;
+      for (size_t k = 0; k < pairs.size(); ++k) {
+        if (!best_flags[k]) continue;
+        src.push_back(pairs[k].p2);
+        dst.push_back(pairs[k].p1);
+      }
+      const Rigid3d refined = AlignPoints(src, dst);
+      const int n = count_inliers(refined, &flags);
+      if (n < best) break;
+      best = n;
+      best_t12 = refined;
+      best_flags = flags;
+    }
+    // Guided search: the candidate's neighbourhood seen from the corrected pose.
+    std::vector<std::shared_ptr<MapPoint>> kept(kf->size(), nullptr);
+    for (size_t k = 0; k < pairs.size(); ++k)
+      if (best_flags[k]) kept[pairs[k].idx1] = matches[pairs[k].idx1];
+    const Rigid3d corrected = best_t12 * c->cam_from_world;
+    std::vector<std::shared_ptr<MapPoint>> loop_points;
+    std::set<int64_t> seen;
+    std::vector<std::shared_ptr<KeyFrame>> neighbourhood = {c};
+    for (int64_t id : c->ordered_connections) {
+      auto n = map_->GetKeyFrame(id);
+      if (n && !n->bad) neighbourhood.push_back(n);
+    }
+    for (const auto& n : neighbourhood) {
+      for (const auto& mp : n->map_points) {
+        if (mp && !mp->bad && seen.insert(mp->id).second) loop_points.push_back(mp);
+      }
+    }
+    SearchByProjection(*kf, corrected, loop_points, 10.0, matcher_.options().th_low, &kept);
+    int total = 0;
+    for (const auto& m : kept) total += m != nullptr;
+    if (total < options_.min_projection_matches) {
+      LOG_DEBUG << "loop closing: keyframe " << kf->id << " vs " << c->id << ": " << best
+                << " RANSAC inliers, " << total << " projected matches (too few)";
+      continue;
+    }
+    loop->loop_kf = c;
+    loop->cam_from_world = corrected;
+    loop->matches = std::move(kept);
+    loop->loop_points = std::move(loop_points);
+    loop->inliers = best;
+    loop->projected = total;
+    return true;
+  }
+  return false;
+}
+
+void LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& loop) {
+  std::vector<int64_t> moved;
+  int fused = 0;
+  double shift = 0;
+  {
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    if (kf->bad || loop.loop_kf->bad) return;
+    map_->BumpCorrectionEpoch();  // local BA in flight must not write back pre-loop poses
+    // 1. Move the current keyframe's neighbourhood (and the points it sees) by the loop transform.
+    std::vector<std::shared_ptr<KeyFrame>> group = {kf};
+    for (int64_t id : kf->ordered_connections) {
+      auto n = map_->GetKeyFrame(id);
+      if (n && !n->bad) group.push_back(n);
+    }
+    std::map<int64_t, Rigid3d> uncorrected, corrected;
+    const Rigid3d kf_from_world = kf->cam_from_world;
+    for (const auto& g : group) {
+      uncorrected[g->id] = g->cam_from_world;
+      corrected[g->id] = (g->cam_from_world * kf_from_world.Inverse()) * loop.cam_from_world;
+    }
+    shift = (kf->CameraCenter() - loop.cam_from_world.Inverse().translation).norm();
+    std::set<int64_t> moved_points;
+    std::vector<std::shared_ptr<MapPoint>> touched;
+    for (const auto& g : group) {
+      const Rigid3d world_from_new = corrected[g->id].Inverse();
+      for (const auto& mp : g->map_points) {
+        if (!mp || mp->bad || !moved_points.insert(mp->id).second) continue;
+        mp->position = world_from_new * (uncorrected[g->id] * mp->position);
+        touched.push_back(mp);
+      }
+    }
+    for (const auto& g : group) g->cam_from_world = corrected[g->id];
+    for (const auto& mp : touched) map_->UpdateNormalAndDepth(*mp);
+    // 2. Fuse: the loop's matched points replace the current keyframe's duplicates, then the
+    // loop neighbourhood's points are fused into every corrected keyframe.
+    for (size_t i = 0; i < loop.matches.size(); ++i) {
+      const auto& lp = loop.matches[i];
+      if (!lp || lp->bad) continue;
+      const auto current = kf->map_points[i];
+      if (current && !current->bad) {
+        if (current != lp) {
+          map_->Replace(current, lp);
+          ++fused;
+        }
+      } else if (lp->observations.count(kf->id) == 0) {
+        map_->AddObservation(lp, kf, static_cast<int>(i));
+        map_->ComputeDistinctiveDescriptor(*lp);
+        ++fused;
+      }
+    }
+    for (const auto& g : group)
+      fused += matcher_.Fuse(*map_, g, loop.loop_points, options_.fusion_radius_px);
+    // 3. Covisibility after fusion; links that appeared between the two sides are loop edges.
+    std::set<int64_t> group_ids;
+    for (const auto& g : group) group_ids.insert(g->id);
+    std::map<int64_t, std::set<int64_t>> before;
+    for (const auto& g : group)
+      for (const auto& [id, w] : g->connection_weights) before[g->id].insert(id);
+    for (const auto& g : group) map_->UpdateConnections(g);
+    std::vector<std::pair<int64_t, int64_t>> new_links;
+    for (const auto& g : group) {
+      for (const auto& [id, w] : g->connection_weights) {
+        if (group_ids.count(id) || before[g->id].count(id)) continue;
+        new_links.push_back({g->id, id});
+      }
+    }
+    new_links.push_back({kf->id, loop.loop_kf->id});
+    kf->not_erase = true;
+    loop.loop_kf->not_erase = true;
+    // 4. Essential graph: spanning tree, strong covisibility, old loop edges from the poses
+    // before this correction; the new loop links from the corrected ones.
+    std::map<int64_t, Rigid3d> poses, measure;
+    for (const auto& [id, k] : map_->keyframes()) {
+      poses[id] = k->cam_from_world;
+      auto u = uncorrected.find(id);
+      measure[id] = u != uncorrected.end() ? u->second : k->cam_from_world;
+    }
+    std::vector<PoseGraphEdge> edges;
+    auto relative = [](const std::map<int64_t, Rigid3d>& p, int64_t i, int64_t j) {
+      return p.at(i) * p.at(j).Inverse();
+    };
+    std::set<std::pair<int64_t, int64_t>> added;
+    auto add = [&](int64_t i, int64_t j, const std::map<int64_t, Rigid3d>& from) {
+      if (!poses.count(i) || !poses.count(j) || i == j) return;
+      const auto key = std::minmax(i, j);
+      if (!added.insert(key).second) return;
+      edges.push_back({i, j, relative(from, i, j), 1.0});
+    };
+    for (const auto& [a, b] : new_links) add(a, b, poses);
+    for (const auto& [a, b] : loop_edges_) add(a, b, measure);
+    for (const auto& [id, k] : map_->keyframes()) {
+      if (k->parent_id >= 0) add(id, k->parent_id, measure);
+      for (const auto& [other, w] : k->connection_weights)
+        if (w >= options_.essential_min_weight) add(id, other, measure);
+    }
+    for (const auto& l : new_links) loop_edges_.push_back(l);
+    std::set<int64_t> fixed = {loop.loop_kf->id, map_->keyframes().begin()->first};
+    const std::map<int64_t, Rigid3d> before_graph = poses;
+    OptimizePoseGraph(&poses, edges, fixed, options_.pose_graph_iterations);
+    // 5. Keyframes take the optimised poses; points follow their reference keyframe.
+    for (const auto& [id, k] : map_->keyframes()) {
+      k->cam_from_world = poses[id];
+      moved.push_back(id);
+    }
+    for (const auto& [pid, mp] : map_->map_points()) {
+      if (mp->bad) continue;
+      int64_t ref = mp->ref_kf_id;
+      if (!poses.count(ref)) {
+        ref = -1;
+        for (const auto& [kid, idx] : mp->observations)
+          if (poses.count(kid)) {
+            ref = kid;
+            break;
+          }
+      }
+      if (ref < 0) continue;
+      mp->position = poses[ref].Inverse() * (before_graph.at(ref) * mp->position);
+      map_->UpdateNormalAndDepth(*mp);
+    }
+    map_->BumpCorrectionEpoch();
+    last_loop_kf_id_ = kf->id;
+    consistent_groups_.clear();
+  }
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.loops_closed++;
+    stats_.points_fused += fused;
+    stats_.loops.push_back({kf->id, loop.loop_kf->id});
+    stats_.loop_frames.push_back({kf->frame_id, loop.loop_kf->frame_id});
+  }
+  LOG_INFO << "loop closed: keyframe " << kf->id << " (frame " << kf->frame_id << ") with keyframe "
+           << loop.loop_kf->id << " (frame " << loop.loop_kf->frame_id << "): " << loop.inliers
+           << " RANSAC inliers, " << loop.projected << " matches, correction " << shift << " m, "
+           << fused << " points fused";
+  Report(moved);
+}
+
+void LoopCloser::StartGlobalBundleAdjustment(int64_t loop_kf_id) {
+  const int64_t epoch = map_->CorrectionEpoch();
+  std::lock_guard<std::mutex> lock(global_ba_mutex_);
+  if (global_ba_thread_.joinable()) {
+    global_ba_abort_ = true;
+    global_ba_thread_.join();
+  }
+  global_ba_abort_ = false;
+  if (!threaded_) {
+    RunGlobalBundleAdjustment(epoch);
+    return;
+  }
+  global_ba_thread_ = std::thread([this, epoch] { RunGlobalBundleAdjustment(epoch); });
+}
+
+void LoopCloser::RunGlobalBundleAdjustment(int64_t epoch) {
+  struct Observation {
+    int64_t kf_id, point_id;
+    Eigen::Vector3d measurement;
+    double sqrt_info;
+    bool stereo;
+  };
+  std::map<int64_t, std::array<double, 7>> poses;
+  std::map<int64_t, Rigid3d> before;
+  std::map<int64_t, Eigen::Vector3d> points;
+  std::vector<Observation> observations;
+  ProjectionModel model{};
+  int64_t first_kf = -1;
+  {
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    if (map_->CorrectionEpoch() != epoch || map_->keyframes().empty()) return;
+    first_kf = map_->keyframes().begin()->first;
+    const auto& g = *map_->keyframes().begin()->second->geometry;
+    model = {g.camera.fx, g.camera.fy, g.camera.cx, g.camera.cy, g.bf};
+    for (const auto& [id, k] : map_->keyframes()) {
+      PoseToParameters(k->cam_from_world, poses[id].data());
+      before[id] = k->cam_from_world;
+    }
+    for (const auto& [pid, mp] : map_->map_points()) {
+      if (mp->bad || mp->NumObservations() < 2) continue;
+      points[pid] = mp->position;
+      for (const auto& [kid, idx] : mp->observations) {
+        auto k = map_->GetKeyFrame(kid);
+        if (!k) continue;
+        const cv::KeyPoint& kp = k->undistorted[idx];
+        const bool stereo = k->u_right[idx] >= 0;
+        observations.push_back({kid, pid,
+                                Eigen::Vector3d(kp.pt.x, kp.pt.y, stereo ? k->u_right[idx] : 0.0),
+                                std::sqrt(k->geometry->inv_sigma2[kp.octave]), stereo});
+      }
+    }
+  }
+  if (observations.empty()) return;
+  {
+    ceres::Problem::Options problem_options;
+    problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(problem_options);
+    PoseManifold manifold;
+    const double delta_mono = std::sqrt(optimizer_.chi2_mono),
+                 delta_stereo = std::sqrt(optimizer_.chi2_stereo);
+    for (const Observation& o : observations) {
+      ceres::CostFunction* cost = o.stereo
+                                      ? static_cast<ceres::CostFunction*>(
+                                            new StereoBACost(o.measurement, o.sqrt_info, model))
+                                      : new MonoBACost(o.measurement.head<2>(), o.sqrt_info, model);
+      problem.AddResidualBlock(cost, new ceres::HuberLoss(o.stereo ? delta_stereo : delta_mono),
+                               poses[o.kf_id].data(), points[o.point_id].data());
+    }
+    for (auto& [id, pose] : poses) {
+      if (!problem.HasParameterBlock(pose.data())) continue;
+      problem.SetManifold(pose.data(), &manifold);
+      if (id == first_kf) problem.SetParameterBlockConstant(pose.data());
+    }
+    struct Abort : ceres::IterationCallback {
+      explicit Abort(const std::atomic<bool>* flag) : flag(flag) {}
+      ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+        return flag->load() ? ceres::SOLVER_ABORT : ceres::SOLVER_CONTINUE;
+      }
+      const std::atomic<bool>* flag;
+    } abort(&global_ba_abort_);
+    ceres::Solver::Options solver_options;
+    solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
+    solver_options.max_num_iterations = options_.global_ba_iterations;
+    solver_options.num_threads = 1;
+    solver_options.logging_type = ceres::SILENT;
+    solver_options.callbacks.push_back(&abort);
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &problem, &summary);
+    if (global_ba_abort_.load() || summary.termination_type == ceres::USER_FAILURE ||
+        summary.termination_type == ceres::FAILURE) {
+      std::lock_guard<std::mutex> lock(stats_mutex_);
+      stats_.global_ba_discarded++;
+      return;
+    }
+  }
+  std::vector<int64_t> moved;
+  {
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    if (map_->CorrectionEpoch() != epoch) {
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      stats_.global_ba_discarded++;
+      return;
+    }
+    // Keyframes in the problem take its poses; newer ones follow their parent (chain) by the same
+    // world correction; points not in the problem follow their reference keyframe.
+    std::map<int64_t, Rigid3d> after;
+    for (const auto& [id, p] : poses) after[id] = PoseFromParameters(p.data());
+    std::map<int64_t, Rigid3d> old_pose;
+    for (const auto& [id, k] : map_->keyframes()) {
+      old_pose[id] = k->cam_from_world;
+      if (after.count(id)) continue;
+      int64_t anchor = k->parent_id;
+      for (int guard = 0; guard < 1000 && anchor >= 0 && !after.count(anchor); ++guard) {
+        auto parent = map_->GetKeyFrame(anchor);
+        anchor = parent ? parent->parent_id : -1;
+      }
+      if (anchor < 0 || !after.count(anchor)) continue;
+      after[id] = k->cam_from_world * before.at(anchor).Inverse() * after.at(anchor);
+    }
+    for (const auto& [pid, mp] : map_->map_points()) {
+      if (mp->bad) continue;
+      auto solved = points.find(pid);
+      if (solved != points.end()) {
+        mp->position = solved->second;
+      } else {
+        auto ref = after.find(mp->ref_kf_id);
+        auto old = old_pose.find(mp->ref_kf_id);
+        if (ref == after.end() || old == old_pose.end()) continue;
+        mp->position = ref->second.Inverse() * (old->second * mp->position);
+      }
+    }
+    for (const auto& [id, k] : map_->keyframes()) {
+      auto a = after.find(id);
+      if (a == after.end()) continue;
+      k->cam_from_world = a->second;
+      moved.push_back(id);
+    }
+    for (const auto& [pid, mp] : map_->map_points())
+      if (!mp->bad) map_->UpdateNormalAndDepth(*mp);
+    map_->BumpCorrectionEpoch();
+  }
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.global_ba_runs++;
+  }
+  Report(moved);
+}
+
+}  // namespace dygslam

@@ -1,0 +1,108 @@
+// Loop closing, ORB-SLAM2's RGB-D order, on its own thread (synchronous in deterministic mode):
+//   1. detection: loop candidates from the BoW index (scoring at least as well as the keyframe's
+//      worst covisible neighbour, not covisible, not recent), kept only when consistent over
+//      `consistency` consecutive keyframes (candidate groups overlapping);
+//   2. geometry: BoW matches between the map points of the keyframe and the candidate, an SE3
+//      (metric depth: no scale) by RANSAC on 3-point Horn/Umeyama solutions scored by
+//      reprojection in both keyframes, refined on the inliers, then a guided projection search of
+//      the candidate's neighbourhood with that transform; enough matches accept the loop;
+//   3. correction: the keyframe and its covisible neighbours are moved by the loop transform (and
+//      their points with them), duplicated map points are fused, covisibility is updated, the
+//      essential graph (spanning tree, strong covisibility, loop edges) is optimised with Ceres,
+//      and map points follow their reference keyframes;
+//   4. a global bundle adjustment of every keyframe and point, in the background (its own
+//      thread; synchronous in deterministic mode), written back only if no newer loop came.
+// Corrections are reported through the callback (ids of keyframes whose pose changed).
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <thread>
+#include <vector>
+
+#include "core/place/keyframe_database.h"
+#include "core/slam/loop_closing_options.h"
+#include "core/slam/map.h"
+#include "core/slam/matcher.h"
+#include "core/slam/optimizer.h"
+
+namespace dygslam {
+
+struct LoopClosingStats {
+  int keyframes_checked = 0;
+  int candidates_detected = 0;  // consistent candidates (before geometry)
+  int loops_rejected = 0;       // candidates that failed the geometric checks
+  int loops_closed = 0;
+  int points_fused = 0;
+  int global_ba_runs = 0;
+  int global_ba_discarded = 0;  // finished after a newer loop: not written back
+  double correction_ms_total = 0;
+  std::vector<std::pair<int64_t, int64_t>> loops;        // (keyframe id, loop keyframe id)
+  std::vector<std::pair<int64_t, int64_t>> loop_frames;  // (frame id, loop keyframe's frame id)
+};
+
+class LoopCloser {
+ public:
+  LoopCloser(std::shared_ptr<Map> map, std::shared_ptr<KeyFrameDatabase> database,
+             const LoopClosingOptions& options, const OptimizerOptions& optimizer,
+             const MatcherOptions& matcher, bool threaded);
+  ~LoopCloser();
+  LoopCloser(const LoopCloser&) = delete;
+  LoopCloser& operator=(const LoopCloser&) = delete;
+
+  // A keyframe local mapping is done with. Threaded: queued; deterministic: processed here.
+  void InsertKeyFrame(std::shared_ptr<KeyFrame> kf);
+  // Waits for the queue and any global bundle adjustment, then stops the threads.
+  void Finish();
+  // Called after a correction (loop or global BA) with the keyframes whose pose changed.
+  using CorrectionCallback = std::function<void(const std::vector<int64_t>& moved)>;
+  void SetCorrectionCallback(CorrectionCallback callback);
+  LoopClosingStats stats() const;
+
+ private:
+  struct Loop;
+  void Run();
+  void Process(const std::shared_ptr<KeyFrame>& kf);
+  std::vector<std::shared_ptr<KeyFrame>> DetectLoop(const std::shared_ptr<KeyFrame>& kf);
+  bool ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
+                        const std::vector<std::shared_ptr<KeyFrame>>& candidates, Loop* loop);
+  void CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& loop);
+  void StartGlobalBundleAdjustment(int64_t loop_kf_id);
+  void RunGlobalBundleAdjustment(int64_t epoch);
+  void Report(const std::vector<int64_t>& moved);
+
+  std::shared_ptr<Map> map_;
+  std::shared_ptr<KeyFrameDatabase> database_;
+  LoopClosingOptions options_;
+  OptimizerOptions optimizer_;
+  Matcher matcher_;
+  bool threaded_;
+
+  // Detection state (loop thread only).
+  struct ConsistentGroup {
+    std::set<int64_t> keyframes;
+    int consistency = 0;
+  };
+  std::vector<ConsistentGroup> consistent_groups_;
+  int64_t last_loop_kf_id_ = -1;
+  std::vector<std::pair<int64_t, int64_t>> loop_edges_;  // kept for later pose graphs
+
+  mutable std::mutex queue_mutex_;
+  std::condition_variable queue_cv_, done_cv_;
+  std::deque<std::shared_ptr<KeyFrame>> queue_;
+  bool stop_ = false, busy_ = false;
+  CorrectionCallback callback_;
+  mutable std::mutex stats_mutex_;
+  LoopClosingStats stats_;
+  std::mutex global_ba_mutex_;
+  std::thread global_ba_thread_;
+  std::atomic<bool> global_ba_abort_{false};
+  std::thread thread_;
+};
+
+}  // namespace dygslam

@@ -1,0 +1,53 @@
+// Settings of place recognition and loop closing (YAML section `LoopClosing:`).
+#pragma once
+
+#include <cmath>
+#include <string>
+
+#include "core/base/error.h"
+#include "core/slam/place_recognition.h"
+
+namespace dygslam {
+
+struct LoopClosingOptions {
+  // Bag-of-words vocabulary file (`dygslam vocab`). Empty: no place recognition at all
+  // (relocalization and reference-keyframe tracking match by brute force, no loop closing).
+  std::string vocabulary;
+  bool enabled = true;  // LoopClosing.enabled: detect and close loops
+  // Candidates: keyframes at least this many keyframes older than the query...
+  int min_keyframe_gap = 10;
+  // ...seen in this many consecutive keyframes (each one covisible with the last group).
+  int consistency = 3;
+  // SE3 from matched map points (metric depth): RANSAC then refinement on the inliers.
+  int min_bow_matches = 20;
+  int ransac_iterations = 300;
+  double ransac_threshold_px = 4.0;  // reprojection error, level-0 pixels (scaled by level)
+  int min_ransac_inliers = 20;
+  int min_projection_matches = 40;  // after the guided search with the loop transform
+  double fusion_radius_px = 4.0;
+  // Essential graph: covisibility edges with at least this many shared points.
+  int essential_min_weight = 100;
+  int pose_graph_iterations = 20;
+  bool global_bundle_adjustment = true;  // after a loop, in the background
+  int global_ba_iterations = 10;
+  PlaceRecognitionOptions place;
+  void Check() const {
+    DYGSLAM_CHECK_OPTION(min_keyframe_gap >= 1, "LoopClosing.min_keyframe_gap");
+    DYGSLAM_CHECK_OPTION(consistency >= 1, "LoopClosing.consistency");
+    DYGSLAM_CHECK_OPTION(min_bow_matches >= 3, "LoopClosing.min_bow_matches");
+    DYGSLAM_CHECK_OPTION(ransac_iterations >= 1, "LoopClosing.ransac_iterations");
+    DYGSLAM_CHECK_OPTION(ransac_threshold_px > 0 && std::isfinite(ransac_threshold_px),
+                         "LoopClosing.ransac_threshold_px");
+    DYGSLAM_CHECK_OPTION(min_ransac_inliers >= 3, "LoopClosing.min_ransac_inliers");
+    DYGSLAM_CHECK_OPTION(min_projection_matches >= min_ransac_inliers,
+                         "LoopClosing.min_projection_matches");
+    DYGSLAM_CHECK_OPTION(fusion_radius_px > 0 && std::isfinite(fusion_radius_px),
+                         "LoopClosing.fusion_radius_px");
+    DYGSLAM_CHECK_OPTION(essential_min_weight >= 1, "LoopClosing.essential_min_weight");
+    DYGSLAM_CHECK_OPTION(pose_graph_iterations >= 1, "LoopClosing.pose_graph_iterations");
+    DYGSLAM_CHECK_OPTION(global_ba_iterations >= 1, "LoopClosing.global_ba_iterations");
+    place.Check();
+  }
+};
+
+}  // namespace dygslam

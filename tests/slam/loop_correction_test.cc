@@ -1,0 +1,112 @@
+// Loop closer on a keyframe map made from a generated loop with a known, growing drift: the
+// return to the start is detected (BoW candidates, covisibility consistency), the SE3 between the
+// two sides is found and the pose graph spreads the correction, so the drift at the end shrinks.
+#include <gtest/gtest.h>
+
+#include "core/slam/loop_closing.h"
+#include "tests/slam/synthetic_map.h"
+
+namespace dygslam {
+namespace {
+
+TEST(LoopCorrection, DriftedLoopIsDetectedAndCorrected) {
+  const Vocabulary vocabulary =
+      Vocabulary::Load(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/vocabulary.dygvoc");
+  const OrbExtractor extractor{OrbExtractorOptions{}};
+  // Stadium loop 5 x 3 m (corner radius 1.5 m: 13.4 m) in a 9 x 7 m room at 1.5 m/s, 20 frames/s:
+  // one lap = 179 frames; a keyframe every 6 frames over 1.05 laps (keyframes after the loop
+  // would be made from the drifted estimate, which tracking would have corrected).
+  SyntheticOptions synth;
+  synth.seed = 17;
+  synth.num_moving_objects = 0;
+  synth.supersampling = 1;
+  synth.room_size = {9.0, 7.0, 3.0};
+  synth.loop_semi_axes = {2.5, 1.5};
+  synth.loop_speed = 1.5;
+  synth.sensor.fps = 20;
+  constexpr int kStride = 6, kKeyframes = 32;
+  synth.num_frames = kKeyframes * kStride;
+  const SyntheticScene scene(synth);
+  auto map = std::make_shared<Map>();
+  auto database = std::make_shared<KeyFrameDatabase>();
+  const auto geometry = std::make_shared<CameraGeometry>(
+      CameraGeometry::Create(synth.camera, synth.sensor, extractor));
+  LoopClosingOptions options;
+  options.global_bundle_adjustment = false;  // pose graph only: the figure below is its work
+  LoopCloser closer(map, database, options, OptimizerOptions{}, MatcherOptions{},
+                    /*threaded=*/false);
+  // Drift: each keyframe's estimate is off by a yaw of 0.3 deg and 1.5 cm per keyframe
+  // (accumulated, as visual odometry drifts), so the end of the lap is ~0.5 m / 10 deg off.
+  const Rigid3d step(
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.3 * M_PI / 180, Eigen::Vector3d::UnitZ())),
+      Eigen::Vector3d(0.015, 0.0, 0.005));
+  Rigid3d world_drift = Rigid3d::Identity();  // drifted world from true world
+  std::vector<std::shared_ptr<KeyFrame>> keyframes;
+  std::vector<Rigid3d> truth;
+  std::vector<double> error_before;
+  for (int k = 0; k < kKeyframes; ++k) {
+    const int index = k * kStride;
+    Frame frame =
+        testing::MakeSyntheticFrame(scene, scene.RenderFrame(index), index, extractor, geometry);
+    const Rigid3d world_from_cam = scene.WorldFromCam(index);
+    frame.cam_from_world = (world_drift * world_from_cam).Inverse();
+    frame.has_pose = true;
+    frame.ComputeBow(vocabulary);
+    truth.push_back(world_from_cam);
+    std::shared_ptr<KeyFrame> kf;
+    {
+      std::lock_guard<std::mutex> lock(map->mutex());
+      kf = std::make_shared<KeyFrame>(map->NextKeyFrameId(), frame);
+      map->AddKeyFrame(kf);
+      for (size_t i = 0; i < kf->size(); ++i) {
+        if (!kf->CanSeedPoint(i)) continue;
+        auto mp = std::make_shared<MapPoint>(map->NextMapPointId(), kf->UnprojectWorld(i), kf->id);
+        mp->ref_kf_id = kf->id;
+        map->AddObservation(mp, kf, static_cast<int>(i));
+        map->ComputeDistinctiveDescriptor(*mp);
+        map->UpdateNormalAndDepth(*mp);
+        map->AddMapPoint(mp);
+      }
+      // Odometry covisibility: neighbours within 2 keyframes, parent = the previous one.
+      for (int back = 1; back <= 2 && k - back >= 0; ++back) {
+        auto other = keyframes[k - back];
+        kf->connection_weights[other->id] = 150;
+        other->connection_weights[kf->id] = 150;
+        other->ordered_connections.push_back(kf->id);
+        kf->ordered_connections.push_back(other->id);
+      }
+      if (k > 0) kf->parent_id = keyframes[k - 1]->id;
+    }
+    keyframes.push_back(kf);
+    database->Add(kf->id, kf->bow_vector);
+    error_before.push_back((kf->CameraCenter() - world_from_cam.translation).norm());
+    closer.InsertKeyFrame(kf);  // synchronous
+    world_drift = step * world_drift;
+  }
+  const LoopClosingStats stats = closer.stats();
+  ASSERT_GE(stats.loops_closed, 1);
+  // The loop joins the end of the lap (after >= 25 keyframes, 150 frames) to its start.
+  const int64_t loop_frame = stats.loop_frames[0].first;
+  EXPECT_GE(loop_frame, 25 * kStride);
+  EXPECT_LE(stats.loop_frames[0].second, 8 * kStride);
+  // Worst position error of the keyframes up to the loop, before (as made) and after closing.
+  double worst_before = 0, worst_after = 0;
+  {
+    std::lock_guard<std::mutex> lock(map->mutex());
+    for (size_t k = 0; k < keyframes.size() && keyframes[k]->frame_id <= loop_frame; ++k) {
+      worst_before = std::max(worst_before, error_before[k]);
+      worst_after =
+          std::max(worst_after, (keyframes[k]->CameraCenter() - truth[k].translation).norm());
+    }
+  }
+  std::printf(
+      "drifted loop: %d loops closed (%d candidates, %d rejected) at frame %lld; worst keyframe "
+      "error %.3f m before, %.3f m after\n",
+      stats.loops_closed, stats.candidates_detected, stats.loops_rejected,
+      static_cast<long long>(loop_frame), worst_before, worst_after);
+  EXPECT_GT(worst_before, 0.3);
+  EXPECT_LT(worst_after, worst_before / 3);
+}
+
+}  // namespace
+}  // namespace dygslam

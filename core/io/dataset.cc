@@ -231,13 +231,15 @@ const char* TypeName(int type) {
 }
 
 // Width and height from a PNG's IHDR chunk (bytes 16..23, big endian); false if `path` is not a
-// PNG.
+// PNG or does not start with an IHDR chunk.
 bool PngSize(const std::string& path, int64_t* width, int64_t* height) {
   std::ifstream in(path, std::ios::binary);
   unsigned char header[24];
   if (!in.read(reinterpret_cast<char*>(header), sizeof(header))) return false;
   static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (!std::equal(kSignature, kSignature + 8, header)) return false;
+  // The IHDR chunk must come first; without it the header says nothing (the decoder reports it).
+  if (header[12] != 'I' || header[13] != 'H' || header[14] != 'D' || header[15] != 'R') return false;
   const auto be32 = [&](int at) {
     return (int64_t{header[at]} << 24) | (int64_t{header[at + 1]} << 16) |
            (int64_t{header[at + 2]} << 8) | int64_t{header[at + 3]};

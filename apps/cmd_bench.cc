@@ -187,7 +187,7 @@ int RunWorker(const ArgParser& p) {
   const std::string config = p.Get("worker");
   const std::string dataset_dir = p.Positional("DATA_DIR");
   if (!p.Has("config")) return p.UsageError("--worker needs --config");
-  const Settings settings = LoadSettings(p.Get("config"));
+  const Settings settings = LoadSettings(p.Get("config"), CliSettingsReadOptions(false));
   const RgbdDataset dataset = RgbdDataset::Open(dataset_dir);
   size_t first = 0, last = dataset.num_rgb_entries();
   if (p.Has("frames")) std::tie(first, last) = ParseFrameRange(p.Get("frames"), last);
@@ -326,7 +326,7 @@ int RunBench(const std::vector<std::string>& args) {
   for (const BenchSequence& s : sequences) {
     Prepared pr;
     pr.sequence = s;
-    pr.settings = LoadSettings(s.settings_path);
+    pr.settings = LoadSettings(s.settings_path, CliSettingsReadOptions(false));
     const RgbdDataset dataset = RgbdDataset::Open(s.directory);
     pr.num_entries = dataset.num_rgb_entries();
     pr.last = pr.num_entries;

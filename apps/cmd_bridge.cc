@@ -148,7 +148,8 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
     pipeline.dataset_dir = "-";
     pipeline.settings_path = p.Get("config");
     pipeline.output_dir = p.Get("out");
-    pipeline.system = SystemOptionsFromSettings(LoadSettings(pipeline.settings_path));
+    pipeline.system = SystemOptionsFromSettings(
+        LoadSettings(pipeline.settings_path, CliSettingsReadOptions(false)));
     ApplyFilterConfiguration(p.Get("filter"), &pipeline.system);
     pipeline.run_mapper = !p.Flag("no-mapper");
     pipeline.domain_id = domain;

@@ -82,7 +82,7 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   o.settings_path = p.Get("config");
   if (o.settings_path.empty()) return p.UsageError("--config is required");
   if (o.dataset_dir.empty()) o.dataset_dir = "-";  // only the player reads it
-  const Settings settings = LoadSettings(o.settings_path);
+  const Settings settings = LoadSettings(o.settings_path, CliSettingsReadOptions(false));
   o.system = SystemOptionsFromSettings(settings);
   ReadOptions(settings.reader, &o.octomap);
   ApplyFilterConfiguration(p.Get("filter"), &o.system);

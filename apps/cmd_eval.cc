@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -137,6 +138,23 @@ int RunEval(const std::vector<std::string>& args) {
   rpe_options.offset = ate_options.offset;
   const AteResult ate = ComputeAte(gt, est, ate_options);
   const RpeResult rpe = ComputeRpe(gt, est, rpe_options);
+
+  // Finite but huge coordinates (1e300) overflow the squared errors: no number to report.
+  const bool rpe_finite =
+      rpe.num_pairs == 0 || (std::isfinite(rpe.trans_rmse) && std::isfinite(rpe.rot_rmse));
+  if (!std::isfinite(ate.error.rmse) || !std::isfinite(ate.error.max) || !rpe_finite) {
+    double gt_largest = 0, est_largest = 0;
+    for (const StampedPose& s : gt)
+      gt_largest = std::max(gt_largest, s.world_from_cam.translation.cwiseAbs().maxCoeff());
+    for (const StampedPose& s : est)
+      est_largest = std::max(est_largest, s.world_from_cam.translation.cwiseAbs().maxCoeff());
+    char why[256];
+    std::snprintf(why, sizeof(why),
+                  "the error is not a finite number: coordinates too large (largest |coordinate| "
+                  "%g in the ground truth, %g in the estimate)",
+                  gt_largest, est_largest);
+    throw InputError(est_largest >= gt_largest ? est_path : gt_path, 0, why);
+  }
 
   if (p.Has("save-aligned")) WriteTumTrajectory(p.Get("save-aligned"), ate.aligned_estimate);
   bool plotted = false;

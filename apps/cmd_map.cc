@@ -6,6 +6,8 @@
 // (mapping/keyframe_mapper.h: new keyframes inserted with their dynamic masks, local-BA pose
 // corrections and culled keyframes applied), or, with --trajectory, from given poses (e.g. the
 // ground truth) without masks.
+// SIGINT / SIGTERM stop it at any time like `run`: the map is finished from the frames processed so
+// far, every output is written (atomically) and the exit code is 0.
 #include <octomap/OcTree.h>
 
 #include <algorithm>
@@ -20,6 +22,7 @@
 
 #include "apps/command.h"
 #include "core/base/error.h"
+#include "core/base/stop_signal.h"
 #include "core/config/mapping_config.h"
 #include "core/config/settings.h"
 #include "core/config/system_config.h"
@@ -108,7 +111,14 @@ int RunMap(const std::vector<std::string>& args) {
   p.AddFlag("deterministic",
             "fixed seeds and synchronous local mapping: identical output run to run");
   p.AddFlag("quiet", "no progress line");
+  p.AddFlag("strict-settings",
+            "unknown keys in the settings file are errors, not warnings (also "
+            "DYGSLAM_STRICT_SETTINGS=1)");
+  p.AddFlag("strict-paths", "image paths outside DATASET_DIR are errors, not warnings");
   if (!p.Parse(args)) return p.exit_code();
+  // A stop request ends the frame loop; the outputs are then written from what was processed
+  // (shares the flag of dygslam main's early scope, so a signal during setup counts too).
+  ScopedStopSignals stop_signals;
   // Numbers first: a malformed one is a usage error (exit 2).
   try {
     for (const char* name : {"resolution", "every", "reference-until", "save-every"}) {
@@ -120,7 +130,9 @@ int RunMap(const std::vector<std::string>& args) {
 
   const std::string dataset_dir = p.Positional("DATASET_DIR");
   const std::string config = p.Has("config") ? p.Get("config") : DefaultSettingsPath(dataset_dir, ConfigDir());
-  const Settings settings = LoadSettings(config);
+  // The output folder first: a bad --out is found before the run, not after it.
+  const fs::path out = PrepareOutputDir("out", p.Get("out"));
+  const Settings settings = LoadSettings(config, CliSettingsReadOptions(p.Flag("strict-settings")));
   SystemOptions options = SystemOptionsFromSettings(settings);
   ApplyFilterConfiguration(p.Get("filter"), &options);
   options.deterministic = p.Flag("deterministic");
@@ -144,7 +156,9 @@ int RunMap(const std::vector<std::string>& args) {
   std::optional<double> save_every;
   if (p.Has("save-every")) save_every = ParsePositive("save-every", p.Get("save-every"));
 
-  const RgbdDataset dataset = RgbdDataset::Open(dataset_dir);
+  DatasetOptions dataset_options;
+  dataset_options.refuse_outside_paths = p.Flag("strict-paths");
+  const RgbdDataset dataset = RgbdDataset::Open(dataset_dir, dataset_options);
   auto [first, last] = p.Has("frames") ? ParseFrameRange(p.Get("frames"), dataset.num_rgb_entries())
                                        : std::pair<size_t, size_t>{0, dataset.num_rgb_entries()};
   std::optional<Timestamp> reference_until;
@@ -165,8 +179,6 @@ int RunMap(const std::vector<std::string>& args) {
   }
   std::vector<StampedPose> given_poses;
   if (from_trajectory) given_poses = ReadTumTrajectory(p.Get("trajectory"));
-  const fs::path out = p.Get("out");
-  fs::create_directories(out);
 
   // Background rebuilds after pose corrections keep the live map exact at a bounded cost; a
   // deterministic run leaves them to the final read so that the map is the same every time.
@@ -218,7 +230,12 @@ int RunMap(const std::vector<std::string>& args) {
     });
     ++saves;
   };
+  bool interrupted = false;
   for (size_t k = first; k < last; ++k) {
+    if (ScopedStopSignals::Received() != 0) {
+      interrupted = true;
+      break;
+    }
     const auto index = dataset.FrameForRgbEntry(k);
     if (!index) {
       ++skipped;
@@ -354,6 +371,11 @@ int RunMap(const std::vector<std::string>& args) {
   });
 
   const MapperStats ms = mapper.Stats();
+  if (interrupted) {
+    std::printf(
+        "interrupted by a signal after %zu of %zu frames: map and outputs written from them\n",
+        processed, last - first);
+  }
   if (system) {
     std::printf(
         "frames: %zu processed, %zu lost, %zu without depth partner; %.1f fps (SLAM + map)\n",
@@ -435,6 +457,14 @@ int RunMap(const std::vector<std::string>& args) {
   std::printf("outputs: %s/{map.bt,map.ot,map_top.png,map_slice.png%s%s}\n", out.string().c_str(),
               system ? ",trajectory.txt,keyframes.txt" : "",
               ghosts ? ",reference.bt,ghosts_top.png,ghost_cells.txt" : "");
+  // A SLAM map from (almost) no tracked frame is no map of the scene: fail, and say why.
+  if (system && !interrupted) {
+    const size_t tracked = system->Trajectory().size();
+    if (IsTrackingFailure(processed, tracked)) {
+      PrintTrackingFailure("map", processed, tracked, lost);
+      return 1;
+    }
+  }
   return 0;
 }
 

@@ -276,15 +276,33 @@ int RunRun(const std::vector<std::string>& args) {
               "DDS modes: the player replays the frames for M minutes, stamps continuing (soak)",
               "0");
   p.AddFlag("quiet", "no progress line");
+  p.AddFlag("strict-settings",
+            "unknown keys in the settings file are errors, not warnings (also "
+            "DYGSLAM_STRICT_SETTINGS=1)");
+  p.AddFlag("strict-paths", "image paths outside DATASET_DIR are errors, not warnings");
   if (!p.Parse(args)) return p.exit_code();
   if (p.Flag("processes") && p.Flag("direct"))
     return p.UsageError("--processes and --direct exclude each other");
+  if (p.Has("security") && (p.Flag("direct") || p.Has("detections")))
+    return p.UsageError(
+        "--security secures the DDS pipeline; --direct and --detections use no DDS");
+  if (!p.Has("security") && security_env != nullptr && *security_env != '\0' &&
+      (p.Flag("direct") || p.Has("detections"))) {
+    std::fprintf(stderr,
+                 "dygslam run: warning: DYGSLAM_DDS_SECURITY_DIR is set but --direct uses no DDS "
+                 "(nothing to secure)\n");
+  }
+  if (p.Flag("strict-settings")) ::setenv("DYGSLAM_STRICT_SETTINGS", "1", 1);  // --processes
+  // The output folder first: a bad --out is found before the run, not after it.
+  const fs::path out_dir = PrepareOutputDir("out", p.Get("out"));
 
   RunSetup s;
   s.dataset_dir = p.Positional("DATASET_DIR");
   s.config = p.Has("config") ? p.Get("config") : DefaultSettingsPath(s.dataset_dir, ConfigDir());
-  const Settings settings = LoadSettings(s.config);
+  const Settings settings =
+      LoadSettings(s.config, CliSettingsReadOptions(p.Flag("strict-settings")));
   s.system = SystemOptionsFromSettings(settings);
+  ::setenv("DYGSLAM_SETTINGS_WARNED", "1", 1);  // --processes: components do not repeat them
   ReadOptions(settings.reader, &s.octomap);
   ApplyFilterConfiguration(p.Get("filter"), &s.system);
   s.system.deterministic = p.Flag("deterministic");
@@ -317,7 +335,9 @@ int RunRun(const std::vector<std::string>& args) {
   }
   if (domain_id < -1 || domain_id > 232) return p.UsageError("--domain: expected 0..232");
 
-  const RgbdDataset dataset = RgbdDataset::Open(s.dataset_dir);
+  DatasetOptions dataset_options;
+  dataset_options.refuse_outside_paths = p.Flag("strict-paths");
+  const RgbdDataset dataset = RgbdDataset::Open(s.dataset_dir, dataset_options);
   std::tie(s.first, s.last) = p.Has("frames")
                                   ? ParseFrameRange(p.Get("frames"), dataset.num_rgb_entries())
                                   : std::pair<size_t, size_t>{0, dataset.num_rgb_entries()};
@@ -325,8 +345,7 @@ int RunRun(const std::vector<std::string>& args) {
   for (size_t k = s.first; k < s.last; ++k) {
     if (!dataset.FrameForRgbEntry(k)) ++skipped;
   }
-  s.out = p.Get("out");
-  fs::create_directories(s.out);
+  s.out = out_dir;
 
   std::string mode;
   RunOutcome outcome;
@@ -378,6 +397,11 @@ int RunRun(const std::vector<std::string>& args) {
               has_map ? ",map.bt" : "");
   if (outcome.exit_code != 0) {
     std::fprintf(stderr, "dygslam run: a pipeline component failed (see the messages above)\n");
+    return 1;
+  }
+  // A run that tracked (almost) nothing has no trajectory to speak of: fail, and say why.
+  if (!outcome.interrupted && IsTrackingFailure(outcome.processed, trajectory.size())) {
+    PrintTrackingFailure("run", outcome.processed, trajectory.size(), outcome.lost);
     return 1;
   }
   return 0;

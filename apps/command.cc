@@ -3,10 +3,16 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
+
+#include "core/base/error.h"
+#include "core/io/file_util.h"
 
 namespace dygslam::cli {
 namespace {
@@ -43,6 +49,59 @@ std::string ScriptsDir() {
     if (fs::is_directory(installed, ec)) return fs::canonical(installed, ec).string();
   }
   return "scripts";
+}
+
+std::filesystem::path PrepareOutputDir(const std::string& option, const std::string& value) {
+  namespace fs = std::filesystem;
+  const std::string name = "--" + option + " '" + Abbreviate(value) + "'";
+  if (value.empty()) throw InputError("--" + option + ": empty folder name");
+  std::error_code ec;
+  const fs::path dir(value);
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    throw InputError(name + ": exists and is not a folder");
+  fs::create_directories(dir, ec);
+  if (ec) throw InputError(name + ": cannot create the folder: " + ec.message());
+  const fs::path probe = dir / (".dygslam_write_probe." + std::to_string(::getpid()));
+  FILE* f = std::fopen(probe.c_str(), "wb");
+  if (f == nullptr) {
+    throw InputError(name + ": folder is not writable: " + std::strerror(errno));
+  }
+  std::fclose(f);
+  fs::remove(probe, ec);
+  return dir;
+}
+
+SettingsReadOptions CliSettingsReadOptions(bool strict_flag) {
+  SettingsReadOptions options;
+  const char* env = std::getenv("DYGSLAM_STRICT_SETTINGS");
+  if (strict_flag || (env != nullptr && std::string(env) == "1"))
+    options.unknown_keys = UnknownKeyPolicy::kError;
+  // A `run --processes` parent has printed the warnings already; its components stay quiet.
+  options.print_warnings = std::getenv("DYGSLAM_SETTINGS_WARNED") == nullptr;
+  return options;
+}
+
+bool IsTrackingFailure(size_t processed, size_t tracked) {
+  return processed == 0 || tracked * 10 < processed;
+}
+
+void PrintTrackingFailure(const std::string& command, size_t processed, size_t tracked,
+                          size_t lost) {
+  if (processed == 0) {
+    std::fprintf(stderr,
+                 "dygslam %s: error: no frame was processed (no rgb entry of the range has a "
+                 "depth partner)\n",
+                 command.c_str());
+    return;
+  }
+  const size_t untracked = processed - std::min(processed, tracked);
+  std::fprintf(stderr,
+               "dygslam %s: error: tracking failed: %zu of %zu frames tracked (%.1f %%, at least "
+               "10 %% needed); %zu lost after initialisation, %zu never tracked. Likely causes: "
+               "depth images without valid depth (DepthMapFactor), camera settings that do not "
+               "match the images (Camera.*), or images without texture.\n",
+               command.c_str(), tracked, processed, 100.0 * tracked / processed,
+               std::min(lost, untracked), untracked - std::min(lost, untracked));
 }
 
 ArgParser::ArgParser(std::string command, std::string usage, std::string description)

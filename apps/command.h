@@ -22,11 +22,14 @@
 // Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error / unavailable command.
 #pragma once
 
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "core/config/settings.h"
 
 namespace dygslam::cli {
 
@@ -92,6 +95,24 @@ const std::vector<std::string>& PlannedCommands();
 std::string ScriptsDir();
 // The settings presets folder (config/ beside scripts/).
 std::string ConfigDir();
+// The output folder given as `--<option> value`, checked before any work: InputError naming the
+// option when the value is empty, names something that is not a folder (/etc/passwd), or the
+// folder cannot be created or written (a probe file is created and removed, so a read-only folder
+// is found up front, not after the whole run). Creates the folder.
+std::filesystem::path PrepareOutputDir(const std::string& option, const std::string& value);
+
+// How the command line reads settings files: unknown keys warn, or are errors with the flag
+// --strict-settings or DYGSLAM_STRICT_SETTINGS=1 (which child processes inherit). Warnings are not
+// printed again where DYGSLAM_SETTINGS_WARNED is set (a parent `run` printed them).
+SettingsReadOptions CliSettingsReadOptions(bool strict_flag);
+
+// A SLAM run that processed no frame or tracked fewer than 10 % of them failed (exit 1), even when
+// every part of it ran: its trajectory says nothing.
+bool IsTrackingFailure(size_t processed, size_t tracked);
+// "dygslam <command>: error: tracking failed: 0 of 30 frames tracked ..." with the likely causes.
+void PrintTrackingFailure(const std::string& command, size_t processed, size_t tracked,
+                          size_t lost);
+
 // `s` as one POSIX shell word: unchanged when it has only safe characters, else single-quoted.
 std::string ShellQuote(const std::string& s);
 

@@ -63,13 +63,25 @@ int Dispatch(const std::vector<std::string>& argv) {
   const std::string& name = argv[0];
   const std::vector<std::string> args(argv.begin() + 1, argv.end());
   if (name == "help" || name == "--help" || name == "-h") {
+    if (args.size() > 1) {
+      std::cerr << "dygslam help: expected at most one command name (see 'dygslam help')\n";
+      return 2;
+    }
     if (!args.empty() && Commands().count(args[0])) {
       return Commands().at(args[0]).run({"--help"});
+    }
+    if (!args.empty() && args[0] != "help" && args[0] != "version") {
+      std::cerr << "dygslam help: unknown command '" << args[0] << "' (see 'dygslam help')\n";
+      return 2;
     }
     PrintHelp(std::cout);
     return 0;
   }
   if (name == "version" || name == "--version") {
+    if (!args.empty()) {
+      std::cerr << "dygslam version: takes no arguments, got '" << args[0] << "'\n";
+      return 2;
+    }
     std::cout << "dygslam " << DYGSLAM_VERSION << "\n";
     return 0;
   }
@@ -106,7 +118,8 @@ int main(int argc, char** argv) {
   std::optional<dygslam::ScopedStopSignals> stop_signals;
   if (argc > 1) {
     const std::string name = argv[1];
-    if (name == "run" || name == "component" || name == "bridge") stop_signals.emplace();
+    if (name == "run" || name == "map" || name == "component" || name == "bridge")
+      stop_signals.emplace();
   }
   return dygslam::cli::Dispatch(std::vector<std::string>(argv + 1, argv + argc));
 }

@@ -2,10 +2,13 @@
 
 #include <octomap/OcTree.h>
 
+#include <deque>
 #include <sstream>
+#include <utility>
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
+#include "components/run_writers.h"
 #include "components/stream_status.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
@@ -74,22 +77,31 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
                       const StopSignalPtr& stop) {
   MapperCore core(options);
   MapperStats stats;
-  BlockingQueue<msg::Keyframe> queue;
+  BlockingQueue<std::pair<msg::Keyframe, WriterGuid>> queue;
   std::mutex mutex;
   bool slam_done = false;
+  // Only keyframes of the participant that announced "slam" (components/run_writers.h); the ones
+  // that arrive before the announcement wait for it.
+  RunWriters writers;
+  std::deque<std::pair<msg::Keyframe, WriterGuid>> waiting;
+  constexpr size_t kMaxWaiting = 256;
 
   dds::Writer<msg::MapUpdatePubSubType> updates(participant, dds::topics::kMapUpdate,
                                                 dds::TopicKind::kMapUpdate);
   dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
                                                   dds::TopicKind::kStreamStatus);
-  dds::Reader<msg::KeyframePubSubType> keyframes(
-      participant, dds::topics::kKeyframe, dds::TopicKind::kKeyframe,
-      [&](msg::Keyframe&& k) { queue.Push(std::move(k)); });
+  dds::Reader<msg::KeyframePubSubType> keyframes(participant, dds::topics::kKeyframe,
+                                                 dds::TopicKind::kKeyframe,
+                                                 [&](msg::Keyframe&& k, const WriterGuid& writer) {
+                                                   queue.Push(std::make_pair(std::move(k), writer));
+                                                 });
   dds::Reader<msg::StreamStatusPubSubType> status_reader(
       participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
-      [&](msg::StreamStatus&& s) {
-        if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone) && s.source() == "slam") {
-          std::lock_guard<std::mutex> lock(mutex);
+      [&](msg::StreamStatus&& s, const WriterGuid& writer) {
+        std::lock_guard<std::mutex> lock(mutex);
+        writers.Announce(s.source(), writer);
+        if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone) && s.source() == "slam" &&
+            writers.Check("slam", writer) == RunWriters::Verdict::kAccept) {
           slam_done = true;
         }
       });
@@ -130,7 +142,47 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
     } else if (!writer_gone_since) {
       writer_gone_since = std::chrono::steady_clock::now();
     }
-    std::optional<msg::Keyframe> sample = queue.Pop(std::chrono::milliseconds(50));
+    std::optional<msg::Keyframe> sample;
+    {
+      // A keyframe that waited for slam's announcement first, then the queue.
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!waiting.empty() && writers.Known("slam")) {
+        auto [k, writer] = std::move(waiting.front());
+        waiting.pop_front();
+        if (writers.Check("slam", writer) == RunWriters::Verdict::kAccept) {
+          sample = std::move(k);
+        } else {
+          ++stats.foreign_samples;
+        }
+      }
+    }
+    if (!sample) {
+      std::optional<std::pair<msg::Keyframe, WriterGuid>> received =
+          queue.Pop(std::chrono::milliseconds(waiting.empty() ? 50 : 5));
+      if (received) {
+        std::lock_guard<std::mutex> lock(mutex);
+        switch (writers.Check("slam", received->second)) {
+          case RunWriters::Verdict::kAccept:
+            if (waiting.empty()) {
+              sample = std::move(received->first);
+            } else {
+              waiting.push_back(std::move(*received));  // keep slam's order
+            }
+            break;
+          case RunWriters::Verdict::kWait:
+            if (waiting.size() < kMaxWaiting) {
+              waiting.push_back(std::move(*received));
+            } else {
+              ++stats.foreign_samples;
+            }
+            break;
+          case RunWriters::Verdict::kReject:
+            ++stats.foreign_samples;
+            break;
+        }
+        if (!sample) continue;
+      }
+    }
     if (!sample) {
       if (writer_gone_since &&
           std::chrono::steady_clock::now() - *writer_gone_since >
@@ -166,6 +218,13 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
       ++stats.bad_samples;
       LOG_WARNING << "mapper: dropped keyframe " << sample->id() << ": " << e.what();
     }
+  }
+  stats.foreign_samples += waiting.size();  // their writer never announced itself
+  if (stats.foreign_samples > 0) {
+    LOG_WARNING << "mapper: ignored " << stats.foreign_samples
+                << " keyframes from writers outside this run (another process on the DDS domain "
+                   "published into it; without --security any local process can: see README, DDS "
+                   "components)";
   }
   publish();
   msg::StreamStatus done;

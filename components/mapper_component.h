@@ -70,6 +70,8 @@ class MapperCore {
 struct MapperStats {
   size_t keyframes_received = 0;
   size_t bad_samples = 0;
+  // Keyframes from participants other than the run's slam (components/run_writers.h).
+  size_t foreign_samples = 0;
   size_t updates_published = 0;
   size_t map_writes = 0;
 };

@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <utility>
+#include <vector>
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
+#include "components/run_writers.h"
 #include "components/stream_status.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
@@ -119,56 +122,113 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
 
   dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
                                                   dds::TopicKind::kStreamStatus);
+  // Only the writers of this run (components/run_writers.h): poses and trajectories from the
+  // participant that announced "slam", ground truth from the one that announced "player".
+  RunWriters writers;
+  std::vector<std::pair<msg::CameraPose, WriterGuid>> waiting_poses;
+  std::vector<std::pair<msg::Trajectory, WriterGuid>> waiting_trajectories;
+  std::vector<std::pair<msg::GroundTruthPose, WriterGuid>> waiting_ground_truth;
+  constexpr size_t kMaxWaiting = 4096;
+  // Returns true when the sample may be used now; keeps it for later (kWait) or counts it.
+  auto admit = [&](const char* source, const WriterGuid& writer, auto&& message,
+                   auto* waiting) -> bool {
+    switch (writers.Check(source, writer)) {
+      case RunWriters::Verdict::kAccept:
+        return true;
+      case RunWriters::Verdict::kWait:
+        if (waiting->size() < kMaxWaiting) {
+          waiting->emplace_back(std::move(message), writer);
+          return false;
+        }
+        break;
+      case RunWriters::Verdict::kReject:
+        break;
+    }
+    ++stats.foreign_samples;
+    return false;
+  };
+  const auto add_pose = [&](const msg::CameraPose& p) {
+    try {
+      core.AddPose(p);
+      ++stats.poses;
+    } catch (const InputError& e) {
+      ++stats.bad_samples;
+      LOG_WARNING << "recorder: dropped pose: " << e.what();
+      return;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (!first_pose) first_pose = now;
+    const size_t n = core.num_frames();
+    if (options.progress && (n % 10 == 0 || n == total_frames)) {
+      const double elapsed = std::chrono::duration<double>(now - start).count();
+      std::fprintf(
+          stderr, "\r[run] frame %zu/%llu  %.1f fps  state=%s  lost=%zu   ", n,
+          static_cast<unsigned long long>(total_frames), n / std::max(elapsed, 1e-9),
+          p.tracking_state() <= 3 ? ToString(static_cast<TrackingState>(p.tracking_state())) : "?",
+          core.num_lost());
+      std::fflush(stderr);
+    }
+  };
+  const auto set_trajectory = [&](const msg::Trajectory& t) {
+    try {
+      core.SetTrajectory(t);
+    } catch (const InputError& e) {
+      ++stats.bad_samples;
+      LOG_WARNING << "recorder: dropped trajectory: " << e.what();
+    }
+    cv.notify_all();
+  };
+  const auto add_ground_truth = [&](const msg::GroundTruthPose& p) {
+    try {
+      core.AddGroundTruth(p);
+    } catch (const InputError& e) {
+      ++stats.bad_samples;
+    }
+  };
+  // Replays the samples that waited for `source`'s announcement (or counts them as foreign).
+  auto replay = [&](auto* waiting, const char* source, const auto& use) {
+    if (!writers.Known(source)) return;
+    auto pending = std::move(*waiting);
+    waiting->clear();
+    for (auto& [message, writer] : pending) {
+      if (writers.Check(source, writer) == RunWriters::Verdict::kAccept) {
+        use(message);
+      } else {
+        ++stats.foreign_samples;
+      }
+    }
+  };
   dds::Reader<msg::CameraPosePubSubType> poses(
-      participant, dds::topics::kCameraPose, dds::TopicKind::kCameraPose, [&](msg::CameraPose&& p) {
+      participant, dds::topics::kCameraPose, dds::TopicKind::kCameraPose,
+      [&](msg::CameraPose&& p, const WriterGuid& writer) {
         std::lock_guard<std::mutex> lock(mutex);
-        try {
-          core.AddPose(p);
-          ++stats.poses;
-        } catch (const InputError& e) {
-          ++stats.bad_samples;
-          LOG_WARNING << "recorder: dropped pose: " << e.what();
-          return;
-        }
-        const auto now = std::chrono::steady_clock::now();
-        if (!first_pose) first_pose = now;
-        const size_t n = core.num_frames();
-        if (options.progress && (n % 10 == 0 || n == total_frames)) {
-          const double elapsed = std::chrono::duration<double>(now - start).count();
-          std::fprintf(stderr, "\r[run] frame %zu/%llu  %.1f fps  state=%s  lost=%zu   ", n,
-                       static_cast<unsigned long long>(total_frames), n / std::max(elapsed, 1e-9),
-                       p.tracking_state() <= 3
-                           ? ToString(static_cast<TrackingState>(p.tracking_state()))
-                           : "?",
-                       core.num_lost());
-          std::fflush(stderr);
-        }
+        if (admit("slam", writer, std::move(p), &waiting_poses)) add_pose(p);
       });
   dds::Reader<msg::TrajectoryPubSubType> trajectories(
-      participant, dds::topics::kTrajectory, dds::TopicKind::kTrajectory, [&](msg::Trajectory&& t) {
+      participant, dds::topics::kTrajectory, dds::TopicKind::kTrajectory,
+      [&](msg::Trajectory&& t, const WriterGuid& writer) {
         std::lock_guard<std::mutex> lock(mutex);
-        try {
-          core.SetTrajectory(t);
-        } catch (const InputError& e) {
-          ++stats.bad_samples;
-          LOG_WARNING << "recorder: dropped trajectory: " << e.what();
-        }
-        cv.notify_all();
+        if (admit("slam", writer, std::move(t), &waiting_trajectories)) set_trajectory(t);
       });
   dds::Reader<msg::GroundTruthPosePubSubType> ground_truth(
       participant, dds::topics::kGroundTruth, dds::TopicKind::kGroundTruth,
-      [&](msg::GroundTruthPose&& p) {
+      [&](msg::GroundTruthPose&& p, const WriterGuid& writer) {
         std::lock_guard<std::mutex> lock(mutex);
-        try {
-          core.AddGroundTruth(p);
-        } catch (const InputError& e) {
-          ++stats.bad_samples;
-        }
+        if (admit("player", writer, std::move(p), &waiting_ground_truth)) add_ground_truth(p);
       });
   dds::Reader<msg::StreamStatusPubSubType> status_reader(
       participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
-      [&](msg::StreamStatus&& s) {
+      [&](msg::StreamStatus&& s, const WriterGuid& writer) {
         std::lock_guard<std::mutex> lock(mutex);
+        writers.Announce(s.source(), writer);
+        replay(&waiting_poses, "slam", add_pose);
+        replay(&waiting_trajectories, "slam", set_trajectory);
+        replay(&waiting_ground_truth, "player", add_ground_truth);
+        // A second participant announcing the same component is not this run's.
+        if (writers.Check(s.source(), writer) != RunWriters::Verdict::kAccept) {
+          if (s.source() == "slam" || s.source() == "player") ++stats.foreign_samples;
+          return;
+        }
         if (s.kind() == static_cast<uint8_t>(StreamEvent::kStarted) && s.source() == "player") {
           total_frames = s.num_frames();
         }
@@ -214,6 +274,9 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
       }
       cv.wait_for(lock, std::chrono::milliseconds(50));
     }
+    // Samples whose writer never announced itself: not from this run either.
+    stats.foreign_samples +=
+        waiting_poses.size() + waiting_trajectories.size() + waiting_ground_truth.size();
     stats.final_trajectory = core.has_final_trajectory();
     stats.trajectory_path = core.Write();
     if (options.progress && core.num_frames() > 0) std::fprintf(stderr, "\n");
@@ -223,6 +286,12 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
   done.source("recorder");
   status.Write(done);
   status.WaitForAcknowledgments(std::chrono::milliseconds(2000));
+  if (stats.foreign_samples > 0) {
+    LOG_WARNING << "recorder: ignored " << stats.foreign_samples
+                << " samples from writers outside this run (another process on the DDS domain "
+                   "published into it; without --security any local process can: see README, DDS "
+                   "components)";
+  }
   LOG_INFO << "recorder: wrote " << stats.trajectory_path
            << (stats.final_trajectory ? " (final trajectory)" : " (online poses)");
   return stats;

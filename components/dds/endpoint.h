@@ -25,6 +25,7 @@
 #include <thread>
 
 #include "components/dds/participant.h"
+#include "components/run_writers.h"
 
 namespace dygslam::dds {
 
@@ -91,11 +92,20 @@ class TypedReader {
  public:
   using Message = typename PubSubType::type;
   using Callback = std::function<void(Message&&)>;
+  // Also given the GUID of the writer of each sample (components/run_writers.h).
+  using CallbackWithWriter = std::function<void(Message&&, const WriterGuid&)>;
 
   // callback runs on a DDS listener thread: keep it short (enqueue + notify).
   TypedReader(std::shared_ptr<const void> owner, Participant& participant,
               eprosima::fastdds::dds::Subscriber* subscriber, const std::string& topic,
               const eprosima::fastdds::dds::DataReaderQos& qos, Callback callback)
+      : TypedReader(std::move(owner), participant, subscriber, topic, qos,
+                    CallbackWithWriter([cb = std::move(callback)](Message&& m, const WriterGuid&) {
+                      cb(std::move(m));
+                    })) {}
+  TypedReader(std::shared_ptr<const void> owner, Participant& participant,
+              eprosima::fastdds::dds::Subscriber* subscriber, const std::string& topic,
+              const eprosima::fastdds::dds::DataReaderQos& qos, CallbackWithWriter callback)
       : owner_(std::move(owner)), subscriber_(subscriber), listener_(std::move(callback)) {
     auto* t = participant.template GetTopic<PubSubType>(topic);
     reader_ = subscriber_->create_datareader(t, qos, &listener_);
@@ -118,7 +128,7 @@ class TypedReader {
  private:
   class Listener : public eprosima::fastdds::dds::DataReaderListener {
    public:
-    explicit Listener(Callback cb) : callback(std::move(cb)) {}
+    explicit Listener(CallbackWithWriter cb) : callback(std::move(cb)) {}
     void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
       eprosima::fastdds::dds::SampleInfo info;
       while (true) {
@@ -127,7 +137,10 @@ class TypedReader {
             eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
           break;
         }
-        if (info.valid_data) callback(std::move(message));
+        if (!info.valid_data) continue;
+        WriterGuid writer{};
+        for (size_t i = 0; i < writer.size(); ++i) writer[i] = info.publication_handle.value[i];
+        callback(std::move(message), writer);
       }
     }
     void on_subscription_matched(
@@ -135,7 +148,7 @@ class TypedReader {
         const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
       matched.store(status.current_count);
     }
-    Callback callback;
+    CallbackWithWriter callback;
     std::atomic<int> matched{0};
   };
 

@@ -27,8 +27,13 @@ template <class PubSubType>
 class Reader : public TypedReader<PubSubType> {
  public:
   using Callback = typename TypedReader<PubSubType>::Callback;
+  using CallbackWithWriter = typename TypedReader<PubSubType>::CallbackWithWriter;
   Reader(std::shared_ptr<Participant> participant, const std::string& topic, TopicKind kind,
          Callback callback)
+      : TypedReader<PubSubType>(participant, *participant, participant->subscriber(), topic,
+                                ReaderQos(kind), std::move(callback)) {}
+  Reader(std::shared_ptr<Participant> participant, const std::string& topic, TopicKind kind,
+         CallbackWithWriter callback)
       : TypedReader<PubSubType>(participant, *participant, participant->subscriber(), topic,
                                 ReaderQos(kind), std::move(callback)) {}
 };

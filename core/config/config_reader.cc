@@ -40,15 +40,59 @@ void FindAll(const YAML::Node& node, const std::string& key, std::vector<Hit>* h
   }
 }
 
-void CollectKeys(const YAML::Node& node, const std::string& prefix, std::vector<std::string>* out) {
-  if (!node.IsMap()) return;
+// Settings files are small: deeper nesting or more nodes than this is not a settings file (and
+// an alias chain that doubles at every level would take forever to walk).
+constexpr int kMaxDepth = 32;
+constexpr size_t kMaxNodes = 200000;
+
+// Checks the whole tree once, before anything else walks it: no alias that refers to one of its
+// own ancestors (a cycle), nesting at most kMaxDepth, at most kMaxNodes visited (aliases
+// expanded). Throws InputError with the line of the offending key.
+void CheckTree(const YAML::Node& node, const std::string& path, int line,
+               std::vector<YAML::Node>* ancestors, size_t* visited) {
+  if (++*visited > kMaxNodes) {
+    throw InputError(path, line,
+                     "more than " + std::to_string(kMaxNodes) +
+                         " values (aliases expanded); not a settings file");
+  }
+  if (!node.IsMap() && !node.IsSequence()) return;
+  for (const YAML::Node& a : *ancestors) {
+    if (a.is(node)) {
+      throw InputError(path, line,
+                       "recursive alias: a value refers to a map or list that contains it");
+    }
+  }
+  if (static_cast<int>(ancestors->size()) >= kMaxDepth) {
+    throw InputError(path, line, "nested deeper than " + std::to_string(kMaxDepth) + " levels");
+  }
+  ancestors->push_back(node);
+  if (node.IsMap()) {
+    for (const auto& entry : node) {
+      const int key_line = entry.first.Mark().line >= 0 ? entry.first.Mark().line + 1 : line;
+      CheckTree(entry.first, path, key_line, ancestors, visited);
+      CheckTree(entry.second, path, key_line, ancestors, visited);
+    }
+  } else {
+    for (const auto& item : node) {
+      const int item_line = item.Mark().line >= 0 ? item.Mark().line + 1 : line;
+      CheckTree(item, path, item_line, ancestors, visited);
+    }
+  }
+  ancestors->pop_back();
+}
+
+// `depth` guards the recursion (CheckTree has bounded the tree already; this keeps the walk safe
+// on its own).
+void CollectKeys(const YAML::Node& node, const std::string& prefix, std::vector<std::string>* out,
+                 int depth = 0) {
+  if (!node.IsMap() || depth > kMaxDepth) return;
   for (const auto& entry : node) {
     if (!entry.first.IsScalar()) continue;
     const std::string key =
         prefix.empty() ? entry.first.Scalar() : prefix + "." + entry.first.Scalar();
     // An OpenCV matrix is a leaf value, not a section.
     if (entry.second.IsMap() && entry.second.Tag() != "tag:yaml.org,2002:opencv-matrix") {
-      CollectKeys(entry.second, key, out);
+      CollectKeys(entry.second, key, out, depth + 1);
     } else {
       out->push_back(key);
     }
@@ -250,6 +294,9 @@ ConfigReader ConfigReader::FromString(const std::string& text, const std::string
     throw InputError(name, impl->root.Mark().line + 1,
                      "top level must be a map of 'key: value' entries");
   }
+  std::vector<YAML::Node> ancestors;
+  size_t visited = 0;
+  CheckTree(impl->root, name, 0, &ancestors, &visited);
   return ConfigReader(std::move(impl), "");
 }
 
@@ -271,10 +318,6 @@ std::string ConfigReader::FullKey(const std::string& key) const {
   return prefix_.empty() ? key : prefix_ + "." + key;
 }
 
-ConfigReader ConfigReader::Section(const std::string& name) const {
-  return ConfigReader(impl_, FullKey(name));
-}
-
 // The single entry for `full_key` (line 0 when absent); a key given twice is an error.
 namespace {
 struct ConfigLookup {
@@ -291,6 +334,17 @@ struct ConfigLookup {
   }
 };
 }  // namespace
+
+ConfigReader ConfigReader::Section(const std::string& name) const {
+  const std::string full = FullKey(name);
+  const Hit h = ConfigLookup::Find(impl_->path, impl_->root, full);
+  if (h.line > 0 && !h.value.IsNull() && !h.value.IsMap()) {
+    throw InputError(impl_->path, h.line,
+                     "section '" + full + "' must be a map of 'key: value' entries, found a " +
+                         (h.value.IsSequence() ? "list" : "single value"));
+  }
+  return ConfigReader(impl_, full);
+}
 
 bool ConfigReader::Has(const std::string& key) const {
   const Hit h = ConfigLookup::Find(impl_->path, impl_->root, FullKey(key));
@@ -315,6 +369,74 @@ std::vector<std::string> ConfigReader::Keys() const {
   return out;
 }
 
+namespace {
+
+// Edit distance (insertions, deletions, substitutions; case-insensitive).
+size_t EditDistance(const std::string& a_in, const std::string& b_in) {
+  const std::string a = Lower(a_in), b = Lower(b_in);
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+bool IsKnown(const std::string& key, const std::vector<std::string>& known) {
+  for (const std::string& k : known) {
+    if (k == key) return true;
+    // "Viewer.*": every key below Viewer.
+    if (k.size() >= 2 && k.compare(k.size() - 2, 2, ".*") == 0 &&
+        key.compare(0, k.size() - 1, k, 0, k.size() - 1) == 0) {
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+std::vector<ConfigReader::UnknownKey> ConfigReader::UnknownKeys(
+    const std::vector<std::string>& known) const {
+  std::vector<UnknownKey> out;
+  for (const std::string& key : Keys()) {
+    if (IsKnown(key, known)) continue;
+    UnknownKey u;
+    u.key = key;
+    try {
+      u.line = ConfigLookup::Find(impl_->path, impl_->root, key).line;
+    } catch (const InputError&) {
+    }
+    // The closest known key, if it is close: a few edits, at most a third of the key.
+    size_t best = std::numeric_limits<size_t>::max();
+    for (const std::string& k : known) {
+      if (k.size() >= 2 && k.compare(k.size() - 2, 2, ".*") == 0) continue;
+      const size_t d = EditDistance(key, k);
+      if (d < best) {
+        best = d;
+        u.closest = k;
+      }
+    }
+    if (best > std::max<size_t>(2, key.size() / 3)) u.closest.clear();
+    out.push_back(u);
+  }
+  return out;
+}
+
+std::string ConfigReader::UnknownKeyMessage(const UnknownKey& unknown) const {
+  return InputError::Format(
+      impl_->path, unknown.line,
+      "unknown key '" + unknown.key + "'" +
+          (unknown.closest.empty() ? std::string(" (not a dygslam or ORB-SLAM2 settings key)")
+                                   : " (did you mean '" + unknown.closest + "'?)"));
+}
+
 void ConfigReader::Fail(const std::string& key, const std::string& message) const {
   const std::string full = FullKey(key);
   int line = 0;
@@ -325,8 +447,49 @@ void ConfigReader::Fail(const std::string& key, const std::string& message) cons
   throw InputError(impl_->path, line, "key '" + full + "': " + message);
 }
 
+namespace {
+
+// "DynamicFilter.p_init" and "DynamicFilter.P_init" alike: lower case, no '_', no "_path" suffix.
+std::string LooseKey(const std::string& key) {
+  std::string k = key;
+  if (k.size() > 5 && k.compare(k.size() - 5, 5, "_path") == 0) k.resize(k.size() - 5);
+  std::string out;
+  for (char c : k) {
+    if (c != '_') out += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  }
+  return out;
+}
+
+std::string LastPart(const std::string& key) {
+  const size_t dot = key.rfind('.');
+  return dot == std::string::npos ? key : key.substr(dot + 1);
+}
+
+// `text` with every whole-word `from` replaced by `to`.
+std::string ReplaceWord(const std::string& text, const std::string& from, const std::string& to) {
+  if (from.empty()) return text;
+  const auto is_word = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+  };
+  std::string out;
+  size_t i = 0;
+  while (i < text.size()) {
+    if (text.compare(i, from.size(), from) == 0 && (i == 0 || !is_word(text[i - 1])) &&
+        (i + from.size() == text.size() || !is_word(text[i + from.size()]))) {
+      out += to;
+      i += from.size();
+    } else {
+      out += text[i++];
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 void ConfigReader::FailInvalidOptions(const InvalidOptions& e) const {
-  // DYGSLAM_CHECK_OPTION: "invalid option <name>: requires <condition>".
+  // DYGSLAM_CHECK_OPTION: "invalid option <name>: requires <condition>". The option's name is the
+  // struct's ("DynamicFilter.c1"); messages use the key as the file spells it ("DynamicFilter.C1").
   const std::string message = e.what();
   const std::string head = "invalid option ";
   std::string name;
@@ -335,21 +498,37 @@ void ConfigReader::FailInvalidOptions(const InvalidOptions& e) const {
     name = message.substr(head.size(),
                           colon == std::string::npos ? std::string::npos : colon - head.size());
   }
+  if (name.empty()) throw InputError(impl_->path, 0, message);
+  std::string key = name;
   int line = 0;
-  if (!name.empty()) {
-    for (const std::string& candidate : {name, FullKey(name)}) {
+  for (const std::string& candidate : {name, FullKey(name)}) {
+    try {
+      line = ConfigLookup::Find(impl_->path, impl_->root, candidate).line;
+    } catch (const InputError&) {
+    }
+    if (line > 0) {
+      key = candidate;
+      break;
+    }
+  }
+  if (line == 0) {
+    std::vector<std::string> all;
+    CollectKeys(impl_->root, "", &all);
+    for (const std::string& candidate : all) {
+      if (LooseKey(candidate) != LooseKey(name) && LooseKey(candidate) != LooseKey(FullKey(name)))
+        continue;
       try {
         line = ConfigLookup::Find(impl_->path, impl_->root, candidate).line;
       } catch (const InputError&) {
       }
-      if (line > 0) break;
+      key = candidate;
+      break;
     }
   }
-  if (name.empty()) throw InputError(impl_->path, line, message);
   const size_t requires_at = message.find("requires ");
-  const std::string condition =
-      requires_at == std::string::npos ? message : message.substr(requires_at);
-  throw InputError(impl_->path, line, "key '" + name + "': invalid value (" + condition + ")");
+  std::string condition = requires_at == std::string::npos ? message : message.substr(requires_at);
+  condition = ReplaceWord(condition, LastPart(name), LastPart(key));
+  throw InputError(impl_->path, line, "key '" + key + "': invalid value (" + condition + ")");
 }
 
 template <typename T>

@@ -19,7 +19,9 @@
 // std::vector<double> (a sequence or an !!opencv-matrix's data), std::vector<int>.
 // Numbers must be finite; ints must be integral and in range; bools are
 // true/false/yes/no/on/off/1/0. Every error is a dygslam::InputError naming "file:line" and the
-// full key.
+// full key. A file whose aliases refer to their own ancestors ("recursive alias"), nested deeper
+// than 32 levels or with more than 200,000 values (aliases expanded) is rejected when loaded, so
+// every later walk of the tree is bounded.
 #pragma once
 
 #include <memory>
@@ -43,6 +45,7 @@ class ConfigReader {
   // "" for the root reader, "DynamicFilter" for Section("DynamicFilter").
   const std::string& prefix() const { return prefix_; }
   // A view of the keys below `name` (nested map or flat "name.key" entries). Sections nest.
+  // InputError when `name` is given as a list or a single value instead of a map.
   ConfigReader Section(const std::string& name) const;
 
   bool Has(const std::string& key) const;
@@ -60,6 +63,19 @@ class ConfigReader {
   int LineOf(const std::string& key) const;
   // All leaf keys below this reader, fully dotted ("Camera.fx"), in file order.
   std::vector<std::string> Keys() const;
+
+  // A key of the file that no module reads: its line and the closest known key ("" when no
+  // known key is within a few edits).
+  struct UnknownKey {
+    std::string key;  // fully dotted
+    int line = 0;
+    std::string closest;
+  };
+  // The keys below this reader that are not in `known` (fully dotted keys; "Viewer.*" accepts
+  // every key below Viewer), in file order.
+  std::vector<UnknownKey> UnknownKeys(const std::vector<std::string>& known) const;
+  // "<file>:<line>: unknown key 'Camera.fxx' (did you mean 'Camera.fx'?)".
+  std::string UnknownKeyMessage(const UnknownKey& unknown) const;
 
   // Throws InputError "<file>:<line>: key '<prefix.key>': <message>".
   [[noreturn]] void Fail(const std::string& key, const std::string& message) const;

@@ -1,13 +1,66 @@
 #include "core/config/settings.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
 
 namespace dygslam {
 namespace {
 
-Settings ReadSettings(ConfigReader reader) {
+// "1e+308" style: short, exact enough for a message.
+std::string Short(double v) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g", v);
+  return text;
+}
+
+// Values that pass the types and signs but cannot describe a real RGB-D camera (a focal length of
+// 1e308 px, a principal point outside the image, k1 = 1e10): tracking would "succeed" on nonsense.
+void CheckPlausibleCamera(const ConfigReader& camera, const PinholeCamera& c) {
+  const double side = std::max(c.width, c.height);
+  const double min_focal = 0.05 * side, max_focal = 100.0 * side;
+  for (const auto& [key, value] : {std::pair<const char*, double>{"fx", c.fx}, {"fy", c.fy}}) {
+    if (value < min_focal || value > max_focal) {
+      camera.Fail(key, "focal length " + Short(value) + " px is implausible for a " +
+                           std::to_string(c.width) + "x" + std::to_string(c.height) +
+                           " image (expected " + Short(min_focal) + " to " + Short(max_focal) +
+                           " px)");
+    }
+  }
+  if (c.cx < 0 || c.cx > c.width) {
+    camera.Fail("cx", "principal point " + Short(c.cx) + " px is outside the image (0 to " +
+                          std::to_string(c.width) + ", Camera.width)");
+  }
+  if (c.cy < 0 || c.cy > c.height) {
+    camera.Fail("cy", "principal point " + Short(c.cy) + " px is outside the image (0 to " +
+                          std::to_string(c.height) + ", Camera.height)");
+  }
+  for (const auto& [key, value] :
+       {std::pair<const char*, double>{"k1", c.k1}, {"k2", c.k2}, {"k3", c.k3}}) {
+    if (std::abs(value) > 10.0) {
+      camera.Fail(key, "radial distortion " + Short(value) +
+                           " is implausible (expected |value| <= 10; real lenses are below 2)");
+    }
+  }
+  for (const auto& [key, value] : {std::pair<const char*, double>{"p1", c.p1}, {"p2", c.p2}}) {
+    if (std::abs(value) > 1.0) {
+      camera.Fail(
+          key, "tangential distortion " + Short(value) + " is implausible (expected |value| <= 1)");
+    }
+  }
+}
+
+Settings ReadSettings(ConfigReader reader, const SettingsReadOptions& read_options) {
   Settings s;
   s.path = reader.path();
+  for (const ConfigReader::UnknownKey& u : reader.UnknownKeys(KnownSettingsKeys())) {
+    const std::string message = reader.UnknownKeyMessage(u);
+    if (read_options.unknown_keys == UnknownKeyPolicy::kError) {
+      throw InputError(message + " [unknown settings keys are errors here]");
+    }
+    s.warnings.push_back(message);
+    if (read_options.print_warnings) std::fprintf(stderr, "warning: %s\n", message.c_str());
+  }
   const ConfigReader camera = reader.Section("Camera");
   s.camera.fx = camera.Require<double>("fx");
   s.camera.fy = camera.Require<double>("fy");
@@ -31,6 +84,7 @@ Settings ReadSettings(ConfigReader reader) {
   orb.ReadIfPresent("iniThFAST", &s.orb.ini_th_fast);
   orb.ReadIfPresent("minThFAST", &s.orb.min_th_fast);
   reader.CheckOptions(s.camera);
+  CheckPlausibleCamera(camera, s.camera);
   reader.CheckOptions(s.sensor);
   reader.CheckOptions(s.orb);
   s.reader = std::move(reader);
@@ -39,12 +93,45 @@ Settings ReadSettings(ConfigReader reader) {
 
 }  // namespace
 
-Settings LoadSettings(const std::string& path) {
-  return ReadSettings(ConfigReader::FromFile(path));
+const std::vector<std::string>& KnownSettingsKeys() {
+  static const std::vector<std::string> kKeys = {
+      // ORB-SLAM2 (RGB-D): read.
+      "Camera.fx", "Camera.fy", "Camera.cx", "Camera.cy", "Camera.k1", "Camera.k2", "Camera.p1",
+      "Camera.p2", "Camera.k3", "Camera.width", "Camera.height", "Camera.fps", "Camera.bf",
+      "ThDepth", "DepthMapFactor", "ORBextractor.nFeatures", "ORBextractor.scaleFactor",
+      "ORBextractor.nLevels", "ORBextractor.iniThFAST", "ORBextractor.minThFAST",
+      // ORB-SLAM2 / ORB-SLAM3 keys accepted and not used.
+      "Camera.RGB", "Camera.type", "File.version", "Viewer.*",
+      // core/config/system_config.cc.
+      "Tracking.init_min_features", "Tracking.motion_radius_px",
+      "Tracking.max_frames_between_keyframes", "Tracking.ref_ratio",
+      "LocalMapping.triangulation_neighbors", "LocalMapping.cull_keyframes",
+      "LocalMapping.redundancy_ratio", "DynamicFilter.mode", "DynamicFilter.C1",
+      "DynamicFilter.alpha", "DynamicFilter.Q", "DynamicFilter.R", "DynamicFilter.P_init",
+      "DynamicFilter.C2", "DynamicFilter.delta", "DynamicFilter.threshold",
+      "DynamicFilter.box_margin", "DynamicFilter.box_margin_fraction",
+      "DynamicFilter.search_radius", "DynamicFilter.max_hamming",
+      "DynamicFilter.fundamental_threshold", "Detector.model", "Detector.cfg", "Detector.weights",
+      "Detector.names", "Detector.input_width", "Detector.input_height",
+      "Detector.confidence_threshold", "Detector.nms_threshold", "Detector.num_threads",
+      "Detector.dynamic_classes",
+      // core/config/mapping_config.cc.
+      "OctoMap.resolution", "OctoMap.max_range", "OctoMap.min_range", "OctoMap.prob_hit",
+      "OctoMap.prob_miss", "OctoMap.clamping_min", "OctoMap.clamping_max",
+      "OctoMap.occupancy_threshold", "OctoMap.pixel_stride", "OctoMap.voxel_filter_size",
+      "OctoMap.use_voxel_filter", "OctoMap.use_dynamic_mask", "OctoMap.dynamic_mask_dilation_px",
+      "OctoMap.dynamic_keypoint_radius_px", "OctoMap.lazy_eval", "OctoMap.discretize",
+      "OctoMap.rebuild_displacement"};
+  return kKeys;
 }
 
-Settings ParseSettings(const std::string& text, const std::string& name) {
-  return ReadSettings(ConfigReader::FromString(text, name));
+Settings LoadSettings(const std::string& path, const SettingsReadOptions& read_options) {
+  return ReadSettings(ConfigReader::FromFile(path), read_options);
+}
+
+Settings ParseSettings(const std::string& text, const std::string& name,
+                       const SettingsReadOptions& read_options) {
+  return ReadSettings(ConfigReader::FromString(text, name), read_options);
 }
 
 std::string DefaultSettingsPath(const std::string& dataset_dir, const std::string& config_dir) {

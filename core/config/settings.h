@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "core/base/camera.h"
 #include "core/config/config_reader.h"
@@ -16,7 +17,23 @@ struct Settings {
   OrbExtractorOptions orb;
   std::string path;     // the settings file
   ConfigReader reader;  // for module sections
+  // "file:line: unknown key 'Camera.fxx' (did you mean 'Camera.fx'?)", one per unknown key
+  // (LoadSettings has printed them as warnings unless they were made errors).
+  std::vector<std::string> warnings;
 };
+
+// What to do with a key that no module reads (a misspelling would silently keep the default).
+enum class UnknownKeyPolicy { kWarn, kError };
+struct SettingsReadOptions {
+  UnknownKeyPolicy unknown_keys = UnknownKeyPolicy::kWarn;
+  // kWarn: print each warning to stderr (ParseSettings never prints).
+  bool print_warnings = true;
+};
+
+// Every key dygslam reads (ORB-SLAM2's plus the module sections Tracking, LocalMapping,
+// DynamicFilter, Detector, OctoMap) and ORB-SLAM2 keys it accepts without using (Camera.RGB,
+// Viewer.*). A module that reads a new key adds it here.
+const std::vector<std::string>& KnownSettingsKeys();
 
 // Reads ORB-SLAM2's keys:
 //   required: Camera.fx, Camera.fy, Camera.cx, Camera.cy, Camera.k1, Camera.k2, Camera.p1,
@@ -26,13 +43,18 @@ struct Settings {
 //     ORBextractor.scaleFactor (1.2), ORBextractor.nLevels (8), ORBextractor.iniThFAST (20),
 //     ORBextractor.minThFAST (7)
 // Keys ORB-SLAM2 has but dygslam does not use (Camera.RGB, Viewer.*) are ignored.
+// Plausible ranges (InputError otherwise): focal lengths 0.05..100 times the larger image side,
+// principal point inside the image, |k1|, |k2|, |k3| <= 10, |p1|, |p2| <= 1.
+// Unknown keys: a warning (or, with UnknownKeyPolicy::kError, an InputError) naming file:line
+// and the closest known key. A section given as a list is an error.
 // Throws InputError naming the file, line and key (bad values, failed Check()).
-Settings LoadSettings(const std::string& path);
+Settings LoadSettings(const std::string& path, const SettingsReadOptions& read_options = {});
 
 // The settings file for a dataset folder: its own camera.yaml (generated sequences), else the
 // preset of `config_dir` by folder name (freiburg1/2/3 -> tum1/2/3.yaml, otherwise bonn.yaml).
 std::string DefaultSettingsPath(const std::string& dataset_dir, const std::string& config_dir);
 // Same from YAML text (`name` stands in for the file name in messages).
-Settings ParseSettings(const std::string& text, const std::string& name);
+Settings ParseSettings(const std::string& text, const std::string& name,
+                       const SettingsReadOptions& read_options = {UnknownKeyPolicy::kWarn, false});
 
 }  // namespace dygslam

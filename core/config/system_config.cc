@@ -111,11 +111,20 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
     options.detector.cfg_path = detector.Require<std::string>("cfg");
     options.detector.weights_path = detector.Require<std::string>("weights");
     options.detector.names_path = detector.Require<std::string>("names");
-  } else {
+  } else if (detector.Has("model")) {
+    // A model named in the file must exist: falling back to another one would also drop the
+    // input size, thresholds and classes given with it.
     try {
       options.detector = DetectorOptionsForModel(model);
     } catch (const InputError& e) {
-      // Resolved lazily: a run without detection (filter none/geometry) needs no model.
+      detector.Fail("model", e.what());
+    }
+  } else {
+    try {
+      options.detector = DetectorOptionsForModel(model);
+    } catch (const InputError&) {
+      // The default model, resolved lazily: a run without detection (filter none/geometry)
+      // needs no model files.
       options.detector = DetectorOptions();
     }
   }
@@ -126,6 +135,11 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   detector.ReadIfPresent("num_threads", &options.detector.num_threads);
   std::vector<std::string> classes;
   if (detector.ReadIfPresent("dynamic_classes", &classes)) options.detector.dynamic_classes = classes;
+  // The values of the file, checked here so that a bad one names its line (model files that are
+  // resolved later stand in as placeholders).
+  DetectorOptions check = options.detector;
+  if (check.cfg_path.empty()) check.cfg_path = check.weights_path = check.names_path = "default";
+  detector.CheckOptions(check);
   return options;
 }
 

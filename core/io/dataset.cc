@@ -1,7 +1,10 @@
 #include "core/io/dataset.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 
@@ -28,18 +31,49 @@ struct ListEntry {
 
 Timestamp ParseStamp(const std::string& file, int line, const std::string& text) {
   const std::optional<Timestamp> t = Timestamp::Parse(text);
-  if (!t) throw InputError(file, line, "malformed timestamp '" + text + "'");
+  if (!t) throw InputError(file, line, "malformed timestamp '" + Abbreviate(text) + "'");
+  if (t->nanoseconds() < 0) throw InputError(file, line, "negative timestamp " + Abbreviate(text));
   return *t;
 }
 
+// What a path is when it is not a regular file ("" when it is one or does not exist).
+std::string NotRegularReason(const fs::path& p) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(p, ec);
+  if (ec || !fs::exists(st) || fs::is_regular_file(st)) return "";
+  const std::string target =
+      fs::is_symlink(fs::symlink_status(p, ec))
+          ? " (a link to " + Abbreviate(fs::read_symlink(p, ec).string()) + ")"
+          : "";
+  const char* kind = fs::is_directory(st)        ? "a directory"
+                     : fs::is_fifo(st)           ? "a FIFO"
+                     : fs::is_character_file(st) ? "a character device"
+                     : fs::is_block_file(st)     ? "a block device"
+                     : fs::is_socket(st)         ? "a socket"
+                                                 : "not a file";
+  return std::string("not a regular file: ") + kind + target;
+}
+
 std::string ResolveImage(const fs::path& directory, const std::string& file, int line,
-                         const std::string& relative) {
+                         const std::string& relative, bool refuse_outside) {
   const fs::path p = fs::path(relative).is_absolute() ? fs::path(relative) : directory / relative;
+  const std::string reason = NotRegularReason(p);
+  if (!reason.empty())
+    throw InputError(file, line, "image " + Abbreviate(p.string()) + ": " + reason);
   std::error_code ec;
   if (!fs::is_regular_file(p, ec)) {
-    throw InputError(file, line, "image file not found: " + p.string());
+    throw InputError(file, line, "image file not found: " + Abbreviate(p.string()));
   }
-  return p.lexically_normal().string();
+  const fs::path normal = p.lexically_normal();
+  const fs::path base = directory.filename().empty() ? directory.parent_path() : directory;
+  const fs::path inside = normal.lexically_relative(base);
+  if (inside.empty() || *inside.begin() == "..") {
+    const std::string message = "image path " + Abbreviate(relative) +
+                                " is outside the dataset folder " + directory.string();
+    if (refuse_outside) throw InputError(file, line, message);
+    std::fprintf(stderr, "warning: %s\n", InputError::Format(file, line, message).c_str());
+  }
+  return normal.string();
 }
 
 void CheckOrder(const std::string& file, int line, Timestamp previous, Timestamp current,
@@ -56,7 +90,8 @@ void CheckOrder(const std::string& file, int line, Timestamp previous, Timestamp
 }
 
 // rgb.txt / depth.txt: "timestamp relative_path".
-std::vector<ListEntry> ReadImageList(const fs::path& directory, const std::string& name) {
+std::vector<ListEntry> ReadImageList(const fs::path& directory, const std::string& name,
+                                     bool refuse_outside) {
   const std::string file = (directory / name).string();
   std::vector<ListEntry> entries;
   for (const TextLine& l : ReadDataLines(file)) {
@@ -70,7 +105,7 @@ std::vector<ListEntry> ReadImageList(const fs::path& directory, const std::strin
     e.stamp = ParseStamp(file, l.line_number, l.tokens[0]);
     CheckOrder(file, l.line_number, entries.empty() ? Timestamp() : entries.back().stamp, e.stamp,
                !entries.empty());
-    e.path = ResolveImage(directory, file, l.line_number, l.tokens[1]);
+    e.path = ResolveImage(directory, file, l.line_number, l.tokens[1], refuse_outside);
     entries.push_back(std::move(e));
   }
   if (entries.empty()) throw InputError(file, 0, "no entries");
@@ -93,7 +128,7 @@ RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions
   const bool has_rgb_list = fs::is_regular_file(dir / "rgb.txt", ec);
 
   std::vector<ListEntry> rgb;
-  if (has_rgb_list || !use_assoc) rgb = ReadImageList(dir, "rgb.txt");
+  if (has_rgb_list || !use_assoc) rgb = ReadImageList(dir, "rgb.txt", options.refuse_outside_paths);
 
   if (use_assoc) {
     // "t_rgb rgb_path t_depth depth_path", sorted by rgb stamp.
@@ -114,8 +149,11 @@ RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions
         throw InputError(file, l.line_number,
                          "rgb and depth stamps differ by more than max_time_difference");
       }
-      f.rgb_path = ResolveImage(dir, file, l.line_number, l.tokens[1]);
-      f.depth_path = ResolveImage(dir, file, l.line_number, l.tokens[3]);
+      f.rgb_path =
+          ResolveImage(dir, file, l.line_number, l.tokens[1], options.refuse_outside_paths);
+      f.depth_path =
+          ResolveImage(dir, file, l.line_number, l.tokens[3], options.refuse_outside_paths);
+      f.rgb_listed_at = f.depth_listed_at = file + ":" + std::to_string(l.line_number);
       dataset.frames_.push_back(std::move(f));
     }
     if (dataset.frames_.empty()) throw InputError(file, 0, "no entries");
@@ -135,7 +173,8 @@ RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions
       }
     }
   } else {
-    const std::vector<ListEntry> depth = ReadImageList(dir, "depth.txt");
+    const std::vector<ListEntry> depth =
+        ReadImageList(dir, "depth.txt", options.refuse_outside_paths);
     std::vector<Timestamp> rgb_stamps, depth_stamps;
     for (const ListEntry& e : rgb) rgb_stamps.push_back(e.stamp);
     for (const ListEntry& e : depth) depth_stamps.push_back(e.stamp);
@@ -145,8 +184,12 @@ RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions
     dataset.rgb_entry_to_frame_.assign(rgb.size(), std::nullopt);
     for (const TimestampMatch& m : matches) {
       dataset.rgb_entry_to_frame_[m.first] = dataset.frames_.size();
-      dataset.frames_.push_back(
-          {rgb[m.first].stamp, rgb[m.first].path, depth[m.second].stamp, depth[m.second].path});
+      const std::string rgb_file = (dir / "rgb.txt").string();
+      const std::string depth_file = (dir / "depth.txt").string();
+      dataset.frames_.push_back({rgb[m.first].stamp, rgb[m.first].path, depth[m.second].stamp,
+                                 depth[m.second].path,
+                                 rgb_file + ":" + std::to_string(rgb[m.first].line),
+                                 depth_file + ":" + std::to_string(depth[m.second].line)});
     }
     if (dataset.frames_.empty()) {
       throw InputError(dir.string(), 0,
@@ -187,26 +230,66 @@ const char* TypeName(int type) {
   }
 }
 
-cv::Mat LoadImage(const std::string& path, int expected_type, const char* what, int width,
-                  int height) {
+// Width and height from a PNG's IHDR chunk (bytes 16..23, big endian); false if `path` is not a
+// PNG or does not start with an IHDR chunk.
+bool PngSize(const std::string& path, int64_t* width, int64_t* height) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char header[24];
+  if (!in.read(reinterpret_cast<char*>(header), sizeof(header))) return false;
+  static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (!std::equal(kSignature, kSignature + 8, header)) return false;
+  // The IHDR chunk must come first; without it the header says nothing (the decoder reports it).
+  if (header[12] != 'I' || header[13] != 'H' || header[14] != 'D' || header[15] != 'R') return false;
+  const auto be32 = [&](int at) {
+    return (int64_t{header[at]} << 24) | (int64_t{header[at + 1]} << 16) |
+           (int64_t{header[at + 2]} << 8) | int64_t{header[at + 3]};
+  };
+  *width = be32(16);
+  *height = be32(20);
+  return true;
+}
+
+// `listed_at`: "rgb.txt:12", named in every message next to the image.
+cv::Mat LoadImage(const std::string& path, const std::string& listed_at, int expected_type,
+                  const char* what, int width, int height) {
+  const auto fail = [&](const std::string& message) {
+    throw InputError(path, 0,
+                     message + (listed_at.empty() ? "" : " (listed at " + listed_at + ")"));
+  };
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec))
-    throw InputError(path, 0, std::string(what) + " image not found");
-  cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
-  if (image.empty()) {
-    throw InputError(path, 0,
-                     std::string("cannot decode ") + what + " image (corrupt or not an image)");
+  const std::string reason = NotRegularReason(path);
+  if (!reason.empty()) fail(std::string(what) + " image " + reason);
+  if (!fs::is_regular_file(path, ec)) fail(std::string(what) + " image not found");
+  // The size first, from the header: decoding a 20000x20000 PNG allocates 1.2 GB before its size
+  // could be checked, and OpenCV refuses larger ones with an assertion.
+  int64_t png_width = 0, png_height = 0;
+  if (PngSize(path, &png_width, &png_height)) {
+    const int64_t max_side = 16384;  // Camera.width / height limit
+    if ((width > 0 && png_width != width) || (height > 0 && png_height != height) ||
+        png_width > max_side || png_height > max_side || png_width <= 0 || png_height <= 0) {
+      fail(std::string(what) + " image is " + std::to_string(png_width) + "x" +
+           std::to_string(png_height) + ", expected " +
+           (width > 0 ? std::to_string(width) + "x" + std::to_string(height)
+                      : "at most " + std::to_string(max_side) + "x" + std::to_string(max_side)) +
+           " (size from the PNG header; not decoded)");
+    }
   }
+  cv::Mat image;
+  try {
+    image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    fail(std::string("cannot decode ") + what + " image: " + e.err);
+  }
+  if (image.empty())
+    fail(std::string("cannot decode ") + what + " image (corrupt or not an image)");
   if (image.type() != expected_type) {
-    throw InputError(path, 0,
-                     std::string(what) + " image must be " + TypeName(expected_type) + ", found " +
-                         TypeName(image.type()));
+    fail(std::string(what) + " image must be " + TypeName(expected_type) + ", found " +
+         TypeName(image.type()));
   }
   if ((width > 0 && image.cols != width) || (height > 0 && image.rows != height)) {
-    throw InputError(path, 0,
-                     std::string(what) + " image is " + std::to_string(image.cols) + "x" +
-                         std::to_string(image.rows) + ", expected " + std::to_string(width) + "x" +
-                         std::to_string(height));
+    fail(std::string(what) + " image is " + std::to_string(image.cols) + "x" +
+         std::to_string(image.rows) + ", expected " + std::to_string(width) + "x" +
+         std::to_string(height));
   }
   return image;
 }
@@ -214,11 +297,13 @@ cv::Mat LoadImage(const std::string& path, int expected_type, const char* what, 
 }  // namespace
 
 cv::Mat RgbdDataset::LoadRgb(size_t i, int expected_width, int expected_height) const {
-  return LoadImage(frame(i).rgb_path, CV_8UC3, "rgb", expected_width, expected_height);
+  return LoadImage(frame(i).rgb_path, frame(i).rgb_listed_at, CV_8UC3, "rgb", expected_width,
+                   expected_height);
 }
 
 cv::Mat RgbdDataset::LoadDepth(size_t i, int expected_width, int expected_height) const {
-  return LoadImage(frame(i).depth_path, CV_16UC1, "depth", expected_width, expected_height);
+  return LoadImage(frame(i).depth_path, frame(i).depth_listed_at, CV_16UC1, "depth", expected_width,
+                   expected_height);
 }
 
 std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total) {

@@ -19,6 +19,9 @@ namespace dygslam {
 struct DatasetOptions {
   double max_time_difference = 0.02;  // seconds, rgb <-> depth association
   bool use_associations_file = true;  // use associations.txt when present
+  // Image paths that lead outside the dataset folder ("../../etc/passwd", an absolute path
+  // elsewhere): a warning on stderr naming the list file and line (false), or an InputError (true).
+  bool refuse_outside_paths = false;
   void Check() const;
 };
 
@@ -27,6 +30,9 @@ struct RgbdFrameEntry {
   std::string rgb_path;  // absolute
   Timestamp depth_stamp;
   std::string depth_path;  // absolute
+  // Where the entries are listed ("/data/x/rgb.txt:12"), for messages about the images.
+  std::string rgb_listed_at;
+  std::string depth_listed_at;
 };
 
 // "FIRST:LAST" (either side may be empty) -> [first, last) of rgb.txt entries, LAST clamped to
@@ -35,8 +41,10 @@ std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total)
 
 class RgbdDataset {
  public:
-  // Throws InputError naming the file and line for missing files, malformed lines, unsorted or
-  // duplicate timestamps.
+  // Throws InputError naming the file and line for missing files, malformed lines, unsorted,
+  // duplicate or negative timestamps, and image paths that are not regular files (a FIFO, a
+  // device, a directory). A UTF-8 byte order mark at the start of a list is skipped; paths echoed
+  // in messages are cut to 200 characters.
   static RgbdDataset Open(const std::string& directory, const DatasetOptions& options = {});
 
   const std::string& directory() const { return directory_; }
@@ -48,7 +56,9 @@ class RgbdDataset {
   // Index into frames() of rgb.txt entry k, or nullopt if that entry has no depth partner.
   std::optional<size_t> FrameForRgbEntry(size_t k) const;
 
-  // CV_8UC3 BGR. Throws InputError naming the file if missing, unreadable or wrong size.
+  // CV_8UC3 BGR. Throws InputError naming the file and its list line if missing, unreadable or of
+  // the wrong size; a PNG's size is checked from its header before it is decoded (a 20000x20000
+  // PNG is refused without allocating 1.2 GB).
   cv::Mat LoadRgb(size_t i, int expected_width = 0, int expected_height = 0) const;
   // CV_16UC1 raw depth (divide by DepthMapFactor for metres). Same errors.
   cv::Mat LoadDepth(size_t i, int expected_width = 0, int expected_height = 0) const;

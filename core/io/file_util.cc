@@ -40,10 +40,18 @@ void WriteFileAtomically(const std::string& path, const std::string& content) {
   }
 }
 
+std::string Abbreviate(const std::string& text, size_t max_chars) {
+  if (text.size() <= max_chars) return text;
+  return text.substr(0, max_chars) + "... (" + std::to_string(text.size()) + " bytes)";
+}
+
 std::vector<TextLine> ReadDataLines(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, 0, "file not found");
   if (fs::is_directory(path, ec)) throw InputError(path, 0, "is a directory, expected a file");
+  // A pipe is fine (`<(...)`); a device (/dev/zero) would be read forever.
+  if (!fs::is_regular_file(path, ec) && !fs::is_fifo(path, ec))
+    throw InputError(path, 0, "not a regular file (a device or a socket)");
   std::ifstream in(path);
   if (!in) throw InputError(path, 0, "cannot open file for reading");
   std::vector<TextLine> lines;
@@ -51,6 +59,7 @@ std::vector<TextLine> ReadDataLines(const std::string& path) {
   int number = 0;
   while (std::getline(in, raw)) {
     ++number;
+    if (number == 1 && raw.compare(0, 3, "\xEF\xBB\xBF") == 0) raw.erase(0, 3);  // UTF-8 BOM
     if (!raw.empty() && raw.back() == '\r') raw.pop_back();
     size_t first = raw.find_first_not_of(" \t");
     if (first == std::string::npos || raw[first] == '#') continue;

@@ -17,9 +17,13 @@ struct TextLine {
   std::vector<std::string> tokens;
 };
 
+// `text` for a message: at most `max_chars` characters, longer text cut with "... (N bytes)".
+std::string Abbreviate(const std::string& text, size_t max_chars = 200);
+
 // Reads `path` and returns its data lines: '#' starts a comment (whole line), blank lines are
-// skipped, tokens are separated by spaces, tabs or commas. Throws InputError if the file is
-// missing or unreadable.
+// skipped, tokens are separated by spaces, tabs or commas; a UTF-8 byte order mark at the start
+// is skipped. Throws InputError if the file is missing, unreadable, or a device or socket (a pipe
+// is read).
 std::vector<TextLine> ReadDataLines(const std::string& path);
 
 }  // namespace dygslam

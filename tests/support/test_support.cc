@@ -1,11 +1,15 @@
 #include "tests/support/test_support.h"
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <random>
-
-#include <unistd.h>
+#include <sstream>
 
 #include "core/base/paths.h"
 
@@ -53,6 +57,45 @@ std::string MakeTempDir(const std::string& prefix) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir.string();
+}
+
+std::string DygslamBinary() {
+  const char* bin = std::getenv("DYGSLAM_BINARY_DIR");
+  return (fs::path(bin ? bin : DYGSLAM_BAKED_BINARY_DIR) / "apps" / "dygslam").string();
+}
+
+ProcessResult RunDygslam(const std::vector<std::string>& args, const std::string& scratch_dir) {
+  static std::atomic<int> counter{0};
+  const int n = counter++;
+  const std::string out =
+      (fs::path(scratch_dir) / ("stdout_" + std::to_string(n) + ".txt")).string();
+  const std::string err =
+      (fs::path(scratch_dir) / ("stderr_" + std::to_string(n) + ".txt")).string();
+  std::vector<std::string> copy = {DygslamBinary()};
+  copy.insert(copy.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : copy) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (!std::freopen(out.c_str(), "w", stdout) || !std::freopen(err.c_str(), "w", stderr))
+      std::_Exit(126);
+    execv(argv[0], argv.data());
+    std::_Exit(127);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  const auto read_all = [](const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  };
+  ProcessResult r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.out = read_all(out);
+  r.err = read_all(err);
+  return r;
 }
 
 }  // namespace dygslam::testing

@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace dygslam::testing {
 
@@ -23,6 +24,16 @@ inline constexpr const char* kHowToGetData =
     "DYGSLAM_MODELS_DIR";
 // A fresh empty directory under the build tree (or /tmp), unique per call.
 std::string MakeTempDir(const std::string& prefix);
+
+// The built `dygslam` executable ($DYGSLAM_BINARY_DIR/apps/dygslam).
+std::string DygslamBinary();
+// What a finished child process left: its exit code (128 + signal when killed) and output.
+struct ProcessResult {
+  int code = -1;
+  std::string out, err;
+};
+// Runs `dygslam args...` to completion, stdout and stderr captured through files in `scratch_dir`.
+ProcessResult RunDygslam(const std::vector<std::string>& args, const std::string& scratch_dir);
 
 }  // namespace dygslam::testing
 

@@ -16,6 +16,7 @@
 namespace dygslam {
 
 class MapPoint;
+struct DenseView;
 
 // Camera geometry shared by frames and keyframes (immutable once built).
 struct CameraGeometry {
@@ -68,6 +69,8 @@ class Frame {
   std::vector<uint8_t> in_dynamic_region;   // 1: never seeds a map point
   bool CanSeedPoint(size_t i) const { return depth[i] > 0 && !in_dynamic_region[i]; }
   FeatureGrid grid;
+  // Gray image, depth and static mask, for the dense fallback estimator (null: none).
+  std::shared_ptr<const DenseView> dense;
 
   // Tracking state built per frame.
   std::vector<std::shared_ptr<MapPoint>> map_points;

@@ -21,6 +21,10 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   tracking.ReadIfPresent("fallback_min_inlier_fraction",
                          &options.tracking.fallback.min_inlier_fraction);
   tracking.ReadIfPresent("fallback_min_inliers", &options.tracking.fallback.min_inliers);
+  tracking.ReadIfPresent("fallback_check_below_inliers",
+                         &options.tracking.fallback_check_below_inliers);
+  tracking.ReadIfPresent("fallback_override_fraction_gain",
+                         &options.tracking.fallback_override_fraction_gain);
   tracking.CheckOptions(options.tracking);
   const ConfigReader mapping = root.Section("LocalMapping");
   mapping.ReadIfPresent("triangulation_neighbors", &options.local_mapping.triangulation_neighbors);

@@ -38,6 +38,7 @@ struct TrackingOptions {
   StaticDepthOdometryOptions fallback;
   int fallback_check_below_inliers = 150;  // feature poses with fewer inliers are cross-checked
   double fallback_override_fraction_gain = 0.02;  // dense agreement must be this much higher
+  double fallback_override_rmse_ratio = 1.5;      // ... or higher with this ratio of residuals
   void Check() const {
     DYGSLAM_CHECK_OPTION(init_min_features > 0, "Tracking.init_min_features");
     DYGSLAM_CHECK_OPTION(motion_radius_px > 0, "Tracking.motion_radius_px");
@@ -46,6 +47,10 @@ struct TrackingOptions {
     optimizer.Check();
     matcher.Check();
     fallback.Check();
+    DYGSLAM_CHECK_OPTION(fallback_check_below_inliers >= 0, "Tracking.fallback_check_below_inliers");
+    DYGSLAM_CHECK_OPTION(fallback_override_fraction_gain >= 0 && fallback_override_fraction_gain <= 1,
+                         "Tracking.fallback_override_fraction_gain");
+    DYGSLAM_CHECK_OPTION(fallback_override_rmse_ratio >= 1, "Tracking.fallback_override_rmse_ratio");
   }
 };
 
@@ -103,8 +108,10 @@ class Tracker {
     const DenseView* ref_view = nullptr;
     DepthAgreement agreement;
   };
-  // The verified dense pose of a frame (against the last frame, else the newest keyframe).
-  std::optional<DenseResult> DenseEstimate(const Frame& frame, const Rigid3d& predicted);
+  // The verified dense pose of a frame (against the last frame, else the newest keyframe;
+  // keyframe_only: against the newest keyframe).
+  std::optional<DenseResult> DenseEstimate(const Frame& frame, const Rigid3d& predicted,
+                                           bool keyframe_only);
   // Sets up a frame whose cam_from_world is a dense pose (drops feature associations that
   // disagree with it); true.
   bool AcceptDensePose(Frame& frame);

@@ -22,7 +22,8 @@ void Tracker::RememberDenseKeyFrame(const std::shared_ptr<KeyFrame>& kf, const F
 }
 
 std::optional<Tracker::DenseResult> Tracker::DenseEstimate(const Frame& frame,
-                                                           const Rigid3d& predicted) {
+                                                           const Rigid3d& predicted,
+                                                           bool keyframe_only) {
   if (!frame.dense) return std::nullopt;
   if (!static_depth_odometry_) {
     static_depth_odometry_ =
@@ -35,7 +36,7 @@ std::optional<Tracker::DenseResult> Tracker::DenseEstimate(const Frame& frame,
     const char* name;
   };
   std::vector<Reference> references;
-  if (last_frame_.dense && last_frame_.has_pose)
+  if (last_frame_.dense && last_frame_.has_pose && !keyframe_only)
     references.push_back({last_frame_.dense.get(), last_frame_.cam_from_world, "last frame"});
   if (dense_kf_ && dense_kf_view_ && !dense_kf_->bad)
     references.push_back({dense_kf_view_.get(), dense_kf_->cam_from_world, "keyframe"});
@@ -57,7 +58,12 @@ std::optional<Tracker::DenseResult> Tracker::DenseEstimate(const Frame& frame,
 bool Tracker::DenseOverridesFeaturePose(Frame& frame, const std::optional<Rigid3d>& predicted) {
   if (!predicted || !frame.dense || last_inliers_ >= options_.fallback_check_below_inliers)
     return false;
-  const std::optional<DenseResult> dense = DenseEstimate(frame, *predicted);
+  // Against the last frame when features held its pose, else against the newest keyframe (its
+  // pose rests on the map): comparing with a dense (fallback) last frame would favour continuing
+  // the dense chain over features that have found the map again.
+  const bool last_was_dense =
+      !records_.empty() && records_.back().state == TrackingState::kFallback;
+  const std::optional<DenseResult> dense = DenseEstimate(frame, *predicted, last_was_dense);
   if (!dense) return false;
   const DepthAgreement& dense_agreement = dense->agreement;
   // The feature pose measured the same way, against the same reference.
@@ -69,16 +75,21 @@ bool Tracker::DenseOverridesFeaturePose(Frame& frame, const std::optional<Rigid3
             << " rmse " << feature_agreement.rmse << ", dense " << dense_agreement.inlier_fraction()
             << " rmse " << dense_agreement.rmse << "; poses differ by " << diff.translation.norm()
             << " m, " << RotationAngle(diff.rotation) * 180 / M_PI << " deg";
-  if (feature_agreement.inlier_fraction() + options_.fallback_override_fraction_gain >
-      dense_agreement.inlier_fraction())
-    return false;
+  // The dense pose wins when more of the static depth agrees with it, or when as much agrees but
+  // with a clearly larger residual under the feature pose.
+  const double gain = dense_agreement.inlier_fraction() - feature_agreement.inlier_fraction();
+  const bool clearly_better =
+      gain >= options_.fallback_override_fraction_gain ||
+      (gain > 0 &&
+       feature_agreement.rmse > options_.fallback_override_rmse_ratio * dense_agreement.rmse);
+  if (!clearly_better) return false;
   frame.cam_from_world = dense->cam_from_world;
   return AcceptDensePose(frame);
 }
 
 bool Tracker::TrackWithStaticDepth(Frame& frame, const std::optional<Rigid3d>& predicted) {
   if (!predicted || !frame.dense || !reference_kf_) return false;
-  const std::optional<DenseResult> dense = DenseEstimate(frame, *predicted);
+  const std::optional<DenseResult> dense = DenseEstimate(frame, *predicted, false);
   if (!dense) return false;
   frame.cam_from_world = dense->cam_from_world;
   return AcceptDensePose(frame);

@@ -143,8 +143,7 @@ TEST(SlamFallback, BonnCrowdFramesWherePersonFillsTheViewGetAPose) {
   std::map<std::string, int> states;
   int fallback_keyframes = 0, ok_after_fallback = 0;
   bool seen_fallback = false;
-  for (bool dense_fallback : {true}) {
-    options.tracking.dense_fallback = dense_fallback;
+  {
     System system(options);
     constexpr size_t kFirst = 170, kLast = 225;
     for (size_t k = kFirst; k < kLast; ++k) {

@@ -277,8 +277,8 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
            << stats.keyframes_published - stats.keyframe_pose_updates - stats.keyframes_removed
            << " new, " << stats.keyframe_pose_updates << " pose updates, "
            << stats.keyframes_removed << " removed); detections: " << stats.pairing.with_detections
-           << " paired, " << stats.pairing.missing_detections << " frames without their own ("
-           << stats.pairing.carried_forward << " with boxes carried forward, "
+           << " paired, " << stats.pairing.missing_detections << " missing (frames without their "
+           << "own boxes: " << stats.pairing.carried_forward << " with boxes carried forward, "
            << stats.pairing.missing_detections - stats.pairing.carried_forward
            << " geometry-only), " << stats.pairing.dropped_detections << " arrived late ("
            << stats.pairing.late_used << " carried forward)"

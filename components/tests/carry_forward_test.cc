@@ -23,9 +23,10 @@ struct Outcome {
   int geometry_only = 0;     // frames without any boxes
 };
 
-// Frames [first, last) of the dataset; the detector delivers boxes until `stop` (exclusive).
+// Frames [first, last) of the dataset; the detector delivers boxes until `stop` (exclusive);
+// frames from `record_from` on are counted.
 Outcome RunFrames(const RgbdDataset& dataset, const SystemOptions& system, size_t first,
-                  size_t stop, size_t last, int carry_forward_max_frames,
+                  size_t stop, size_t record_from, size_t last, int carry_forward_max_frames,
                   const std::vector<std::vector<Detection>>& detections) {
   SlamComponentOptions options;
   options.system = system;
@@ -50,7 +51,7 @@ Outcome RunFrames(const RgbdDataset& dataset, const SystemOptions& system, size_
     EXPECT_TRUE(paired);
     const std::vector<Detection>* dets = paired->detections ? &*paired->detections : nullptr;
     const SlamOutput result = core.Process(paired->frame, dets);
-    if (k >= stop) {
+    if (k >= record_from) {
       out.dynamic.push_back(result.result.num_dynamic);
       out.carried += paired->detections_carried_forward;
       out.geometry_only += dets == nullptr;
@@ -81,9 +82,9 @@ TEST(CarryForward, DetectorStoppedMidRunBoxesStillFilter) {
   ASSERT_FALSE(detections[kStop - 1 - kFirst].empty()) << "no person detected at the stop frame";
 
   const Outcome all =
-      RunFrames(dataset, system, kFirst, kLast, kLast, 30, detections);  // never stops
-  const Outcome carried = RunFrames(dataset, system, kFirst, kStop, kLast, 30, detections);
-  const Outcome geometry = RunFrames(dataset, system, kFirst, kStop, kLast, 0, detections);
+      RunFrames(dataset, system, kFirst, kLast, kStop, kLast, 30, detections);  // never stops
+  const Outcome carried = RunFrames(dataset, system, kFirst, kStop, kStop, kLast, 30, detections);
+  const Outcome geometry = RunFrames(dataset, system, kFirst, kStop, kStop, kLast, 0, detections);
   auto sum = [](const std::vector<int>& v) { return std::accumulate(v.begin(), v.end(), 0); };
   std::cout << "features removed on entries " << kStop << "-" << kLast - 1 << ": own boxes "
             << sum(all.dynamic) << ", carried forward " << sum(carried.dynamic)
@@ -94,7 +95,8 @@ TEST(CarryForward, DetectorStoppedMidRunBoxesStillFilter) {
   // The carried-forward boxes remove most of what the frames' own boxes remove, far more than the
   // geometry alone.
   EXPECT_GT(sum(carried.dynamic), 2 * sum(geometry.dynamic));
-  EXPECT_GT(sum(carried.dynamic), sum(all.dynamic) / 2);
+  // Measured: own boxes 8038, carried forward 7308 (91 %), geometry only 0.
+  EXPECT_GT(sum(carried.dynamic), 0.75 * sum(all.dynamic));
 }
 
 }  // namespace

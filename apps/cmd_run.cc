@@ -349,12 +349,13 @@ int RunRun(const std::vector<std::string>& args) {
     };
     const size_t with_pose = count(TrackingState::kOk) + count(TrackingState::kFallback) +
                              count(TrackingState::kRelocalized);
-    std::printf("poses: %zu of %zu frames (%.1f %%): ok %zu, fallback %zu, relocalized %zu, lost %zu, "
-                "not initialised %zu\n",
-                with_pose, outcome.processed,
-                100.0 * with_pose / std::max<size_t>(outcome.processed, 1), count(TrackingState::kOk),
-                count(TrackingState::kFallback), count(TrackingState::kRelocalized),
-                count(TrackingState::kLost), count(TrackingState::kNotInitialized));
+    std::printf(
+        "poses: %zu of %zu frames (%.1f %%): ok %zu, fallback %zu, relocalized %zu, lost %zu, "
+        "not initialised %zu\n",
+        with_pose, outcome.processed, 100.0 * with_pose / std::max<size_t>(outcome.processed, 1),
+        count(TrackingState::kOk), count(TrackingState::kFallback),
+        count(TrackingState::kRelocalized), count(TrackingState::kLost),
+        count(TrackingState::kNotInitialized));
   }
   std::printf("filter: %s%s\n", ToString(s.system.filter_mode),
               s.system.deterministic ? " (deterministic)" : "");

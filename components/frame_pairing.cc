@@ -41,7 +41,8 @@ void FramePairer::AddDetections(Timestamp stamp, std::vector<Detection> detectio
 void FramePairer::SetDetectorAlive(bool alive) {
   if (!alive && detector_alive_ && options_.needs_detections) {
     LOG_WARNING << "slam: the detector is gone; continuing with its last boxes carried forward "
-                   "(at most " << options_.carry_forward_max_frames << " frames), then geometry-only";
+                   "(at most "
+                << options_.carry_forward_max_frames << " frames), then geometry-only";
     if (!detector_lost_) ++stats_.lost_episodes;
     detector_lost_ = true;
   }
@@ -77,7 +78,8 @@ std::optional<PairedFrame> FramePairer::Next(Clock::time_point now) {
     const bool recent =
         newest_ && newest_->first < stamp &&
         stamp - newest_->first <=
-            std::chrono::duration_cast<std::chrono::nanoseconds>(options_.carry_forward_max_age).count();
+            std::chrono::duration_cast<std::chrono::nanoseconds>(options_.carry_forward_max_age)
+                .count();
     if (recent && consecutive_carried_ < options_.carry_forward_max_frames) {
       out.detections = newest_->second;
       out.detections_carried_forward = true;
@@ -88,7 +90,8 @@ std::optional<PairedFrame> FramePairer::Next(Clock::time_point now) {
     if (!detector_lost_ && ++consecutive_misses_ >= options_.lost_after_misses) {
       LOG_WARNING << "slam: no detections for " << consecutive_misses_
                   << " frames in a row; no more waiting for them (boxes carried forward, at "
-                     "most " << options_.carry_forward_max_frames << " frames, then geometry-only)";
+                     "most "
+                  << options_.carry_forward_max_frames << " frames, then geometry-only)";
       detector_lost_ = true;
       ++stats_.lost_episodes;
     }

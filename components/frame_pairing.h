@@ -35,7 +35,7 @@ struct PairingOptions {
   bool deterministic = false;
   std::chrono::milliseconds max_wait{150};
   int lost_after_misses = 5;
-  int carry_forward_max_frames = 30;                    // 0: never carry boxes forward
+  int carry_forward_max_frames = 30;                      // 0: never carry boxes forward
   std::chrono::milliseconds carry_forward_max_age{1000};  // stamp difference, frame to boxes
   void Check() const;
 };

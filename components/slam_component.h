@@ -5,9 +5,10 @@
 // stamp (FramePairer: --deterministic waits for every frame's detections; normal mode waits at
 // most detection_wait and counts misses; a frame without its own detections is filtered with the
 // newest earlier boxes carried forward (CameraPose.detections_carried_forward), geometry-only
-// when there are none recent; reported in the stats and in CameraPose.detections_missing). Ends when END_OF_STREAM's frame count has been processed
-// (or 3 s after END_OF_STREAM without new frames, or on stop): System::Shutdown(), final
-// trajectories published, StreamStatus COMPONENT_DONE "slam".
+// when there are none recent; reported in the stats and in CameraPose.detections_missing). Ends
+// when END_OF_STREAM's frame count has been processed (or 3 s after END_OF_STREAM without new
+// frames, or on stop): System::Shutdown(), final trajectories published, StreamStatus
+// COMPONENT_DONE "slam".
 #pragma once
 
 #include <chrono>

@@ -37,7 +37,8 @@ TrackResult Tracker::Track(Frame frame) {
       if (!lost_) {
         PrepareLastFrame();
         if (last_frame_.has_pose)
-          predicted = velocity_ ? *velocity_ * last_frame_.cam_from_world : last_frame_.cam_from_world;
+          predicted =
+              velocity_ ? *velocity_ * last_frame_.cam_from_world : last_frame_.cam_from_world;
         if (velocity_ && frame.id > last_relocalization_frame_id_ + 1) ok = TrackWithMotionModel(frame);
         if (!ok) ok = TrackReferenceKeyFrame(frame);
       }
@@ -63,7 +64,8 @@ TrackResult Tracker::Track(Frame frame) {
         if (NeedNewKeyFrame(frame)) result.new_keyframe = CreateKeyFrame(frame);
         if (result.new_keyframe) RememberDenseKeyFrame(result.new_keyframe, frame);
         records_.push_back({frame.stamp, reference_kf_->id,
-                            frame.cam_from_world * reference_kf_->cam_from_world.Inverse(), result.state});
+                            frame.cam_from_world * reference_kf_->cam_from_world.Inverse(),
+                            result.state});
         last_frame_ = frame;
       } else if (dense_override ||
                  (options_.dense_fallback && TrackWithStaticDepth(frame, predicted))) {

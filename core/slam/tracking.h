@@ -47,10 +47,13 @@ struct TrackingOptions {
     optimizer.Check();
     matcher.Check();
     fallback.Check();
-    DYGSLAM_CHECK_OPTION(fallback_check_below_inliers >= 0, "Tracking.fallback_check_below_inliers");
-    DYGSLAM_CHECK_OPTION(fallback_override_fraction_gain >= 0 && fallback_override_fraction_gain <= 1,
-                         "Tracking.fallback_override_fraction_gain");
-    DYGSLAM_CHECK_OPTION(fallback_override_rmse_ratio >= 1, "Tracking.fallback_override_rmse_ratio");
+    DYGSLAM_CHECK_OPTION(fallback_check_below_inliers >= 0,
+                         "Tracking.fallback_check_below_inliers");
+    DYGSLAM_CHECK_OPTION(
+        fallback_override_fraction_gain >= 0 && fallback_override_fraction_gain <= 1,
+        "Tracking.fallback_override_fraction_gain");
+    DYGSLAM_CHECK_OPTION(fallback_override_rmse_ratio >= 1,
+                         "Tracking.fallback_override_rmse_ratio");
   }
 };
 

@@ -468,6 +468,28 @@ int RunBench(const std::vector<std::string>& args) {
     }
   }
 
+  // γ on the same frame set: the no-filter runs' ATE over each configuration's frames.
+  for (BenchCell& cell : cells) {
+    if (cell.config == kNoFilterConfig || cell.median_run < 0) continue;
+    const auto none_runs = grouped.find({cell.sequence, kNoFilterConfig});
+    if (none_runs == grouped.end()) continue;
+    const Prepared* pr = nullptr;
+    for (const Prepared& candidate : prepared)
+      if (candidate.sequence.name == cell.sequence) pr = &candidate;
+    if (!pr) continue;
+    try {
+      std::vector<std::vector<StampedPose>> none_trajectories;
+      for (const BenchRun* r : none_runs->second)
+        none_trajectories.push_back(ReadTumTrajectory(r->trajectory_path));
+      const BenchRun& median = *grouped[{cell.sequence, cell.config}][cell.median_run];
+      SetReferenceAte(pr->groundtruth, none_trajectories, ReadTumTrajectory(median.trajectory_path),
+                      &cell);
+    } catch (const InputError& e) {  // --report-only after the run folders were removed
+      notes.push_back(cell.sequence + " " + cell.config +
+                      ": γ against the no-filter ATE over all its frames (" + e.what() + ")");
+    }
+  }
+
   // Pictures.
   std::vector<SequencePictures> pictures;
   if (!p.Flag("no-pictures")) {

@@ -96,6 +96,7 @@ struct RunSetup {
 struct RunOutcome {
   size_t processed = 0;
   size_t lost = 0;
+  std::map<std::string, size_t> states;  // frames per tracking state (frames.csv `state`)
   bool interrupted = false;
   int exit_code = 0;
 };
@@ -137,6 +138,7 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
     ++outcome.processed;
     if (r.state == TrackingState::kLost) ++outcome.lost;
     if (r.world_from_cam) online.push_back({r.stamp, *r.world_from_cam});
+    ++outcome.states[ToString(r.state)];
     csv += FramesCsvRow(r);
     if (s.progress && (outcome.processed % 10 == 0 || k + 1 == s.last)) {
       const double elapsed =
@@ -231,6 +233,7 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
       if (line.tokens.size() < 2 || line.tokens[0] == "stamp") continue;
       ++outcome.processed;
       if (line.tokens[1] == ToString(TrackingState::kLost)) ++outcome.lost;
+      ++outcome.states[line.tokens[1]];
     }
   }
   return outcome;
@@ -384,6 +387,23 @@ int RunRun(const std::vector<std::string>& args) {
   std::printf("frames: %zu processed, %zu tracked, %zu lost, %zu without depth partner; %.1f fps\n",
               outcome.processed, trajectory.size(), outcome.lost, skipped,
               outcome.processed / std::max(elapsed, 1e-9));
+  {
+    // Frames with a pose by how it was obtained (issue 16): ok / fallback / relocalized; lost and
+    // not_initialized frames have none.
+    auto count = [&](TrackingState state) {
+      auto it = outcome.states.find(ToString(state));
+      return it == outcome.states.end() ? size_t{0} : it->second;
+    };
+    const size_t with_pose = count(TrackingState::kOk) + count(TrackingState::kFallback) +
+                             count(TrackingState::kRelocalized);
+    std::printf(
+        "poses: %zu of %zu frames (%.1f %%): ok %zu, fallback %zu, relocalized %zu, lost %zu, "
+        "not initialised %zu\n",
+        with_pose, outcome.processed, 100.0 * with_pose / std::max<size_t>(outcome.processed, 1),
+        count(TrackingState::kOk), count(TrackingState::kFallback),
+        count(TrackingState::kRelocalized), count(TrackingState::kLost),
+        count(TrackingState::kNotInitialized));
+  }
   std::printf("filter: %s%s\n", p.Get("filter").c_str(),
               s.system.deterministic ? " (deterministic)" : "");
   if (dataset.has_groundtruth() && trajectory.size() >= 3) {

@@ -8,6 +8,8 @@ namespace dygslam {
 void PairingOptions::Check() const {
   DYGSLAM_CHECK_OPTION(max_wait.count() >= 0, "slam.detection_wait_ms");
   DYGSLAM_CHECK_OPTION(lost_after_misses >= 1, "slam.detector_lost_after_misses");
+  DYGSLAM_CHECK_OPTION(carry_forward_max_frames >= 0, "slam.carry_forward_max_frames");
+  DYGSLAM_CHECK_OPTION(carry_forward_max_age.count() >= 0, "slam.carry_forward_max_age_ms");
 }
 
 FramePairer::FramePairer(const PairingOptions& options) : options_(options) { options_.Check(); }
@@ -22,16 +24,25 @@ void FramePairer::AddDetections(Timestamp stamp, std::vector<Detection> detectio
     detector_lost_ = false;
     consecutive_misses_ = 0;
   }
-  if (stamp.nanoseconds() <= last_released_stamp_) {
+  const int64_t ns = stamp.nanoseconds();
+  if (ns <= last_released_stamp_) {
     ++stats_.dropped_detections;
+    // Too late for its own frame; still the newest view of where the people are.
+    if (!newest_ || newest_->first < ns) {
+      newest_.emplace(ns, std::move(detections));
+      ++stats_.late_used;
+    }
     return;
   }
-  detections_[stamp.nanoseconds()] = std::move(detections);
+  if (!newest_ || newest_->first < ns) newest_.emplace(ns, detections);
+  detections_[ns] = std::move(detections);
 }
 
 void FramePairer::SetDetectorAlive(bool alive) {
   if (!alive && detector_alive_ && options_.needs_detections) {
-    LOG_WARNING << "slam: the detector is gone; continuing geometry-only (no boxes)";
+    LOG_WARNING << "slam: the detector is gone; continuing with its last boxes carried forward "
+                   "(at most "
+                << options_.carry_forward_max_frames << " frames), then geometry-only";
     if (!detector_lost_) ++stats_.lost_episodes;
     detector_lost_ = true;
   }
@@ -57,15 +68,30 @@ std::optional<PairedFrame> FramePairer::Next(Clock::time_point now) {
     out.detections = std::move(it->second);
     ++stats_.with_detections;
     consecutive_misses_ = 0;
+    consecutive_carried_ = 0;
   } else {
     const bool waited_enough =
         detector_lost_ || (!options_.deterministic && now >= front.arrival + options_.max_wait);
     if (!waited_enough) return std::nullopt;
     out.detections_missing = true;
     ++stats_.missing_detections;
+    const bool recent =
+        newest_ && newest_->first < stamp &&
+        stamp - newest_->first <=
+            std::chrono::duration_cast<std::chrono::nanoseconds>(options_.carry_forward_max_age)
+                .count();
+    if (recent && consecutive_carried_ < options_.carry_forward_max_frames) {
+      out.detections = newest_->second;
+      out.detections_carried_forward = true;
+      out.carried_from = Timestamp::FromNanoseconds(newest_->first);
+      ++consecutive_carried_;
+      ++stats_.carried_forward;
+    }
     if (!detector_lost_ && ++consecutive_misses_ >= options_.lost_after_misses) {
       LOG_WARNING << "slam: no detections for " << consecutive_misses_
-                  << " frames in a row; continuing geometry-only (no boxes)";
+                  << " frames in a row; no more waiting for them (boxes carried forward, at "
+                     "most "
+                  << options_.carry_forward_max_frames << " frames, then geometry-only)";
       detector_lost_ = true;
       ++stats_.lost_episodes;
     }

@@ -5,9 +5,16 @@
 // Policy:
 // - deterministic: a frame waits for its detections without limit, unless the detector is known
 //   to be gone (SetDetectorAlive(false)): then frames proceed without detections.
-// - normal: a frame waits at most `max_wait` after it arrived; then it proceeds without
+// - normal: a frame waits at most `max_wait` after it arrived; then it proceeds without its own
 //   detections (counted). After `lost_after_misses` consecutive misses the detector is considered
-//   lost: frames no longer wait at all (geometry-only) until detections arrive again.
+//   lost: frames no longer wait at all until detections arrive again.
+// - a frame that goes on without its own detections gets the newest detections received so far
+//   (of an earlier frame: "carried forward", at most `carry_forward_max_frames` frames in a row
+//   and at most `carry_forward_max_age` older than the frame), so the dynamic filter still
+//   removes the people's features (and propagates its per-feature probabilities) instead of
+//   running unfiltered. Detections that arrive after their frame was released are not used for
+//   that frame (it is gone) but become the boxes carried forward to the next frames (counted as
+//   late). Without any recent detections the frame goes on geometry-only.
 // - detections not needed (filter mode none / geometry, or internal detector): no waiting.
 #pragma once
 
@@ -28,6 +35,8 @@ struct PairingOptions {
   bool deterministic = false;
   std::chrono::milliseconds max_wait{150};
   int lost_after_misses = 5;
+  int carry_forward_max_frames = 30;                      // 0: never carry boxes forward
+  std::chrono::milliseconds carry_forward_max_age{1000};  // stamp difference, frame to boxes
   void Check() const;
 };
 
@@ -36,13 +45,18 @@ struct PairedFrame {
   // Set when the frame's detections arrived in time.
   std::optional<std::vector<Detection>> detections;
   bool detections_missing = false;  // needed but not available (frame goes on without them)
+  // detections_missing and `detections` holds an earlier frame's boxes (carried forward).
+  bool detections_carried_forward = false;
+  Timestamp carried_from;  // stamp of the frame those boxes were detected on
 };
 
 struct PairingStats {
   size_t frames = 0;
   size_t with_detections = 0;
   size_t missing_detections = 0;  // frames that went on without detections
-  size_t dropped_detections = 0;  // detections whose frame was already processed
+  size_t dropped_detections = 0;  // detections whose frame was already processed (late)
+  size_t carried_forward = 0;     // frames that got an earlier frame's detections
+  size_t late_used = 0;           // late detections that became the boxes carried forward
   size_t lost_episodes = 0;       // times the detector was declared lost
 };
 
@@ -78,6 +92,9 @@ class FramePairer {
   bool detector_alive_ = true;
   bool detector_lost_ = false;
   int consecutive_misses_ = 0;
+  int consecutive_carried_ = 0;
+  // The newest detections received (by frame stamp), what a frame without its own gets.
+  std::optional<std::pair<int64_t, std::vector<Detection>>> newest_;
   PairingStats stats_;
 };
 

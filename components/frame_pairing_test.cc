@@ -119,5 +119,66 @@ TEST(FramePairing, NoDetectionsNeededNoWait) {
   EXPECT_FALSE(f->detections);
 }
 
+// Issue 16: a frame whose detections do not come in time gets the newest earlier boxes.
+TEST(FramePairing, MissingDetectionsGetTheLastBoxesCarriedForward) {
+  PairingOptions o;
+  o.max_wait = 10ms;
+  o.carry_forward_max_frames = 2;
+  o.lost_after_misses = 100;
+  FramePairer p(o);
+  const auto t0 = Clock::now();
+  p.AddFrame(Frame(0), t0);
+  p.AddDetections(Frame(0).stamp, OneBox());
+  ASSERT_TRUE(p.Next(t0)->detections);
+  for (int i = 1; i <= 3; ++i) p.AddFrame(Frame(i), t0);
+  auto a = p.Next(t0 + 10ms);
+  ASSERT_TRUE(a && a->detections);
+  EXPECT_TRUE(a->detections_missing);
+  EXPECT_TRUE(a->detections_carried_forward);
+  EXPECT_EQ(a->carried_from, Frame(0).stamp);
+  EXPECT_EQ(a->detections->front().box, OneBox().front().box);
+  auto b = p.Next(t0 + 10ms);
+  ASSERT_TRUE(b && b->detections_carried_forward);
+  auto c = p.Next(t0 + 10ms);  // third in a row: over the limit, geometry-only
+  ASSERT_TRUE(c);
+  EXPECT_FALSE(c->detections);
+  EXPECT_FALSE(c->detections_carried_forward);
+  EXPECT_TRUE(c->detections_missing);
+  EXPECT_EQ(p.stats().carried_forward, 2u);
+  EXPECT_EQ(p.stats().missing_detections, 3u);
+}
+
+TEST(FramePairing, LateDetectionsAreCarriedForwardNotDropped) {
+  PairingOptions o;
+  o.max_wait = 10ms;
+  FramePairer p(o);
+  const auto t0 = Clock::now();
+  p.AddFrame(Frame(0), t0);
+  auto a = p.Next(t0 + 10ms);  // nothing yet, nothing to carry: geometry-only
+  ASSERT_TRUE(a);
+  EXPECT_FALSE(a->detections);
+  std::vector<Detection> late = OneBox();
+  late.front().box = cv::Rect2f(100, 100, 50, 120);
+  p.AddDetections(Frame(0).stamp, late);  // frame 0 is gone: the boxes go to the next frames
+  EXPECT_EQ(p.stats().dropped_detections, 1u);
+  EXPECT_EQ(p.stats().late_used, 1u);
+  p.AddFrame(Frame(1), t0 + 33ms);
+  auto b = p.Next(t0 + 43ms);
+  ASSERT_TRUE(b && b->detections);
+  EXPECT_TRUE(b->detections_carried_forward);
+  EXPECT_EQ(b->detections->front().box, late.front().box);
+  // Boxes older than carry_forward_max_age are not carried.
+  PairingOptions strict = o;
+  strict.carry_forward_max_age = std::chrono::milliseconds(0);
+  FramePairer q(strict);
+  q.AddFrame(Frame(0), t0);
+  q.AddDetections(Frame(0).stamp, OneBox());
+  ASSERT_TRUE(q.Next(t0));
+  q.AddFrame(Frame(1), t0);
+  auto c = q.Next(t0 + 10ms);
+  ASSERT_TRUE(c);
+  EXPECT_FALSE(c->detections);
+}
+
 }  // namespace
 }  // namespace dygslam

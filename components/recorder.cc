@@ -35,9 +35,9 @@ std::string FramesCsvHeader() {
 
 std::string FramesCsvRow(const msg::CameraPose& m) {
   const Timestamp stamp = TimeFromMsg(m.header().stamp(), "CameraPose.header.stamp");
-  if (m.tracking_state() > static_cast<uint8_t>(TrackingState::kLost)) {
+  if (m.tracking_state() > static_cast<uint8_t>(TrackingState::kFallback)) {
     throw InputError("CameraPose.tracking_state: " + std::to_string(m.tracking_state()) +
-                     " is not a tracking state (0..3)");
+                     " is not a tracking state (0..4)");
   }
   char line[512];
   std::snprintf(line, sizeof(line), "%s,%s,%d,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n",
@@ -164,7 +164,9 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
       std::fprintf(
           stderr, "\r[run] frame %zu/%llu  %.1f fps  state=%s  lost=%zu   ", n,
           static_cast<unsigned long long>(total_frames), n / std::max(elapsed, 1e-9),
-          p.tracking_state() <= 3 ? ToString(static_cast<TrackingState>(p.tracking_state())) : "?",
+          p.tracking_state() <= static_cast<uint8_t>(TrackingState::kFallback)
+              ? ToString(static_cast<TrackingState>(p.tracking_state()))
+              : "?",
           core.num_lost());
       std::fflush(stderr);
     }

@@ -22,6 +22,7 @@ void SlamComponentOptions::Check() const {
   system.Check();
   DYGSLAM_CHECK_OPTION(detection_wait.count() >= 0, "slam.detection_wait_ms");
   DYGSLAM_CHECK_OPTION(detector_lost_after_misses >= 1, "slam.detector_lost_after_misses");
+  DYGSLAM_CHECK_OPTION(carry_forward_max_frames >= 0, "slam.carry_forward_max_frames");
 }
 
 bool SlamComponentOptions::NeedsDetections() const {
@@ -69,7 +70,8 @@ std::vector<KeyframeData> SlamCore::Finish() {
   return TakeKeyframes();
 }
 
-msg::CameraPose CameraPoseToMsg(const FrameResult& r, uint64_t seq, bool detections_missing) {
+msg::CameraPose CameraPoseToMsg(const FrameResult& r, uint64_t seq, bool detections_missing,
+                                bool detections_carried_forward) {
   msg::CameraPose m;
   m.header().stamp(TimeToMsg(r.stamp));
   m.header().frame_id("world");
@@ -83,6 +85,7 @@ msg::CameraPose CameraPoseToMsg(const FrameResult& r, uint64_t seq, bool detecti
   m.num_tracked(r.num_tracked);
   m.detections_used(r.detections_used);
   m.detections_missing(detections_missing);
+  m.detections_carried_forward(detections_carried_forward);
   m.orb_extraction_ms(r.times.orb_extraction_ms);
   m.detection_ms(r.times.detection_ms);
   m.detection_wait_ms(r.times.detection_wait_ms);
@@ -106,6 +109,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   pairing_options.deterministic = options.system.deterministic;
   pairing_options.max_wait = options.detection_wait;
   pairing_options.lost_after_misses = options.detector_lost_after_misses;
+  pairing_options.carry_forward_max_frames = options.carry_forward_max_frames;
 
   std::mutex mutex;
   std::condition_variable cv;
@@ -116,6 +120,8 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   int detector_writers_seen = 0;
   std::map<int64_t, double> inference_ms;  // detector component's time per frame stamp (ns)
   bool detector_done = false;  // the detector announced COMPONENT_DONE (finished, not lost)
+  bool carrying = false;       // the previous frame ran with boxes carried forward (log once)
+  bool geometry_only = false;  // the previous frame ran without any boxes (log once)
 
   dds::Writer<msg::CameraPosePubSubType> pose_writer(participant, dds::topics::kCameraPose,
                                                      dds::TopicKind::kCameraPose);
@@ -242,8 +248,27 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
     const SlamOutput out = core.Process(paired->frame, dets);
     ++stats.frames_processed;
     if (out.result.world_from_cam) ++stats.frames_tracked;
+    if (paired->detections_carried_forward) {
+      if (!carrying) {
+        LOG_WARNING << "slam: no detections for frame " << paired->frame.stamp.ToString()
+                    << " in time; filtering with the boxes of frame "
+                    << paired->carried_from.ToString() << " carried forward";
+      }
+      carrying = true;
+    } else if (paired->detections_missing) {
+      if (carrying || !geometry_only) {
+        LOG_WARNING << "slam: no recent detections for frame " << paired->frame.stamp.ToString()
+                    << "; geometry-only (no boxes)";
+      }
+      carrying = false;
+      geometry_only = true;
+    } else {
+      carrying = false;
+      geometry_only = false;
+    }
     msg::CameraPose pose =
-        CameraPoseToMsg(out.result, paired->frame.seq, paired->detections_missing);
+        CameraPoseToMsg(out.result, paired->frame.seq, paired->detections_missing,
+                        paired->detections_carried_forward);
     if (dets != nullptr && options.external_detections) pose.detection_ms(detection_ms);
     pose_writer.Write(pose);
     publish_keyframes(out.keyframes);
@@ -272,9 +297,13 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
            << stats.keyframes_published - stats.keyframe_pose_updates - stats.keyframes_removed
            << " new, " << stats.keyframe_pose_updates << " pose updates, "
            << stats.keyframes_removed << " removed); detections: " << stats.pairing.with_detections
-           << " paired, " << stats.pairing.missing_detections << " missing"
-           << (stats.detector_lost ? " (detector lost: geometry-only frames)" : "") << "; busy "
-           << stats.busy_s << " s, waited " << stats.wait_for_frames_s << " s for frames, "
+           << " paired, " << stats.pairing.missing_detections << " missing (frames without their "
+           << "own boxes: " << stats.pairing.carried_forward << " with boxes carried forward, "
+           << stats.pairing.missing_detections - stats.pairing.carried_forward
+           << " geometry-only), " << stats.pairing.dropped_detections << " arrived late ("
+           << stats.pairing.late_used << " carried forward)"
+           << (stats.detector_lost ? " (detector lost)" : "") << "; busy " << stats.busy_s
+           << " s, waited " << stats.wait_for_frames_s << " s for frames, "
            << stats.wait_for_detections_s << " s for detections";
   return stats;
 }

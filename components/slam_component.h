@@ -3,10 +3,12 @@
 //
 // Core: SlamCore (no DDS) wraps dygslam::System. Shell: RunSlam pairs frames with detections by
 // stamp (FramePairer: --deterministic waits for every frame's detections; normal mode waits at
-// most detection_wait and counts misses; a dead detector -> geometry-only, reported in the stats
-// and in CameraPose.detections_missing). Ends when END_OF_STREAM's frame count has been processed
-// (or 3 s after END_OF_STREAM without new frames, or on stop): System::Shutdown(), final
-// trajectories published, StreamStatus COMPONENT_DONE "slam".
+// most detection_wait and counts misses; a frame without its own detections is filtered with the
+// newest earlier boxes carried forward (CameraPose.detections_carried_forward), geometry-only
+// when there are none recent; reported in the stats and in CameraPose.detections_missing). Ends
+// when END_OF_STREAM's frame count has been processed (or 3 s after END_OF_STREAM without new
+// frames, or on stop): System::Shutdown(), final trajectories published, StreamStatus
+// COMPONENT_DONE "slam".
 #pragma once
 
 #include <chrono>
@@ -32,6 +34,9 @@ struct SlamComponentOptions {
   bool external_detections = true;
   std::chrono::milliseconds detection_wait{150};
   int detector_lost_after_misses = 5;
+  // A frame whose detections are late gets the newest earlier boxes for at most this many frames
+  // in a row (FramePairer); 0: such frames run geometry-only.
+  int carry_forward_max_frames = 30;
   void Check() const;
   bool NeedsDetections() const;
 };
@@ -62,7 +67,8 @@ class SlamCore {
   bool finished_ = false;
 };
 
-msg::CameraPose CameraPoseToMsg(const FrameResult& result, uint64_t seq, bool detections_missing);
+msg::CameraPose CameraPoseToMsg(const FrameResult& result, uint64_t seq, bool detections_missing,
+                                bool detections_carried_forward = false);
 
 struct SlamStats {
   PairingStats pairing;

@@ -7,6 +7,7 @@ const char* ToString(TrackingState state) {
     case TrackingState::kOk: return "ok";
     case TrackingState::kRelocalized: return "relocalized";
     case TrackingState::kLost: return "lost";
+    case TrackingState::kFallback: return "fallback";
   }
   return "unknown";
 }

@@ -17,9 +17,13 @@ enum class TrackingState : uint8_t {
   kOk = 1,              // tracked; pose valid
   kRelocalized = 2,     // pose recovered by relocalization on this frame; pose valid
   kLost = 3,            // not tracked; no pose is reported
+  kFallback = 4,        // features failed; pose from the verified dense fallback (no keyframe)
 };
 const char* ToString(TrackingState state);
-inline bool HasPose(TrackingState s) { return s == TrackingState::kOk || s == TrackingState::kRelocalized; }
+inline bool HasPose(TrackingState s) {
+  return s == TrackingState::kOk || s == TrackingState::kRelocalized ||
+         s == TrackingState::kFallback;
+}
 
 // One detected object in image coordinates (pixels, top-left origin).
 struct Detection {

@@ -65,6 +65,11 @@ struct BenchCell {
   // Index (into the runs given to Summarize) of the run whose RMSE is the median (lower median
   // for an even count): the run drawn in the pictures.
   int median_run = -1;
+  // γ's μ on the same frame set (issue 16): the no-filter ATE over only the frames this
+  // configuration has a pose for (median over the no-filter runs; the frame set of this
+  // configuration's median run). Unset: γ uses the no-filter cell's ATE as it is.
+  bool has_reference_ate = false;
+  ErrorStatistics reference_ate;
 };
 
 // Median of the finite values (mean of the two middle ones for an even count); NaN if none.
@@ -73,6 +78,16 @@ double Median(std::vector<double> values);
 double Improvement(double eta, double mu);
 // Throws std::invalid_argument when `runs` is empty or mixes sequences / configurations.
 BenchCell Summarize(const std::vector<BenchRun>& runs);
+// The ATE of `estimate` over only the stamps that `frame_set` has a pose for (same stamp within
+// 1 microsecond). Fewer than 3 associated pairs: every field NaN.
+ErrorStatistics AteOnFrameSet(const std::vector<StampedPose>& groundtruth,
+                              const std::vector<StampedPose>& estimate,
+                              const std::vector<StampedPose>& frame_set);
+// Sets cell.reference_ate to the medians of AteOnFrameSet over the no-filter trajectories, with
+// the frame set of the cell's median-run trajectory.
+void SetReferenceAte(const std::vector<StampedPose>& groundtruth,
+                     const std::vector<std::vector<StampedPose>>& no_filter_trajectories,
+                     const std::vector<StampedPose>& frame_set, BenchCell* cell);
 
 // Pictures of one sequence, paths relative to the report's directory ("" = not drawn).
 struct SequencePictures {

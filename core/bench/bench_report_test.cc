@@ -200,3 +200,50 @@ TEST(BenchReport, ReplaceBetweenMarkersNamesTheProblem) {
 
 }  // namespace
 }  // namespace dygslam
+
+namespace dygslam {
+namespace {
+
+// Issue 16: γ compares both rows on the same frames.
+TEST(BenchReport, AteOnFrameSetUsesOnlyTheConfigurationsFrames) {
+  std::vector<StampedPose> gt, none, full;
+  for (int i = 0; i < 40; ++i) {
+    const Timestamp t = Timestamp::FromNanoseconds(1'000'000'000LL + i * 33'333'000LL);
+    Rigid3d pose;
+    pose.translation = Eigen::Vector3d(0.05 * i, 0.01 * (i % 7), 0.0);
+    gt.push_back({t, pose});
+    Rigid3d drifting = pose;
+    // The no-filter run is good on frames 0-19 and far off on 20-39.
+    if (i >= 20) drifting.translation += Eigen::Vector3d(0, 0.3 * (i - 19) / 20.0, 0.2);
+    none.push_back({t, drifting});
+    if (i < 20) full.push_back({t, pose});  // the configuration has poses only for 0-19
+  }
+  const ErrorStatistics all = AteOnFrameSet(gt, none, none);
+  const ErrorStatistics same = AteOnFrameSet(gt, none, full);
+  EXPECT_GT(all.rmse, 0.05);
+  EXPECT_LT(same.rmse, 1e-9);  // exactly the ground truth on those frames
+  BenchCell cell = Summarize({MakeRun("seqA", "full", 0, 0.01, 50)});
+  SetReferenceAte(gt, {none, none}, full, &cell);
+  ASSERT_TRUE(cell.has_reference_ate);
+  EXPECT_NEAR(cell.reference_ate.rmse, same.rmse, 1e-12);
+  // Fewer than 3 shared frames: no reference.
+  BenchCell lonely = Summarize({MakeRun("seqA", "full", 0, 0.01, 50)});
+  SetReferenceAte(gt, {none}, {full.front()}, &lonely);
+  EXPECT_FALSE(lonely.has_reference_ate);
+}
+
+TEST(BenchReport, GammaUsesTheReferenceOnTheSameFrames) {
+  BenchCell none = Summarize({MakeRun("seqA", "none", 0, 0.9195, 43)});
+  BenchCell full = Summarize({MakeRun("seqA", "full", 0, 0.0269, 52)});
+  full.has_reference_ate = true;
+  full.reference_ate = ErrorStatistics{0.0538, 0.8 * 0.0538, 0, 0.5 * 0.0538, 0, 0};
+  BenchContext context;
+  context.runs = 1;
+  context.configs = {"none", "full"};
+  const std::string md = RenderBenchMarkdown(context, {none, full}, {}, "");
+  // η/μ = 0.5 on the same frames (not 0.0269 / 0.9195 over different frame sets).
+  EXPECT_NE(md.find("| 98 / 100 | 50.00 % | 50.00 % | 50.00 % |"), std::string::npos) << md;
+}
+
+}  // namespace
+}  // namespace dygslam

@@ -24,6 +24,14 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   tracking.ReadIfPresent("motion_radius_px", &options.tracking.motion_radius_px);
   tracking.ReadIfPresent("max_frames_between_keyframes", &options.tracking.max_frames_between_keyframes);
   tracking.ReadIfPresent("ref_ratio", &options.tracking.ref_ratio);
+  tracking.ReadIfPresent("dense_fallback", &options.tracking.dense_fallback);
+  tracking.ReadIfPresent("fallback_min_inlier_fraction",
+                         &options.tracking.fallback.min_inlier_fraction);
+  tracking.ReadIfPresent("fallback_min_inliers", &options.tracking.fallback.min_inliers);
+  tracking.ReadIfPresent("fallback_check_below_inliers",
+                         &options.tracking.fallback_check_below_inliers);
+  tracking.ReadIfPresent("fallback_override_fraction_gain",
+                         &options.tracking.fallback_override_fraction_gain);
   tracking.CheckOptions(options.tracking);
   const ConfigReader mapping = root.Section("LocalMapping");
   mapping.ReadIfPresent("triangulation_neighbors", &options.local_mapping.triangulation_neighbors);

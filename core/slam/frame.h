@@ -17,6 +17,7 @@
 namespace dygslam {
 
 class MapPoint;
+struct DenseView;
 
 // Camera geometry shared by frames and keyframes (immutable once built).
 struct CameraGeometry {
@@ -76,6 +77,8 @@ class Frame {
   void ComputeBow(const Vocabulary& vocabulary) {
     if (bow_vector.empty()) vocabulary.Transform(descriptors, &bow_vector, &bow_features, kBowDirectIndexLevel);
   }
+  // Gray image, depth and static mask, for the dense fallback estimator (null: none).
+  std::shared_ptr<const DenseView> dense;
 
   // Tracking state built per frame.
   std::vector<std::shared_ptr<MapPoint>> map_points;

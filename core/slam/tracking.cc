@@ -29,13 +29,18 @@ TrackResult Tracker::Track(Frame frame) {
     if (!initialized_) {
       if (Initialize(frame, &result)) {
         initialized_ = true;
+        RememberDenseKeyFrame(result.new_keyframe, frame);
         last_frame_ = frame;
       }
     } else {
       bool ok = false;
       bool relocalized = false;
+      std::optional<Rigid3d> predicted;  // motion model: the seed of the dense fallback
       if (!lost_) {
         PrepareLastFrame();
+        if (last_frame_.has_pose)
+          predicted =
+              velocity_ ? *velocity_ * last_frame_.cam_from_world : last_frame_.cam_from_world;
         if (velocity_ && frame.id > last_relocalization_frame_id_ + 1) ok = TrackWithMotionModel(frame);
         if (!ok) ok = TrackReferenceKeyFrame(frame);
       }
@@ -44,7 +49,10 @@ TrackResult Tracker::Track(Frame frame) {
         relocalized = ok;
       }
       if (ok) ok = TrackLocalMap(frame);
-      if (ok) {
+      // A pose held by few features is checked against the dense estimate (tracking_fallback.cc).
+      const bool dense_override =
+          ok && options_.dense_fallback && DenseOverridesFeaturePose(frame, predicted);
+      if (ok && !dense_override) {
         lost_ = false;
         result.state = relocalized ? TrackingState::kRelocalized : TrackingState::kOk;
         result.cam_from_world = frame.cam_from_world;
@@ -56,6 +64,20 @@ TrackResult Tracker::Track(Frame frame) {
           if (frame.outlier[i]) frame.map_points[i] = nullptr;
         }
         if (NeedNewKeyFrame(frame)) result.new_keyframe = CreateKeyFrame(frame);
+        if (result.new_keyframe) RememberDenseKeyFrame(result.new_keyframe, frame);
+        records_.push_back({frame.stamp, reference_kf_->id,
+                            frame.cam_from_world * reference_kf_->cam_from_world.Inverse(),
+                            result.state});
+        last_frame_ = frame;
+      } else if (dense_override ||
+                 (options_.dense_fallback && TrackWithStaticDepth(frame, predicted))) {
+        // A dense pose (verified); no keyframe, no map points from it. Features take over again
+        // as soon as they hold the pose (the next frame tries them first).
+        lost_ = false;
+        result.state = TrackingState::kFallback;
+        result.cam_from_world = frame.cam_from_world;
+        result.num_inliers = 0;
+        velocity_ = frame.cam_from_world * last_frame_.cam_from_world.Inverse();
         records_.push_back({frame.stamp, reference_kf_->id,
                             frame.cam_from_world * reference_kf_->cam_from_world.Inverse(), result.state});
         last_frame_ = frame;

@@ -13,6 +13,7 @@
 #include "core/slam/matcher.h"
 #include "core/slam/optimizer.h"
 #include "core/slam/place_recognition.h"
+#include "core/slam/static_depth_odometry.h"
 
 namespace dygslam {
 
@@ -33,6 +34,13 @@ struct TrackingOptions {
   PlaceRecognitionOptions place;  // candidates from the BoW index (when a vocabulary is set)
   OptimizerOptions optimizer;
   MatcherOptions matcher;
+  // Frames that feature tracking cannot hold get their pose from the dense alignment of their
+  // static depth (tracking_fallback.cc); false: such frames are lost.
+  bool dense_fallback = true;
+  StaticDepthOdometryOptions fallback;
+  int fallback_check_below_inliers = 150;  // feature poses with fewer inliers are cross-checked
+  double fallback_override_fraction_gain = 0.02;  // dense agreement must be this much higher
+  double fallback_override_rmse_ratio = 1.5;      // ... or higher with this ratio of residuals
   void Check() const {
     DYGSLAM_CHECK_OPTION(init_min_features > 0, "Tracking.init_min_features");
     DYGSLAM_CHECK_OPTION(motion_radius_px > 0, "Tracking.motion_radius_px");
@@ -41,6 +49,14 @@ struct TrackingOptions {
     place.Check();
     optimizer.Check();
     matcher.Check();
+    fallback.Check();
+    DYGSLAM_CHECK_OPTION(fallback_check_below_inliers >= 0,
+                         "Tracking.fallback_check_below_inliers");
+    DYGSLAM_CHECK_OPTION(
+        fallback_override_fraction_gain >= 0 && fallback_override_fraction_gain <= 1,
+        "Tracking.fallback_override_fraction_gain");
+    DYGSLAM_CHECK_OPTION(fallback_override_rmse_ratio >= 1,
+                         "Tracking.fallback_override_rmse_ratio");
   }
 };
 
@@ -90,6 +106,26 @@ class Tracker {
   bool NeedNewKeyFrame(const Frame& frame) const;
   std::shared_ptr<KeyFrame> CreateKeyFrame(Frame& frame);
   int DiscardOutliers(Frame& frame);
+  // tracking_fallback.cc: the dense estimate of a frame feature tracking could not hold.
+  bool TrackWithStaticDepth(Frame& frame, const std::optional<Rigid3d>& predicted);
+  // A feature pose with fewer than options_.fallback_check_below_inliers inliers is compared with
+  // the dense estimate; true (pose replaced by the dense one) when the dense one explains the
+  // static depth clearly better.
+  bool DenseOverridesFeaturePose(Frame& frame, const std::optional<Rigid3d>& predicted);
+  struct DenseResult {
+    Rigid3d cam_from_world;
+    Rigid3d ref_from_world;
+    const DenseView* ref_view = nullptr;
+    DepthAgreement agreement;
+  };
+  // The verified dense pose of a frame (against the last frame, else the newest keyframe;
+  // keyframe_only: against the newest keyframe).
+  std::optional<DenseResult> DenseEstimate(const Frame& frame, const Rigid3d& predicted,
+                                           bool keyframe_only);
+  // Sets up a frame whose cam_from_world is a dense pose (drops feature associations that
+  // disagree with it); true.
+  bool AcceptDensePose(Frame& frame);
+  void RememberDenseKeyFrame(const std::shared_ptr<KeyFrame>& kf, const Frame& frame);
 
   TrackingOptions options_;
   std::shared_ptr<Map> map_;
@@ -112,6 +148,11 @@ class Tracker {
   std::vector<std::shared_ptr<KeyFrame>> local_keyframes_;
   std::vector<std::shared_ptr<MapPoint>> local_points_;
   std::vector<TrajectoryRecord> records_;
+  std::unique_ptr<StaticDepthOdometry> static_depth_odometry_;  // created on first use
+  // The newest keyframe and its dense view: the dense fallback's first reference (its pose is
+  // refined by local BA, so fallback frames do not chain the drift of the frames before them).
+  std::shared_ptr<KeyFrame> dense_kf_;
+  std::shared_ptr<const DenseView> dense_kf_view_;
 };
 
 }  // namespace dygslam

@@ -17,6 +17,26 @@
 
 namespace dygslam {
 namespace {
+// The dense fallback's view of a frame: static pixels = outside the dynamic mask (boxes refined
+// by depth, disks around dynamic features).
+std::shared_ptr<const DenseView> MakeDenseView(const cv::Mat& gray, const cv::Mat& depth_m,
+                                               const std::vector<Detection>& detections,
+                                               const std::vector<cv::KeyPoint>& keypoints,
+                                               const std::vector<uint8_t>& dynamic,
+                                               const DynamicMaskOptions& options) {
+  auto view = std::make_shared<DenseView>();
+  view->gray = gray;
+  view->depth = depth_m;
+  bool any_dynamic = !detections.empty();
+  for (uint8_t d : dynamic) any_dynamic = any_dynamic || d;
+  if (any_dynamic) {
+    cv::Mat dynamic_mask =
+        ComputeDynamicMask(gray.size(), depth_m, detections, keypoints, dynamic, options);
+    cv::bitwise_not(dynamic_mask, view->static_mask);
+  }
+  return view;
+}
+
 double MsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -400,6 +420,9 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   kept_in_region.resize(kept.keypoints.size(), 0);  // top-up features lie outside the boxes
   Frame frame(next_frame_id_++, stamp, std::move(kept), depth_m, geometry_,
               std::move(kept_in_region));
+  if (options_.tracking.dense_fallback && options_.filter_mode != FilterMode::kNone)
+    frame.dense = MakeDenseView(gray, depth_m, detections ? *detections : kNoDetections,
+                                features.keypoints, dynamic, options_.dynamic_mask);
   TrackResult tracked = tracker_.Track(std::move(frame));
   result.times.tracking_ms = MsSince(t_track);
   result.state = tracked.state;

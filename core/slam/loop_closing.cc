@@ -631,12 +631,14 @@ void LoopCloser::RunGlobalBundleAdjustment(int64_t epoch) {
     for (const auto& [id, k] : map_->keyframes()) {
       old_pose[id] = k->cam_from_world;
       if (after.count(id)) continue;
+      // The anchor is a keyframe of the problem (in `before`): keyframes added to `after` by this
+      // loop were not solved and have no `before` pose.
       int64_t anchor = k->parent_id;
-      for (int guard = 0; guard < 1000 && anchor >= 0 && !after.count(anchor); ++guard) {
+      for (int guard = 0; guard < 1000 && anchor >= 0 && !before.count(anchor); ++guard) {
         auto parent = map_->GetKeyFrame(anchor);
         anchor = parent ? parent->parent_id : -1;
       }
-      if (anchor < 0 || !after.count(anchor)) continue;
+      if (anchor < 0 || !before.count(anchor)) continue;
       after[id] = k->cam_from_world * before.at(anchor).Inverse() * after.at(anchor);
     }
     for (const auto& [pid, mp] : map_->map_points()) {

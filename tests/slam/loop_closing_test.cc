@@ -51,6 +51,7 @@ class LoopClosingTest : public ::testing::Test {
     options.tracking.max_frames_between_keyframes = 20;
     options.loop_closing.vocabulary =
         std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/vocabulary.dygvoc";
+    options.loop_closing.enabled = true;
     System system(options);
     std::vector<StampedPose> gt;
     for (size_t i = 0; i < num_frames; ++i) {

@@ -32,6 +32,7 @@ TEST(LoopCorrection, DriftedLoopIsDetectedAndCorrected) {
   const auto geometry = std::make_shared<CameraGeometry>(
       CameraGeometry::Create(synth.camera, synth.sensor, extractor));
   LoopClosingOptions options;
+  options.enabled = true;
   options.global_bundle_adjustment = false;  // pose graph only: the figure below is its work
   LoopCloser closer(map, database, options, OptimizerOptions{}, MatcherOptions{},
                     /*threaded=*/false);

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/calib3d.hpp>
 
 #include "core/slam/map.h"
@@ -56,8 +55,8 @@ void FeatureGrid::Build(const std::vector<cv::KeyPoint>& undistorted, const Came
   }
 }
 
-std::vector<int> FeatureGrid::Query(const std::vector<cv::KeyPoint>& undistorted, double u, double v,
-                                    double r, int min_level, int max_level) const {
+std::vector<int> FeatureGrid::Query(const std::vector<cv::KeyPoint>& undistorted, double u,
+                                    double v, double r, int min_level, int max_level) const {
   std::vector<int> result;
   if (cells_.empty()) return result;
   const int x0 = std::max(0, static_cast<int>(std::floor((u - r - min_x_) * inv_cell_w_)));
@@ -79,7 +78,8 @@ std::vector<int> FeatureGrid::Query(const std::vector<cv::KeyPoint>& undistorted
 }
 
 Frame::Frame(int64_t frame_id, Timestamp frame_stamp, OrbFeatures features, const cv::Mat& depth_m,
-             std::shared_ptr<const CameraGeometry> frame_geometry, std::vector<uint8_t> dynamic_region)
+             std::shared_ptr<const CameraGeometry> frame_geometry,
+             std::vector<uint8_t> dynamic_region)
     : id(frame_id),
       stamp(frame_stamp),
       geometry(std::move(frame_geometry)),
@@ -125,6 +125,20 @@ int Frame::NumTrackedInliers() const {
     if (map_points[i] && !outlier[i]) ++n;
   }
   return n;
+}
+
+int Frame::DiscardOutliers() {
+  int real = 0;
+  for (size_t i = 0; i < size(); ++i) {
+    if (!map_points[i]) continue;
+    if (outlier[i]) {
+      map_points[i] = nullptr;
+      outlier[i] = 0;
+    } else if (map_points[i]->NumObservations() > 0) {
+      ++real;
+    }
+  }
+  return real;
 }
 
 }  // namespace dygslam

@@ -52,6 +52,9 @@ class FeatureGrid {
 
 class Frame {
  public:
+  // Unlinks the map points flagged as outliers (and clears the flags); returns the matches left
+  // to points that have observations.
+  int DiscardOutliers();
   Frame() = default;
   // depth_m: CV_32FC1 metres registered to the colour image.
   // in_dynamic_region (optional, one flag per feature): features inside detection boxes that the

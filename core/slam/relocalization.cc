@@ -7,24 +7,6 @@
 #include "core/slam/place_recognition.h"
 
 namespace dygslam {
-namespace {
-
-int DropOutliers(Frame& frame) {
-  int real = 0;
-  for (size_t i = 0; i < frame.size(); ++i) {
-    if (!frame.map_points[i]) continue;
-    if (frame.outlier[i]) {
-      frame.map_points[i] = nullptr;
-      frame.outlier[i] = 0;
-    } else if (frame.map_points[i]->NumObservations() > 0) {
-      ++real;
-    }
-  }
-  return real;
-}
-
-}  // namespace
-
 RelocalizationResult RelocalizeFrame(Frame& frame, const Map& map, const KeyFrameDatabase* database,
                                      const Vocabulary* vocabulary, const Matcher& matcher,
                                      const TrackingOptions& options) {
@@ -92,14 +74,14 @@ RelocalizationResult RelocalizeFrame(Frame& frame, const Map& map, const KeyFram
       if (!keep[i]) frame.map_points[i] = nullptr;
     int good = OptimizePose(frame, options.optimizer);
     if (good < 10) continue;
-    DropOutliers(frame);
+    frame.DiscardOutliers();
     if (good < options.relocalized_min_inliers) {
       std::set<const MapPoint*> found;
       for (const auto& mp : frame.map_points)
         if (mp) found.insert(mp.get());
       matcher.SearchByProjection(frame, *kf, found, 10, 100);
       good = OptimizePose(frame, options.optimizer);
-      DropOutliers(frame);
+      frame.DiscardOutliers();
     }
     if (good >= options.relocalized_min_inliers) {
       result.ok = true;

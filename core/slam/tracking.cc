@@ -174,20 +174,6 @@ void Tracker::PrepareLastFrame() {
   }
 }
 
-int Tracker::DiscardOutliers(Frame& frame) {
-  int real = 0;
-  for (size_t i = 0; i < frame.size(); ++i) {
-    if (!frame.map_points[i]) continue;
-    if (frame.outlier[i]) {
-      frame.map_points[i] = nullptr;
-      frame.outlier[i] = 0;
-    } else if (frame.map_points[i]->NumObservations() > 0) {
-      ++real;
-    }
-  }
-  return real;
-}
-
 bool Tracker::TrackWithMotionModel(Frame& frame) {
   frame.cam_from_world = *velocity_ * last_frame_.cam_from_world;
   frame.has_pose = true;
@@ -199,7 +185,7 @@ bool Tracker::TrackWithMotionModel(Frame& frame) {
   }
   if (matches < options_.motion_min_matches) return false;
   OptimizePose(frame, options_.optimizer);
-  return DiscardOutliers(frame) >= options_.min_inliers;
+  return frame.DiscardOutliers() >= options_.min_inliers;
 }
 
 bool Tracker::TrackReferenceKeyFrame(Frame& frame) {
@@ -225,7 +211,7 @@ bool Tracker::TrackReferenceKeyFrame(Frame& frame) {
     frame.cam_from_world = last_frame_.has_pose ? last_frame_.cam_from_world : reference_kf_->cam_from_world;
     frame.has_pose = true;
     OptimizePose(frame, options_.optimizer);
-    if (DiscardOutliers(frame) >= options_.min_inliers) return true;
+    if (frame.DiscardOutliers() >= options_.min_inliers) return true;
   }
   return false;
 }

@@ -105,7 +105,6 @@ class Tracker {
   void UpdateLocalMap(Frame& frame);
   bool NeedNewKeyFrame(const Frame& frame) const;
   std::shared_ptr<KeyFrame> CreateKeyFrame(Frame& frame);
-  int DiscardOutliers(Frame& frame);
   // tracking_fallback.cc: the dense estimate of a frame feature tracking could not hold.
   bool TrackWithStaticDepth(Frame& frame, const std::optional<Rigid3d>& predicted);
   // A feature pose with fewer than options_.fallback_check_below_inliers inliers is compared with

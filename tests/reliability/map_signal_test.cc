@@ -34,19 +34,7 @@ std::string ReadAll(const std::string& path) {
 }
 
 pid_t Spawn(const std::vector<std::string>& args, const std::string& out, const std::string& err) {
-  std::vector<std::string> copy = {testing::DygslamBinary()};
-  copy.insert(copy.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (auto& a : copy) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    if (!std::freopen(out.c_str(), "w", stdout) || !std::freopen(err.c_str(), "w", stderr))
-      std::_Exit(126);
-    execv(argv[0], argv.data());
-    std::_Exit(127);
-  }
-  return pid;
+  return testing::SpawnDygslam(args, out, err);
 }
 
 int Wait(pid_t pid) {

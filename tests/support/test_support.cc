@@ -53,7 +53,8 @@ std::string MakeTempDir(const std::string& prefix) {
   static std::atomic<int> counter{0};
   const char* bin = std::getenv("DYGSLAM_BINARY_DIR");
   fs::path root = bin ? fs::path(bin) / "test_tmp" : fs::temp_directory_path() / "dygslam_test_tmp";
-  fs::path dir = root / (prefix + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+  fs::path dir =
+      root / (prefix + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir.string();
@@ -64,13 +65,8 @@ std::string DygslamBinary() {
   return (fs::path(bin ? bin : DYGSLAM_BAKED_BINARY_DIR) / "apps" / "dygslam").string();
 }
 
-ProcessResult RunDygslam(const std::vector<std::string>& args, const std::string& scratch_dir) {
-  static std::atomic<int> counter{0};
-  const int n = counter++;
-  const std::string out =
-      (fs::path(scratch_dir) / ("stdout_" + std::to_string(n) + ".txt")).string();
-  const std::string err =
-      (fs::path(scratch_dir) / ("stderr_" + std::to_string(n) + ".txt")).string();
+pid_t SpawnDygslam(const std::vector<std::string>& args, const std::string& out,
+                   const std::string& err) {
   std::vector<std::string> copy = {DygslamBinary()};
   copy.insert(copy.end(), args.begin(), args.end());
   std::vector<char*> argv;
@@ -83,6 +79,17 @@ ProcessResult RunDygslam(const std::vector<std::string>& args, const std::string
     execv(argv[0], argv.data());
     std::_Exit(127);
   }
+  return pid;
+}
+
+ProcessResult RunDygslam(const std::vector<std::string>& args, const std::string& scratch_dir) {
+  static std::atomic<int> counter{0};
+  const int n = counter++;
+  const std::string out =
+      (fs::path(scratch_dir) / ("stdout_" + std::to_string(n) + ".txt")).string();
+  const std::string err =
+      (fs::path(scratch_dir) / ("stderr_" + std::to_string(n) + ".txt")).string();
+  const pid_t pid = SpawnDygslam(args, out, err);
   int status = 0;
   waitpid(pid, &status, 0);
   const auto read_all = [](const std::string& path) {

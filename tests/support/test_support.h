@@ -6,6 +6,9 @@
 #include <string>
 #include <vector>
 
+#include <sys/types.h>
+#include <vector>
+
 namespace dygslam::testing {
 
 // Directory of the shared data (DYGSLAM_DATA_DIR or the default), "" when absent.
@@ -34,6 +37,10 @@ struct ProcessResult {
 };
 // Runs `dygslam args...` to completion, stdout and stderr captured through files in `scratch_dir`.
 ProcessResult RunDygslam(const std::vector<std::string>& args, const std::string& scratch_dir);
+// Starts `dygslam ARGS` with stdout / stderr redirected to the files; returns its pid (the caller
+// waits for it).
+pid_t SpawnDygslam(const std::vector<std::string>& args, const std::string& out,
+                   const std::string& err);
 
 }  // namespace dygslam::testing
 

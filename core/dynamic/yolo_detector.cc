@@ -169,7 +169,7 @@ DarknetCfgInfo ParseDarknetCfg(const std::string& cfg_path) {
       info.num_parameters += int64_t{filters} * (bn ? 4 : 1);
       info.num_parameters += int64_t{filters} * (channels / groups) * size * size;
       ++info.num_conv_layers;
-      info.conv_layers.push_back({filters, (channels / groups) * size * size, bn});
+      info.conv_layers.push_back({filters, int64_t{channels / groups} * size * size, bn});
       channels = filters;
     } else if (s.type == "route") {
       const std::vector<int> refs = GetIntList(cfg_path, s, "layers");

@@ -82,7 +82,7 @@ struct DarknetCfgInfo {
   // (filters * input_channels / groups * size * size).
   struct ConvLayer {
     int filters = 0;
-    int kernel_values = 0;  // input_channels / groups * size * size per filter
+    int64_t kernel_values = 0;  // input_channels / groups * size * size per filter
     bool batch_normalize = false;
   };
   std::vector<ConvLayer> conv_layers;

@@ -7,6 +7,7 @@
 #ifdef DYGSLAM_HAVE_COMPONENTS
 #include <cstdlib>
 #include <iostream>
+#include <sstream>
 #include <tuple>
 
 #include "apps/command.h"
@@ -50,7 +51,8 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   p.AddOption("dataset", "DIR", "dataset folder (player)");
   p.AddOption("config", "FILE", "settings YAML (camera, sensor, modules)");
   p.AddOption("out", "DIR", "output folder (recorder, mapper)", "out/run");
-  p.AddOption("filter", "MODE", "none | boxes | geometry | full | paper (+margin, +margin+demotion)", "full");
+  p.AddOption("filter", "MODE",
+              "none | boxes | geometry | full | paper (+margin, +margin+demotion)", "full");
   p.AddOption("frames", "FIRST:LAST", "rgb.txt entries [FIRST, LAST) (player)", "0:");
   p.AddOption("rate", "R", "player: 0 = as fast as consumed, 1 = real time", "0");
   p.AddOption("window", "N", "player back-pressure window in frames", "2");
@@ -68,6 +70,13 @@ int RunComponentCommand(const std::vector<std::string>& args) {
               "DDS Security credentials: an identity folder, or make_dds_certs.sh's OUT_DIR with "
               "one folder per component (default: $DYGSLAM_DDS_SECURITY_DIR; none = off)",
               security_env != nullptr ? security_env : "");
+  p.AddOption("dds-interface", "ADDR[,ADDR]",
+              "IPv4 address(es) of this host's interfaces for DDS over UDP, to run components on "
+              "several hosts (default: 127.0.0.1 only)");
+  p.AddFlag("no-shm", "no shared-memory transport (all DDS traffic over UDP)");
+  p.AddOption("discovery-server", "ADDR:PORT",
+              "discover peers through a discovery server (`dygslam discovery-server`) instead of "
+              "multicast");
   p.AddFlag("progress", "recorder: progress line on stderr");
   p.AddFlag("wait-for-components", "player: wait for the other components' start announcements");
   p.AddFlag("deterministic", "slam waits for every frame's detections; synchronous local mapping");
@@ -103,6 +112,19 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   o.run_mapper = !p.Flag("no-mapper");
   o.partition = p.Get("partition");
   o.security_dir = p.Get("security");
+  if (p.Has("dds-interface")) {
+    std::stringstream list(p.Get("dds-interface"));
+    for (std::string address; std::getline(list, address, ',');) {
+      if (!address.empty()) o.network.interfaces.push_back(address);
+    }
+  }
+  o.network.shared_memory = !p.Flag("no-shm");
+  o.network.discovery_server = p.Get("discovery-server");
+  try {
+    o.network.Check();
+  } catch (const InvalidOptions& e) {
+    return p.UsageError(e.what());
+  }
   o.progress = p.Flag("progress");
   o.wait_for_components = p.Flag("wait-for-components");
 

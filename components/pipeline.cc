@@ -83,6 +83,7 @@ void PipelineOptions::Check() const {
   DYGSLAM_CHECK_OPTION(last_entry == 0 || last_entry > first_entry, "frames (empty range)");
   DYGSLAM_CHECK_OPTION(flush_timeout_s >= 0, "flush_timeout_s");
   DYGSLAM_CHECK_OPTION(loop_minutes >= 0 && std::isfinite(loop_minutes), "loop_minutes");
+  network.Check();
 }
 
 bool PipelineOptions::NeedsDetectorComponent() const {
@@ -157,6 +158,16 @@ std::vector<std::string> ComponentArgs(const PipelineOptions& o) {
   if (!o.partition.empty()) a.insert(a.end(), {"--partition", o.partition});
   if (o.loop_minutes > 0) a.insert(a.end(), {"--loop-minutes", Number(o.loop_minutes)});
   if (!o.security_dir.empty()) a.insert(a.end(), {"--security", o.security_dir});
+  if (!o.network.interfaces.empty()) {
+    std::string list;
+    for (const std::string& address : o.network.interfaces)
+      list += (list.empty() ? "" : ",") + address;
+    a.insert(a.end(), {"--dds-interface", list});
+  }
+  if (!o.network.shared_memory) a.push_back("--no-shm");
+  if (!o.network.discovery_server.empty()) {
+    a.insert(a.end(), {"--discovery-server", o.network.discovery_server});
+  }
   if (o.system.deterministic) a.push_back("--deterministic");
   if (o.progress) a.push_back("--progress");
   if (o.wait_for_components) a.push_back("--wait-for-components");
@@ -254,6 +265,7 @@ std::shared_ptr<dds::Participant> MakeParticipant(const PipelineOptions& options
   p.name = "dygslam_" + name;
   p.partition = options.partition;
   p.security = ComponentSecurity(options.security_dir, name);
+  p.network = options.network;
   return dds::Participant::Create(p);
 }
 

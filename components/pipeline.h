@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "components/component_common.h"
+#include "components/dds/network_options.h"
 #include "core/system/system.h"
 #include "mapping/octomap_builder.h"
 
@@ -55,6 +56,8 @@ struct PipelineOptions {
   // every component uses it) or the OUT_DIR of scripts/make_dds_certs.sh with one identity
   // folder per component (OUT_DIR/player, .../slam, ...; the single-process pipeline uses slam's).
   std::string security_dir;
+  // DDS interfaces / shared memory / discovery server (default: this machine only).
+  dds::NetworkOptions network;
   bool progress = false;  // recorder prints a progress line on stderr
   // The player waits for the STARTED announcement of every other component of this pipeline
   // (set by RunPipeline; `dygslam component player --wait-for-components` by hand).

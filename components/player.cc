@@ -1,9 +1,13 @@
 #include "components/player.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <map>
+#include <optional>
 #include <set>
 #include <thread>
+#include <vector>
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
@@ -86,6 +90,10 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   std::mutex mutex;
   std::condition_variable cv;
   int64_t acked = -1;  // highest seq whose pose was received
+  // End-to-end latency: when each frame was published, and from it to its pose's arrival here.
+  std::map<uint64_t, Clock::time_point> sent;
+  std::vector<double> latency_ms;
+  std::optional<Clock::time_point> first_sent, last_pose;
   bool slam_done = false;
   std::set<std::string> started;  // components that announced STARTED
   dds::Writer<msg::RgbdFramePubSubType> frames(participant, dds::topics::kRgbdFrame,
@@ -100,6 +108,14 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
         {
           std::lock_guard<std::mutex> lock(mutex);
           acked = std::max<int64_t>(acked, static_cast<int64_t>(pose.header().seq()));
+          const auto it = sent.find(pose.header().seq());
+          if (it != sent.end()) {
+            const auto now = Clock::now();
+            latency_ms.push_back(
+                std::chrono::duration<double, std::milli>(now - it->second).count());
+            last_pose = now;
+            sent.erase(sent.begin(), std::next(it));
+          }
         }
         cv.notify_all();
       });
@@ -196,6 +212,12 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
       }
     }
     if (stop->requested()) break;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      const auto now = Clock::now();
+      sent[n] = now;
+      if (!first_sent) first_sent = now;
+    }
     if (!frames.Write(RgbdFrameToMsg(frame))) {
       LOG_WARNING << "player: frame " << n << " was not accepted by the writer";
       continue;
@@ -212,6 +234,25 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
     while (!slam_done && !stop->requested()) cv.wait_for(lock, std::chrono::milliseconds(50));
   }
   stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    stats.poses_timed = latency_ms.size();
+    if (!latency_ms.empty()) {
+      std::sort(latency_ms.begin(), latency_ms.end());
+      stats.latency_median_ms = latency_ms[latency_ms.size() / 2];
+      stats.latency_p95_ms =
+          latency_ms[std::min(latency_ms.size() - 1, latency_ms.size() * 95 / 100)];
+    }
+    if (first_sent && last_pose && latency_ms.size() > 1) {
+      stats.poses_per_second =
+          (latency_ms.size() - 1) / std::chrono::duration<double>(*last_pose - *first_sent).count();
+    }
+  }
+  if (stats.poses_timed > 0) {
+    LOG_INFO << "player: frame-to-pose latency median " << stats.latency_median_ms << " ms, 95th "
+             << stats.latency_p95_ms << " ms over " << stats.poses_timed << " frames; "
+             << stats.poses_per_second << " poses/s";
+  }
   return stats;
 }
 

@@ -77,6 +77,11 @@ struct PlayerStats {
   size_t ack_timeouts = 0;
   size_t ground_truth_published = 0;
   double seconds = 0;
+  // Frame published -> its pose received back (the player reads the poses for back-pressure):
+  // end-to-end latency through detector and slam, and the rate at which poses came back.
+  size_t poses_timed = 0;
+  double latency_median_ms = 0, latency_p95_ms = 0;
+  double poses_per_second = 0;
 };
 
 // Publishes the dataset; returns when slam reported done, or stop was requested.

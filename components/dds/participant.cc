@@ -1,17 +1,22 @@
 #include "components/dds/participant.h"
 
+#include <fastdds/rtps/attributes/ServerAttributes.h>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastrtps/attributes/LibrarySettingsAttributes.h>
+#include <fastrtps/utils/IPLocator.h>
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/publisher/qos/PublisherQos.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/subscriber/qos/SubscriberQos.hpp>
+#include <sstream>
 #include <stdexcept>
+#include <thread>
 
 #include "core/base/error.h"
 #include "core/base/log.h"
@@ -26,6 +31,9 @@ void ParticipantOptions::Check() const {
   DYGSLAM_CHECK_OPTION(domain_id >= 0 && domain_id <= 232, "domain_id");
   DYGSLAM_CHECK_OPTION(!name.empty(), "participant name");
   DYGSLAM_CHECK_OPTION(use_shm || use_udp_loopback, "transports (shm or udp)");
+  DYGSLAM_CHECK_OPTION(network.shared_memory || use_udp_loopback || !network.interfaces.empty(),
+                       "transports (shared memory off and no UDP interface)");
+  network.Check();
   DYGSLAM_CHECK_OPTION(shm_segment_size >= (1u << 20), "shm_segment_size");
   DYGSLAM_CHECK_OPTION(socket_buffer_size >= (64u << 10), "socket_buffer_size");
   DYGSLAM_CHECK_OPTION(partition.find_first_of("*?[]") == std::string::npos,
@@ -63,6 +71,20 @@ void DisableIntraprocessDelivery() {
   });
 }
 
+std::string Describe(const ParticipantOptions& options) {
+  std::string text;
+  if (options.use_shm && options.network.shared_memory) text += "SHM + ";
+  text += "UDPv4 ";
+  if (options.network.interfaces.empty()) text += "127.0.0.1";
+  for (size_t i = 0; i < options.network.interfaces.size(); ++i) {
+    text += (i ? "," : "") + options.network.interfaces[i];
+  }
+  if (!options.network.discovery_server.empty()) {
+    text += ", discovery server " + options.network.discovery_server;
+  }
+  return text;
+}
+
 }  // namespace
 
 std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& options) {
@@ -82,20 +104,38 @@ std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& optio
   } else {
     qos = PARTICIPANT_QOS_DEFAULT;
     qos.transport().use_builtin_transports = false;
-    if (options.use_shm) {
+    if (options.use_shm && options.network.shared_memory) {
       auto shm = std::make_shared<SharedMemTransportDescriptor>();
       shm->segment_size(options.shm_segment_size);
       qos.transport().user_transports.push_back(shm);
     }
-    if (options.use_udp_loopback) {
+    if (options.use_udp_loopback || !options.network.interfaces.empty()) {
       auto udp = std::make_shared<UDPv4TransportDescriptor>();
-      udp->interfaceWhiteList.push_back("127.0.0.1");
+      if (options.network.interfaces.empty()) {
+        udp->interfaceWhiteList.push_back("127.0.0.1");
+      } else {
+        for (const std::string& address : options.network.interfaces) {
+          udp->interfaceWhiteList.push_back(address);
+        }
+      }
       udp->sendBufferSize = options.socket_buffer_size;
       udp->receiveBufferSize = options.socket_buffer_size;
       qos.transport().user_transports.push_back(udp);
     }
     qos.transport().send_socket_buffer_size = options.socket_buffer_size;
     qos.transport().listen_socket_buffer_size = options.socket_buffer_size;
+    if (!options.network.discovery_server.empty()) {
+      const Endpoint server = ParseEndpoint(options.network.discovery_server, "discovery server");
+      eprosima::fastdds::rtps::RemoteServerAttributes remote;
+      remote.ReadguidPrefix(DiscoveryServerGuidPrefix(0).c_str());
+      eprosima::fastrtps::rtps::Locator_t locator;
+      eprosima::fastrtps::rtps::IPLocator::setIPv4(locator, server.address);
+      locator.port = server.port;
+      remote.metatrafficUnicastLocatorList.push_back(locator);
+      auto& discovery = qos.wire_protocol().builtin.discovery_config;
+      discovery.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;
+      discovery.m_DiscoveryServers.push_back(remote);
+    }
   }
   qos.name(options.name);
 
@@ -128,7 +168,7 @@ std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& optio
   }
   LOG_DEBUG << "participant '" << options.name << "' domain " << options.domain_id
             << (options.partition.empty() ? "" : " partition '" + options.partition + "'")
-            << (xml ? " (XML profile)" : " (SHM + UDPv4 127.0.0.1)")
+            << (xml ? " (XML profile)" : " (" + Describe(options) + ")")
             << (options.security.enabled ? " DDS Security on" : "");
   return result;
 }
@@ -149,6 +189,46 @@ Participant::~Participant() {
   if (participant_ == nullptr) return;
   participant_->delete_contained_entities();
   DomainParticipantFactory::get_instance()->delete_participant(participant_);
+}
+
+}  // namespace dygslam::dds
+
+namespace dygslam::dds {
+
+std::string DiscoveryServerGuidPrefix(int id) {
+  DYGSLAM_CHECK_OPTION(id >= 0 && id <= 255, "discovery server id (0..255)");
+  char text[64];
+  std::snprintf(text, sizeof(text), "44.53.%02x.5f.45.50.52.4f.53.49.4d.41", id);
+  return text;
+}
+
+void RunDiscoveryServer(const std::string& listen, int domain_id,
+                        const std::function<bool()>& stop_requested) {
+  const Endpoint endpoint = ParseEndpoint(listen, "--listen");
+  DYGSLAM_CHECK_OPTION(domain_id >= 0 && domain_id <= 232, "domain_id");
+  DomainParticipantQos qos = PARTICIPANT_QOS_DEFAULT;
+  qos.name("dygslam_discovery_server");
+  qos.transport().use_builtin_transports = false;
+  auto udp = std::make_shared<UDPv4TransportDescriptor>();
+  udp->interfaceWhiteList.push_back(endpoint.address);
+  qos.transport().user_transports.push_back(udp);
+  auto& discovery = qos.wire_protocol().builtin.discovery_config;
+  discovery.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::SERVER;
+  std::istringstream(DiscoveryServerGuidPrefix(0)) >> qos.wire_protocol().prefix;
+  eprosima::fastrtps::rtps::Locator_t locator;
+  eprosima::fastrtps::rtps::IPLocator::setIPv4(locator, endpoint.address);
+  locator.port = endpoint.port;
+  qos.wire_protocol().builtin.metatrafficUnicastLocatorList.push_back(locator);
+  DomainParticipant* server =
+      DomainParticipantFactory::get_instance()->create_participant(domain_id, qos);
+  if (server == nullptr) {
+    throw std::runtime_error("Fast DDS: cannot start a discovery server on " + listen +
+                             " (is the address this host's and the port free?)");
+  }
+  LOG_INFO << "discovery server on " << listen << ", domain " << domain_id << ", GUID prefix "
+           << DiscoveryServerGuidPrefix(0);
+  while (!stop_requested()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  DomainParticipantFactory::get_instance()->delete_participant(server);
 }
 
 }  // namespace dygslam::dds

@@ -17,12 +17,14 @@
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
 
 #include "components/dds/guarded_type.h"
+#include "components/dds/network_options.h"
 #include "components/dds/security.h"
 
 namespace dygslam::dds {
@@ -43,8 +45,20 @@ struct ParticipantOptions {
   // DDS Security (authentication, access control, encryption); off by default. Applied to the
   // XML-profile and the default QoS alike.
   SecurityOptions security;
+  // Interfaces, shared memory and discovery server (default: this machine only). Ignored when an
+  // XML profile is used (the XML then says it all).
+  NetworkOptions network;
   void Check() const;
 };
+
+// The discovery server's GUID prefix for server id `id` (0..255): the one Fast DDS's tools use
+// (44.53.<id>.5f.45.50.52.4f.53.49.4d.41), so `fastdds discovery -i ID` works as a server too.
+std::string DiscoveryServerGuidPrefix(int id = 0);
+
+// Runs a discovery server on `listen` ("ADDRESS:PORT") until `stop_requested()` returns true
+// (polled every 100 ms). Clients: NetworkOptions::discovery_server = the same "ADDRESS:PORT".
+void RunDiscoveryServer(const std::string& listen, int domain_id,
+                        const std::function<bool()>& stop_requested);
 
 // Domain id from DYGSLAM_DOMAIN_ID (0..232) if set, else `fallback`.
 int DomainIdFromEnvironment(int fallback = 0);

@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -55,12 +56,6 @@ pid_t Spawn(const std::vector<std::string>& args, const std::string& log) {
   return pid;
 }
 
-int Wait(pid_t pid) {
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
 // First integer captured by `pattern` in `text`, -1 if absent.
 long Extract(const std::string& text, const std::string& pattern) {
   std::smatch m;
@@ -92,23 +87,49 @@ class Faults : public ::testing::Test {
                                      "--domain",
                                      std::to_string(domain)};
     args.insert(args.end(), extra.begin(), extra.end());
-    return Spawn(args, tmp + "/" + (log_name.empty() ? component : log_name) + ".log");
+    const pid_t pid = Spawn(args, tmp + "/" + (log_name.empty() ? component : log_name) + ".log");
+    running_.push_back(pid);
+    return pid;
+  }
+  // A test that stops early (a failed ASSERT) leaves no component running behind it.
+  void TearDown() override {
+    for (const pid_t pid : running_) {
+      if (::kill(pid, SIGKILL) == 0) ::waitpid(pid, nullptr, 0);
+    }
+  }
+  // Exit code of child `pid`; a child that has not exited within `timeout_s` is a hang: the test
+  // fails naming it, with its threads' stacks, instead of running into ctest's timeout silently.
+  int Wait(pid_t pid, double timeout_s = 60.0) {
+    std::string hang;
+    const int code = testing::WaitForExit(pid, timeout_s, &hang);
+    running_.erase(std::remove(running_.begin(), running_.end(), pid), running_.end());
+    if (code < 0) ADD_FAILURE() << hang;
+    return code;
   }
   std::string dataset_;
+  std::vector<pid_t> running_;
 };
 
 TEST_F(Faults, MapperKilledAndRestartedGetsKeyframeHistoryBack) {
   const std::string tmp = testing::MakeTempDir("fault_mapper");
   const int domain = 121;
-  const pid_t recorder = Run("recorder", tmp, domain, "0:120");
-  const pid_t mapper1 = Run("mapper", tmp, domain, "0:120", {}, "mapper1");
-  const pid_t slam = Run("slam", tmp, domain, "0:120", {"--filter", "none"});
-  const pid_t player = Run("player", tmp, domain, "0:120", {"--rate", "1"});  // 4 s of frames
-  std::this_thread::sleep_for(std::chrono::milliseconds(2000));
+  const std::string frames = "0:300";  // 10 s of frames at --rate 1
+  const pid_t recorder = Run("recorder", tmp, domain, frames);
+  const pid_t mapper1 = Run("mapper", tmp, domain, frames, {}, "mapper1");
+  const pid_t slam = Run("slam", tmp, domain, frames, {"--filter", "none"});
+  const pid_t player = Run("player", tmp, domain, frames, {"--rate", "1", "--no-detector"});
+  // Kill the first mapper once it has received keyframes and written a map from them (an event,
+  // not a time: under load the pipeline may take seconds to start).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!fs::exists(tmp + "/out/map.bt") && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  const bool first_map = fs::exists(tmp + "/out/map.bt");
   kill(mapper1, SIGKILL);
   EXPECT_EQ(Wait(mapper1), 128 + SIGKILL);
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  const pid_t mapper2 = Run("mapper", tmp, domain, "0:120", {}, "mapper2");
+  ASSERT_TRUE(first_map) << "the first mapper never wrote a map\n" << ReadAll(tmp + "/mapper1.log");
+  fs::remove(tmp + "/out/map.bt");
+  const pid_t mapper2 = Run("mapper", tmp, domain, frames, {}, "mapper2");
   EXPECT_EQ(Wait(player), 0) << ReadAll(tmp + "/player.log");
   EXPECT_EQ(Wait(slam), 0) << ReadAll(tmp + "/slam.log");
   EXPECT_EQ(Wait(recorder), 0) << ReadAll(tmp + "/recorder.log");
@@ -124,6 +145,8 @@ TEST_F(Faults, MapperKilledAndRestartedGetsKeyframeHistoryBack) {
   const long received = Extract(mapper_log, R"(mapper: (\d+) keyframe messages)");
   EXPECT_GE(received, std::min(published, 64L)) << mapper_log;  // 64: kKeyframeHistoryDepth
   EXPECT_LE(in_map, static_cast<long>(keyframes.size())) << mapper_log;
+  ASSERT_TRUE(fs::exists(tmp + "/out/map.bt")) << "the restarted mapper wrote no map\n"
+                                               << mapper_log;
   EXPECT_GT(fs::file_size(tmp + "/out/map.bt"), 1000u);
 }
 

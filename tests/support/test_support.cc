@@ -1,15 +1,18 @@
 #include "tests/support/test_support.h"
 
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <thread>
 
 #include "core/base/paths.h"
 
@@ -103,6 +106,30 @@ ProcessResult RunDygslam(const std::vector<std::string>& args, const std::string
   r.out = read_all(out);
   r.err = read_all(err);
   return r;
+}
+
+int WaitForExit(pid_t pid, double timeout_s, std::string* diagnostics) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  int status = 0;
+  while (std::chrono::steady_clock::now() < deadline) {
+    const pid_t r = waitpid(pid, &status, WNOHANG);
+    if (r == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    if (r < 0) return -1;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::string text = "process " + std::to_string(pid) + " still running after " +
+                     std::to_string(timeout_s) + " s (hang); its threads:\n";
+  const std::string cmd = "gdb -p " + std::to_string(pid) +
+                          " -batch -nx -ex 'thread apply all bt 25' 2>&1 | grep -E '^(#|Thread)'";
+  if (FILE* pipe = ::popen(cmd.c_str(), "r")) {
+    char buffer[4096];
+    while (std::fgets(buffer, sizeof buffer, pipe)) text += buffer;
+    ::pclose(pipe);
+  }
+  ::kill(pid, SIGKILL);
+  waitpid(pid, &status, 0);
+  if (diagnostics) *diagnostics += text;
+  return -1;
 }
 
 }  // namespace dygslam::testing

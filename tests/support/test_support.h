@@ -1,12 +1,11 @@
 // Helpers for tests: shared data lookup and scratch directories.
 #pragma once
 
+#include <sys/types.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <string>
-#include <vector>
-
-#include <sys/types.h>
 #include <vector>
 
 namespace dygslam::testing {
@@ -41,34 +40,39 @@ ProcessResult RunDygslam(const std::vector<std::string>& args, const std::string
 // waits for it).
 pid_t SpawnDygslam(const std::vector<std::string>& args, const std::string& out,
                    const std::string& err);
+// Waits up to `timeout_s` for child `pid` to exit; returns its exit code (128 + signal when
+// killed). A child still running at the deadline is a hang: its threads' stacks (gdb, when
+// installed) are appended to `*diagnostics`, it is killed and reaped, and -1 is returned, so a test
+// reports which process hung and where instead of running into ctest's timeout with no output.
+int WaitForExit(pid_t pid, double timeout_s, std::string* diagnostics);
 
 }  // namespace dygslam::testing
 
 // Skips the test (GTEST_SKIP) with a clear reason when a dataset is not available, for someone
 // running one test by hand without data... except in CI and `make test` (RequireData()), where a
 // missing dataset fails the test.
-#define DYGSLAM_REQUIRE_DATASET(var, name)                                                 \
-  const std::string var = ::dygslam::testing::DatasetDir(name);                            \
-  if (var.empty()) {                                                                       \
-    if (::dygslam::testing::RequireData())                                                 \
-      FAIL() << "dataset " << name << " missing (required in CI / make test); "           \
-             << ::dygslam::testing::kHowToGetData;                                         \
+#define DYGSLAM_REQUIRE_DATASET(var, name)                                                     \
+  const std::string var = ::dygslam::testing::DatasetDir(name);                                \
+  if (var.empty()) {                                                                           \
+    if (::dygslam::testing::RequireData())                                                     \
+      FAIL() << "dataset " << name << " missing (required in CI / make test); "                \
+             << ::dygslam::testing::kHowToGetData;                                             \
     GTEST_SKIP() << "dataset " << name << " not found; " << ::dygslam::testing::kHowToGetData; \
   }
 
 // The same for the detector models folder.
-#define DYGSLAM_REQUIRE_MODELS(var)                                                        \
-  const std::string var = ::dygslam::testing::ModelsDir();                                 \
-  if (var.empty()) {                                                                       \
-    if (::dygslam::testing::RequireData())                                                 \
-      FAIL() << "models folder missing (required in CI / make test); "                    \
-             << ::dygslam::testing::kHowToGetData;                                         \
-    GTEST_SKIP() << "models folder not found; " << ::dygslam::testing::kHowToGetData;      \
+#define DYGSLAM_REQUIRE_MODELS(var)                                                   \
+  const std::string var = ::dygslam::testing::ModelsDir();                            \
+  if (var.empty()) {                                                                  \
+    if (::dygslam::testing::RequireData())                                            \
+      FAIL() << "models folder missing (required in CI / make test); "                \
+             << ::dygslam::testing::kHowToGetData;                                    \
+    GTEST_SKIP() << "models folder not found; " << ::dygslam::testing::kHowToGetData; \
   }
 
 // The same for a built tool (e.g. the `dygslam` binary) that a test runs.
-#define DYGSLAM_REQUIRE_FILE(path, what)                                                   \
-  if (!std::filesystem::exists(path)) {                                                    \
-    if (::dygslam::testing::RequireData()) FAIL() << what << " missing: " << (path);       \
-    GTEST_SKIP() << what << " not found: " << (path);                                      \
+#define DYGSLAM_REQUIRE_FILE(path, what)                                             \
+  if (!std::filesystem::exists(path)) {                                              \
+    if (::dygslam::testing::RequireData()) FAIL() << what << " missing: " << (path); \
+    GTEST_SKIP() << what << " not found: " << (path);                                \
   }

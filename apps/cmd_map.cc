@@ -114,11 +114,7 @@ int RunMap(const std::vector<std::string>& args) {
               "also write map.bt/map.ot every SECONDS of wall time while running");
   p.AddFlag("deterministic",
             "fixed seeds and synchronous local mapping: identical output run to run");
-  p.AddFlag("quiet", "no progress line");
-  p.AddFlag("strict-settings",
-            "unknown keys in the settings file are errors, not warnings (also "
-            "DYGSLAM_STRICT_SETTINGS=1)");
-  p.AddFlag("strict-paths", "image paths outside DATASET_DIR are errors, not warnings");
+  AddDatasetRunFlags(&p);
   if (!p.Parse(args)) return p.exit_code();
   // A stop request ends the frame loop; the outputs are then written from what was processed
   // (shares the flag of dygslam main's early scope, so a signal during setup counts too).

@@ -245,11 +245,7 @@ int RunRun(const std::vector<std::string>& args) {
   p.AddOption("loop-minutes", "M",
               "DDS modes: the player replays the frames for M minutes, stamps continuing (soak)",
               "0");
-  p.AddFlag("quiet", "no progress line");
-  p.AddFlag("strict-settings",
-            "unknown keys in the settings file are errors, not warnings (also "
-            "DYGSLAM_STRICT_SETTINGS=1)");
-  p.AddFlag("strict-paths", "image paths outside DATASET_DIR are errors, not warnings");
+  AddDatasetRunFlags(&p);
   if (!p.Parse(args)) return p.exit_code();
   if (p.Flag("processes") && p.Flag("direct"))
     return p.UsageError("--processes and --direct exclude each other");

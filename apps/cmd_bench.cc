@@ -37,7 +37,8 @@
 #include "core/bench/feature_figure.h"
 #include "core/bench/rgbd_odometry_baseline.h"
 #include "core/config/settings.h"
-#include "core/config/system_config.h"
+#include "run/run_settings.h"
+#include "run/system_config.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
 #include "core/io/file_util.h"
@@ -187,7 +188,10 @@ int RunWorker(const ArgParser& p) {
   const std::string config = p.Get("worker");
   const std::string dataset_dir = p.Positional("DATA_DIR");
   if (!p.Has("config")) return p.UsageError("--worker needs --config");
-  const Settings settings = LoadSettings(p.Get("config"), CliSettingsReadOptions(false));
+  // The baseline reads only the camera; its name is no filter configuration.
+  const RunConfiguration c = LoadRunConfiguration(
+      {p.Get("config"), CliSettingsReadOptions(false),
+       config == kBaselineConfig ? std::string("full") : config, p.Flag("deterministic")});
   const RgbdDataset dataset = RgbdDataset::Open(dataset_dir);
   size_t first = 0, last = dataset.num_rgb_entries();
   if (p.Has("frames")) std::tie(first, last) = ParseFrameRange(p.Get("frames"), last);
@@ -203,13 +207,10 @@ int RunWorker(const ArgParser& p) {
   };
   RunOutput output;
   if (config == kBaselineConfig) {
-    output = RunOdometryOnSequence(dataset, settings.camera, settings.sensor.depth_map_factor,
+    output = RunOdometryOnSequence(dataset, c.settings.camera, c.settings.sensor.depth_map_factor,
                                    RgbdOdometryOptions(), first, last, report);
   } else {
-    SystemOptions options = SystemOptionsFromSettings(settings);
-    ApplyFilterConfiguration(config, &options);
-    options.deterministic = p.Flag("deterministic");
-    output = RunSystemOnSequence(dataset, options, first, last, report);
+    output = RunSystemOnSequence(dataset, c.system, first, last, report);
   }
   WriteRunOutput(p.Get("out"), output);
   return 0;

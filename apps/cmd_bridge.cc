@@ -17,7 +17,7 @@
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "core/config/settings.h"
-#include "core/config/system_config.h"
+#include "run/run_settings.h"
 
 namespace dygslam::cli {
 namespace {
@@ -148,9 +148,9 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
     pipeline.dataset_dir = "-";
     pipeline.settings_path = p.Get("config");
     pipeline.output_dir = p.Get("out");
-    pipeline.system = SystemOptionsFromSettings(
-        LoadSettings(pipeline.settings_path, CliSettingsReadOptions(false)));
-    ApplyFilterConfiguration(p.Get("filter"), &pipeline.system);
+    pipeline.system = LoadRunConfiguration({pipeline.settings_path,
+                                            CliSettingsReadOptions(false), p.Get("filter")})
+                          .system;
     pipeline.run_mapper = !p.Flag("no-mapper");
     pipeline.domain_id = domain;
     pipeline.partition = partition;

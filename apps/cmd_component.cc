@@ -14,9 +14,8 @@
 #include "components/bench_transport.h"
 #include "components/pipeline.h"
 #include "core/base/error.h"
-#include "core/config/mapping_config.h"
 #include "core/config/settings.h"
-#include "core/config/system_config.h"
+#include "run/run_settings.h"
 
 namespace dygslam::cli {
 namespace {
@@ -91,11 +90,13 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   o.settings_path = p.Get("config");
   if (o.settings_path.empty()) return p.UsageError("--config is required");
   if (o.dataset_dir.empty()) o.dataset_dir = "-";  // only the player reads it
-  const Settings settings = LoadSettings(o.settings_path, CliSettingsReadOptions(false));
-  o.system = SystemOptionsFromSettings(settings);
-  ReadOptions(settings.reader, &o.octomap);
-  ApplyFilterConfiguration(p.Get("filter"), &o.system);
-  o.system.deterministic = p.Flag("deterministic");
+  {
+    const RunConfiguration c =
+        LoadRunConfiguration({o.settings_path, CliSettingsReadOptions(false), p.Get("filter"),
+                              p.Flag("deterministic")});
+    o.system = c.system;
+    o.octomap = c.octomap;
+  }
   if (p.Has("detector-cfg")) {
     o.system.detector.cfg_path = p.Get("detector-cfg");
     o.system.detector.weights_path = p.Get("detector-weights");

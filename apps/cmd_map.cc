@@ -1,4 +1,5 @@
-// dygslam map DATASET_DIR [--config FILE] [--filter none|boxes|geometry|paper|full] [--frames FIRST:LAST]
+// dygslam map DATASET_DIR [--config FILE] [--filter none|boxes|geometry|paper|full]
+//              [--frames FIRST:LAST]
 //              [--out DIR] [--trajectory FILE [--every N] [--bonn-marker]] [--deterministic]
 //              [--resolution R] [--no-mask] [--reference-until K] [--save-every SECONDS]
 //
@@ -23,9 +24,7 @@
 #include "apps/command.h"
 #include "core/base/error.h"
 #include "core/base/stop_signal.h"
-#include "core/config/mapping_config.h"
 #include "core/config/settings.h"
-#include "core/config/system_config.h"
 #include "core/io/dataset.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
@@ -36,6 +35,9 @@
 #include "mapping/map_frame.h"
 #include "mapping/map_render.h"
 #include "mapping/octomap_builder.h"
+#include "run/dataset_runner.h"
+#include "run/run_outputs.h"
+#include "run/run_settings.h"
 
 namespace dygslam::cli {
 namespace {
@@ -86,7 +88,9 @@ int RunMap(const std::vector<std::string>& args) {
       "settings.");
   p.AddPositional("DATASET_DIR", "folder with rgb.txt, depth.txt (groundtruth.txt optional)");
   p.AddOption("config", "FILE", "settings YAML; default: DATASET_DIR/camera.yaml or a preset");
-  p.AddOption("filter", "MODE", "dynamic filter of the SLAM: none | boxes | geometry | full | paper (+margin, +margin+demotion)",
+  p.AddOption("filter", "MODE",
+              "dynamic filter of the SLAM: none | boxes | geometry | full | paper (+margin, "
+              "+margin+demotion)",
               "full");
   p.AddOption("frames", "FIRST:LAST",
               "rgb.txt entries FIRST (inclusive, 0-based) to LAST (exclusive)");
@@ -110,11 +114,7 @@ int RunMap(const std::vector<std::string>& args) {
               "also write map.bt/map.ot every SECONDS of wall time while running");
   p.AddFlag("deterministic",
             "fixed seeds and synchronous local mapping: identical output run to run");
-  p.AddFlag("quiet", "no progress line");
-  p.AddFlag("strict-settings",
-            "unknown keys in the settings file are errors, not warnings (also "
-            "DYGSLAM_STRICT_SETTINGS=1)");
-  p.AddFlag("strict-paths", "image paths outside DATASET_DIR are errors, not warnings");
+  AddDatasetRunFlags(&p);
   if (!p.Parse(args)) return p.exit_code();
   // A stop request ends the frame loop; the outputs are then written from what was processed
   // (shares the flag of dygslam main's early scope, so a signal during setup counts too).
@@ -129,15 +129,15 @@ int RunMap(const std::vector<std::string>& args) {
   }
 
   const std::string dataset_dir = p.Positional("DATASET_DIR");
-  const std::string config = p.Has("config") ? p.Get("config") : DefaultSettingsPath(dataset_dir, ConfigDir());
+  const std::string config =
+      p.Has("config") ? p.Get("config") : DefaultSettingsPath(dataset_dir, ConfigDir());
   // The output folder first: a bad --out is found before the run, not after it.
   const fs::path out = PrepareOutputDir("out", p.Get("out"));
-  const Settings settings = LoadSettings(config, CliSettingsReadOptions(p.Flag("strict-settings")));
-  SystemOptions options = SystemOptionsFromSettings(settings);
-  ApplyFilterConfiguration(p.Get("filter"), &options);
-  options.deterministic = p.Flag("deterministic");
-  OctoMapOptions map_options;
-  ReadOptions(settings.reader, &map_options);
+  RunConfiguration configuration =
+      LoadRunConfiguration({config, CliSettingsReadOptions(p.Flag("strict-settings")),
+                            p.Get("filter"), p.Flag("deterministic")});
+  const SystemOptions& options = configuration.system;
+  OctoMapOptions& map_options = configuration.octomap;
   if (p.Has("resolution"))
     map_options.resolution = ParsePositive("resolution", p.Get("resolution"));
   if (p.Flag("no-mask") || options.filter_mode == FilterMode::kNone)
@@ -230,40 +230,8 @@ int RunMap(const std::vector<std::string>& args) {
     });
     ++saves;
   };
-  bool interrupted = false;
-  for (size_t k = first; k < last; ++k) {
-    if (ScopedStopSignals::Received() != 0) {
-      interrupted = true;
-      break;
-    }
-    const auto index = dataset.FrameForRgbEntry(k);
-    if (!index) {
-      ++skipped;
-      continue;
-    }
-    const RgbdFrameEntry& entry = dataset.frame(*index);
-    TrackingState state = TrackingState::kOk;
-    if (from_trajectory) {
-      if ((k - first) % every != 0) continue;
-      std::optional<Rigid3d> pose = mapping_data::InterpolatePose(given_poses, entry.rgb_stamp);
-      if (!pose) {
-        ++lost;
-        continue;
-      }
-      if (p.Flag("bonn-marker")) *pose = *pose * mapping_data::BonnMarkerFromCam();
-      KeyframeData keyframe;
-      keyframe.id = static_cast<int64_t>(k);
-      keyframe.stamp = entry.rgb_stamp;
-      keyframe.world_from_cam = *pose;
-      dataset.LoadDepth(*index, options.camera.width, options.camera.height)
-          .convertTo(keyframe.depth, CV_32F, 1.0 / options.sensor.depth_map_factor);
-      on_keyframe(keyframe);
-    } else {
-      const cv::Mat rgb = dataset.LoadRgb(*index, options.camera.width, options.camera.height);
-      const cv::Mat depth = dataset.LoadDepth(*index, options.camera.width, options.camera.height);
-      state = system->FeedRgbdFrame(rgb, depth, entry.rgb_stamp).state;
-      if (state == TrackingState::kLost) ++lost;
-    }
+  // After each frame fed (SLAM) or inserted (--trajectory): periodic saves, progress line.
+  auto after_frame = [&](size_t k, TrackingState state) {
     ++processed;
     const auto now = std::chrono::steady_clock::now();
     if (save_every && std::chrono::duration<double>(now - last_save).count() >= *save_every) {
@@ -284,16 +252,57 @@ int RunMap(const std::vector<std::string>& args) {
           num_keyframes, ms.num_submitted - ms.num_applied - ms.num_coalesced);
       std::fflush(stderr);
     }
+  };
+  auto stop_requested = [] { return ScopedStopSignals::Received() != 0; };
+  bool interrupted = false;
+  if (from_trajectory) {
+    for (size_t k = first; k < last; ++k) {
+      if (stop_requested()) {
+        interrupted = true;
+        break;
+      }
+      const auto index = dataset.FrameForRgbEntry(k);
+      if (!index) {
+        ++skipped;
+        continue;
+      }
+      if ((k - first) % every != 0) continue;
+      const Timestamp stamp = dataset.frame(*index).rgb_stamp;
+      std::optional<Rigid3d> pose = mapping_data::InterpolatePose(given_poses, stamp);
+      if (!pose) {
+        ++lost;
+        continue;
+      }
+      if (p.Flag("bonn-marker")) *pose = *pose * mapping_data::BonnMarkerFromCam();
+      KeyframeData keyframe;
+      keyframe.id = static_cast<int64_t>(k);
+      keyframe.stamp = stamp;
+      keyframe.world_from_cam = *pose;
+      dataset.LoadDepth(*index, options.camera.width, options.camera.height)
+          .convertTo(keyframe.depth, CV_32F, 1.0 / options.sensor.depth_map_factor);
+      on_keyframe(keyframe);
+      after_frame(k, TrackingState::kOk);
+    }
+  } else {
+    DatasetRunOptions run;
+    run.first_entry = first;
+    run.last_entry = last;
+    run.image_width = options.camera.width;
+    run.image_height = options.camera.height;
+    run.prefetch_detections = false;
+    run.stop = stop_requested;
+    const DatasetRunSummary summary = RunDatasetFrames(
+        dataset, *system, run, [&](size_t k, const FrameResult& r) { after_frame(k, r.state); });
+    lost = summary.lost;
+    skipped = summary.skipped;
+    interrupted = summary.interrupted;
   }
   if (progress) std::fprintf(stderr, "\n");
   if (system) system->Shutdown();  // last local-mapping corrections reach the mapper
   mapper.Flush();
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (system) {
-    WriteTumTrajectory((out / "trajectory.txt").string(), system->Trajectory());
-    WriteTumTrajectory((out / "keyframes.txt").string(), system->KeyframeTrajectory());
-  }
+  if (system) WriteSystemTrajectories(out.string(), *system);
 
   // SLAM maps: level the map (z up, floor at z = 0) by the floor it found, so pictures and
   // planners see it upright. A rigid change of the world frame: all stored keyframe poses move,

@@ -1,4 +1,5 @@
-// dygslam run DATASET_DIR [--config FILE] [--filter none|boxes|geometry|paper|full] [--frames FIRST:LAST]
+// dygslam run DATASET_DIR [--config FILE] [--filter none|boxes|geometry|paper|full]
+//              [--frames FIRST:LAST]
 //              [--out DIR] [--deterministic] [--processes | --direct] [--no-map] [--domain N]
 //              [--quiet]
 //
@@ -15,27 +16,25 @@
 #include <signal.h>
 #include <unistd.h>
 
-#include <atomic>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
-#include <map>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <random>
 
 #include "apps/command.h"
 #include "core/base/error.h"
-#include "core/base/stop_signal.h"
 #include "core/base/log.h"
-#include "core/config/mapping_config.h"
+#include "core/base/stop_signal.h"
 #include "core/config/settings.h"
-#include "core/config/system_config.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
 #include "core/io/detections_io.h"
@@ -43,6 +42,9 @@
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
 #include "mapping/keyframe_mapper.h"
+#include "run/dataset_runner.h"
+#include "run/run_outputs.h"
+#include "run/run_settings.h"
 #ifdef DYGSLAM_HAVE_COMPONENTS
 #include "components/pipeline.h"
 #endif
@@ -50,32 +52,6 @@
 namespace dygslam::cli {
 namespace {
 namespace fs = std::filesystem;
-
-// frames.csv: the same columns in every mode (the pipeline's recorder writes them from
-// CameraPose, components/recorder.cc FramesCsvHeader / FramesCsvRow).
-constexpr const char* kFramesCsvHeader =
-    "stamp,state,keyframe,features,dynamic,tracked,orb_ms,detection_ms,matching_ms,probability_ms,"
-    "tracking_ms,"
-    "total_ms\n";
-
-std::string FramesCsvRow(const FrameResult& r) {
-  char line[512];
-  std::snprintf(line, sizeof(line), "%s,%s,%d,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n",
-                r.stamp.ToString().c_str(), ToString(r.state), r.is_keyframe ? 1 : 0,
-                r.num_features, r.num_dynamic, r.num_tracked, r.times.orb_extraction_ms,
-                r.times.detection_ms, r.times.matching_ms, r.times.probability_ms,
-                r.times.tracking_ms, r.times.total_ms);
-  return line;
-}
-
-// SIGINT / SIGTERM -> a flag the direct loop polls (shared with dygslam main's early scope).
-class DirectSignals {
- public:
-  bool signaled() const { return ScopedStopSignals::Received() != 0; }
-
- private:
-  ScopedStopSignals scope_;
-};
 
 struct RunSetup {
   std::string dataset_dir;
@@ -110,47 +86,40 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
     KeyframeMapper* m = mapper.get();
     system.SetKeyframeCallback([m](const KeyframeData& k) { m->Submit(k); });
   }
-  DirectSignals signals;
-  std::string csv = kFramesCsvHeader;
+  // SIGINT / SIGTERM -> the stop flag the loop polls (shared with dygslam main's early scope).
+  ScopedStopSignals signals;
+  DatasetRunOptions run;
+  run.first_entry = s.first;
+  run.last_entry = s.last;
+  run.image_width = s.system.camera.width;
+  run.image_height = s.system.camera.height;
+  if (s.use_detection_file) run.detections = &s.detections;
+  run.stop = [] { return ScopedStopSignals::Received() != 0; };
+  std::string csv = FramesCsvHeader();
   std::vector<StampedPose> online;  // the pose known when each frame was tracked
   const auto t0 = std::chrono::steady_clock::now();
   const size_t total = s.last - s.first;
-  cv::Mat next_rgb;  // loaded one frame ahead so its detection overlaps this frame's tracking
-  for (size_t k = s.first; k < s.last && !signals.signaled(); ++k) {
-    const auto index = dataset.FrameForRgbEntry(k);
-    if (!index) continue;
-    const cv::Mat rgb = next_rgb.empty()
-                            ? dataset.LoadRgb(*index, s.system.camera.width, s.system.camera.height)
-                            : next_rgb;
-    next_rgb = cv::Mat();
-    const cv::Mat depth = dataset.LoadDepth(*index, s.system.camera.width, s.system.camera.height);
-    const Timestamp stamp = dataset.frame(*index).rgb_stamp;
-    if (!s.use_detection_file && k + 1 < s.last) {
-      if (const auto next = dataset.FrameForRgbEntry(k + 1)) {
-        next_rgb = dataset.LoadRgb(*next, s.system.camera.width, s.system.camera.height);
-        system.PrefetchDetections(next_rgb, dataset.frame(*next).rgb_stamp);
-      }
-    }
-    const FrameResult r =
-        s.use_detection_file
-            ? system.FeedRgbdFrame(rgb, depth, stamp, cv::Mat(), &DetectionsNear(s.detections, stamp))
-            : system.FeedRgbdFrame(rgb, depth, stamp);
-    ++outcome.processed;
-    if (r.state == TrackingState::kLost) ++outcome.lost;
-    if (r.world_from_cam) online.push_back({r.stamp, *r.world_from_cam});
-    ++outcome.states[ToString(r.state)];
-    csv += FramesCsvRow(r);
-    if (s.progress && (outcome.processed % 10 == 0 || k + 1 == s.last)) {
-      const double elapsed =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::fprintf(stderr, "\r[run] frame %zu/%zu  %.1f fps  state=%s  lost=%zu   ",
-                   k + 1 - s.first, total, outcome.processed / std::max(elapsed, 1e-9),
-                   ToString(r.state), outcome.lost);
-      std::fflush(stderr);
-    }
-  }
+  size_t done = 0, lost = 0;  // for the progress line
+  const DatasetRunSummary summary =
+      RunDatasetFrames(dataset, system, run, [&](size_t k, const FrameResult& r) {
+        ++done;
+        if (r.state == TrackingState::kLost) ++lost;
+        if (r.world_from_cam) online.push_back({r.stamp, *r.world_from_cam});
+        ++outcome.states[ToString(r.state)];
+        csv += FramesCsvRow(FrameRowFromResult(r));
+        if (s.progress && (done % 10 == 0 || k + 1 == s.last)) {
+          const double elapsed =
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          std::fprintf(stderr, "\r[run] frame %zu/%zu  %.1f fps  state=%s  lost=%zu   ",
+                       k + 1 - s.first, total, done / std::max(elapsed, 1e-9), ToString(r.state),
+                       lost);
+          std::fflush(stderr);
+        }
+      });
+  outcome.processed = summary.processed;
+  outcome.lost = summary.lost;
   if (s.progress) std::fprintf(stderr, "\n");
-  outcome.interrupted = signals.signaled();
+  outcome.interrupted = summary.interrupted || ScopedStopSignals::Received() != 0;
   if (outcome.interrupted) std::fprintf(stderr, "[run] interrupted: flushing outputs\n");
   system.Shutdown();
   {
@@ -161,32 +130,27 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
       std::nth_element(ms.begin(), ms.begin() + ms.size() / 2, ms.end());
       median = ms[ms.size() / 2];
     }
-    std::printf("local mapping: %d keyframes, median %.1f ms per keyframe, %d points triangulated, "
-                "%d keyframes culled\n", lm.keyframes_processed, median, lm.points_triangulated,
-                lm.keyframes_culled);
+    std::printf(
+        "local mapping: %d keyframes, median %.1f ms per keyframe, %d points triangulated, "
+        "%d keyframes culled\n",
+        lm.keyframes_processed, median, lm.points_triangulated, lm.keyframes_culled);
     const MapStatistics sizes = system.MapSizes();
     std::printf("map: %zu keyframes (%zu culled), %zu map points\n", sizes.keyframes,
                 sizes.culled_keyframes, sizes.map_points);
     const LoopClosingStats lc = system.LoopClosingStatistics();
-    std::printf("loop closing: %d loops closed (%d consistent candidates, %d rejected), %d points fused, "
-                "%d global BA (%d discarded), %d keyframes checked\n",
-                lc.loops_closed, lc.candidates_detected, lc.loops_rejected, lc.points_fused,
-                lc.global_ba_runs, lc.global_ba_discarded, lc.keyframes_checked);
+    std::printf(
+        "loop closing: %d loops closed (%d consistent candidates, %d rejected), %d points fused, "
+        "%d global BA (%d discarded), %d keyframes checked\n",
+        lc.loops_closed, lc.candidates_detected, lc.loops_rejected, lc.points_fused,
+        lc.global_ba_runs, lc.global_ba_discarded, lc.keyframes_checked);
     for (const auto& [frame, loop_frame] : lc.loop_frames)
       std::printf("loop: frame %lld closed with frame %lld\n", static_cast<long long>(frame),
                   static_cast<long long>(loop_frame));
   }
   WriteFileAtomically((s.out / "frames.csv").string(), csv);
-  WriteTumTrajectory((s.out / "trajectory.txt").string(), system.Trajectory());
+  WriteSystemTrajectories(s.out.string(), system);
   WriteTumTrajectory((s.out / "trajectory_online.txt").string(), online);
-  WriteTumTrajectory((s.out / "keyframes.txt").string(), system.KeyframeTrajectory());
-  if (mapper) {
-    mapper->Flush();
-    const std::string path = (s.out / "map.bt").string();
-    mapper->WithBuilder([&](OctoMapBuilder& b) {
-      if (!b.KeyframeIds().empty()) b.WriteBinary(path);
-    });
-  }
+  if (mapper) WriteMapperBinary(s.out.string(), *mapper);
   return outcome;
 }
 
@@ -215,8 +179,8 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
   o.domain_id = domain_id;
   o.partition = partition.empty() ? RunPartition() : partition;
   o.security_dir = security_dir;
-  std::fprintf(stderr, "[run] DDS partition '%s' (a bridge joins with --partition %s)\n", o.partition.c_str(),
-               o.partition.c_str());
+  std::fprintf(stderr, "[run] DDS partition '%s' (a bridge joins with --partition %s)\n",
+               o.partition.c_str(), o.partition.c_str());
   o.progress = s.progress;
   o.loop_minutes = s.loop_minutes;
   RunOutcome outcome;
@@ -256,7 +220,9 @@ int RunRun(const std::vector<std::string>& args) {
   p.AddPositional("DATASET_DIR", "folder with rgb.txt, depth.txt (groundtruth.txt optional)");
   p.AddOption("config", "FILE",
               "settings YAML (ORB-SLAM2 keys); default: DATASET_DIR/camera.yaml or a preset");
-  p.AddOption("filter", "MODE", "dynamic filter: none | boxes | geometry | full | paper (+margin, +margin+demotion)", "full");
+  p.AddOption("filter", "MODE",
+              "dynamic filter: none | boxes | geometry | full | paper (+margin, +margin+demotion)",
+              "full");
   p.AddOption("frames", "FIRST:LAST",
               "rgb.txt entries FIRST (inclusive, 0-based) to LAST (exclusive)");
   p.AddOption("out", "DIR", "output folder", "out/run");
@@ -269,7 +235,8 @@ int RunRun(const std::vector<std::string>& args) {
               "boxes per frame from FILE ('timestamp x y w h class score', e.g. detections.txt of\n"
               "`dygslam synth`) instead of the detector; implies --direct");
   p.AddOption("domain", "N", "DDS domain id (default: $DYGSLAM_DOMAIN_ID or 0)", "-1");
-  p.AddOption("partition", "NAME", "DDS partition of the pipeline topics (default: unique per run)");
+  p.AddOption("partition", "NAME",
+              "DDS partition of the pipeline topics (default: unique per run)");
   const char* security_env = std::getenv("DYGSLAM_DDS_SECURITY_DIR");
   p.AddOption("security", "DIR",
               "DDS Security: make_dds_certs.sh's OUT_DIR (one identity folder per component) or "
@@ -278,11 +245,7 @@ int RunRun(const std::vector<std::string>& args) {
   p.AddOption("loop-minutes", "M",
               "DDS modes: the player replays the frames for M minutes, stamps continuing (soak)",
               "0");
-  p.AddFlag("quiet", "no progress line");
-  p.AddFlag("strict-settings",
-            "unknown keys in the settings file are errors, not warnings (also "
-            "DYGSLAM_STRICT_SETTINGS=1)");
-  p.AddFlag("strict-paths", "image paths outside DATASET_DIR are errors, not warnings");
+  AddDatasetRunFlags(&p);
   if (!p.Parse(args)) return p.exit_code();
   if (p.Flag("processes") && p.Flag("direct"))
     return p.UsageError("--processes and --direct exclude each other");
@@ -302,18 +265,14 @@ int RunRun(const std::vector<std::string>& args) {
   RunSetup s;
   s.dataset_dir = p.Positional("DATASET_DIR");
   s.config = p.Has("config") ? p.Get("config") : DefaultSettingsPath(s.dataset_dir, ConfigDir());
-  const Settings settings =
-      LoadSettings(s.config, CliSettingsReadOptions(p.Flag("strict-settings")));
-  s.system = SystemOptionsFromSettings(settings);
-  ::setenv("DYGSLAM_SETTINGS_WARNED", "1", 1);  // --processes: components do not repeat them
-  ReadOptions(settings.reader, &s.octomap);
-  ApplyFilterConfiguration(p.Get("filter"), &s.system);
-  s.system.deterministic = p.Flag("deterministic");
-  if (s.system.deterministic) {
-    // One OpenCV thread for the detector in every mode (the pipeline's detector component uses
-    // one too): detections are then bit-identical between --direct and the pipeline.
-    s.system.detector.num_threads = 1;
+  {
+    const RunConfiguration c =
+        LoadRunConfiguration({s.config, CliSettingsReadOptions(p.Flag("strict-settings")),
+                              p.Get("filter"), p.Flag("deterministic")});
+    s.system = c.system;
+    s.octomap = c.octomap;
   }
+  ::setenv("DYGSLAM_SETTINGS_WARNED", "1", 1);  // --processes: components do not repeat them
   s.map = !p.Flag("no-map");
   if (p.Has("detections")) {
     if (p.Flag("processes")) return p.UsageError("--detections works with --direct only");
@@ -413,8 +372,7 @@ int RunRun(const std::vector<std::string>& args) {
   }
   const bool has_map = fs::exists(s.out / "map.bt");
   std::printf("outputs: %s/{trajectory.txt,trajectory_online.txt,keyframes.txt,frames.csv%s}\n",
-              s.out.string().c_str(),
-              has_map ? ",map.bt" : "");
+              s.out.string().c_str(), has_map ? ",map.bt" : "");
   if (outcome.exit_code != 0) {
     std::fprintf(stderr, "dygslam run: a pipeline component failed (see the messages above)\n");
     return 1;

@@ -81,6 +81,14 @@ SettingsReadOptions CliSettingsReadOptions(bool strict_flag) {
   return options;
 }
 
+void AddDatasetRunFlags(ArgParser* p) {
+  p->AddFlag("quiet", "no progress line");
+  p->AddFlag("strict-settings",
+             "unknown keys in the settings file are errors, not warnings (also "
+             "DYGSLAM_STRICT_SETTINGS=1)");
+  p->AddFlag("strict-paths", "image paths outside DATASET_DIR are errors, not warnings");
+}
+
 bool IsTrackingFailure(size_t processed, size_t tracked) {
   return processed == 0 || tracked * 10 < processed;
 }

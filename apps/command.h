@@ -105,6 +105,9 @@ std::filesystem::path PrepareOutputDir(const std::string& option, const std::str
 // --strict-settings or DYGSLAM_STRICT_SETTINGS=1 (which child processes inherit). Warnings are not
 // printed again where DYGSLAM_SETTINGS_WARNED is set (a parent `run` printed them).
 SettingsReadOptions CliSettingsReadOptions(bool strict_flag);
+// The flags of the commands that run the SLAM on a dataset folder (run, map), in this order:
+// --quiet, --strict-settings, --strict-paths.
+void AddDatasetRunFlags(ArgParser* p);
 
 // A SLAM run that processed no frame or tracked fewer than 10 % of them failed (exit 1), even when
 // every part of it ran: its trajectory says nothing.

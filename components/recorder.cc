@@ -28,29 +28,30 @@ void RecorderOptions::Check() const {
 
 RecorderCore::RecorderCore(const RecorderOptions& options) : options_(options) { options_.Check(); }
 
-std::string FramesCsvHeader() {
-  return "stamp,state,keyframe,features,dynamic,tracked,orb_ms,detection_ms,matching_ms,"
-         "probability_ms,tracking_ms,total_ms\n";
-}
-
-std::string FramesCsvRow(const msg::CameraPose& m) {
-  const Timestamp stamp = TimeFromMsg(m.header().stamp(), "CameraPose.header.stamp");
+FrameRow FrameRowFromPose(const msg::CameraPose& m) {
+  FrameRow row;
+  row.stamp = TimeFromMsg(m.header().stamp(), "CameraPose.header.stamp");
   if (m.tracking_state() > static_cast<uint8_t>(TrackingState::kFallback)) {
     throw InputError("CameraPose.tracking_state: " + std::to_string(m.tracking_state()) +
                      " is not a tracking state (0..4)");
   }
-  char line[512];
-  std::snprintf(line, sizeof(line), "%s,%s,%d,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n",
-                stamp.ToString().c_str(), ToString(static_cast<TrackingState>(m.tracking_state())),
-                m.is_keyframe() ? 1 : 0, m.num_features(), m.num_dynamic(), m.num_tracked(),
-                m.orb_extraction_ms(), m.detection_ms(), m.matching_ms(), m.probability_ms(),
-                m.tracking_ms(), m.total_ms());
-  return line;
+  row.state = static_cast<TrackingState>(m.tracking_state());
+  row.is_keyframe = m.is_keyframe();
+  row.num_features = m.num_features();
+  row.num_dynamic = m.num_dynamic();
+  row.num_tracked = m.num_tracked();
+  row.times.orb_extraction_ms = m.orb_extraction_ms();
+  row.times.detection_ms = m.detection_ms();
+  row.times.matching_ms = m.matching_ms();
+  row.times.probability_ms = m.probability_ms();
+  row.times.tracking_ms = m.tracking_ms();
+  row.times.total_ms = m.total_ms();
+  return row;
 }
 
 void RecorderCore::AddPose(const msg::CameraPose& pose) {
   const Timestamp stamp = TimeFromMsg(pose.header().stamp(), "CameraPose.header.stamp");
-  std::string row = FramesCsvRow(pose);
+  std::string row = FramesCsvRow(FrameRowFromPose(pose));
   if (pose.has_pose()) {
     StampedPose p;
     p.stamp = stamp;
@@ -161,13 +162,12 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
     const size_t n = core.num_frames();
     if (options.progress && (n % 10 == 0 || n == total_frames)) {
       const double elapsed = std::chrono::duration<double>(now - start).count();
-      std::fprintf(
-          stderr, "\r[run] frame %zu/%llu  %.1f fps  state=%s  lost=%zu   ", n,
-          static_cast<unsigned long long>(total_frames), n / std::max(elapsed, 1e-9),
-          p.tracking_state() <= static_cast<uint8_t>(TrackingState::kFallback)
-              ? ToString(static_cast<TrackingState>(p.tracking_state()))
-              : "?",
-          core.num_lost());
+      std::fprintf(stderr, "\r[run] frame %zu/%llu  %.1f fps  state=%s  lost=%zu   ", n,
+                   static_cast<unsigned long long>(total_frames), n / std::max(elapsed, 1e-9),
+                   p.tracking_state() <= static_cast<uint8_t>(TrackingState::kFallback)
+                       ? ToString(static_cast<TrackingState>(p.tracking_state()))
+                       : "?",
+                   core.num_lost());
       std::fflush(stderr);
     }
   };

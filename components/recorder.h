@@ -20,6 +20,7 @@
 
 #include "components/component_common.h"
 #include "components/convert.h"
+#include "run/run_outputs.h"
 
 namespace dygslam {
 
@@ -36,9 +37,9 @@ struct RecorderOptions {
   void Check() const;
 };
 
-// Header and one row of frames.csv (the columns of `dygslam run --direct`).
-std::string FramesCsvHeader();
-std::string FramesCsvRow(const msg::CameraPose& pose);
+// One row of frames.csv (run/run_outputs.h: the columns of every `dygslam run` mode) from slam's
+// CameraPose. Throws InputError for a bad stamp or tracking state.
+FrameRow FrameRowFromPose(const msg::CameraPose& pose);
 
 class RecorderCore {
  public:

@@ -13,9 +13,9 @@
 #include <optional>
 #include <string>
 
-#include "core/config/mapping_config.h"
+#include "run/mapping_config.h"
 #include "core/config/settings.h"
-#include "core/config/system_config.h"
+#include "run/system_config.h"
 #include "core/io/dataset.h"
 #include "core/synth/synthetic_scene.h"
 #include "core/system/system.h"

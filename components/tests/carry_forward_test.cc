@@ -9,7 +9,7 @@
 #include "components/frame_pairing.h"
 #include "components/slam_component.h"
 #include "core/config/settings.h"
-#include "core/config/system_config.h"
+#include "run/system_config.h"
 #include "core/dynamic/yolo_detector.h"
 #include "core/io/dataset.h"
 #include "tests/support/test_support.h"

@@ -13,6 +13,7 @@
 #include "core/io/detections_io.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
+#include "run/dataset_runner.h"
 
 namespace dygslam {
 namespace {
@@ -38,42 +39,26 @@ RunOutput RunSystemOnSequence(const RgbdDataset& dataset, const SystemOptions& o
   RunOutput out;
   // A sequence that ships its own boxes (generated sequences: ground-truth detections.txt) is run
   // with those instead of the detector, so box/full configurations work without a model.
-  std::map<Timestamp, std::vector<Detection>> file_detections;
-  const std::string detections_path = dataset.directory() + "/detections.txt";
-  std::error_code ec;
-  const bool use_file_detections =
-      options.NeedsDetections() && std::filesystem::is_regular_file(detections_path, ec);
-  if (use_file_detections) file_detections = ReadDetections(detections_path);
+  bool use_file_detections = false;
+  const auto file_detections = ShippedDetections(dataset, options, &use_file_detections);
+  DatasetRunOptions run;
+  run.first_entry = first;
+  run.last_entry = last;
+  run.image_width = options.camera.width;
+  run.image_height = options.camera.height;
+  if (use_file_detections) run.detections = &file_detections;
   const auto t0 = std::chrono::steady_clock::now();
-  cv::Mat next_rgb;  // loaded one frame ahead: its detection overlaps this frame's tracking
-  for (size_t k = first; k < last; ++k) {
-    const auto index = dataset.FrameForRgbEntry(k);
-    if (!index) continue;
-    const cv::Mat rgb = next_rgb.empty()
-                            ? dataset.LoadRgb(*index, options.camera.width, options.camera.height)
-                            : next_rgb;
-    next_rgb = cv::Mat();
-    const cv::Mat depth = dataset.LoadDepth(*index, options.camera.width, options.camera.height);
-    if (!use_file_detections && k + 1 < last) {
-      if (const auto next = dataset.FrameForRgbEntry(k + 1)) {
-        next_rgb = dataset.LoadRgb(*next, options.camera.width, options.camera.height);
-        system.PrefetchDetections(next_rgb, dataset.frame(*next).rgb_stamp);
-      }
-    }
-    const Timestamp stamp = dataset.frame(*index).rgb_stamp;
-    const FrameResult r = use_file_detections
-                              ? system.FeedRgbdFrame(rgb, depth, stamp, cv::Mat(),
-                                                     &DetectionsNear(file_detections, stamp))
-                              : system.FeedRgbdFrame(rgb, depth, stamp);
-    ++out.frames;
-    if (r.state == TrackingState::kLost) ++out.lost;
-    out.stamps.push_back(r.stamp);
-    out.ok.push_back(HasPose(r.state));
-    out.times.push_back(r.times);
-    if (progress) progress(k + 1 - first, last - first);
-  }
+  const DatasetRunSummary summary =
+      RunDatasetFrames(dataset, system, run, [&](size_t k, const FrameResult& r) {
+        out.stamps.push_back(r.stamp);
+        out.ok.push_back(HasPose(r.state));
+        out.times.push_back(r.times);
+        if (progress) progress(k + 1 - first, last - first);
+      });
+  out.frames = static_cast<int>(summary.processed);
+  out.lost = static_cast<int>(summary.lost);
   system.Shutdown();
-  out.loop_seconds = SecondsSince(t0);
+  out.loop_seconds = SecondsSince(t0);  // local mapping's last keyframes included
   out.trajectory = system.Trajectory();
   return out;
 }

@@ -102,7 +102,7 @@ const std::vector<std::string>& KnownSettingsKeys() {
       "ORBextractor.nLevels", "ORBextractor.iniThFAST", "ORBextractor.minThFAST",
       // ORB-SLAM2 / ORB-SLAM3 keys accepted and not used.
       "Camera.RGB", "Camera.type", "File.version", "Viewer.*",
-      // core/config/system_config.cc.
+      // run/system_config.cc.
       "Tracking.init_min_features", "Tracking.motion_radius_px",
       "Tracking.max_frames_between_keyframes", "Tracking.ref_ratio",
       "LocalMapping.triangulation_neighbors", "LocalMapping.cull_keyframes",
@@ -115,7 +115,7 @@ const std::vector<std::string>& KnownSettingsKeys() {
       "Detector.names", "Detector.input_width", "Detector.input_height",
       "Detector.confidence_threshold", "Detector.nms_threshold", "Detector.num_threads",
       "Detector.dynamic_classes",
-      // core/config/mapping_config.cc.
+      // run/mapping_config.cc.
       "OctoMap.resolution", "OctoMap.max_range", "OctoMap.min_range", "OctoMap.prob_hit",
       "OctoMap.prob_miss", "OctoMap.clamping_min", "OctoMap.clamping_max",
       "OctoMap.occupancy_threshold", "OctoMap.pixel_stride", "OctoMap.voxel_filter_size",

@@ -9,9 +9,9 @@
 #include <sstream>
 #include <string>
 
-#include "core/config/mapping_config.h"
+#include "run/mapping_config.h"
 #include "core/config/settings.h"
-#include "core/config/system_config.h"
+#include "run/system_config.h"
 
 namespace dygslam {
 namespace {

@@ -26,12 +26,12 @@
 
 #include "core/base/error.h"
 #include "core/base/log.h"
-#include "core/config/settings.h"
-#include "core/config/system_config.h"
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
 #include "mapping/keyframe_mapper.h"
+#include "run/dataset_runner.h"
+#include "run/run_settings.h"
 
 namespace {
 namespace fs = std::filesystem;
@@ -110,8 +110,10 @@ int main(int argc, char** argv) {
   }
   try {
     if (config.empty()) config = std::string(DYGSLAM_SOURCE_DIR) + "/config/bonn.yaml";
-    SystemOptions options = SystemOptionsFromSettings(LoadSettings(config));
-    ApplyFilterConfiguration(filter, &options);
+    RunSettingsRequest request;
+    request.settings_path = config;
+    request.filter = filter;
+    const SystemOptions options = LoadRunConfiguration(request).system;
     const RgbdDataset dataset = RgbdDataset::Open(dataset_dir);
     const size_t n = max_frames > 0 ? std::min(max_frames, dataset.size()) : dataset.size();
     if (n < 2) throw InputError(dataset_dir, 0, "need at least 2 frames");
@@ -162,12 +164,19 @@ int main(int argc, char** argv) {
             o.num_keyframes, o.num_leaves, o.memory_bytes / 1048576.0, o.num_stored_points);
       }
       bool relocalised = false;
-      for (size_t i = 0; i < n && !g_stop && wall() < minutes * 60; ++i) {
-        const cv::Mat rgb = dataset.LoadRgb(i, options.camera.width, options.camera.height);
-        const cv::Mat depth = dataset.LoadDepth(i, options.camera.width, options.camera.height);
-        const Timestamp stamp =
-            Timestamp::FromNanoseconds(dataset.frame(i).rgb_stamp.nanoseconds() + loop * period_ns);
-        const FrameResult r = system.FeedRgbdFrame(rgb, depth, stamp);
+      // The first n frames of the sequence, stamps shifted by one period per loop.
+      DatasetRunOptions run;
+      run.first_entry = 0;
+      run.last_entry = dataset.num_rgb_entries();
+      run.image_width = options.camera.width;
+      run.image_height = options.camera.height;
+      run.prefetch_detections = false;
+      run.stamp_offset_ns = loop * period_ns;
+      size_t fed = 0;
+      run.stop = [&] { return g_stop || fed >= n || wall() >= minutes * 60; };
+      RunDatasetFrames(dataset, system, run, [&](size_t entry, const FrameResult& r) {
+        const size_t i = *dataset.FrameForRgbEntry(entry);
+        ++fed;
         ++states[r.state];
         if (r.state == TrackingState::kRelocalized && loop > 0 && !relocalised) {
           relocalised = true;
@@ -194,7 +203,7 @@ int main(int argc, char** argv) {
                        w.wall_s / 60, loop, w.rss_mb, w.heap_mb, w.map.keyframes, w.map.map_points,
                        w.total_ms);
         }
-      }
+      });
     }
     system.Shutdown();
     if (mapper) {

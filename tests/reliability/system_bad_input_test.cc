@@ -12,7 +12,7 @@
 
 #include "core/base/error.h"
 #include "core/config/settings.h"
-#include "core/config/system_config.h"
+#include "run/system_config.h"
 #include "core/io/dataset.h"
 #include "core/system/system.h"
 #include "tests/support/test_support.h"

@@ -9,7 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/config/settings.h"
-#include "core/config/system_config.h"
+#include "run/system_config.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"

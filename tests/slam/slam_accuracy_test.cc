@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "core/config/settings.h"
-#include "core/config/system_config.h"
+#include "run/system_config.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"

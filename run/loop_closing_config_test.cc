@@ -7,7 +7,7 @@
 #include <string>
 
 #include "core/config/settings.h"
-#include "core/config/system_config.h"
+#include "run/system_config.h"
 
 namespace dygslam {
 namespace {

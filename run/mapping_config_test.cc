@@ -1,4 +1,4 @@
-#include "core/config/mapping_config.h"
+#include "run/mapping_config.h"
 
 #include <gtest/gtest.h>
 

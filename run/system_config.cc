@@ -1,4 +1,4 @@
-#include "core/config/system_config.h"
+#include "run/system_config.h"
 
 #include <cstdlib>
 #include <filesystem>
@@ -22,7 +22,8 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   const ConfigReader tracking = root.Section("Tracking");
   tracking.ReadIfPresent("init_min_features", &options.tracking.init_min_features);
   tracking.ReadIfPresent("motion_radius_px", &options.tracking.motion_radius_px);
-  tracking.ReadIfPresent("max_frames_between_keyframes", &options.tracking.max_frames_between_keyframes);
+  tracking.ReadIfPresent("max_frames_between_keyframes",
+                         &options.tracking.max_frames_between_keyframes);
   tracking.ReadIfPresent("ref_ratio", &options.tracking.ref_ratio);
   tracking.ReadIfPresent("dense_fallback", &options.tracking.dense_fallback);
   tracking.ReadIfPresent("fallback_min_inlier_fraction",
@@ -142,7 +143,8 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   detector.ReadIfPresent("nms_threshold", &options.detector.nms_threshold);
   detector.ReadIfPresent("num_threads", &options.detector.num_threads);
   std::vector<std::string> classes;
-  if (detector.ReadIfPresent("dynamic_classes", &classes)) options.detector.dynamic_classes = classes;
+  if (detector.ReadIfPresent("dynamic_classes", &classes))
+    options.detector.dynamic_classes = classes;
   // The values of the file, checked here so that a bad one names its line (model files that are
   // resolved later stand in as placeholders).
   DetectorOptions check = options.detector;

@@ -1,0 +1,41 @@
+// What a run writes, written once (issue 17): frames.csv (one column layout for `dygslam run` in
+// every mode: the direct loop and the pipeline's recorder component), the TUM trajectories of a
+// System and the map of a KeyframeMapper.
+//
+// frames.csv: stamp,state,keyframe,features,dynamic,tracked,orb_ms,detection_ms,matching_ms,
+//             probability_ms,tracking_ms,total_ms   (stage times in ms, StageTimes)
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/base/timestamp.h"
+#include "core/base/types.h"
+#include "core/system/system.h"
+
+namespace dygslam {
+
+class KeyframeMapper;  // mapping/keyframe_mapper.h
+
+// One frames.csv line: what the System reported for a frame (FrameResult, or the CameraPose
+// message that carries it between components).
+struct FrameRow {
+  Timestamp stamp;
+  TrackingState state = TrackingState::kNotInitialized;
+  bool is_keyframe = false;
+  int num_features = 0;
+  int num_dynamic = 0;
+  int num_tracked = 0;
+  StageTimes times;
+};
+
+FrameRow FrameRowFromResult(const FrameResult& result);
+std::string FramesCsvHeader();
+std::string FramesCsvRow(const FrameRow& row);
+
+// DIR/trajectory.txt (every tracked frame, refined) and DIR/keyframes.txt; atomically.
+void WriteSystemTrajectories(const std::string& directory, const System& system);
+// Waits for the mapper's queue, then writes DIR/map.bt when the map has a keyframe.
+void WriteMapperBinary(const std::string& directory, KeyframeMapper& mapper);
+
+}  // namespace dygslam

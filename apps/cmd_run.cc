@@ -91,6 +91,7 @@ struct RunSetup {
   // external detector) instead of the internal detector. Direct mode only.
   std::map<Timestamp, std::vector<Detection>> detections;
   bool use_detection_file = false;
+  std::string save_map;  // --save-map FILE: the SLAM map at the end (also on a stop signal)
 };
 
 struct RunOutcome {
@@ -153,6 +154,9 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   outcome.interrupted = signals.signaled();
   if (outcome.interrupted) std::fprintf(stderr, "[run] interrupted: flushing outputs\n");
   system.Shutdown();
+  if (!s.save_map.empty())
+    std::printf("map file: saved %s (%s)\n", s.save_map.c_str(),
+                DescribeMapFile(system.SaveMap(s.save_map)).c_str());
   {
     LocalMappingStats lm = system.LocalMappingStatistics();
     std::vector<double> ms = lm.per_keyframe_ms;
@@ -278,6 +282,13 @@ int RunRun(const std::vector<std::string>& args) {
   p.AddOption("loop-minutes", "M",
               "DDS modes: the player replays the frames for M minutes, stamps continuing (soak)",
               "0");
+  p.AddOption("save-map", "FILE",
+              "write the SLAM map (keyframes, points, BoW) to FILE at the end, also when stopped");
+  p.AddOption("load-map", "FILE",
+              "start from the SLAM map in FILE (made with the same camera, ORB and vocabulary);\n"
+              "without --localization it is extended");
+  p.AddFlag("localization",
+            "with --load-map: track against the loaded map without adding keyframes or points");
   p.AddFlag("quiet", "no progress line");
   p.AddFlag("strict-settings",
             "unknown keys in the settings file are errors, not warnings (also "
@@ -315,6 +326,20 @@ int RunRun(const std::vector<std::string>& args) {
     s.system.detector.num_threads = 1;
   }
   s.map = !p.Flag("no-map");
+  if (p.Flag("localization") && !p.Has("load-map"))
+    return p.UsageError("--localization needs --load-map FILE");
+  if (p.Has("save-map")) {
+    s.save_map = p.Get("save-map");
+    CheckMapFileWritable(s.save_map);
+  }
+  if (p.Has("load-map")) {
+    // Checked before any work: a bad map is an error naming the file, no output is written.
+    s.system.load_map = p.Get("load-map");
+    s.system.localization = p.Flag("localization");
+    std::printf("map file: loaded %s (%s)%s\n", s.system.load_map.c_str(),
+                DescribeMapFile(CheckMapFile(s.system.load_map, s.system)).c_str(),
+                s.system.localization ? ", localization mode" : "");
+  }
   if (p.Has("detections")) {
     if (p.Flag("processes")) return p.UsageError("--detections works with --direct only");
     s.detections = ReadDetections(p.Get("detections"));

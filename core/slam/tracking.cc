@@ -431,10 +431,13 @@ std::vector<StampedPose> Tracker::Trajectory() const {
   return out;
 }
 
-std::vector<StampedPose> Tracker::KeyframeTrajectory() const {
+std::vector<StampedPose> Tracker::KeyframeTrajectory(int64_t min_id) const {
   std::lock_guard<std::mutex> lock(map_->mutex());
   std::vector<StampedPose> out;
-  for (const auto& [id, kf] : map_->keyframes()) out.push_back({kf->stamp, kf->cam_from_world.Inverse()});
+  for (auto it = map_->keyframes().lower_bound(min_id); it != map_->keyframes().end(); ++it) {
+    const auto& kf = it->second;
+    out.push_back({kf->stamp, kf->cam_from_world.Inverse()});
+  }
   return out;
 }
 

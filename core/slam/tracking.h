@@ -96,7 +96,9 @@ class Tracker {
 
   // World poses of all tracked frames (resolved through current keyframe poses).
   std::vector<StampedPose> Trajectory() const;
-  std::vector<StampedPose> KeyframeTrajectory() const;
+  // Active keyframes with id >= min_id (a run on a loaded map: its own keyframes, whose stamps do
+  // not interleave with the loaded ones').
+  std::vector<StampedPose> KeyframeTrajectory(int64_t min_id = 0) const;
   const std::vector<TrajectoryRecord>& records() const { return records_; }
 
  private:

@@ -169,7 +169,10 @@ class SystemImpl {
         [this](const std::vector<int64_t>& moved, const std::vector<int64_t>& culled) {
           EmitMapChanges(moved, culled);
         });
-    if (loaded_.map) tracker_.StartFromLoadedMap(options.localization);
+    if (loaded_.map) {
+      first_own_keyframe_id_ = map_->PeekNextKeyFrameId();
+      tracker_.StartFromLoadedMap(options.localization);
+    }
   }
 
   MapFileInfo SaveMap(const std::string& path) const {
@@ -249,7 +252,9 @@ class SystemImpl {
   void TopUpStaticFeatures(const cv::Mat& gray, const cv::Mat& mask,
                            const std::vector<Detection>& detections, OrbExtractionCache* cache,
                            OrbFeatures* kept) const;
-  std::vector<StampedPose> KeyframeTrajectory() const { return tracker_.KeyframeTrajectory(); }
+  std::vector<StampedPose> KeyframeTrajectory() const {
+    return tracker_.KeyframeTrajectory(first_own_keyframe_id_);
+  }
   void SetKeyframeCallback(std::function<void(const KeyframeData&)> cb) {
     std::lock_guard<std::mutex> lock(callback_mutex_);
     keyframe_callback_ = std::move(cb);
@@ -267,6 +272,7 @@ class SystemImpl {
   MapFileSettings map_file_settings_;             // what a saved map depends on
   LoadedMap loaded_;                              // SystemOptions::load_map (map null: none)
   std::shared_ptr<Map> map_;
+  int64_t first_own_keyframe_id_ = 0;  // keyframes of a loaded map come before it
   std::shared_ptr<KeyFrameDatabase> database_;
   std::unique_ptr<LoopCloser> loop_closer_;  // declared before the mapper: outlives its callback
   LocalMapper local_mapper_;

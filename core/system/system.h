@@ -140,6 +140,7 @@ class System {
 
   // Every tracked frame, world_from_cam, expressed relative to its (refined) reference keyframe.
   std::vector<StampedPose> Trajectory() const;
+  // This run's keyframes (a loaded map's keyframes are in the map file, not here).
   std::vector<StampedPose> KeyframeTrajectory() const;
   // Called (from the thread that produced it) for each new keyframe and for keyframe pose
   // corrections (pose_update_only = true).

@@ -68,6 +68,10 @@ int RunComponentCommand(const std::vector<std::string>& args) {
               "DDS Security credentials: an identity folder, or make_dds_certs.sh's OUT_DIR with "
               "one folder per component (default: $DYGSLAM_DDS_SECURITY_DIR; none = off)",
               security_env != nullptr ? security_env : "");
+  p.AddOption("load-map", "FILE", "slam: start from this SLAM map file");
+  p.AddFlag("localization", "slam: with --load-map, track without adding keyframes or points");
+  p.AddOption("save-map", "FILE", "slam: write the SLAM map file at the end (also on stop)");
+  p.AddOption("load-octomap", "FILE", "mapper: continue this OctoMap (.ot)");
   p.AddFlag("progress", "recorder: progress line on stderr");
   p.AddFlag("wait-for-components", "player: wait for the other components' start announcements");
   p.AddFlag("deterministic", "slam waits for every frame's detections; synchronous local mapping");
@@ -87,6 +91,10 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   ReadOptions(settings.reader, &o.octomap);
   ApplyFilterConfiguration(p.Get("filter"), &o.system);
   o.system.deterministic = p.Flag("deterministic");
+  o.system.load_map = p.Get("load-map");
+  o.system.localization = p.Flag("localization");
+  o.save_map = p.Get("save-map");
+  o.load_octomap = p.Get("load-octomap");
   if (p.Has("detector-cfg")) {
     o.system.detector.cfg_path = p.Get("detector-cfg");
     o.system.detector.weights_path = p.Get("detector-weights");

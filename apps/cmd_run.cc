@@ -43,6 +43,8 @@
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
 #include "mapping/keyframe_mapper.h"
+#include "mapping/octomap_builder.h"
+#include <octomap/OcTree.h>
 #ifdef DYGSLAM_HAVE_COMPONENTS
 #include "components/pipeline.h"
 #endif
@@ -92,6 +94,7 @@ struct RunSetup {
   std::map<Timestamp, std::vector<Detection>> detections;
   bool use_detection_file = false;
   std::string save_map;  // --save-map FILE: the SLAM map at the end (also on a stop signal)
+  std::string load_octomap;  // --load-octomap FILE: the OctoMap the map continues
 };
 
 struct RunOutcome {
@@ -108,6 +111,10 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   std::unique_ptr<KeyframeMapper> mapper;
   if (s.map) {
     mapper = std::make_unique<KeyframeMapper>(s.system.camera, s.octomap);
+    if (!s.load_octomap.empty()) {
+      const auto base = ReadOctoMap(s.load_octomap);
+      mapper->WithBuilder([&](OctoMapBuilder& b) { b.SetBaseMap(*base, s.load_octomap); });
+    }
     KeyframeMapper* m = mapper.get();
     system.SetKeyframeCallback([m](const KeyframeData& k) { m->Submit(k); });
   }
@@ -188,7 +195,10 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
     mapper->Flush();
     const std::string path = (s.out / "map.bt").string();
     mapper->WithBuilder([&](OctoMapBuilder& b) {
-      if (!b.KeyframeIds().empty()) b.WriteBinary(path);
+      if (!b.KeyframeIds().empty() || b.has_base_map()) b.WriteBinary(path);
+      // With --save-map, the OctoMap with probabilities too: what --load-octomap continues.
+      if (!s.save_map.empty() && (!b.KeyframeIds().empty() || b.has_base_map()))
+        b.WriteFull((s.out / "map.ot").string());
     });
   }
   return outcome;
@@ -223,6 +233,8 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
                o.partition.c_str());
   o.progress = s.progress;
   o.loop_minutes = s.loop_minutes;
+  o.save_map = s.save_map;
+  o.load_octomap = s.load_octomap;
   RunOutcome outcome;
   // The files a previous run left in DIR must not be mistaken for this run's.
   for (const char* name : {"trajectory.txt", "keyframes.txt", "frames.csv", "map.bt"}) {
@@ -289,6 +301,9 @@ int RunRun(const std::vector<std::string>& args) {
               "without --localization it is extended");
   p.AddFlag("localization",
             "with --load-map: track against the loaded map without adding keyframes or points");
+  p.AddOption("load-octomap", "FILE",
+              "continue this OctoMap (.ot, e.g. map.ot of a --save-map run): keyframes are\n"
+              "inserted on top; in --localization it is the map");
   p.AddFlag("quiet", "no progress line");
   p.AddFlag("strict-settings",
             "unknown keys in the settings file are errors, not warnings (also "
@@ -331,6 +346,11 @@ int RunRun(const std::vector<std::string>& args) {
   if (p.Has("save-map")) {
     s.save_map = p.Get("save-map");
     CheckMapFileWritable(s.save_map);
+  }
+  if (p.Has("load-octomap")) {
+    if (!s.map) return p.UsageError("--load-octomap and --no-map exclude each other");
+    s.load_octomap = p.Get("load-octomap");
+    ReadOctoMap(s.load_octomap);  // checked before any work (InputError naming the file)
   }
   if (p.Has("load-map")) {
     // Checked before any work: a bad map is an error naming the file, no output is written.

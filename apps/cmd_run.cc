@@ -29,6 +29,8 @@
 #include <optional>
 #include <random>
 
+#include <octomap/OcTree.h>
+
 #include "apps/command.h"
 #include "core/base/error.h"
 #include "core/base/stop_signal.h"
@@ -44,7 +46,6 @@
 #include "core/system/system.h"
 #include "mapping/keyframe_mapper.h"
 #include "mapping/octomap_builder.h"
-#include <octomap/OcTree.h>
 #ifdef DYGSLAM_HAVE_COMPONENTS
 #include "components/pipeline.h"
 #endif
@@ -93,7 +94,7 @@ struct RunSetup {
   // external detector) instead of the internal detector. Direct mode only.
   std::map<Timestamp, std::vector<Detection>> detections;
   bool use_detection_file = false;
-  std::string save_map;  // --save-map FILE: the SLAM map at the end (also on a stop signal)
+  std::string save_map;      // --save-map FILE: the SLAM map at the end (also on a stop signal)
   std::string load_octomap;  // --load-octomap FILE: the OctoMap the map continues
 };
 

@@ -217,7 +217,8 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
       loaded.header().frame_id("map " + std::string(id) + " " + options.system.load_map);
       status.Write(loaded);
       LOG_INFO << "slam: started from map file " << options.system.load_map << " ("
-               << DescribeMapFile(info) << ")" << (options.system.localization ? ", localization" : "");
+               << DescribeMapFile(info) << ")"
+               << (options.system.localization ? ", localization" : "");
       map_announced = true;
     }
     std::optional<PairedFrame> paired;

@@ -76,6 +76,12 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   p.AddOption("discovery-server", "ADDR:PORT",
               "discover peers through a discovery server (`dygslam discovery-server`) instead of "
               "multicast");
+  p.AddOption("load-map", "FILE", "slam: start from this SLAM map file");
+  p.AddFlag("localization", "slam: with --load-map, track without adding keyframes or points");
+  p.AddOption("localization-map", "FILE",
+              "slam: the same as --load-map FILE --localization (\"\": none; compose)");
+  p.AddOption("save-map", "FILE", "slam: write the SLAM map file at the end (also on stop)");
+  p.AddOption("load-octomap", "FILE", "mapper: continue this OctoMap (.ot)");
   p.AddFlag("progress", "recorder: progress line on stderr");
   p.AddFlag("wait-for-components", "player: wait for the other components' start announcements");
   p.AddFlag("deterministic", "slam waits for every frame's detections; synchronous local mapping");
@@ -97,6 +103,16 @@ int RunComponentCommand(const std::vector<std::string>& args) {
     o.system = c.system;
     o.octomap = c.octomap;
   }
+  o.system.load_map = p.Get("load-map");
+  o.system.localization = p.Flag("localization");
+  if (!p.Get("localization-map").empty()) {
+    if (!o.system.load_map.empty())
+      return p.UsageError("--localization-map and --load-map exclude each other");
+    o.system.load_map = p.Get("localization-map");
+    o.system.localization = true;
+  }
+  o.save_map = p.Get("save-map");
+  o.load_octomap = p.Get("load-octomap");
   if (p.Has("detector-cfg")) {
     o.system.detector.cfg_path = p.Get("detector-cfg");
     o.system.detector.weights_path = p.Get("detector-weights");

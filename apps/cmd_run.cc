@@ -30,6 +30,8 @@
 #include <optional>
 #include <random>
 
+#include <octomap/OcTree.h>
+
 #include "apps/command.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
@@ -42,6 +44,7 @@
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
 #include "mapping/keyframe_mapper.h"
+#include "mapping/octomap_builder.h"
 #include "run/dataset_runner.h"
 #include "run/run_outputs.h"
 #include "run/run_settings.h"
@@ -67,6 +70,8 @@ struct RunSetup {
   // external detector) instead of the internal detector. Direct mode only.
   std::map<Timestamp, std::vector<Detection>> detections;
   bool use_detection_file = false;
+  std::string save_map;      // --save-map FILE: the SLAM map at the end (also on a stop signal)
+  std::string load_octomap;  // --load-octomap FILE: the OctoMap the map continues
 };
 
 struct RunOutcome {
@@ -83,6 +88,10 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   std::unique_ptr<KeyframeMapper> mapper;
   if (s.map) {
     mapper = std::make_unique<KeyframeMapper>(s.system.camera, s.octomap);
+    if (!s.load_octomap.empty()) {
+      const auto base = ReadOctoMap(s.load_octomap);
+      mapper->WithBuilder([&](OctoMapBuilder& b) { b.SetBaseMap(*base, s.load_octomap); });
+    }
     KeyframeMapper* m = mapper.get();
     system.SetKeyframeCallback([m](const KeyframeData& k) { m->Submit(k); });
   }
@@ -122,6 +131,9 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   outcome.interrupted = summary.interrupted || ScopedStopSignals::Received() != 0;
   if (outcome.interrupted) std::fprintf(stderr, "[run] interrupted: flushing outputs\n");
   system.Shutdown();
+  if (!s.save_map.empty())
+    std::printf("map file: saved %s (%s)\n", s.save_map.c_str(),
+                DescribeMapFile(system.SaveMap(s.save_map)).c_str());
   {
     LocalMappingStats lm = system.LocalMappingStatistics();
     std::vector<double> ms = lm.per_keyframe_ms;
@@ -150,7 +162,8 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   WriteFileAtomically((s.out / "frames.csv").string(), csv);
   WriteSystemTrajectories(s.out.string(), system);
   WriteTumTrajectory((s.out / "trajectory_online.txt").string(), online);
-  if (mapper) WriteMapperBinary(s.out.string(), *mapper);
+  // With --save-map, map.ot too (the OctoMap with probabilities, what --load-octomap continues).
+  if (mapper) WriteMapperBinary(s.out.string(), *mapper, /*with_full_map=*/!s.save_map.empty());
   return outcome;
 }
 
@@ -183,6 +196,8 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
                o.partition.c_str(), o.partition.c_str());
   o.progress = s.progress;
   o.loop_minutes = s.loop_minutes;
+  o.save_map = s.save_map;
+  o.load_octomap = s.load_octomap;
   RunOutcome outcome;
   // The files a previous run left in DIR must not be mistaken for this run's.
   for (const char* name : {"trajectory.txt", "keyframes.txt", "frames.csv", "map.bt"}) {
@@ -246,6 +261,16 @@ int RunRun(const std::vector<std::string>& args) {
               "DDS modes: the player replays the frames for M minutes, stamps continuing (soak)",
               "0");
   AddDatasetRunFlags(&p);
+  p.AddOption("save-map", "FILE",
+              "write the SLAM map (keyframes, points, BoW) to FILE at the end, also when stopped");
+  p.AddOption("load-map", "FILE",
+              "start from the SLAM map in FILE (made with the same camera, ORB and vocabulary);\n"
+              "without --localization it is extended");
+  p.AddFlag("localization",
+            "with --load-map: track against the loaded map without adding keyframes or points");
+  p.AddOption("load-octomap", "FILE",
+              "continue this OctoMap (.ot, e.g. map.ot of a --save-map run): keyframes are\n"
+              "inserted on top; in --localization it is the map");
   if (!p.Parse(args)) return p.exit_code();
   if (p.Flag("processes") && p.Flag("direct"))
     return p.UsageError("--processes and --direct exclude each other");
@@ -274,6 +299,25 @@ int RunRun(const std::vector<std::string>& args) {
   }
   ::setenv("DYGSLAM_SETTINGS_WARNED", "1", 1);  // --processes: components do not repeat them
   s.map = !p.Flag("no-map");
+  if (p.Flag("localization") && !p.Has("load-map"))
+    return p.UsageError("--localization needs --load-map FILE");
+  if (p.Has("save-map")) {
+    s.save_map = p.Get("save-map");
+    CheckMapFileWritable(s.save_map);
+  }
+  if (p.Has("load-octomap")) {
+    if (!s.map) return p.UsageError("--load-octomap and --no-map exclude each other");
+    s.load_octomap = p.Get("load-octomap");
+    ReadOctoMap(s.load_octomap);  // checked before any work (InputError naming the file)
+  }
+  if (p.Has("load-map")) {
+    // Checked before any work: a bad map is an error naming the file, no output is written.
+    s.system.load_map = p.Get("load-map");
+    s.system.localization = p.Flag("localization");
+    std::printf("map file: loaded %s (%s)%s\n", s.system.load_map.c_str(),
+                DescribeMapFile(CheckMapFile(s.system.load_map, s.system)).c_str(),
+                s.system.localization ? ", localization mode" : "");
+  }
   if (p.Has("detections")) {
     if (p.Flag("processes")) return p.UsageError("--detections works with --direct only");
     s.detections = ReadDetections(p.Get("detections"));

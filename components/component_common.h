@@ -40,7 +40,14 @@ class StopSignal {
 using StopSignalPtr = std::shared_ptr<StopSignal>;
 
 // msg::StreamStatus::kind values.
-enum class StreamEvent : uint8_t { kStarted = 0, kEndOfStream = 1, kComponentDone = 2 };
+// kMapLoaded (slam, issue 15): the SLAM map file it started from; num_frames = its keyframe
+// count, header.frame_id = "map <checksum hex> <path>".
+enum class StreamEvent : uint8_t {
+  kStarted = 0,
+  kEndOfStream = 1,
+  kComponentDone = 2,
+  kMapLoaded = 3
+};
 
 // Unbounded FIFO for handing samples from a DDS listener thread to a worker thread.
 template <class T>

@@ -26,7 +26,10 @@ void MapperOptions::Check() const {
   DYGSLAM_CHECK_OPTION(writer_gone_s > 0, "mapper.writer_gone_s");
 }
 
-MapperCore::MapperCore(const MapperOptions& options) : options_(options) { options_.Check(); }
+MapperCore::MapperCore(const MapperOptions& options) : options_(options) {
+  options_.Check();
+  if (!options_.base_map_path.empty()) base_ = ReadOctoMap(options_.base_map_path);
+}
 
 void MapperCore::Process(const KeyframeData& keyframe, const PinholeCamera& camera) {
   if (keyframe.removed) {
@@ -40,7 +43,10 @@ void MapperCore::Process(const KeyframeData& keyframe, const PinholeCamera& came
     }
     return;
   }
-  if (builder_ == nullptr) builder_ = std::make_unique<OctoMapBuilder>(camera, options_.octomap);
+  if (builder_ == nullptr) {
+    builder_ = std::make_unique<OctoMapBuilder>(camera, options_.octomap);
+    if (base_) builder_->SetBaseMap(*base_, options_.base_map_path);
+  }
   builder_->Insert(keyframe);
   ++num_inserted_;
   if (keyframe.stamp > newest_) newest_ = keyframe.stamp;
@@ -52,8 +58,14 @@ size_t MapperCore::num_keyframes() const {
 
 msg::MapUpdate MapperCore::MakeUpdate() {
   msg::MapUpdate m;
-  const OctoMapStats stats = builder_->Stats();
-  const octomap::OcTree& tree = builder_->tree();
+  OctoMapStats stats;
+  if (builder_) stats = builder_->Stats();
+  const octomap::OcTree& tree = builder_ ? builder_->tree() : *base_;
+  if (!builder_) {
+    stats.num_leaves = tree.getNumLeafNodes();
+    for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it)
+      stats.num_occupied_leaves += tree.isNodeOccupied(*it);
+  }
   std::ostringstream stream;
   tree.writeBinaryConst(stream);
   const std::string bytes = stream.str();
@@ -69,7 +81,11 @@ msg::MapUpdate MapperCore::MakeUpdate() {
 }
 
 void MapperCore::Write() {
-  if (builder_ == nullptr || options_.map_path.empty()) return;
+  if (options_.map_path.empty()) return;
+  if (builder_ == nullptr) {
+    if (base_) WriteOctoMapBinary(*base_, options_.map_path);  // localization: the loaded map
+    return;
+  }
   builder_->WriteBinary(options_.map_path);
 }
 

@@ -26,6 +26,9 @@ class Participant;
 struct MapperOptions {
   OctoMapOptions octomap;
   std::string map_path = "map.bt";  // "" = do not write
+  // An existing OctoMap (.ot, e.g. a previous run's) the map continues from (issue 15): keyframes
+  // are inserted on top of it; without keyframes (localization) it is the map. "": none.
+  std::string base_map_path;
   // Write map.bt + publish MapUpdate every this many inserted keyframes (0 = only at the end)...
   int update_every_keyframes = 5;
   // ... but at most this share of the wall time: after an update that took d seconds the next
@@ -49,7 +52,7 @@ class MapperCore {
   // Inserts a keyframe (creates the builder on the first one, from the keyframe's camera), or
   // applies a pose correction / removal of a known keyframe (unknown ids are ignored).
   void Process(const KeyframeData& keyframe, const PinholeCamera& camera);
-  bool has_map() const { return builder_ != nullptr; }
+  bool has_map() const { return builder_ != nullptr || base_ != nullptr; }
   // Keyframes currently in the map (inserted minus removed).
   size_t num_keyframes() const;
   size_t num_inserted() const { return num_inserted_; }
@@ -63,6 +66,7 @@ class MapperCore {
  private:
   MapperOptions options_;
   std::unique_ptr<OctoMapBuilder> builder_;
+  std::unique_ptr<octomap::OcTree> base_;  // options.base_map_path, read at construction
   size_t num_inserted_ = 0, num_pose_updates_ = 0, num_removed_ = 0;
   Timestamp newest_;
 };

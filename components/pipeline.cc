@@ -169,6 +169,10 @@ std::vector<std::string> ComponentArgs(const PipelineOptions& o) {
     a.insert(a.end(), {"--discovery-server", o.network.discovery_server});
   }
   if (o.system.deterministic) a.push_back("--deterministic");
+  if (!o.system.load_map.empty()) a.insert(a.end(), {"--load-map", o.system.load_map});
+  if (o.system.localization) a.push_back("--localization");
+  if (!o.save_map.empty()) a.insert(a.end(), {"--save-map", o.save_map});
+  if (!o.load_octomap.empty()) a.insert(a.end(), {"--load-octomap", o.load_octomap});
   if (o.progress) a.push_back("--progress");
   if (o.wait_for_components) a.push_back("--wait-for-components");
   if (!o.run_detector) a.push_back("--no-detector");
@@ -223,12 +227,14 @@ int RunComponentOn(const std::string& name, const PipelineOptions& options,
     s.system = options.system;
     s.external_detections = options.run_detector;
     s.detection_wait = options.detection_wait;
+    s.save_map = options.save_map;
     RunSlam(participant, s, stop);
     return 0;
   }
   if (name == "mapper") {
     MapperOptions m;
     m.map_path = (fs::path(options.output_dir) / "map.bt").string();
+    m.base_map_path = options.load_octomap;
     m.flush_timeout_s = options.flush_timeout_s;
     m.octomap = options.octomap;
     fs::create_directories(options.output_dir);

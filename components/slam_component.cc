@@ -68,6 +68,10 @@ std::vector<KeyframeData> SlamCore::Finish() {
   if (!finished_) {
     system_->Shutdown();
     finished_ = true;
+    if (!options_.save_map.empty()) {
+      LOG_INFO << "slam: map file saved " << options_.save_map << " ("
+               << DescribeMapFile(system_->SaveMap(options_.save_map)) << ")";
+    }
   }
   return TakeKeyframes();
 }
@@ -271,9 +275,23 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   bool waiting = false;  // after the first frame: no frame ready since wait_since
   Clock::time_point wait_since = Clock::now();
   bool waited_with_frames = false;  // a frame was pending during that wait
+  bool map_announced = !core.LoadedMapInfo();
   while (!stop->requested()) {
     announcer.Poll(status, frames.matched() > 0 &&
                                (!pairing_options.needs_detections || detections.matched() > 0));
+    if (announcer.done() && !map_announced) {
+      // The map this slam starts from (issue 15), after STARTED so the readers are matched.
+      const MapFileInfo info = *core.LoadedMapInfo();
+      char id[32];
+      std::snprintf(id, sizeof(id), "%016llx", static_cast<unsigned long long>(info.checksum));
+      msg::StreamStatus loaded = MakeStreamStatus(StreamEvent::kMapLoaded, "slam", info.keyframes);
+      loaded.header().frame_id("map " + std::string(id) + " " + options.system.load_map);
+      status.Write(loaded);
+      LOG_INFO << "slam: started from map file " << options.system.load_map << " ("
+               << DescribeMapFile(info) << ")"
+               << (options.system.localization ? ", localization" : "");
+      map_announced = true;
+    }
     std::optional<PairedFrame> paired;
     {
       std::unique_lock<std::mutex> lock(mutex);

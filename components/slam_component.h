@@ -14,6 +14,8 @@
 #include <chrono>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "components/component_common.h"
@@ -37,6 +39,9 @@ struct SlamComponentOptions {
   // A frame whose detections are late gets the newest earlier boxes for at most this many frames
   // in a row (FramePairer); 0: such frames run geometry-only.
   int carry_forward_max_frames = 30;
+  // SLAM map file written when the component finishes (end of stream or stop); "": none. The map
+  // to start from and localization mode are system.load_map / system.localization.
+  std::string save_map;
   void Check() const;
   bool NeedsDetections() const;
 };
@@ -57,6 +62,7 @@ class SlamCore {
   std::vector<StampedPose> Trajectory() const { return system_->Trajectory(); }
   std::vector<StampedPose> KeyframeTrajectory() const { return system_->KeyframeTrajectory(); }
   const PinholeCamera& camera() const { return options_.system.camera; }
+  std::optional<MapFileInfo> LoadedMapInfo() const { return system_->LoadedMapInfo(); }
 
  private:
   std::vector<KeyframeData> TakeKeyframes();

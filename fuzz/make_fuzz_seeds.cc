@@ -4,6 +4,7 @@
 //   OUT_DIR/tum_list/     rgb.txt \f depth.txt \f associations.txt examples
 //   OUT_DIR/trajectory/   TUM trajectory snippets
 //   OUT_DIR/settings/     SOURCE_DIR/config/*.yaml (the presets)
+//   OUT_DIR/map_file/     a tiny SLAM map file (fuzz/map_file_seed.h), as is and re-wrapped
 //   OUT_DIR/darknet_cfg/  the .cfg files of $DYGSLAM_MODELS_DIR (or ../shared/models) when present
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,9 @@
 #include "core/base/paths.h"
 #ifndef DYGSLAM_FUZZ_NO_DDS
 #include "fuzz/dds_decoders.h"
+#endif
+#ifdef DYGSLAM_FUZZ_MAP_FILE
+#include "fuzz/map_file_seed.h"
 #endif
 
 namespace {
@@ -169,6 +173,13 @@ int main(int argc, char** argv) {
   DdsSeeds(out / "dds_sample");
 #endif
   TextSeeds(out, source);
+#ifdef DYGSLAM_FUZZ_MAP_FILE
+  fs::create_directories(out / "map_file");
+  std::string map = dygslam::fuzz::MapSeedFile();
+  Write(out / "map_file" / "tiny_raw.dygmap", map);  // first byte 'D' (even): decoded as is
+  map[0] = 'E';                                      // odd: payload re-wrapped by the fuzzer
+  Write(out / "map_file" / "tiny_rewrapped.dygmap", map);
+#endif
   std::cout << "seeds in " << out.string() << "\n";
   return 0;
 }

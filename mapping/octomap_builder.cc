@@ -104,8 +104,20 @@ OctoMapBuilder::OctoMapBuilder(const PinholeCamera& camera, const OctoMapOptions
 
 OctoMapBuilder::~OctoMapBuilder() = default;
 
+void OctoMapBuilder::SetBaseMap(const octomap::OcTree& base, const std::string& source) {
+  if (std::abs(base.getResolution() - options_.resolution) > 1e-9)
+    throw InputError(source, 0,
+                     "OctoMap resolution " + std::to_string(base.getResolution()) +
+                         " m differs from OctoMap.resolution " +
+                         std::to_string(options_.resolution) + " m of the settings");
+  base_ = std::make_unique<octomap::OcTree>(base);
+  ResetTree();
+  for (auto& [id, keyframe] : keyframes_) InsertIntoTree(keyframe);
+}
+
 void OctoMapBuilder::ResetTree() {
-  tree_ = std::make_unique<octomap::OcTree>(options_.resolution);
+  tree_ = base_ ? std::make_unique<octomap::OcTree>(*base_)
+                : std::make_unique<octomap::OcTree>(options_.resolution);
   tree_->setProbHit(options_.prob_hit);
   tree_->setProbMiss(options_.prob_miss);
   tree_->setClampingThresMin(options_.clamping_min);

@@ -149,6 +149,13 @@ class OctoMapBuilder {
   // Removes a keyframe's contribution (schedules a rebuild). Returns false if unknown.
   bool Remove(int64_t keyframe_id);
 
+  // Continues an existing map (issue 15): the tree starts from `base` (e.g. a previous run's
+  // map.ot; a .bt works too but has lost the probabilities) and keyframes are inserted on top;
+  // rebuilds start from it again. Throws InputError naming `source` when its resolution differs
+  // from OctoMap.resolution. Call before the first Insert.
+  void SetBaseMap(const octomap::OcTree& base, const std::string& source);
+  bool has_base_map() const { return base_ != nullptr; }
+
   // Brings the tree up to date (rebuild if scheduled, inner nodes if lazy).
   void Sync();
   bool rebuild_pending() const { return rebuild_pending_; }
@@ -189,6 +196,7 @@ class OctoMapBuilder {
   PinholeCamera camera_;
   OctoMapOptions options_;
   std::unique_ptr<octomap::OcTree> tree_;
+  std::unique_ptr<octomap::OcTree> base_;  // SetBaseMap: what every (re)build starts from
   std::map<int64_t, StoredKeyframe> keyframes_;
   uint64_t next_sequence_ = 0;
   bool rebuild_pending_ = false;

@@ -288,6 +288,51 @@ TEST(OctoMapBuilder, BinaryAndFullFilesRoundTrip) {
   EXPECT_THROW(builder.WriteBinary(dir + "/no_such_dir/map.bt"), InputError);
 }
 
+// Issue 15: a map continued from a saved .ot (first half of the walk) and the second half
+// inserted on top is the map of the whole walk; a rebuild starts from the loaded map again; a map
+// of another resolution is refused naming the file.
+TEST(OctoMapBuilder, ContinuesASavedMap) {
+  const PinholeCamera camera = test_scene::SmallCamera();
+  constexpr int kHalf = (kWalkFrames + kAfterFrames) / 2;
+  auto keyframe = [&](int k) {
+    Scene scene = test_scene::DefaultRoom();
+    if (k < kWalkFrames) scene.dynamic_boxes.push_back(PersonAt(k));
+    return MakeKeyframe(k, scene, camera, WalkPose(k));
+  };
+  OctoMapBuilder whole(camera, TestOptions()), first(camera, TestOptions());
+  for (int k = 0; k < kWalkFrames + kAfterFrames; ++k) whole.Insert(keyframe(k));
+  for (int k = 0; k < kHalf; ++k) first.Insert(keyframe(k));
+  const std::string dir = testing::MakeTempDir("octomap_continue");
+  first.WriteFull(dir + "/first.ot");
+
+  OctoMapBuilder continued(camera, TestOptions());
+  continued.SetBaseMap(*ReadOctoMap(dir + "/first.ot"), dir + "/first.ot");
+  EXPECT_TRUE(continued.has_base_map());
+  EXPECT_EQ(continued.tree().size(), first.tree().size());
+  for (int k = kHalf; k < kWalkFrames + kAfterFrames; ++k) continued.Insert(keyframe(k));
+  const GhostVoxelCounts c = CompareGhostVoxels(whole.tree(), continued.tree());
+  EXPECT_GT(c.occupied_in_a, 100u);
+  EXPECT_EQ(c.occupied_in_a, c.occupied_in_b);
+  EXPECT_EQ(c.occupied_a_occupied_b, c.occupied_in_a);
+
+  // Removing every inserted keyframe (a rebuild) leaves the loaded map.
+  for (int k = kHalf; k < kWalkFrames + kAfterFrames; ++k) continued.Remove(k);
+  const GhostVoxelCounts back = CompareGhostVoxels(first.tree(), continued.tree());
+  EXPECT_EQ(back.occupied_in_a, back.occupied_in_b);
+  EXPECT_EQ(back.occupied_a_occupied_b, back.occupied_in_a);
+
+  OctoMapOptions coarse = TestOptions();
+  coarse.resolution = 2 * coarse.resolution;
+  OctoMapBuilder other(camera, coarse);
+  try {
+    other.SetBaseMap(*ReadOctoMap(dir + "/first.ot"), dir + "/first.ot");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("first.ot"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("resolution"), std::string::npos) << e.what();
+  }
+}
+
 // (5) Pose corrections move the map; small ones do not trigger a rebuild.
 TEST(OctoMapBuilder, UpdatePosesMovesTheMap) {
   const PinholeCamera camera = test_scene::SmallCamera();

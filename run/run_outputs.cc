@@ -41,11 +41,13 @@ void WriteSystemTrajectories(const std::string& directory, const System& system)
   WriteTumTrajectory((fs::path(directory) / "keyframes.txt").string(), system.KeyframeTrajectory());
 }
 
-void WriteMapperBinary(const std::string& directory, KeyframeMapper& mapper) {
+void WriteMapperBinary(const std::string& directory, KeyframeMapper& mapper, bool with_full_map) {
   mapper.Flush();
-  const std::string path = (fs::path(directory) / "map.bt").string();
   mapper.WithBuilder([&](OctoMapBuilder& b) {
-    if (!b.KeyframeIds().empty()) b.WriteBinary(path);
+    // A continued map (--load-octomap) is written even when no keyframe was added to it.
+    if (b.KeyframeIds().empty() && !b.has_base_map()) return;
+    b.WriteBinary((fs::path(directory) / "map.bt").string());
+    if (with_full_map) b.WriteFull((fs::path(directory) / "map.ot").string());
   });
 }
 

@@ -35,7 +35,9 @@ std::string FramesCsvRow(const FrameRow& row);
 
 // DIR/trajectory.txt (every tracked frame, refined) and DIR/keyframes.txt; atomically.
 void WriteSystemTrajectories(const std::string& directory, const System& system);
-// Waits for the mapper's queue, then writes DIR/map.bt when the map has a keyframe.
-void WriteMapperBinary(const std::string& directory, KeyframeMapper& mapper);
+// Waits for the mapper's queue, then writes DIR/map.bt when the map has a keyframe or a loaded
+// base map (and DIR/map.ot, the OctoMap with probabilities, with `with_full_map`).
+void WriteMapperBinary(const std::string& directory, KeyframeMapper& mapper,
+                       bool with_full_map = false);
 
 }  // namespace dygslam

@@ -129,6 +129,13 @@ class Map {
 
   int64_t NextKeyFrameId() { return next_kf_id_++; }
   int64_t NextMapPointId() { return next_point_id_++; }
+  // The id counters, for map files (a continued map keeps counting where it stopped).
+  int64_t PeekNextKeyFrameId() const { return next_kf_id_; }
+  int64_t PeekNextMapPointId() const { return next_point_id_; }
+  void SetIdCounters(int64_t next_kf_id, int64_t next_point_id) {
+    next_kf_id_ = next_kf_id;
+    next_point_id_ = next_point_id;
+  }
 
   void AddKeyFrame(const std::shared_ptr<KeyFrame>& kf);
   void AddMapPoint(const std::shared_ptr<MapPoint>& mp);

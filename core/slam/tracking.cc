@@ -63,7 +63,7 @@ TrackResult Tracker::Track(Frame frame) {
         for (size_t i = 0; i < frame.size(); ++i) {
           if (frame.outlier[i]) frame.map_points[i] = nullptr;
         }
-        if (NeedNewKeyFrame(frame)) result.new_keyframe = CreateKeyFrame(frame);
+        if (!localization_ && NeedNewKeyFrame(frame)) result.new_keyframe = CreateKeyFrame(frame);
         if (result.new_keyframe) RememberDenseKeyFrame(result.new_keyframe, frame);
         records_.push_back({frame.stamp, reference_kf_->id,
                             frame.cam_from_world * reference_kf_->cam_from_world.Inverse(),
@@ -98,6 +98,13 @@ void Tracker::SetPlaceRecognition(std::shared_ptr<const Vocabulary> vocabulary,
                                   std::shared_ptr<KeyFrameDatabase> database) {
   vocabulary_ = std::move(vocabulary);
   database_ = std::move(database);
+}
+
+void Tracker::StartFromLoadedMap(bool localization) {
+  localization_ = localization;
+  // An empty loaded map is extended from scratch, or (localization) never gives a pose.
+  initialized_ = localization || map_->NumKeyFrames() > 0;
+  lost_ = initialized_;  // no pose yet: relocalize the first frame
 }
 
 void Tracker::HandOffKeyFrame(const std::shared_ptr<KeyFrame>& kf) {
@@ -424,10 +431,13 @@ std::vector<StampedPose> Tracker::Trajectory() const {
   return out;
 }
 
-std::vector<StampedPose> Tracker::KeyframeTrajectory() const {
+std::vector<StampedPose> Tracker::KeyframeTrajectory(int64_t min_id) const {
   std::lock_guard<std::mutex> lock(map_->mutex());
   std::vector<StampedPose> out;
-  for (const auto& [id, kf] : map_->keyframes()) out.push_back({kf->stamp, kf->cam_from_world.Inverse()});
+  for (auto it = map_->keyframes().lower_bound(min_id); it != map_->keyframes().end(); ++it) {
+    const auto& kf = it->second;
+    out.push_back({kf->stamp, kf->cam_from_world.Inverse()});
+  }
   return out;
 }
 

@@ -89,10 +89,16 @@ class Tracker {
   // matching in relocalization and reference-keyframe tracking; new keyframes get BoW vectors and
   // are added to `database`. Without it (nullptr) both fall back to brute-force matching.
   void SetPlaceRecognition(std::shared_ptr<const Vocabulary> vocabulary, std::shared_ptr<KeyFrameDatabase> database);
+  // The map was loaded from a file (map_file.h): the first frame is relocalized against it
+  // instead of starting a new map. localization: track against it without adding keyframes or
+  // map points (pose only, like ORB-SLAM2's localization mode).
+  void StartFromLoadedMap(bool localization);
 
   // World poses of all tracked frames (resolved through current keyframe poses).
   std::vector<StampedPose> Trajectory() const;
-  std::vector<StampedPose> KeyframeTrajectory() const;
+  // Active keyframes with id >= min_id (a run on a loaded map: its own keyframes, whose stamps do
+  // not interleave with the loaded ones').
+  std::vector<StampedPose> KeyframeTrajectory(int64_t min_id = 0) const;
   const std::vector<TrajectoryRecord>& records() const { return records_; }
 
  private:
@@ -137,6 +143,7 @@ class Tracker {
 
   bool initialized_ = false;
   bool lost_ = false;
+  bool localization_ = false;
   Frame last_frame_;
   std::optional<Rigid3d> velocity_;  // cam_from_world(t) * world_from_cam(t-1)
   std::shared_ptr<KeyFrame> reference_kf_;

@@ -96,6 +96,7 @@ void ApplyFilterConfiguration(const std::string& name, SystemOptions* options) {
 }
 
 void SystemOptions::Check() const {
+  DYGSLAM_CHECK_OPTION(!localization || !load_map.empty(), "localization (needs a map to load)");
   camera.Check();
   sensor.Check();
   orb.Check();
@@ -127,6 +128,13 @@ DynamicFilterOptions FilterOptionsOf(const SystemOptions& options) {
 }
 }  // namespace
 
+namespace {
+std::shared_ptr<const Vocabulary> LoadVocabulary(const SystemOptions& options) {
+  if (options.loop_closing.vocabulary.empty()) return nullptr;
+  return std::make_shared<Vocabulary>(Vocabulary::Load(options.loop_closing.vocabulary));
+}
+}  // namespace
+
 class SystemImpl {
  public:
   explicit SystemImpl(const SystemOptions& options)
@@ -134,13 +142,19 @@ class SystemImpl {
         extractor_(options.orb),
         geometry_(std::make_shared<CameraGeometry>(
             CameraGeometry::Create(options.camera, options.sensor, extractor_))),
-        map_(std::make_shared<Map>()),
+        vocabulary_(LoadVocabulary(options)),
+        map_file_settings_(MapFileSettings::Of(*geometry_, options.orb.scale_factor,
+                                               vocabulary_ ? vocabulary_->Checksum() : 0)),
+        loaded_(options.load_map.empty()
+                    ? LoadedMap{}
+                    : LoadMapFile(options.load_map, map_file_settings_, geometry_)),
+        map_(loaded_.map ? loaded_.map : std::make_shared<Map>()),
         local_mapper_(map_, options.local_mapping, !options.deterministic),
         tracker_(options.tracking, map_, local_mapper_, options.deterministic),
         filter_(FilterOptionsOf(options)) {
-    if (!options.loop_closing.vocabulary.empty()) {
-      vocabulary_ = std::make_shared<Vocabulary>(Vocabulary::Load(options.loop_closing.vocabulary));
+    if (vocabulary_) {
       database_ = std::make_shared<KeyFrameDatabase>();
+      for (const auto& [id, kf] : map_->keyframes()) database_->Add(id, kf->bow_vector);
       tracker_.SetPlaceRecognition(vocabulary_, database_);
       loop_closer_ = std::make_unique<LoopCloser>(map_, database_, options.loop_closing,
                                                   options.local_mapping.optimizer,
@@ -155,6 +169,18 @@ class SystemImpl {
         [this](const std::vector<int64_t>& moved, const std::vector<int64_t>& culled) {
           EmitMapChanges(moved, culled);
         });
+    if (loaded_.map) {
+      first_own_keyframe_id_ = map_->PeekNextKeyFrameId();
+      tracker_.StartFromLoadedMap(options.localization);
+    }
+  }
+
+  MapFileInfo SaveMap(const std::string& path) const {
+    return SaveMapFile(path, *map_, map_file_settings_);
+  }
+  std::optional<MapFileInfo> LoadedMapInfo() const {
+    if (!loaded_.map) return std::nullopt;
+    return loaded_.info;
   }
 
   // Keyframe pose corrections (local BA) and culled keyframes, for the map.
@@ -226,7 +252,9 @@ class SystemImpl {
   void TopUpStaticFeatures(const cv::Mat& gray, const cv::Mat& mask,
                            const std::vector<Detection>& detections, OrbExtractionCache* cache,
                            OrbFeatures* kept) const;
-  std::vector<StampedPose> KeyframeTrajectory() const { return tracker_.KeyframeTrajectory(); }
+  std::vector<StampedPose> KeyframeTrajectory() const {
+    return tracker_.KeyframeTrajectory(first_own_keyframe_id_);
+  }
   void SetKeyframeCallback(std::function<void(const KeyframeData&)> cb) {
     std::lock_guard<std::mutex> lock(callback_mutex_);
     keyframe_callback_ = std::move(cb);
@@ -240,8 +268,11 @@ class SystemImpl {
   SystemOptions options_;
   OrbExtractor extractor_;
   std::shared_ptr<const CameraGeometry> geometry_;
-  std::shared_ptr<Map> map_;
   std::shared_ptr<const Vocabulary> vocabulary_;  // null without a vocabulary file
+  MapFileSettings map_file_settings_;             // what a saved map depends on
+  LoadedMap loaded_;                              // SystemOptions::load_map (map null: none)
+  std::shared_ptr<Map> map_;
+  int64_t first_own_keyframe_id_ = 0;  // keyframes of a loaded map come before it
   std::shared_ptr<KeyFrameDatabase> database_;
   std::unique_ptr<LoopCloser> loop_closer_;  // declared before the mapper: outlives its callback
   LocalMapper local_mapper_;
@@ -460,6 +491,16 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   return result;
 }
 
+MapFileInfo CheckMapFile(const std::string& path, const SystemOptions& options) {
+  const OrbExtractor extractor(options.orb);
+  auto geometry = std::make_shared<CameraGeometry>(
+      CameraGeometry::Create(options.camera, options.sensor, extractor));
+  const auto vocabulary = LoadVocabulary(options);
+  const MapFileSettings settings = MapFileSettings::Of(*geometry, options.orb.scale_factor,
+                                                       vocabulary ? vocabulary->Checksum() : 0);
+  return LoadMapFile(path, settings, geometry).info;
+}
+
 void System::PrefetchDetections(const cv::Mat& rgb, Timestamp stamp) {
   impl_->Prefetch(rgb, stamp);
 }
@@ -484,5 +525,7 @@ void System::SetKeyframeCallback(std::function<void(const KeyframeData&)> callba
   impl_->SetKeyframeCallback(std::move(callback));
 }
 void System::Shutdown() { impl_->Shutdown(); }
+MapFileInfo System::SaveMap(const std::string& path) const { return impl_->SaveMap(path); }
+std::optional<MapFileInfo> System::LoadedMapInfo() const { return impl_->LoadedMapInfo(); }
 
 }  // namespace dygslam

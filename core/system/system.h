@@ -19,6 +19,7 @@
 #include "core/dynamic/yolo_detector.h"
 #include "core/slam/local_mapping.h"
 #include "core/slam/loop_closing.h"
+#include "core/slam/map_file.h"
 #include "core/slam/orb_extractor.h"
 #include "core/slam/tracking.h"
 
@@ -82,6 +83,12 @@ struct SystemOptions {
   bool demote_in_box_features = true;
   // Fixed seeds, local mapping run synchronously after each keyframe: identical output run to run.
   bool deterministic = false;
+  // A SLAM map file to start from (map_file.h; empty: a new map). Its camera, ORB pyramid and
+  // vocabulary must match these settings. Without `localization` the loaded map is extended
+  // (keyframe and point ids continue); with it, frames are tracked against the loaded map without
+  // adding keyframes or map points, and the first frame is relocalized with the BoW index.
+  std::string load_map;
+  bool localization = false;
   bool NeedsDetections() const { return filter_mode == FilterMode::kBoxes || filter_mode == FilterMode::kFull; }
   void Check() const;
 };
@@ -102,6 +109,11 @@ struct SystemOptions {
 void ApplyFilterConfiguration(const std::string& name, SystemOptions* options);
 // Every accepted name, in the order above after none, boxes, geometry.
 const std::vector<std::string>& FilterConfigurationNames();
+
+// Loads the map file `path` against the settings in `options` (camera, ORB pyramid, vocabulary)
+// and returns what it holds; throws InputError naming the file and what is wrong. For checking a
+// --load-map argument before a run starts (the map is loaded again by the System).
+MapFileInfo CheckMapFile(const std::string& path, const SystemOptions& options);
 
 class SystemImpl;
 
@@ -128,6 +140,7 @@ class System {
 
   // Every tracked frame, world_from_cam, expressed relative to its (refined) reference keyframe.
   std::vector<StampedPose> Trajectory() const;
+  // This run's keyframes (a loaded map's keyframes are in the map file, not here).
   std::vector<StampedPose> KeyframeTrajectory() const;
   // Called (from the thread that produced it) for each new keyframe and for keyframe pose
   // corrections (pose_update_only = true).
@@ -140,6 +153,11 @@ class System {
   LoopClosingStats LoopClosingStatistics() const;
   // Map sizes and live object counts (memory monitoring in long runs).
   MapStatistics MapSizes() const;
+  // Map files (map_file.h). SaveMap writes the current map atomically (call after Shutdown for
+  // the final map; during a run it saves a consistent snapshot under the map lock).
+  MapFileInfo SaveMap(const std::string& path) const;
+  // The map file this system started from (SystemOptions::load_map), if any.
+  std::optional<MapFileInfo> LoadedMapInfo() const;
   // Finishes local mapping and loop closing (and a global bundle adjustment still running);
   // afterwards Trajectory() is final.
   void Shutdown();

@@ -1,0 +1,110 @@
+// `dygslam run --load-map` with a damaged or foreign map file (issue 15): truncated at 10
+// offsets, flipped bytes, another format version, another camera. Each gives its clear error
+// naming the file (exit 1) before any work, and leaves no output file (not even a half-written
+// one) in --out. A good map localizes from the first frame.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/support/test_support.h"
+
+namespace dygslam {
+namespace {
+namespace fs = std::filesystem;
+
+std::string ReadBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void WriteBytes(const fs::path& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+std::string Config(const std::string& name) {
+  return std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/" + name;
+}
+
+TEST(MapFileCli, DamagedOrForeignMapIsAClearErrorWithNoOutput) {
+  DYGSLAM_REQUIRE_DATASET(data, "bonn_crowd_part");
+  DYGSLAM_REQUIRE_FILE(testing::DygslamBinary(), "dygslam binary");
+  const fs::path dir = testing::MakeTempDir("map_file_cli");
+  const fs::path good = dir / "good.dygmap";
+  // A small map: 20 frames, no detector (filter none), no OctoMap.
+  const testing::ProcessResult made =
+      testing::RunDygslam({"run", data, "--config", Config("bonn.yaml"), "--frames", "0:20",
+                           "--direct", "--deterministic", "--filter", "none", "--no-map", "--quiet",
+                           "--out", (dir / "mapping").string(), "--save-map", good.string()},
+                          dir.string());
+  ASSERT_EQ(made.code, 0) << made.err;
+  const std::string bytes = ReadBytes(good);
+  ASSERT_GT(bytes.size(), 10000u);
+
+  struct Case {
+    std::string name, bytes, config, expected;
+  };
+  std::vector<Case> cases;
+  for (int k = 0; k < 10; ++k) {
+    const size_t cut = k == 0 ? 12 : k * (bytes.size() / 10) + (k == 9 ? bytes.size() / 10 - 1 : 0);
+    cases.push_back({"truncated at " + std::to_string(cut), bytes.substr(0, cut), "bonn.yaml",
+                     "truncated map file"});
+  }
+  for (size_t offset : {size_t(40), bytes.size() / 2, bytes.size() - 3}) {
+    std::string bad = bytes;
+    bad[offset] = static_cast<char>(bad[offset] ^ 0x01);
+    cases.push_back(
+        {"flipped byte at " + std::to_string(offset), bad, "bonn.yaml", "checksum mismatch"});
+  }
+  {
+    std::string bad = bytes;
+    bad[8] = 2;
+    cases.push_back(
+        {"version 2", bad, "bonn.yaml", "format version 2, this build reads version 1"});
+  }
+  cases.push_back({"other camera", bytes, "tum1.yaml", "different camera: Camera.fx"});
+
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const Case& c = cases[i];
+    const fs::path map = dir / ("bad" + std::to_string(i) + ".dygmap");
+    WriteBytes(map, c.bytes);
+    const fs::path out = dir / ("out" + std::to_string(i));
+    const testing::ProcessResult r = testing::RunDygslam(
+        {"run", data, "--config", Config(c.config), "--frames", "0:20", "--direct", "--filter",
+         "none", "--quiet", "--out", out.string(), "--load-map", map.string(), "--localization",
+         "--save-map", (out / "again.dygmap").string()},
+        dir.string());
+    EXPECT_EQ(r.code, 1) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(map.string()), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_EQ(r.err.find("internal error"), std::string::npos) << c.name;
+    // No output at all (the folder may exist, empty): nothing half-written.
+    if (fs::exists(out)) EXPECT_TRUE(fs::is_empty(out)) << c.name;
+  }
+
+  // --localization without a map is a usage error.
+  const testing::ProcessResult usage = testing::RunDygslam(
+      {"run", data, "--direct", "--localization", "--out", (dir / "usage").string()}, dir.string());
+  EXPECT_EQ(usage.code, 2) << usage.err;
+
+  // The good map: the first frame is relocalized in it (not lost), and nothing is added.
+  const fs::path out = dir / "localization";
+  const testing::ProcessResult ok =
+      testing::RunDygslam({"run", data, "--config", Config("bonn.yaml"), "--frames", "0:20",
+                           "--direct", "--deterministic", "--filter", "none", "--no-map", "--quiet",
+                           "--out", out.string(), "--load-map", good.string(), "--localization"},
+                          dir.string());
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  std::ifstream csv(out / "frames.csv");
+  std::string header, first;
+  std::getline(csv, header);
+  std::getline(csv, first);
+  EXPECT_NE(first.find(",relocalized,"), std::string::npos) << first;
+}
+
+}  // namespace
+}  // namespace dygslam

@@ -89,6 +89,20 @@ int SearchByProjection(const KeyFrame& kf, const Rigid3d& cam_from_world,
   return added;
 }
 
+// Length of the path of the keyframe centres from keyframe `from` to keyframe `to` (ids in map
+// order; culled keyframes are skipped). The caller holds Map::mutex().
+double KeyFramePathLength(const Map& map, int64_t from, int64_t to) {
+  double length = 0;
+  const KeyFrame* previous = nullptr;
+  for (auto it = map.keyframes().lower_bound(from); it != map.keyframes().end() && it->first <= to;
+       ++it) {
+    if (it->second->bad) continue;
+    if (previous) length += (it->second->CameraCenter() - previous->CameraCenter()).norm();
+    previous = it->second.get();
+  }
+  return length;
+}
+
 }  // namespace
 
 LoopCloser::LoopCloser(std::shared_ptr<Map> map, std::shared_ptr<KeyFrameDatabase> database,
@@ -219,7 +233,14 @@ std::vector<std::shared_ptr<KeyFrame>> LoopCloser::DetectLoop(const std::shared_
   const auto candidates = LoopCandidates(
       *map_, *database_, *kf, min_score,
       [&](int64_t id) {
-        return id > kf->id - options_.min_keyframe_gap || kf->connection_weights.count(id) > 0;
+        if (id > kf->id - options_.min_keyframe_gap) return true;  // recent
+        if (kf->connection_weights.count(id) == 0) return false;
+        // Covisible: ORB-SLAM2 excludes these, as covisibility normally means the local window
+        // (already joined by local BA, nothing to correct). An old keyframe that became
+        // covisible again after a long way round is the place revisited, tracked without losing
+        // the map (there and back): it stays a candidate, so the revisit is closed as a loop.
+        return options_.revisit_min_path_m <= 0 ||
+               KeyFramePathLength(*map_, id, kf->id) < options_.revisit_min_path_m;
       },
       options_.place);
   if (candidates.empty()) {
@@ -331,9 +352,12 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
     }
     LOG_DEBUG << "loop closing: keyframe " << kf->id << " vs " << c->id << ": " << pairs.size()
               << " BoW matches, " << best << " RANSAC inliers";
-    if (best < options_.min_ransac_inliers) continue;
+    LoopVerification v;
+    v.frame_id = kf->frame_id;
+    v.loop_frame_id = c->frame_id;
+    v.bow_pairs = static_cast<int>(pairs.size());
     // Refinement: least squares on the inliers, re-scored, twice.
-    for (int round = 0; round < 2; ++round) {
+    for (int round = 0; round < 2 && best >= 3; ++round) {
       std::vector<Eigen::Vector3d> src, dst;
       for (size_t k = 0; k < pairs.size(); ++k) {
         if (!best_flags[k]) continue;
@@ -341,17 +365,53 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
         dst.push_back(pairs[k].p1);
       }
       const Rigid3d refined = AlignPoints(src, dst);
+      if (!refined.AllFinite()) break;
       const int n = count_inliers(refined, &flags);
       if (n < best) break;
       best = n;
       best_t12 = refined;
       best_flags = flags;
     }
+    v.inliers = best;
+    const Rigid3d corrected_pose = best_t12 * c->cam_from_world;
+    {
+      // Correction: where the loop transform puts the camera against where odometry has it.
+      const Rigid3d delta = corrected_pose * kf->cam_from_world.Inverse();
+      v.correction_m = (kf->CameraCenter() - corrected_pose.Inverse().translation).norm();
+      v.correction_deg = Eigen::AngleAxisd(delta.rotation).angle() * 180.0 / M_PI;
+      v.path_m = KeyFramePathLength(*map_, c->id, kf->id);
+      v.allowed_m = options_.max_correction_m + options_.max_drift_per_meter * v.path_m;
+      v.allowed_deg = options_.max_correction_deg + options_.max_drift_deg_per_meter * v.path_m;
+    }
+    auto reject = [&](const char* verdict, int LoopClosingStats::*counter) {
+      v.verdict = verdict;
+      LOG_DEBUG << "loop closing: keyframe " << kf->id << " (frame " << kf->frame_id << ") vs "
+                << c->id << " (frame " << c->frame_id << "): rejected (" << verdict
+                << "): " << v.inliers << " / " << v.bow_pairs << " inliers, " << v.projected
+                << " matches, correction " << v.correction_m << " m / " << v.correction_deg
+                << " deg, budget " << v.allowed_m << " m / " << v.allowed_deg << " deg over "
+                << v.path_m << " m";
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      stats_.*counter += 1;
+      stats_.verifications.push_back(v);
+    };
+    if (best < options_.min_ransac_inliers) {
+      reject("inliers", &LoopClosingStats::rejected_inliers);
+      continue;
+    }
+    if (best < options_.min_inlier_ratio * static_cast<double>(pairs.size())) {
+      reject("inlier ratio", &LoopClosingStats::rejected_ratio);
+      continue;
+    }
+    if (v.correction_m > v.allowed_m || v.correction_deg > v.allowed_deg) {
+      reject("implausible correction", &LoopClosingStats::rejected_implausible);
+      continue;
+    }
     // Guided search: the candidate's neighbourhood seen from the corrected pose.
     std::vector<std::shared_ptr<MapPoint>> kept(kf->size(), nullptr);
     for (size_t k = 0; k < pairs.size(); ++k)
       if (best_flags[k]) kept[pairs[k].idx1] = matches[pairs[k].idx1];
-    const Rigid3d corrected = best_t12 * c->cam_from_world;
+    const Rigid3d& corrected = corrected_pose;
     std::vector<std::shared_ptr<MapPoint>> loop_points;
     std::set<int64_t> seen;
     std::vector<std::shared_ptr<KeyFrame>> neighbourhood = {c};
@@ -367,10 +427,15 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
     SearchByProjection(*kf, corrected, loop_points, 10.0, matcher_.options().th_low, &kept);
     int total = 0;
     for (const auto& m : kept) total += m != nullptr;
+    v.projected = total;
     if (total < options_.min_projection_matches) {
-      LOG_DEBUG << "loop closing: keyframe " << kf->id << " vs " << c->id << ": " << best
-                << " RANSAC inliers, " << total << " projected matches (too few)";
+      reject("guided matches", &LoopClosingStats::rejected_projection);
       continue;
+    }
+    v.verdict = "accepted";
+    {
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      stats_.verifications.push_back(v);
     }
     loop->loop_kf = c;
     loop->cam_from_world = corrected;
@@ -392,8 +457,12 @@ void LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& lo
     if (kf->bad || loop.loop_kf->bad) return;
     map_->BumpCorrectionEpoch();  // local BA in flight must not write back pre-loop poses
     // 1. Move the current keyframe's neighbourhood (and the points it sees) by the loop transform.
+    // A revisit (loop keyframe covisible with the current one) must not move the loop side.
+    std::set<int64_t> loop_side = {loop.loop_kf->id};
+    for (const auto& [id, w] : loop.loop_kf->connection_weights) loop_side.insert(id);
     std::vector<std::shared_ptr<KeyFrame>> group = {kf};
     for (int64_t id : kf->ordered_connections) {
+      if (loop_side.count(id)) continue;
       auto n = map_->GetKeyFrame(id);
       if (n && !n->bad) group.push_back(n);
     }

@@ -105,6 +105,13 @@ TEST(LoopCorrection, DriftedLoopIsDetectedAndCorrected) {
       "error %.3f m before, %.3f m after\n",
       stats.loops_closed, stats.candidates_detected, stats.loops_rejected,
       static_cast<long long>(loop_frame), worst_before, worst_after);
+  for (const LoopVerification& v : stats.verifications)
+    std::printf(
+        "  frame %lld vs %lld: %d / %d inliers, %d matches, correction %.3f m / %.2f deg "
+        "(budget %.3f m / %.2f deg over %.2f m): %s\n",
+        static_cast<long long>(v.frame_id), static_cast<long long>(v.loop_frame_id), v.inliers,
+        v.bow_pairs, v.projected, v.correction_m, v.correction_deg, v.allowed_m, v.allowed_deg,
+        v.path_m, v.verdict);
   EXPECT_GT(worst_before, 0.3);
   EXPECT_LT(worst_after, worst_before / 3);
 }

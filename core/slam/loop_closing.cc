@@ -89,6 +89,81 @@ int SearchByProjection(const KeyFrame& kf, const Rigid3d& cam_from_world,
   return added;
 }
 
+// Refines the current keyframe's corrected pose against the loop-side points matched to its
+// features (pose-only, reprojection with the depth's virtual right coordinate, Huber then
+// outlier rounds as in tracking); outlier matches are removed. Returns the inliers.
+int RefineLoopPose(const KeyFrame& kf, const OptimizerOptions& optimizer,
+                   std::vector<std::shared_ptr<MapPoint>>* matches, Rigid3d* cam_from_world) {
+  const auto& g = *kf.geometry;
+  const ProjectionModel model{g.camera.fx, g.camera.fy, g.camera.cx, g.camera.cy, g.bf};
+  std::vector<uint8_t> outlier(matches->size(), 0);
+  double pose[7];
+  PoseToParameters(*cam_from_world, pose);
+  const double delta_mono = std::sqrt(optimizer.chi2_mono),
+               delta_stereo = std::sqrt(optimizer.chi2_stereo);
+  int inliers = 0;
+  for (int round = 0; round < optimizer.pose_rounds; ++round) {
+    ceres::Problem::Options problem_options;
+    problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(problem_options);
+    PoseManifold manifold;
+    problem.AddParameterBlock(pose, 7, &manifold);
+    int added = 0;
+    for (size_t i = 0; i < matches->size(); ++i) {
+      const auto& mp = (*matches)[i];
+      if (!mp || outlier[i]) continue;
+      const cv::KeyPoint& kp = kf.undistorted[i];
+      const double sqrt_info = std::sqrt(g.inv_sigma2[kp.octave]);
+      const bool stereo = kf.u_right[i] >= 0;
+      ceres::CostFunction* cost = stereo ? static_cast<ceres::CostFunction*>(new StereoPoseCost(
+                                               Eigen::Vector3d(kp.pt.x, kp.pt.y, kf.u_right[i]),
+                                               mp->position, sqrt_info, model))
+                                         : new MonoPoseCost(Eigen::Vector2d(kp.pt.x, kp.pt.y),
+                                                            mp->position, sqrt_info, model);
+      problem.AddResidualBlock(cost, new ceres::HuberLoss(stereo ? delta_stereo : delta_mono),
+                               pose);
+      ++added;
+    }
+    if (added < 3) return 0;
+    ceres::Solver::Options solver_options;
+    solver_options.linear_solver_type = ceres::DENSE_QR;
+    solver_options.max_num_iterations = optimizer.pose_iterations;
+    solver_options.num_threads = 1;
+    solver_options.logging_type = ceres::SILENT;
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &problem, &summary);
+    const Rigid3d estimate = PoseFromParameters(pose);
+    inliers = 0;
+    for (size_t i = 0; i < matches->size(); ++i) {
+      const auto& mp = (*matches)[i];
+      if (!mp) continue;
+      const cv::KeyPoint& kp = kf.undistorted[i];
+      const Eigen::Vector3d p = estimate * mp->position;
+      bool bad = p.z() <= 0;
+      if (!bad) {
+        const double u = model.fx * p.x() / p.z() + model.cx;
+        const double v = model.fy * p.y() / p.z() + model.cy;
+        double chi2 = (u - kp.pt.x) * (u - kp.pt.x) + (v - kp.pt.y) * (v - kp.pt.y);
+        const bool stereo = kf.u_right[i] >= 0;
+        if (stereo) {
+          const double ur = u - model.bf / p.z();
+          chi2 += (ur - kf.u_right[i]) * (ur - kf.u_right[i]);
+        }
+        chi2 *= g.inv_sigma2[kp.octave];
+        bad = chi2 > (stereo ? optimizer.chi2_stereo : optimizer.chi2_mono);
+      }
+      outlier[i] = bad ? 1 : 0;
+      inliers += bad ? 0 : 1;
+    }
+    if (inliers < 10) return inliers;
+  }
+  if (!PoseFromParameters(pose).AllFinite()) return 0;
+  *cam_from_world = PoseFromParameters(pose);
+  for (size_t i = 0; i < matches->size(); ++i)
+    if (outlier[i]) (*matches)[i] = nullptr;
+  return inliers;
+}
+
 // Length of the path of the keyframe centres from keyframe `from` to keyframe `to` (ids in map
 // order; culled keyframes are skipped). The caller holds Map::mutex().
 double KeyFramePathLength(const Map& map, int64_t from, int64_t to) {
@@ -374,15 +449,16 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
     }
     v.inliers = best;
     const Rigid3d corrected_pose = best_t12 * c->cam_from_world;
-    {
-      // Correction: where the loop transform puts the camera against where odometry has it.
-      const Rigid3d delta = corrected_pose * kf->cam_from_world.Inverse();
-      v.correction_m = (kf->CameraCenter() - corrected_pose.Inverse().translation).norm();
+    v.path_m = KeyFramePathLength(*map_, c->id, kf->id);
+    v.allowed_m = options_.max_correction_m + options_.max_drift_per_meter * v.path_m;
+    v.allowed_deg = options_.max_correction_deg + options_.max_drift_deg_per_meter * v.path_m;
+    // Correction: where the loop transform puts the camera against where odometry has it.
+    auto measure = [&](const Rigid3d& pose) {
+      const Rigid3d delta = pose * kf->cam_from_world.Inverse();
+      v.correction_m = (kf->CameraCenter() - pose.Inverse().translation).norm();
       v.correction_deg = Eigen::AngleAxisd(delta.rotation).angle() * 180.0 / M_PI;
-      v.path_m = KeyFramePathLength(*map_, c->id, kf->id);
-      v.allowed_m = options_.max_correction_m + options_.max_drift_per_meter * v.path_m;
-      v.allowed_deg = options_.max_correction_deg + options_.max_drift_deg_per_meter * v.path_m;
-    }
+    };
+    measure(corrected_pose);
     auto reject = [&](const char* verdict, int LoopClosingStats::*counter) {
       v.verdict = verdict;
       LOG_DEBUG << "loop closing: keyframe " << kf->id << " (frame " << kf->frame_id << ") vs "
@@ -425,11 +501,18 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
       }
     }
     SearchByProjection(*kf, corrected, loop_points, 10.0, matcher_.options().th_low, &kept);
-    int total = 0;
-    for (const auto& m : kept) total += m != nullptr;
+    // The transform from a few 3D-3D inliers carries their depth noise: refine the pose on every
+    // match by reprojection, keep the inliers, and check the correction again.
+    Rigid3d refined_pose = corrected;
+    const int total = RefineLoopPose(*kf, optimizer_, &kept, &refined_pose);
     v.projected = total;
     if (total < options_.min_projection_matches) {
       reject("guided matches", &LoopClosingStats::rejected_projection);
+      continue;
+    }
+    measure(refined_pose);
+    if (v.correction_m > v.allowed_m || v.correction_deg > v.allowed_deg) {
+      reject("implausible correction", &LoopClosingStats::rejected_implausible);
       continue;
     }
     v.verdict = "accepted";
@@ -438,7 +521,7 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
       stats_.verifications.push_back(v);
     }
     loop->loop_kf = c;
-    loop->cam_from_world = corrected;
+    loop->cam_from_world = refined_pose;
     loop->matches = std::move(kept);
     loop->loop_points = std::move(loop_points);
     loop->inliers = best;

@@ -1,7 +1,8 @@
 // Loop closing end to end on a generated loop path (core/synth): a path that never comes back
 // must produce no loop (place recognition sees many similar views along the way; the
-// consistency and geometric checks must reject them all). The closed-loop figures are in
-// BENCHMARKS.md (*Loop closing*).
+// consistency and geometric checks must reject them all); a path that comes back must close the
+// loop, re-send the corrected keyframes to the map consumers and keep the per-frame poses apart
+// from the corrected trajectory. Figures in BENCHMARKS.md (*Place recognition and loop closing*).
 #include <gtest/gtest.h>
 
 #include <map>
@@ -108,7 +109,7 @@ TEST_F(LoopClosingTest, PathThatNeverComesBackHasNoLoop) {
   EXPECT_GT(open.loops.keyframes_checked, 5);  // the loop closer did look at the keyframes
 }
 
-TEST_F(LoopClosingTest, DriftedLoopIsClosed) {
+TEST_F(LoopClosingTest, ReturnToStartIsClosedAndReported) {
   constexpr double kFxScale = 1.03;
   const LoopRun on = Run(frames_->size(), true, kFxScale);
   const LoopRun off = Run(frames_->size(), false, kFxScale);
@@ -142,7 +143,9 @@ TEST_F(LoopClosingTest, DriftedLoopIsClosed) {
     EXPECT_LT((sent->second.translation - k.world_from_cam.translation).norm(), 1e-9);
   }
   // trajectory_online keeps what was known at each frame; the final trajectory is the corrected
-  // one: frames before the loop moved, by at least a fraction of the loop's correction.
+  // one (loop, global BA and local BA corrections). On this sequence the loop itself corrects
+  // < 1 mm (measured 0.4 mm: tracking had relocalized against the start), the global BA after it
+  // moves the earlier frames by ~0.1 m, so the two must differ by more than 1 cm.
   const double correction = on.loops.verifications.back().correction_m;
   double moved = 0;
   ASSERT_EQ(on.online.size(), on.trajectory.size());
@@ -159,7 +162,7 @@ TEST_F(LoopClosingTest, DriftedLoopIsClosed) {
       "online %.4f m, final %.4f m\n",
       static_cast<long long>(on.first_loop_frame), on.updated_at_loop.size(), moved, correction,
       on.ate_online, on.ate);
-  EXPECT_GT(moved, 0.25 * correction);
+  EXPECT_GT(moved, 0.01);
 }
 
 }  // namespace

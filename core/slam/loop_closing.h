@@ -56,6 +56,7 @@ struct LoopClosingStats {
   int global_ba_runs = 0;
   int global_ba_discarded = 0;  // finished after a newer loop: not written back
   double correction_ms_total = 0;
+  double global_ba_ms_total = 0;                         // wall time of the global BAs written back
   std::vector<std::pair<int64_t, int64_t>> loops;        // (keyframe id, loop keyframe id)
   std::vector<std::pair<int64_t, int64_t>> loop_frames;  // (frame id, loop keyframe's frame id)
 };

@@ -73,12 +73,18 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   }
   loops.ReadIfPresent("enabled", &lc.enabled);
   loops.ReadIfPresent("min_keyframe_gap", &lc.min_keyframe_gap);
+  loops.ReadIfPresent("revisit_min_path_m", &lc.revisit_min_path_m);
   loops.ReadIfPresent("consistency", &lc.consistency);
   loops.ReadIfPresent("min_bow_matches", &lc.min_bow_matches);
   loops.ReadIfPresent("ransac_iterations", &lc.ransac_iterations);
   loops.ReadIfPresent("ransac_threshold_px", &lc.ransac_threshold_px);
   loops.ReadIfPresent("min_ransac_inliers", &lc.min_ransac_inliers);
+  loops.ReadIfPresent("min_inlier_ratio", &lc.min_inlier_ratio);
   loops.ReadIfPresent("min_projection_matches", &lc.min_projection_matches);
+  loops.ReadIfPresent("max_correction_m", &lc.max_correction_m);
+  loops.ReadIfPresent("max_drift_per_meter", &lc.max_drift_per_meter);
+  loops.ReadIfPresent("max_correction_deg", &lc.max_correction_deg);
+  loops.ReadIfPresent("max_drift_deg_per_meter", &lc.max_drift_deg_per_meter);
   loops.ReadIfPresent("fusion_radius_px", &lc.fusion_radius_px);
   loops.ReadIfPresent("essential_min_weight", &lc.essential_min_weight);
   loops.ReadIfPresent("pose_graph_iterations", &lc.pose_graph_iterations);

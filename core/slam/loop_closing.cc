@@ -89,6 +89,95 @@ int SearchByProjection(const KeyFrame& kf, const Rigid3d& cam_from_world,
   return added;
 }
 
+// Refines the current keyframe's corrected pose against the loop-side points matched to its
+// features (pose-only, reprojection with the depth's virtual right coordinate, Huber then
+// outlier rounds as in tracking); outlier matches are removed. Returns the inliers.
+int RefineLoopPose(const KeyFrame& kf, const OptimizerOptions& optimizer,
+                   std::vector<std::shared_ptr<MapPoint>>* matches, Rigid3d* cam_from_world) {
+  const auto& g = *kf.geometry;
+  const ProjectionModel model{g.camera.fx, g.camera.fy, g.camera.cx, g.camera.cy, g.bf};
+  std::vector<uint8_t> outlier(matches->size(), 0);
+  double pose[7];
+  PoseToParameters(*cam_from_world, pose);
+  const double delta_mono = std::sqrt(optimizer.chi2_mono),
+               delta_stereo = std::sqrt(optimizer.chi2_stereo);
+  int inliers = 0;
+  for (int round = 0; round < optimizer.pose_rounds; ++round) {
+    ceres::Problem::Options problem_options;
+    problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(problem_options);
+    PoseManifold manifold;
+    problem.AddParameterBlock(pose, 7, &manifold);
+    int added = 0;
+    for (size_t i = 0; i < matches->size(); ++i) {
+      const auto& mp = (*matches)[i];
+      if (!mp || outlier[i]) continue;
+      const cv::KeyPoint& kp = kf.undistorted[i];
+      const double sqrt_info = std::sqrt(g.inv_sigma2[kp.octave]);
+      const bool stereo = kf.u_right[i] >= 0;
+      ceres::CostFunction* cost = stereo ? static_cast<ceres::CostFunction*>(new StereoPoseCost(
+                                               Eigen::Vector3d(kp.pt.x, kp.pt.y, kf.u_right[i]),
+                                               mp->position, sqrt_info, model))
+                                         : new MonoPoseCost(Eigen::Vector2d(kp.pt.x, kp.pt.y),
+                                                            mp->position, sqrt_info, model);
+      problem.AddResidualBlock(cost, new ceres::HuberLoss(stereo ? delta_stereo : delta_mono),
+                               pose);
+      ++added;
+    }
+    if (added < 3) return 0;
+    ceres::Solver::Options solver_options;
+    solver_options.linear_solver_type = ceres::DENSE_QR;
+    solver_options.max_num_iterations = optimizer.pose_iterations;
+    solver_options.num_threads = 1;
+    solver_options.logging_type = ceres::SILENT;
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &problem, &summary);
+    const Rigid3d estimate = PoseFromParameters(pose);
+    inliers = 0;
+    for (size_t i = 0; i < matches->size(); ++i) {
+      const auto& mp = (*matches)[i];
+      if (!mp) continue;
+      const cv::KeyPoint& kp = kf.undistorted[i];
+      const Eigen::Vector3d p = estimate * mp->position;
+      bool bad = p.z() <= 0;
+      if (!bad) {
+        const double u = model.fx * p.x() / p.z() + model.cx;
+        const double v = model.fy * p.y() / p.z() + model.cy;
+        double chi2 = (u - kp.pt.x) * (u - kp.pt.x) + (v - kp.pt.y) * (v - kp.pt.y);
+        const bool stereo = kf.u_right[i] >= 0;
+        if (stereo) {
+          const double ur = u - model.bf / p.z();
+          chi2 += (ur - kf.u_right[i]) * (ur - kf.u_right[i]);
+        }
+        chi2 *= g.inv_sigma2[kp.octave];
+        bad = chi2 > (stereo ? optimizer.chi2_stereo : optimizer.chi2_mono);
+      }
+      outlier[i] = bad ? 1 : 0;
+      inliers += bad ? 0 : 1;
+    }
+    if (inliers < 10) return inliers;
+  }
+  if (!PoseFromParameters(pose).AllFinite()) return 0;
+  *cam_from_world = PoseFromParameters(pose);
+  for (size_t i = 0; i < matches->size(); ++i)
+    if (outlier[i]) (*matches)[i] = nullptr;
+  return inliers;
+}
+
+// Length of the path of the keyframe centres from keyframe `from` to keyframe `to` (ids in map
+// order; culled keyframes are skipped). The caller holds Map::mutex().
+double KeyFramePathLength(const Map& map, int64_t from, int64_t to) {
+  double length = 0;
+  const KeyFrame* previous = nullptr;
+  for (auto it = map.keyframes().lower_bound(from); it != map.keyframes().end() && it->first <= to;
+       ++it) {
+    if (it->second->bad) continue;
+    if (previous) length += (it->second->CameraCenter() - previous->CameraCenter()).norm();
+    previous = it->second.get();
+  }
+  return length;
+}
+
 }  // namespace
 
 LoopCloser::LoopCloser(std::shared_ptr<Map> map, std::shared_ptr<KeyFrameDatabase> database,
@@ -219,7 +308,14 @@ std::vector<std::shared_ptr<KeyFrame>> LoopCloser::DetectLoop(const std::shared_
   const auto candidates = LoopCandidates(
       *map_, *database_, *kf, min_score,
       [&](int64_t id) {
-        return id > kf->id - options_.min_keyframe_gap || kf->connection_weights.count(id) > 0;
+        if (id > kf->id - options_.min_keyframe_gap) return true;  // recent
+        if (kf->connection_weights.count(id) == 0) return false;
+        // Covisible: ORB-SLAM2 excludes these, as covisibility normally means the local window
+        // (already joined by local BA, nothing to correct). An old keyframe that became
+        // covisible again after a long way round is the place revisited, tracked without losing
+        // the map (there and back): it stays a candidate, so the revisit is closed as a loop.
+        return options_.revisit_min_path_m <= 0 ||
+               KeyFramePathLength(*map_, id, kf->id) < options_.revisit_min_path_m;
       },
       options_.place);
   if (candidates.empty()) {
@@ -331,9 +427,12 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
     }
     LOG_DEBUG << "loop closing: keyframe " << kf->id << " vs " << c->id << ": " << pairs.size()
               << " BoW matches, " << best << " RANSAC inliers";
-    if (best < options_.min_ransac_inliers) continue;
+    LoopVerification v;
+    v.frame_id = kf->frame_id;
+    v.loop_frame_id = c->frame_id;
+    v.bow_pairs = static_cast<int>(pairs.size());
     // Refinement: least squares on the inliers, re-scored, twice.
-    for (int round = 0; round < 2; ++round) {
+    for (int round = 0; round < 2 && best >= 3; ++round) {
       std::vector<Eigen::Vector3d> src, dst;
       for (size_t k = 0; k < pairs.size(); ++k) {
         if (!best_flags[k]) continue;
@@ -341,17 +440,54 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
         dst.push_back(pairs[k].p1);
       }
       const Rigid3d refined = AlignPoints(src, dst);
+      if (!refined.AllFinite()) break;
       const int n = count_inliers(refined, &flags);
       if (n < best) break;
       best = n;
       best_t12 = refined;
       best_flags = flags;
     }
+    v.inliers = best;
+    const Rigid3d corrected_pose = best_t12 * c->cam_from_world;
+    v.path_m = KeyFramePathLength(*map_, c->id, kf->id);
+    v.allowed_m = options_.max_correction_m + options_.max_drift_per_meter * v.path_m;
+    v.allowed_deg = options_.max_correction_deg + options_.max_drift_deg_per_meter * v.path_m;
+    // Correction: where the loop transform puts the camera against where odometry has it.
+    auto measure = [&](const Rigid3d& pose) {
+      const Rigid3d delta = pose * kf->cam_from_world.Inverse();
+      v.correction_m = (kf->CameraCenter() - pose.Inverse().translation).norm();
+      v.correction_deg = Eigen::AngleAxisd(delta.rotation).angle() * 180.0 / M_PI;
+    };
+    measure(corrected_pose);
+    auto reject = [&](const char* verdict, int LoopClosingStats::*counter) {
+      v.verdict = verdict;
+      LOG_DEBUG << "loop closing: keyframe " << kf->id << " (frame " << kf->frame_id << ") vs "
+                << c->id << " (frame " << c->frame_id << "): rejected (" << verdict
+                << "): " << v.inliers << " / " << v.bow_pairs << " inliers, " << v.projected
+                << " matches, correction " << v.correction_m << " m / " << v.correction_deg
+                << " deg, budget " << v.allowed_m << " m / " << v.allowed_deg << " deg over "
+                << v.path_m << " m";
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      stats_.*counter += 1;
+      stats_.verifications.push_back(v);
+    };
+    if (best < options_.min_ransac_inliers) {
+      reject("inliers", &LoopClosingStats::rejected_inliers);
+      continue;
+    }
+    if (best < options_.min_inlier_ratio * static_cast<double>(pairs.size())) {
+      reject("inlier ratio", &LoopClosingStats::rejected_ratio);
+      continue;
+    }
+    if (v.correction_m > v.allowed_m || v.correction_deg > v.allowed_deg) {
+      reject("implausible correction", &LoopClosingStats::rejected_implausible);
+      continue;
+    }
     // Guided search: the candidate's neighbourhood seen from the corrected pose.
     std::vector<std::shared_ptr<MapPoint>> kept(kf->size(), nullptr);
     for (size_t k = 0; k < pairs.size(); ++k)
       if (best_flags[k]) kept[pairs[k].idx1] = matches[pairs[k].idx1];
-    const Rigid3d corrected = best_t12 * c->cam_from_world;
+    const Rigid3d& corrected = corrected_pose;
     std::vector<std::shared_ptr<MapPoint>> loop_points;
     std::set<int64_t> seen;
     std::vector<std::shared_ptr<KeyFrame>> neighbourhood = {c};
@@ -365,15 +501,27 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
       }
     }
     SearchByProjection(*kf, corrected, loop_points, 10.0, matcher_.options().th_low, &kept);
-    int total = 0;
-    for (const auto& m : kept) total += m != nullptr;
+    // The transform from a few 3D-3D inliers carries their depth noise: refine the pose on every
+    // match by reprojection, keep the inliers, and check the correction again.
+    Rigid3d refined_pose = corrected;
+    const int total = RefineLoopPose(*kf, optimizer_, &kept, &refined_pose);
+    v.projected = total;
     if (total < options_.min_projection_matches) {
-      LOG_DEBUG << "loop closing: keyframe " << kf->id << " vs " << c->id << ": " << best
-                << " RANSAC inliers, " << total << " projected matches (too few)";
+      reject("guided matches", &LoopClosingStats::rejected_projection);
       continue;
     }
+    measure(refined_pose);
+    if (v.correction_m > v.allowed_m || v.correction_deg > v.allowed_deg) {
+      reject("implausible correction", &LoopClosingStats::rejected_implausible);
+      continue;
+    }
+    v.verdict = "accepted";
+    {
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      stats_.verifications.push_back(v);
+    }
     loop->loop_kf = c;
-    loop->cam_from_world = corrected;
+    loop->cam_from_world = refined_pose;
     loop->matches = std::move(kept);
     loop->loop_points = std::move(loop_points);
     loop->inliers = best;
@@ -392,8 +540,12 @@ void LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& lo
     if (kf->bad || loop.loop_kf->bad) return;
     map_->BumpCorrectionEpoch();  // local BA in flight must not write back pre-loop poses
     // 1. Move the current keyframe's neighbourhood (and the points it sees) by the loop transform.
+    // A revisit (loop keyframe covisible with the current one) must not move the loop side.
+    std::set<int64_t> loop_side = {loop.loop_kf->id};
+    for (const auto& [id, w] : loop.loop_kf->connection_weights) loop_side.insert(id);
     std::vector<std::shared_ptr<KeyFrame>> group = {kf};
     for (int64_t id : kf->ordered_connections) {
+      if (loop_side.count(id)) continue;
       auto n = map_->GetKeyFrame(id);
       if (n && !n->bad) group.push_back(n);
     }
@@ -548,6 +700,7 @@ void LoopCloser::RunGlobalBundleAdjustment(int64_t epoch) {
   std::vector<Observation> observations;
   ProjectionModel model{};
   int64_t first_kf = -1;
+  const auto start = std::chrono::steady_clock::now();
   {
     std::lock_guard<std::mutex> lock(map_->mutex());
     if (map_->CorrectionEpoch() != epoch || map_->keyframes().empty()) return;
@@ -663,10 +816,15 @@ void LoopCloser::RunGlobalBundleAdjustment(int64_t epoch) {
       if (!mp->bad) map_->UpdateNormalAndDepth(*mp);
     map_->BumpCorrectionEpoch();
   }
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     stats_.global_ba_runs++;
+    stats_.global_ba_ms_total += ms;
   }
+  LOG_INFO << "global BA: " << poses.size() << " keyframes, " << points.size() << " points, "
+           << observations.size() << " observations, " << ms << " ms (wall, its own thread)";
   Report(moved);
 }
 

@@ -33,15 +33,30 @@
 
 namespace dygslam {
 
+// One geometric verification of a loop candidate (RANSAC reached), for logs and calibration.
+struct LoopVerification {
+  int64_t frame_id = -1, loop_frame_id = -1;
+  int bow_pairs = 0, inliers = 0, projected = 0;  // projected: 0 if not reached
+  double correction_m = 0, correction_deg = 0;    // how far the loop transform moves the camera
+  double path_m = 0;                              // keyframe path since the loop keyframe
+  double allowed_m = 0, allowed_deg = 0;          // the drift budget over that path
+  const char* verdict = "";                       // "accepted" or the failed check
+};
+
 struct LoopClosingStats {
   int keyframes_checked = 0;
   int candidates_detected = 0;  // consistent candidates (before geometry)
-  int loops_rejected = 0;       // candidates that failed the geometric checks
+  int loops_rejected = 0;       // keyframes whose candidates all failed the geometric checks
+  // Candidates rejected, by check (first failed): too few inliers after refinement, inlier ratio,
+  // guided-search matches, correction larger than the drift budget.
+  int rejected_inliers = 0, rejected_ratio = 0, rejected_projection = 0, rejected_implausible = 0;
+  std::vector<LoopVerification> verifications;
   int loops_closed = 0;
   int points_fused = 0;
   int global_ba_runs = 0;
   int global_ba_discarded = 0;  // finished after a newer loop: not written back
   double correction_ms_total = 0;
+  double global_ba_ms_total = 0;                         // wall time of the global BAs written back
   std::vector<std::pair<int64_t, int64_t>> loops;        // (keyframe id, loop keyframe id)
   std::vector<std::pair<int64_t, int64_t>> loop_frames;  // (frame id, loop keyframe's frame id)
 };

@@ -19,14 +19,28 @@ struct LoopClosingOptions {
   bool enabled = false;
   // Candidates: keyframes at least this many keyframes older than the query...
   int min_keyframe_gap = 10;
+  // ...and not covisible with it, unless the keyframe path since them is at least this long (a
+  // place revisited without losing the map, e.g. there and back; <= 0: never, as ORB-SLAM2).
+  // bonn_crowd_part's whole path is 1.0 m (ground truth), its there-and-back version 2.0 m.
+  double revisit_min_path_m = 1.5;
   // ...seen in this many consecutive keyframes (each one covisible with the last group).
   int consistency = 3;
   // SE3 from matched map points (metric depth): RANSAC then refinement on the inliers.
   int min_bow_matches = 20;
   int ransac_iterations = 300;
   double ransac_threshold_px = 4.0;  // reprojection error, level-0 pixels (scaled by level)
-  int min_ransac_inliers = 20;
-  int min_projection_matches = 40;  // after the guided search with the loop transform
+  // Acceptance (issue 14): a false loop on bonn_crowd_part had 21 inliers and moved the camera
+  // 0.8 m after 0.4 m of travel, so the transform must be well supported after refinement...
+  int min_ransac_inliers = 40;
+  double min_inlier_ratio = 0.3;    // ...by this fraction of the BoW correspondences...
+  int min_projection_matches = 60;  // ...confirmed by the guided search with the loop transform...
+  // ...and plausible: the correction (camera moved by the loop transform) must not exceed what
+  // odometry could have drifted over the keyframe path since the loop keyframe:
+  // base + per_meter * path length (translation in m, rotation in degrees).
+  double max_correction_m = 0.10;
+  double max_drift_per_meter = 0.10;
+  double max_correction_deg = 3.0;
+  double max_drift_deg_per_meter = 2.0;
   double fusion_radius_px = 4.0;
   // Essential graph: covisibility edges with at least this many shared points.
   int essential_min_weight = 100;
@@ -36,14 +50,25 @@ struct LoopClosingOptions {
   PlaceRecognitionOptions place;
   void Check() const {
     DYGSLAM_CHECK_OPTION(min_keyframe_gap >= 1, "LoopClosing.min_keyframe_gap");
+    DYGSLAM_CHECK_OPTION(std::isfinite(revisit_min_path_m), "LoopClosing.revisit_min_path_m");
     DYGSLAM_CHECK_OPTION(consistency >= 1, "LoopClosing.consistency");
     DYGSLAM_CHECK_OPTION(min_bow_matches >= 3, "LoopClosing.min_bow_matches");
     DYGSLAM_CHECK_OPTION(ransac_iterations >= 1, "LoopClosing.ransac_iterations");
     DYGSLAM_CHECK_OPTION(ransac_threshold_px > 0 && std::isfinite(ransac_threshold_px),
                          "LoopClosing.ransac_threshold_px");
     DYGSLAM_CHECK_OPTION(min_ransac_inliers >= 3, "LoopClosing.min_ransac_inliers");
+    DYGSLAM_CHECK_OPTION(min_inlier_ratio >= 0 && min_inlier_ratio <= 1,
+                         "LoopClosing.min_inlier_ratio");
     DYGSLAM_CHECK_OPTION(min_projection_matches >= min_ransac_inliers,
                          "LoopClosing.min_projection_matches");
+    DYGSLAM_CHECK_OPTION(max_correction_m >= 0 && std::isfinite(max_correction_m),
+                         "LoopClosing.max_correction_m");
+    DYGSLAM_CHECK_OPTION(max_drift_per_meter >= 0 && std::isfinite(max_drift_per_meter),
+                         "LoopClosing.max_drift_per_meter");
+    DYGSLAM_CHECK_OPTION(max_correction_deg >= 0 && max_correction_deg <= 180,
+                         "LoopClosing.max_correction_deg");
+    DYGSLAM_CHECK_OPTION(max_drift_deg_per_meter >= 0 && std::isfinite(max_drift_deg_per_meter),
+                         "LoopClosing.max_drift_deg_per_meter");
     DYGSLAM_CHECK_OPTION(fusion_radius_px > 0 && std::isfinite(fusion_radius_px),
                          "LoopClosing.fusion_radius_px");
     DYGSLAM_CHECK_OPTION(essential_min_weight >= 1, "LoopClosing.essential_min_weight");

@@ -9,7 +9,12 @@
 namespace dygslam {
 namespace {
 
-TEST(LoopCorrection, DriftedLoopIsDetectedAndCorrected) {
+struct DriftedLoop {
+  LoopClosingStats stats;
+  double worst_before = 0, worst_after = 0;  // worst keyframe position error up to the loop
+};
+
+DriftedLoop RunDriftedLoop(const LoopClosingOptions& options) {
   const Vocabulary vocabulary =
       Vocabulary::Load(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/vocabulary.dygvoc");
   const OrbExtractor extractor{OrbExtractorOptions{}};
@@ -31,9 +36,6 @@ TEST(LoopCorrection, DriftedLoopIsDetectedAndCorrected) {
   auto database = std::make_shared<KeyFrameDatabase>();
   const auto geometry = std::make_shared<CameraGeometry>(
       CameraGeometry::Create(synth.camera, synth.sensor, extractor));
-  LoopClosingOptions options;
-  options.enabled = true;
-  options.global_bundle_adjustment = false;  // pose graph only: the figure below is its work
   LoopCloser closer(map, database, options, OptimizerOptions{}, MatcherOptions{},
                     /*threaded=*/false);
   // Drift: each keyframe's estimate is off by a yaw of 0.3 deg and 1.5 cm per keyframe
@@ -84,29 +86,63 @@ TEST(LoopCorrection, DriftedLoopIsDetectedAndCorrected) {
     closer.InsertKeyFrame(kf);  // synchronous
     world_drift = step * world_drift;
   }
-  const LoopClosingStats stats = closer.stats();
+  DriftedLoop out;
+  out.stats = closer.stats();
+  const int64_t loop_frame =
+      out.stats.loop_frames.empty() ? synth.num_frames : out.stats.loop_frames[0].first;
+  std::lock_guard<std::mutex> lock(map->mutex());
+  for (size_t k = 0; k < keyframes.size() && keyframes[k]->frame_id <= loop_frame; ++k) {
+    out.worst_before = std::max(out.worst_before, error_before[k]);
+    out.worst_after =
+        std::max(out.worst_after, (keyframes[k]->CameraCenter() - truth[k].translation).norm());
+  }
+  return out;
+}
+
+LoopClosingOptions Enabled() {
+  LoopClosingOptions options;
+  options.enabled = true;
+  options.global_bundle_adjustment = false;  // pose graph only: the figure below is its work
+  return options;
+}
+
+void Print(const LoopClosingStats& stats) {
+  for (const LoopVerification& v : stats.verifications)
+    std::printf(
+        "  frame %lld vs %lld: %d / %d inliers, %d matches, correction %.3f m / %.2f deg "
+        "(budget %.3f m / %.2f deg over %.2f m): %s\n",
+        static_cast<long long>(v.frame_id), static_cast<long long>(v.loop_frame_id), v.inliers,
+        v.bow_pairs, v.projected, v.correction_m, v.correction_deg, v.allowed_m, v.allowed_deg,
+        v.path_m, v.verdict);
+}
+
+TEST(LoopCorrection, DriftedLoopIsDetectedAndCorrected) {
+  const DriftedLoop run = RunDriftedLoop(Enabled());
+  const LoopClosingStats& stats = run.stats;
   ASSERT_GE(stats.loops_closed, 1);
   // The loop joins the end of the lap (after >= 25 keyframes, 150 frames) to its start.
-  const int64_t loop_frame = stats.loop_frames[0].first;
-  EXPECT_GE(loop_frame, 25 * kStride);
-  EXPECT_LE(stats.loop_frames[0].second, 8 * kStride);
-  // Worst position error of the keyframes up to the loop, before (as made) and after closing.
-  double worst_before = 0, worst_after = 0;
-  {
-    std::lock_guard<std::mutex> lock(map->mutex());
-    for (size_t k = 0; k < keyframes.size() && keyframes[k]->frame_id <= loop_frame; ++k) {
-      worst_before = std::max(worst_before, error_before[k]);
-      worst_after =
-          std::max(worst_after, (keyframes[k]->CameraCenter() - truth[k].translation).norm());
-    }
-  }
+  EXPECT_GE(stats.loop_frames[0].first, 25 * 6);
+  EXPECT_LE(stats.loop_frames[0].second, 8 * 6);
   std::printf(
       "drifted loop: %d loops closed (%d candidates, %d rejected) at frame %lld; worst keyframe "
       "error %.3f m before, %.3f m after\n",
       stats.loops_closed, stats.candidates_detected, stats.loops_rejected,
-      static_cast<long long>(loop_frame), worst_before, worst_after);
-  EXPECT_GT(worst_before, 0.3);
-  EXPECT_LT(worst_after, worst_before / 3);
+      static_cast<long long>(stats.loop_frames[0].first), run.worst_before, run.worst_after);
+  Print(stats);
+  EXPECT_GT(run.worst_before, 0.3);
+  EXPECT_LT(run.worst_after, run.worst_before / 3);
+}
+
+// The same loop with a drift budget below its true correction (0.64 m, 8.4 deg over 13.3 m of
+// path): refused as implausible, nothing moves. Budget 0.10 m + 0.02 x 13.3 m = 0.37 m.
+TEST(LoopCorrection, CorrectionBeyondTheDriftBudgetIsRefused) {
+  LoopClosingOptions options = Enabled();
+  options.max_drift_per_meter = 0.02;
+  const DriftedLoop run = RunDriftedLoop(options);
+  Print(run.stats);
+  EXPECT_EQ(run.stats.loops_closed, 0);
+  EXPECT_GE(run.stats.rejected_implausible, 1);
+  EXPECT_EQ(run.worst_after, run.worst_before);
 }
 
 }  // namespace

@@ -46,7 +46,7 @@ struct TrackingOptions {
   // returning frame against the last fallback frame says where that frame should have been, and
   // the stretch (plus the weakly held feature frames just before it) is moved by that correction.
   bool fallback_smoothing = true;
-  int fallback_smoothing_weak_inliers = 200;  // feature frames below this before a stretch join it
+  int fallback_smoothing_weak_inliers = 150;  // feature frames below this before a stretch join it
   double fallback_smoothing_max_translation = 0.15;  // metres: larger corrections are not applied
   double fallback_smoothing_max_rotation_deg = 10.0;
   void Check() const {

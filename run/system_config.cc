@@ -33,6 +33,9 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                          &options.tracking.fallback_check_below_inliers);
   tracking.ReadIfPresent("fallback_override_fraction_gain",
                          &options.tracking.fallback_override_fraction_gain);
+  tracking.ReadIfPresent("fallback_smoothing", &options.tracking.fallback_smoothing);
+  tracking.ReadIfPresent("fallback_smoothing_weak_inliers",
+                         &options.tracking.fallback_smoothing_weak_inliers);
   tracking.CheckOptions(options.tracking);
   const ConfigReader mapping = root.Section("LocalMapping");
   mapping.ReadIfPresent("triangulation_neighbors", &options.local_mapping.triangulation_neighbors);

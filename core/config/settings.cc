@@ -105,6 +105,7 @@ const std::vector<std::string>& KnownSettingsKeys() {
       // run/system_config.cc.
       "Tracking.init_min_features", "Tracking.motion_radius_px",
       "Tracking.max_frames_between_keyframes", "Tracking.ref_ratio",
+      "Tracking.fallback_smoothing", "Tracking.fallback_smoothing_weak_inliers",
       "LocalMapping.triangulation_neighbors", "LocalMapping.cull_keyframes",
       "LocalMapping.redundancy_ratio", "DynamicFilter.mode", "DynamicFilter.C1",
       "DynamicFilter.alpha", "DynamicFilter.Q", "DynamicFilter.R", "DynamicFilter.P_init",

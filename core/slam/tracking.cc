@@ -54,6 +54,9 @@ TrackResult Tracker::Track(Frame frame) {
           ok && options_.dense_fallback && DenseOverridesFeaturePose(frame, predicted);
       if (ok && !dense_override) {
         lost_ = false;
+        if (options_.dense_fallback && options_.fallback_smoothing && !records_.empty() &&
+            records_.back().state == TrackingState::kFallback)
+          SmoothFallbackStretch(frame, predicted);
         result.state = relocalized ? TrackingState::kRelocalized : TrackingState::kOk;
         result.cam_from_world = frame.cam_from_world;
         result.num_inliers = last_inliers_;
@@ -67,7 +70,7 @@ TrackResult Tracker::Track(Frame frame) {
         if (result.new_keyframe) RememberDenseKeyFrame(result.new_keyframe, frame);
         records_.push_back({frame.stamp, reference_kf_->id,
                             frame.cam_from_world * reference_kf_->cam_from_world.Inverse(),
-                            result.state});
+                            result.state, last_inliers_});
         last_frame_ = frame;
       } else if (dense_override ||
                  (options_.dense_fallback && TrackWithStaticDepth(frame, predicted))) {

@@ -18,17 +18,17 @@
 namespace dygslam {
 
 struct TrackingOptions {
-  int init_min_features = 300;       // features with depth needed to initialise
-  double motion_radius_px = 7.0;     // projection search radius (x scale) for the motion model
+  int init_min_features = 300;    // features with depth needed to initialise
+  double motion_radius_px = 7.0;  // projection search radius (x scale) for the motion model
   int motion_min_matches = 20;
-  int min_inliers = 10;              // motion model / reference keyframe
+  int min_inliers = 10;  // motion model / reference keyframe
   int local_map_min_inliers = 30;
   int relocalized_min_inliers = 50;
   int max_frames_between_keyframes = 30;  // usually the frame rate
   double ref_ratio = 0.75;
   int close_tracked_min = 100;
   int close_untracked_min = 70;
-  int new_points_min = 100;          // new keyframe: at least this many points from depth
+  int new_points_min = 100;  // new keyframe: at least this many points from depth
   int local_keyframes_max = 80;
   int relocalization_candidates = 5;
   PlaceRecognitionOptions place;  // candidates from the BoW index (when a vocabulary is set)
@@ -41,11 +41,20 @@ struct TrackingOptions {
   int fallback_check_below_inliers = 150;  // feature poses with fewer inliers are cross-checked
   double fallback_override_fraction_gain = 0.02;  // dense agreement must be this much higher
   double fallback_override_rmse_ratio = 1.5;      // ... or higher with this ratio of residuals
+  // When features take over again after a stretch of fallback frames, the stretch is re-anchored
+  // on the first feature pose (tracking_fallback.cc, SmoothFallbackStretch): the dense pose of the
+  // returning frame against the last fallback frame says where that frame should have been, and
+  // the stretch (plus the weakly held feature frames just before it) is moved by that correction.
+  bool fallback_smoothing = true;
+  int fallback_smoothing_weak_inliers = 150;  // feature frames below this before a stretch join it
+  double fallback_smoothing_max_translation = 0.15;  // metres: larger corrections are not applied
+  double fallback_smoothing_max_rotation_deg = 10.0;
   void Check() const {
     DYGSLAM_CHECK_OPTION(init_min_features > 0, "Tracking.init_min_features");
     DYGSLAM_CHECK_OPTION(motion_radius_px > 0, "Tracking.motion_radius_px");
     DYGSLAM_CHECK_OPTION(ref_ratio > 0 && ref_ratio <= 1, "Tracking.ref_ratio");
-    DYGSLAM_CHECK_OPTION(max_frames_between_keyframes >= 1, "Tracking.max_frames_between_keyframes");
+    DYGSLAM_CHECK_OPTION(max_frames_between_keyframes >= 1,
+                         "Tracking.max_frames_between_keyframes");
     place.Check();
     optimizer.Check();
     matcher.Check();
@@ -57,6 +66,12 @@ struct TrackingOptions {
         "Tracking.fallback_override_fraction_gain");
     DYGSLAM_CHECK_OPTION(fallback_override_rmse_ratio >= 1,
                          "Tracking.fallback_override_rmse_ratio");
+    DYGSLAM_CHECK_OPTION(fallback_smoothing_weak_inliers >= 0,
+                         "Tracking.fallback_smoothing_weak_inliers");
+    DYGSLAM_CHECK_OPTION(fallback_smoothing_max_translation > 0,
+                         "Tracking.fallback_smoothing_max_translation");
+    DYGSLAM_CHECK_OPTION(fallback_smoothing_max_rotation_deg > 0,
+                         "Tracking.fallback_smoothing_max_rotation_deg");
   }
 };
 
@@ -74,6 +89,7 @@ struct TrajectoryRecord {
   int64_t ref_kf_id = -1;
   Rigid3d cam_from_ref;
   TrackingState state = TrackingState::kNotInitialized;
+  int num_inliers = 0;  // feature inliers of the local-map tracking (0 for fallback frames)
 };
 
 class Tracker {
@@ -88,7 +104,8 @@ class Tracker {
   // Bag-of-words place recognition: relocalization candidates from `database`, BoW-accelerated
   // matching in relocalization and reference-keyframe tracking; new keyframes get BoW vectors and
   // are added to `database`. Without it (nullptr) both fall back to brute-force matching.
-  void SetPlaceRecognition(std::shared_ptr<const Vocabulary> vocabulary, std::shared_ptr<KeyFrameDatabase> database);
+  void SetPlaceRecognition(std::shared_ptr<const Vocabulary> vocabulary,
+                           std::shared_ptr<KeyFrameDatabase> database);
   // The map was loaded from a file (map_file.h): the first frame is relocalized against it
   // instead of starting a new map. localization: track against it without adding keyframes or
   // map points (pose only, like ORB-SLAM2's localization mode).
@@ -130,6 +147,10 @@ class Tracker {
   // Sets up a frame whose cam_from_world is a dense pose (drops feature associations that
   // disagree with it); true.
   bool AcceptDensePose(Frame& frame);
+  // Called for a frame tracked by features right after a fallback frame (last_frame_): re-anchors
+  // the fallback stretch on the frame's feature pose (see TrackingOptions::fallback_smoothing).
+  // Updates records_ and last_frame_.cam_from_world; false when no verified correction exists.
+  bool SmoothFallbackStretch(const Frame& frame, const std::optional<Rigid3d>& predicted);
   void RememberDenseKeyFrame(const std::shared_ptr<KeyFrame>& kf, const Frame& frame);
 
   TrackingOptions options_;

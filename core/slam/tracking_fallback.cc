@@ -119,4 +119,65 @@ bool Tracker::AcceptDensePose(Frame& frame) {
   return true;
 }
 
+namespace {
+// The pose between `a` (s = 0) and `b` (s = 1): camera centres interpolated linearly, rotations
+// by slerp.
+Rigid3d InterpolatePose(const Rigid3d& a_cam_from_world, const Rigid3d& b_cam_from_world,
+                        double s) {
+  const Rigid3d a = a_cam_from_world.Inverse(), b = b_cam_from_world.Inverse();
+  const Rigid3d world_from_cam(a.rotation.slerp(s, b.rotation),
+                               (1 - s) * a.translation + s * b.translation);
+  return world_from_cam.Inverse();
+}
+}  // namespace
+
+bool Tracker::SmoothFallbackStretch(const Frame& frame, const std::optional<Rigid3d>& predicted) {
+  if (!predicted || !frame.dense || !last_frame_.dense || !last_frame_.has_pose) return false;
+  if (!static_depth_odometry_) return false;
+  // Where the last fallback frame should have been, given this frame's feature pose.
+  const Rigid3d seed = *predicted * last_frame_.cam_from_world.Inverse();  // cur_from_last
+  const StaticDepthEstimate e =
+      static_depth_odometry_->Estimate(*last_frame_.dense, *frame.dense, seed);
+  if (!e.verified) {
+    LOG_DEBUG << "tracking: frame " << frame.id
+              << " fallback stretch not re-anchored (dense estimate not verified)";
+    return false;
+  }
+  const Rigid3d last_corrected = e.cur_from_ref.Inverse() * frame.cam_from_world;
+  // world-side correction: last_corrected = last * correction (relative poses kept).
+  const Rigid3d correction = last_frame_.cam_from_world.Inverse() * last_corrected;
+  const Rigid3d jump = last_corrected * last_frame_.cam_from_world.Inverse();
+  if (jump.translation.norm() > options_.fallback_smoothing_max_translation ||
+      RotationAngle(jump.rotation) * 180.0 / M_PI > options_.fallback_smoothing_max_rotation_deg) {
+    LOG_DEBUG << "tracking: frame " << frame.id << " fallback stretch not re-anchored (correction "
+              << jump.translation.norm() << " m)";
+    return false;
+  }
+  // The stretch: the fallback records at the end, then the feature frames just before them whose
+  // pose rested on few inliers (the drift of the stretch starts there).
+  size_t begin = records_.size();
+  while (begin > 0 && records_[begin - 1].state == TrackingState::kFallback) --begin;
+  const size_t fallback_begin = begin;
+  while (begin > 0 && records_[begin - 1].state == TrackingState::kOk &&
+         records_[begin - 1].ref_kf_id >= 0 &&
+         records_[begin - 1].num_inliers < options_.fallback_smoothing_weak_inliers)
+    --begin;
+  const size_t n = records_.size() - begin;
+  for (size_t k = begin; k < records_.size(); ++k) {
+    TrajectoryRecord& r = records_[k];
+    if (r.ref_kf_id < 0) continue;
+    const Rigid3d ref_from_world = map_->ResolvedPose(r.ref_kf_id);
+    const Rigid3d cam_from_world = r.cam_from_ref * ref_from_world;
+    const double s = double(k - begin + 1) / double(n);
+    const Rigid3d corrected = InterpolatePose(cam_from_world, cam_from_world * correction, s);
+    r.cam_from_ref = corrected * ref_from_world.Inverse();
+  }
+  last_frame_.cam_from_world = last_corrected;
+  LOG_DEBUG << "tracking: frame " << frame.id << " re-anchored " << records_.size() - fallback_begin
+            << " fallback frames and " << fallback_begin - begin << " weakly held ones by "
+            << jump.translation.norm() << " m, " << RotationAngle(jump.rotation) * 180 / M_PI
+            << " deg";
+  return true;
+}
+
 }  // namespace dygslam

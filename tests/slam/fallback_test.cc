@@ -175,5 +175,49 @@ TEST(SlamFallback, BonnCrowdFramesWherePersonFillsTheViewGetAPose) {
   }
 }
 
+// The acceptance figure of issue 16 on the whole sequence: every frame has a pose and the ATE
+// over all of them (fallback frames included) stays low. The final trajectory re-anchors each
+// fallback stretch on the first feature pose after it (Tracking.fallback_smoothing): it must be
+// more accurate than the poses the frames got online.
+TEST(SlamFallback, BonnCrowdAllFramesAteWithSmoothedFallbackStretches) {
+  DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
+  const RgbdDataset dataset = RgbdDataset::Open(dir);
+  const Settings settings =
+      LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
+  SystemOptions options = SystemOptionsFromSettings(settings);
+  options.filter_mode = FilterMode::kFull;
+  options.deterministic = true;
+  ASSERT_TRUE(options.tracking.fallback_smoothing);  // the default
+  std::map<std::string, int> states;
+  std::vector<StampedPose> online;
+  System system(options);
+  for (size_t k = 0; k < dataset.size(); ++k) {
+    const cv::Mat rgb = dataset.LoadRgb(k, options.camera.width, options.camera.height);
+    const cv::Mat depth = dataset.LoadDepth(k, options.camera.width, options.camera.height);
+    const FrameResult r = system.FeedRgbdFrame(rgb, depth, dataset.frame(k).rgb_stamp);
+    ++states[ToString(r.state)];
+    if (r.world_from_cam) online.push_back({r.stamp, *r.world_from_cam});
+  }
+  system.Shutdown();
+  const std::vector<StampedPose> trajectory = system.Trajectory();
+  const auto groundtruth = ReadTumTrajectory(dir + "/groundtruth.txt");
+  const AteResult ate = ComputeAte(groundtruth, trajectory);
+  const AteResult ate_online = ComputeAte(groundtruth, online);
+  std::cout << "bonn_crowd_part (" << dataset.size() << " frames): ok " << states["ok"]
+            << ", fallback " << states["fallback"] << ", relocalized " << states["relocalized"]
+            << ", lost " << states["lost"] << "; ATE RMSE over all " << trajectory.size()
+            << " poses " << ate.error.rmse << " m (online poses " << ate_online.error.rmse
+            << " m)\n";
+  const int with_pose = states["ok"] + states["fallback"] + states["relocalized"];
+  EXPECT_GE(with_pose, static_cast<int>(0.995 * dataset.size()));
+  EXPECT_EQ(trajectory.size(), static_cast<size_t>(with_pose));
+  EXPECT_GT(states["fallback"], 10);  // the two crowded stretches (~196-208, ~324-331)
+  // Measured (deterministic, 2-core machine): 0.0160 m smoothed, 0.0204 m online (ratio 0.78);
+  // with real threading 0.0156-0.0188 m over 6 direct runs (BENCHMARKS.md). Margins: above the
+  // worst threaded run, and a ratio halfway between the measured 0.78 and no gain.
+  EXPECT_LT(ate.error.rmse, 0.020);
+  EXPECT_LT(ate.error.rmse, 0.9 * ate_online.error.rmse);
+}
+
 }  // namespace
 }  // namespace dygslam

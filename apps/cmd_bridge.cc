@@ -157,8 +157,7 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
     pipeline.Check();
   }
 
-  auto stop = std::make_shared<StopSignal>();
-  SignalStopper signals(stop);
+  auto stop = std::make_shared<StopFlag>(StopFlag::Signals::kStop);
   std::vector<std::thread> threads;
   std::mutex mutex;
   int result = 0;

@@ -26,6 +26,7 @@ std::pair<size_t, size_t> ParseEntryRange(const std::string& text) {
     throw InvalidOptions("--frames: expected FIRST:LAST, got '" + text + "'");
   auto parse = [&](const std::string& s) -> size_t {
     if (s.empty()) return 0;
+    if (s.size() > 18) throw InvalidOptions("--frames: number too large: '" + s + "'");
     for (char c : s)
       if (c < '0' || c > '9')
         throw InvalidOptions("--frames: not a non-negative integer: '" + s + "'");
@@ -120,11 +121,15 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   }
   o.detector_model = p.Get("detector-model");
   std::tie(o.first_entry, o.last_entry) = ParseEntryRange(p.Get("frames"));
-  o.rate = std::stod(p.Get("rate"));
-  o.window = std::stoi(p.Get("window"));
-  o.loop_minutes = std::stod(p.Get("loop-minutes"));
-  o.detection_wait = std::chrono::milliseconds(std::stoi(p.Get("detection-wait-ms")));
-  o.domain_id = std::stoi(p.Get("domain"));
+  // Bad numbers are usage errors naming the option (exit 2), as on `dygslam run`.
+  int64_t window = 0, wait_ms = 0, domain = 0;
+  if (!p.GetNumber("rate", 0, 1e6, &o.rate) || !p.GetInt("window", 1, 1000000, &window) ||
+      !p.GetNumber("loop-minutes", 0, 1e6, &o.loop_minutes) ||
+      !p.GetInt("detection-wait-ms", 0, 3600000, &wait_ms) || !p.GetInt("domain", -1, 232, &domain))
+    return p.exit_code();
+  o.window = static_cast<int>(window);
+  o.detection_wait = std::chrono::milliseconds(wait_ms);
+  o.domain_id = static_cast<int>(domain);
   o.run_detector = !p.Flag("no-detector");
   o.run_mapper = !p.Flag("no-mapper");
   o.partition = p.Get("partition");
@@ -147,8 +152,7 @@ int RunComponentCommand(const std::vector<std::string>& args) {
 
   o.processes = p.Flag("processes");
   if (p.Positional("NAME") == "pipeline") return RunPipeline(o);  // the whole pipeline
-  auto stop = std::make_shared<StopSignal>();
-  SignalStopper signals(stop);
+  auto stop = std::make_shared<StopFlag>(StopFlag::Signals::kStop);
   return RunComponent(p.Positional("NAME"), o, stop);
 }
 

@@ -34,8 +34,7 @@ int RunDiscoveryServerCommand(const std::vector<std::string>& args) {
   }
   if (domain < -1 || domain > 232) return p.UsageError("--domain: expected 0..232");
   if (domain < 0) domain = dds::DomainIdFromEnvironment(0);
-  auto stop = std::make_shared<StopSignal>();
-  SignalStopper signals(stop);
+  auto stop = std::make_shared<StopFlag>(StopFlag::Signals::kStop);
   dds::RunDiscoveryServer(p.Get("listen"), domain, [&] { return stop->requested(); });
   return 0;
 }

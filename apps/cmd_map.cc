@@ -118,7 +118,7 @@ int RunMap(const std::vector<std::string>& args) {
   if (!p.Parse(args)) return p.exit_code();
   // A stop request ends the frame loop; the outputs are then written from what was processed
   // (shares the flag of dygslam main's early scope, so a signal during setup counts too).
-  ScopedStopSignals stop_signals;
+  const StopFlag stop(StopFlag::Signals::kStop);
   // Numbers first: a malformed one is a usage error (exit 2).
   try {
     for (const char* name : {"resolution", "every", "reference-until", "save-every"}) {
@@ -253,7 +253,7 @@ int RunMap(const std::vector<std::string>& args) {
       std::fflush(stderr);
     }
   };
-  auto stop_requested = [] { return ScopedStopSignals::Received() != 0; };
+  auto stop_requested = [&stop] { return stop.requested(); };
   bool interrupted = false;
   if (from_trajectory) {
     for (size_t k = first; k < last; ++k) {

@@ -96,14 +96,14 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
     system.SetKeyframeCallback([m](const KeyframeData& k) { m->Submit(k); });
   }
   // SIGINT / SIGTERM -> the stop flag the loop polls (shared with dygslam main's early scope).
-  ScopedStopSignals signals;
+  const StopFlag stop(StopFlag::Signals::kStop);
   DatasetRunOptions run;
   run.first_entry = s.first;
   run.last_entry = s.last;
   run.image_width = s.system.camera.width;
   run.image_height = s.system.camera.height;
   if (s.use_detection_file) run.detections = &s.detections;
-  run.stop = [] { return ScopedStopSignals::Received() != 0; };
+  run.stop = [&stop] { return stop.requested(); };
   std::string csv = FramesCsvHeader();
   std::vector<StampedPose> online;  // the pose known when each frame was tracked
   const auto t0 = std::chrono::steady_clock::now();
@@ -128,7 +128,7 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   outcome.processed = summary.processed;
   outcome.lost = summary.lost;
   if (s.progress) std::fprintf(stderr, "\n");
-  outcome.interrupted = summary.interrupted || ScopedStopSignals::Received() != 0;
+  outcome.interrupted = summary.interrupted || stop.requested();
   if (outcome.interrupted) std::fprintf(stderr, "[run] interrupted: flushing outputs\n");
   system.Shutdown();
   if (!s.save_map.empty())

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -164,6 +165,49 @@ int ArgParser::UsageError(const std::string& message) const {
             << "usage: dygslam " << command_ << " " << usage_ << "\n"
             << "(dygslam " << command_ << " --help for details)\n";
   return 2;
+}
+
+bool ArgParser::GetInt(const std::string& option, int64_t min_value, int64_t max_value,
+                       int64_t* value) {
+  const std::string text = Get(option);
+  const bool negative = !text.empty() && text[0] == '-';
+  const std::string digits = negative ? text.substr(1) : text;
+  bool ok = !digits.empty() && digits.size() <= 18;
+  int64_t v = 0;
+  for (size_t i = 0; ok && i < digits.size(); ++i) {
+    ok = digits[i] >= '0' && digits[i] <= '9';
+    v = v * 10 + (digits[i] - '0');
+  }
+  if (negative) v = -v;
+  if (ok && v >= min_value && v <= max_value) {
+    *value = v;
+    return true;
+  }
+  exit_code_ = UsageError("--" + option + ": expected an integer in " + std::to_string(min_value) +
+                          ".." + std::to_string(max_value) + ", got '" + text + "'");
+  return false;
+}
+
+bool ArgParser::GetNumber(const std::string& option, double min_value, double max_value,
+                          double* value) {
+  const std::string text = Get(option);
+  size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (!text.empty() && used == text.size() && std::isfinite(v) && v >= min_value &&
+      v <= max_value) {
+    *value = v;
+    return true;
+  }
+  std::ostringstream message;
+  message << "--" << option << ": expected a number in " << min_value << ".." << max_value
+          << ", got '" << text << "'";
+  exit_code_ = UsageError(message.str());
+  return false;
 }
 
 bool ArgParser::Parse(const std::vector<std::string>& args) {

@@ -72,6 +72,11 @@ class ArgParser {
   std::string Usage() const;
   // Prints "dygslam <command>: <message>" + usage hint to stderr; returns 2.
   int UsageError(const std::string& message) const;
+  // The option's value as a whole number in [min_value, max_value] / a finite number in
+  // [min_value, max_value]. On a malformed or out-of-range value: false, after the usage error
+  // "--NAME: expected an integer in MIN..MAX, got 'VALUE'" (exit_code() is then 2).
+  bool GetInt(const std::string& option, int64_t min_value, int64_t max_value, int64_t* value);
+  bool GetNumber(const std::string& option, double min_value, double max_value, double* value);
 
  private:
   struct Spec {

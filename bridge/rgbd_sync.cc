@@ -19,29 +19,24 @@ RgbdSynchronizer::RgbdSynchronizer(const RgbdSyncOptions& options) : options_(op
 }
 
 std::vector<RgbdPair> RgbdSynchronizer::AddColor(StampedImage color) {
-  if (last_color_ && color.stamp <= *last_color_) {
-    ++stats_.dropped_color;
-    return {};
-  }
-  last_color_ = color.stamp;
-  colors_.push_back(std::move(color));
-  if (colors_.size() > options_.max_queue) {
-    colors_.pop_front();
-    ++stats_.dropped_color;
-  }
-  return Match();
+  return Add(std::move(color), &colors_, &last_color_, &stats_.dropped_color);
 }
 
 std::vector<RgbdPair> RgbdSynchronizer::AddDepth(StampedImage depth) {
-  if (last_depth_ && depth.stamp <= *last_depth_) {
-    ++stats_.dropped_depth;
+  return Add(std::move(depth), &depths_, &last_depth_, &stats_.dropped_depth);
+}
+
+std::vector<RgbdPair> RgbdSynchronizer::Add(StampedImage image, std::deque<StampedImage>* queue,
+                                            std::optional<Timestamp>* last, size_t* dropped) {
+  if (*last && image.stamp <= **last) {
+    ++*dropped;
     return {};
   }
-  last_depth_ = depth.stamp;
-  depths_.push_back(std::move(depth));
-  if (depths_.size() > options_.max_queue) {
-    depths_.pop_front();
-    ++stats_.dropped_depth;
+  *last = image.stamp;
+  queue->push_back(std::move(image));
+  if (queue->size() > options_.max_queue) {
+    queue->pop_front();
+    ++*dropped;
   }
   return Match();
 }

@@ -12,10 +12,9 @@
 
 #include <cstddef>
 #include <deque>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "core/base/timestamp.h"
 
@@ -56,6 +55,10 @@ class RgbdSynchronizer {
 
  private:
   std::vector<RgbdPair> Match();
+  // Queues `image` behind `last` (dropped when its stamp does not increase, or the oldest when
+  // the queue is full), counting drops in `dropped`; then matches.
+  std::vector<RgbdPair> Add(StampedImage image, std::deque<StampedImage>* queue,
+                            std::optional<Timestamp>* last, size_t* dropped);
   RgbdSyncOptions options_;
   int64_t tolerance_ns_ = 0;
   std::deque<StampedImage> colors_, depths_;

@@ -606,7 +606,7 @@ RosBridgeStats RosBridge::stats() const {
 }
 
 RosBridgeStats RunBridge(std::shared_ptr<dds::Participant> participant,
-                         const RosBridgeOptions& options, const StopSignalPtr& stop) {
+                         const RosBridgeOptions& options, const StopFlagPtr& stop) {
   RosBridge bridge(std::move(participant), options);
   std::optional<Clock::time_point> slam_done_at;
   while (!stop->WaitFor(std::chrono::milliseconds(50))) {

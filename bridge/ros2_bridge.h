@@ -125,7 +125,7 @@ class RosBridge {
 // Runs the bridge until `stop` (or, after END_OF_STREAM, until slam is done and the final
 // outputs were republished). Returns its statistics.
 RosBridgeStats RunBridge(std::shared_ptr<dds::Participant> participant,
-                         const RosBridgeOptions& options, const StopSignalPtr& stop);
+                         const RosBridgeOptions& options, const StopFlagPtr& stop);
 
 }  // namespace ros2
 }  // namespace dygslam

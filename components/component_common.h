@@ -1,5 +1,5 @@
-// Pieces shared by the component shells: a stop signal, stream-status kinds, a small blocking
-// queue. No DDS types here.
+// Pieces shared by the component shells: the stop flag (core/base), stream-status kinds, a small
+// blocking queue. No DDS types here.
 #pragma once
 
 #include <chrono>
@@ -9,35 +9,14 @@
 #include <mutex>
 #include <optional>
 
+#include "core/base/stop_signal.h"
+
 namespace dygslam {
 
-// Set once (SIGINT/SIGTERM, end of data, test teardown); components poll it or wait on it.
-class StopSignal {
- public:
-  void Request() {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stop_ = true;
-    }
-    cv_.notify_all();
-  }
-  bool requested() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return stop_;
-  }
-  // Sleeps up to `duration`; returns true if stop was requested.
-  template <class Rep, class Period>
-  bool WaitFor(std::chrono::duration<Rep, Period> duration) const {
-    std::unique_lock<std::mutex> lock(mutex_);
-    return cv_.wait_for(lock, duration, [this] { return stop_; });
-  }
-
- private:
-  mutable std::mutex mutex_;
-  mutable std::condition_variable cv_;
-  bool stop_ = false;
-};
-using StopSignalPtr = std::shared_ptr<StopSignal>;
+// The components' stop flag is core/base's StopFlag. The old names stay for the slam and mapper
+// components' files (changed on other branches); new code says StopFlag / StopFlagPtr.
+using StopSignal = StopFlag;
+using StopSignalPtr = StopFlagPtr;
 
 // msg::StreamStatus::kind values.
 // kMapLoaded (slam, issue 15): the SLAM map file it started from; num_frames = its keyframe

@@ -26,7 +26,7 @@ msg::Detections DetectorCore::Process(const RgbdFrameData& frame) {
 }
 
 DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
-                          const DetectorOptions& options, const StopSignalPtr& stop) {
+                          const DetectorOptions& options, const StopFlagPtr& stop) {
   DetectorCore core(options);
   DetectorStats stats;
   BlockingQueue<msg::RgbdFrame> queue;

@@ -35,6 +35,6 @@ struct DetectorStats {
 };
 
 DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
-                          const DetectorOptions& options, const StopSignalPtr& stop);
+                          const DetectorOptions& options, const StopFlagPtr& stop);
 
 }  // namespace dygslam

@@ -33,41 +33,6 @@ namespace dygslam {
 namespace fs = std::filesystem;
 
 // ---------------------------------------------------------------------------------------------
-// Signals.
-
-struct SignalStopper::Impl {
-  StopSignalPtr stop;
-  ScopedStopSignals
-      signals;  // shares the flag with an outer scope (dygslam main), see stop_signal.h
-  std::atomic<bool> quit{false};
-  std::atomic<bool> signaled{false};
-  std::thread watcher;
-};
-
-SignalStopper::SignalStopper(StopSignalPtr stop) : impl_(std::make_unique<Impl>()) {
-  impl_->stop = std::move(stop);
-  Impl* impl = impl_.get();
-  impl_->watcher = std::thread([impl] {
-    while (!impl->quit.load()) {
-      if (const int sig = ScopedStopSignals::Received(); sig != 0) {
-        impl->signaled = true;
-        LOG_INFO << "signal " << sig << ": stopping, flushing outputs";
-        impl->stop->Request();
-        return;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-  });
-}
-
-SignalStopper::~SignalStopper() {
-  impl_->quit = true;
-  impl_->watcher.join();
-}
-
-bool SignalStopper::signaled() const { return impl_->signaled.load(); }
-
-// ---------------------------------------------------------------------------------------------
 // Options.
 
 void PipelineOptions::Check() const {
@@ -198,7 +163,7 @@ std::vector<std::string> ComponentNames(const PipelineOptions& options) {
 }
 
 int RunComponentOn(const std::string& name, const PipelineOptions& options,
-                   std::shared_ptr<dds::Participant> participant, const StopSignalPtr& stop) {
+                   std::shared_ptr<dds::Participant> participant, const StopFlagPtr& stop) {
   if (name == "player") {
     PlayerOptions p;
     p.dataset_dir = options.dataset_dir;
@@ -275,7 +240,7 @@ std::shared_ptr<dds::Participant> MakeParticipant(const PipelineOptions& options
   return dds::Participant::Create(p);
 }
 
-int RunSingleProcess(const PipelineOptions& options, const StopSignalPtr& stop) {
+int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop) {
   auto participant = MakeParticipant(options, "pipeline");
   std::map<std::string, int> codes;
   std::mutex mutex;
@@ -313,7 +278,7 @@ bool ComponentCatchesSignal(pid_t pid, const std::string& component, int sig) {
   return ProcessCatchesSignal(pid, sig);
 }
 
-int RunProcesses(const PipelineOptions& options, const StopSignalPtr& stop) {
+int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop) {
   const std::string exe =
       options.executable.empty() ? fs::read_symlink("/proc/self/exe").string() : options.executable;
   const std::vector<std::string> args = ComponentArgs(options);
@@ -396,8 +361,7 @@ int RunProcesses(const PipelineOptions& options, const StopSignalPtr& stop) {
 
 }  // namespace
 
-int RunComponent(const std::string& name, const PipelineOptions& options,
-                 const StopSignalPtr& stop) {
+int RunComponent(const std::string& name, const PipelineOptions& options, const StopFlagPtr& stop) {
   options.Check();
   BoundMallocArenas();
   return RunComponentOn(name, options, MakeParticipant(options, name), stop);
@@ -409,14 +373,13 @@ int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
   PipelineOptions options = pipeline_options;
   options.wait_for_components = true;
   fs::create_directories(options.output_dir);
-  auto stop = std::make_shared<StopSignal>();
-  SignalStopper signals(stop);
+  auto stop = std::make_shared<StopFlag>(StopFlag::Signals::kStop);
   const int code =
       options.processes ? RunProcesses(options, stop) : RunSingleProcess(options, stop);
-  if (signals.signaled()) {
-    LOG_INFO << "stopped by signal; outputs flushed";
+  if (const int sig = stop->signal(); sig != 0) {
+    LOG_INFO << "stopped by signal " << sig << "; outputs flushed";
   }
-  if (report != nullptr) report->signaled = signals.signaled();
+  if (report != nullptr) report->signaled = stop->signal() != 0;
   return code;
 }
 

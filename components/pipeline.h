@@ -77,8 +77,7 @@ std::vector<std::string> ComponentArgs(const PipelineOptions& options);
 // Runs one component in this process until it finishes or `stop` (used by
 // `dygslam component <name>` and by the single-process mode). name: player | detector | slam |
 // mapper | recorder. Returns 0 on success.
-int RunComponent(const std::string& name, const PipelineOptions& options,
-                 const StopSignalPtr& stop);
+int RunComponent(const std::string& name, const PipelineOptions& options, const StopFlagPtr& stop);
 
 struct StopReport {
   bool signaled = false;  // stopped by SIGINT / SIGTERM (outputs flushed)
@@ -86,19 +85,5 @@ struct StopReport {
 // Runs the whole pipeline until the end of the data or a signal. Returns 0 on success (also when
 // stopped by a signal), 1 if a component failed.
 int RunPipeline(const PipelineOptions& options, StopReport* report = nullptr);
-
-// Turns SIGINT / SIGTERM into stop->Request() while alive (one watcher per process).
-class SignalStopper {
- public:
-  explicit SignalStopper(StopSignalPtr stop);
-  ~SignalStopper();
-  SignalStopper(const SignalStopper&) = delete;
-  SignalStopper& operator=(const SignalStopper&) = delete;
-  bool signaled() const;
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
-};
 
 }  // namespace dygslam

@@ -80,7 +80,7 @@ std::vector<StampedPose> DatasetPlayer::GroundTruth() const {
 }
 
 PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const PlayerOptions& options,
-                      const StopSignalPtr& stop) {
+                      const StopFlagPtr& stop) {
   using Clock = std::chrono::steady_clock;
   options.Check();
   DatasetPlayer player(options);

@@ -86,6 +86,6 @@ struct PlayerStats {
 
 // Publishes the dataset; returns when slam reported done, or stop was requested.
 PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const PlayerOptions& options,
-                      const StopSignalPtr& stop);
+                      const StopFlagPtr& stop);
 
 }  // namespace dygslam

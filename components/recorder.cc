@@ -111,7 +111,7 @@ std::string RecorderCore::Write() const {
 }
 
 RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
-                          const RecorderOptions& options, const StopSignalPtr& stop) {
+                          const RecorderOptions& options, const StopFlagPtr& stop) {
   RecorderCore core(options);
   RecorderStats stats;
   std::mutex mutex;

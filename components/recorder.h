@@ -75,6 +75,6 @@ struct RecorderStats {
 };
 
 RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
-                          const RecorderOptions& options, const StopSignalPtr& stop);
+                          const RecorderOptions& options, const StopFlagPtr& stop);
 
 }  // namespace dygslam

@@ -3,7 +3,8 @@
 //
 //   DatasetRunOptions o;
 //   o.first_entry = 0; o.last_entry = dataset.num_rgb_entries();
-//   o.stop = [] { return ScopedStopSignals::Received() != 0; };
+//   const StopFlag flag(StopFlag::Signals::kStop);  // core/base/stop_signal.h
+//   o.stop = [&flag] { return flag.requested(); };
 //   const DatasetRunSummary s = RunDatasetFrames(dataset, system, o,
 //       [&](size_t entry, const FrameResult& r) { ... });   // after every fed frame
 //

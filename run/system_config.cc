@@ -2,6 +2,8 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <initializer_list>
+#include <variant>
 
 #include "core/base/error.h"
 
@@ -10,6 +12,21 @@
 #endif
 
 namespace dygslam {
+namespace {
+
+// One settings key of a section and the options field it sets when present.
+struct SettingsField {
+  const char* key;
+  std::variant<int*, float*, double*, bool*> field;
+};
+
+// Reads each present key into its field, in the order given (the first bad value is reported).
+void ReadFields(const ConfigReader& section, std::initializer_list<SettingsField> fields) {
+  for (const SettingsField& f : fields)
+    std::visit([&](auto* field) { section.ReadIfPresent(f.key, field); }, f.field);
+}
+
+}  // namespace
 
 SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   SystemOptions options;
@@ -20,27 +37,24 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   // Keyframe spacing follows the frame rate unless set.
   options.tracking.max_frames_between_keyframes = static_cast<int>(settings.sensor.fps);
   const ConfigReader tracking = root.Section("Tracking");
-  tracking.ReadIfPresent("init_min_features", &options.tracking.init_min_features);
-  tracking.ReadIfPresent("motion_radius_px", &options.tracking.motion_radius_px);
-  tracking.ReadIfPresent("max_frames_between_keyframes",
-                         &options.tracking.max_frames_between_keyframes);
-  tracking.ReadIfPresent("ref_ratio", &options.tracking.ref_ratio);
-  tracking.ReadIfPresent("dense_fallback", &options.tracking.dense_fallback);
-  tracking.ReadIfPresent("fallback_min_inlier_fraction",
-                         &options.tracking.fallback.min_inlier_fraction);
-  tracking.ReadIfPresent("fallback_min_inliers", &options.tracking.fallback.min_inliers);
-  tracking.ReadIfPresent("fallback_check_below_inliers",
-                         &options.tracking.fallback_check_below_inliers);
-  tracking.ReadIfPresent("fallback_override_fraction_gain",
-                         &options.tracking.fallback_override_fraction_gain);
-  tracking.ReadIfPresent("fallback_smoothing", &options.tracking.fallback_smoothing);
-  tracking.ReadIfPresent("fallback_smoothing_weak_inliers",
-                         &options.tracking.fallback_smoothing_weak_inliers);
+  ReadFields(
+      tracking,
+      {{"init_min_features", &options.tracking.init_min_features},
+       {"motion_radius_px", &options.tracking.motion_radius_px},
+       {"max_frames_between_keyframes", &options.tracking.max_frames_between_keyframes},
+       {"ref_ratio", &options.tracking.ref_ratio},
+       {"dense_fallback", &options.tracking.dense_fallback},
+       {"fallback_min_inlier_fraction", &options.tracking.fallback.min_inlier_fraction},
+       {"fallback_min_inliers", &options.tracking.fallback.min_inliers},
+       {"fallback_check_below_inliers", &options.tracking.fallback_check_below_inliers},
+       {"fallback_override_fraction_gain", &options.tracking.fallback_override_fraction_gain},
+       {"fallback_smoothing", &options.tracking.fallback_smoothing},
+       {"fallback_smoothing_weak_inliers", &options.tracking.fallback_smoothing_weak_inliers}});
   tracking.CheckOptions(options.tracking);
   const ConfigReader mapping = root.Section("LocalMapping");
-  mapping.ReadIfPresent("triangulation_neighbors", &options.local_mapping.triangulation_neighbors);
-  mapping.ReadIfPresent("cull_keyframes", &options.local_mapping.cull_keyframes);
-  mapping.ReadIfPresent("redundancy_ratio", &options.local_mapping.redundancy_ratio);
+  ReadFields(mapping, {{"triangulation_neighbors", &options.local_mapping.triangulation_neighbors},
+                       {"cull_keyframes", &options.local_mapping.cull_keyframes},
+                       {"redundancy_ratio", &options.local_mapping.redundancy_ratio}});
   mapping.CheckOptions(options.local_mapping);
 
   // LoopClosing: place recognition and loop closing. vocabulary: a path relative to the settings
@@ -74,25 +88,25 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                         ? beside.string()
                         : std::string(DYGSLAM_DEFAULT_VOCABULARY);
   }
-  loops.ReadIfPresent("enabled", &lc.enabled);
-  loops.ReadIfPresent("min_keyframe_gap", &lc.min_keyframe_gap);
-  loops.ReadIfPresent("revisit_min_path_m", &lc.revisit_min_path_m);
-  loops.ReadIfPresent("consistency", &lc.consistency);
-  loops.ReadIfPresent("min_bow_matches", &lc.min_bow_matches);
-  loops.ReadIfPresent("ransac_iterations", &lc.ransac_iterations);
-  loops.ReadIfPresent("ransac_threshold_px", &lc.ransac_threshold_px);
-  loops.ReadIfPresent("min_ransac_inliers", &lc.min_ransac_inliers);
-  loops.ReadIfPresent("min_inlier_ratio", &lc.min_inlier_ratio);
-  loops.ReadIfPresent("min_projection_matches", &lc.min_projection_matches);
-  loops.ReadIfPresent("max_correction_m", &lc.max_correction_m);
-  loops.ReadIfPresent("max_drift_per_meter", &lc.max_drift_per_meter);
-  loops.ReadIfPresent("max_correction_deg", &lc.max_correction_deg);
-  loops.ReadIfPresent("max_drift_deg_per_meter", &lc.max_drift_deg_per_meter);
-  loops.ReadIfPresent("fusion_radius_px", &lc.fusion_radius_px);
-  loops.ReadIfPresent("essential_min_weight", &lc.essential_min_weight);
-  loops.ReadIfPresent("pose_graph_iterations", &lc.pose_graph_iterations);
-  loops.ReadIfPresent("global_bundle_adjustment", &lc.global_bundle_adjustment);
-  loops.ReadIfPresent("global_ba_iterations", &lc.global_ba_iterations);
+  ReadFields(loops, {{"enabled", &lc.enabled},
+                     {"min_keyframe_gap", &lc.min_keyframe_gap},
+                     {"revisit_min_path_m", &lc.revisit_min_path_m},
+                     {"consistency", &lc.consistency},
+                     {"min_bow_matches", &lc.min_bow_matches},
+                     {"ransac_iterations", &lc.ransac_iterations},
+                     {"ransac_threshold_px", &lc.ransac_threshold_px},
+                     {"min_ransac_inliers", &lc.min_ransac_inliers},
+                     {"min_inlier_ratio", &lc.min_inlier_ratio},
+                     {"min_projection_matches", &lc.min_projection_matches},
+                     {"max_correction_m", &lc.max_correction_m},
+                     {"max_drift_per_meter", &lc.max_drift_per_meter},
+                     {"max_correction_deg", &lc.max_correction_deg},
+                     {"max_drift_deg_per_meter", &lc.max_drift_deg_per_meter},
+                     {"fusion_radius_px", &lc.fusion_radius_px},
+                     {"essential_min_weight", &lc.essential_min_weight},
+                     {"pose_graph_iterations", &lc.pose_graph_iterations},
+                     {"global_bundle_adjustment", &lc.global_bundle_adjustment},
+                     {"global_ba_iterations", &lc.global_ba_iterations}});
   loops.CheckOptions(lc);
 
   // DynamicFilter: the paper's parameters (defaults in DynamicFilterOptions).
@@ -106,19 +120,19 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
     }
   }
   DynamicFilterOptions& f = options.filter;
-  filter.ReadIfPresent("C1", &f.c1);
-  filter.ReadIfPresent("alpha", &f.alpha);
-  filter.ReadIfPresent("Q", &f.q);
-  filter.ReadIfPresent("R", &f.r);
-  filter.ReadIfPresent("P_init", &f.p_init);
-  filter.ReadIfPresent("C2", &f.c2);
-  filter.ReadIfPresent("delta", &f.delta);
-  filter.ReadIfPresent("threshold", &f.threshold);
-  filter.ReadIfPresent("box_margin", &f.box_margin);
-  filter.ReadIfPresent("box_margin_fraction", &f.box_margin_fraction);
-  filter.ReadIfPresent("search_radius", &f.search_radius);
-  filter.ReadIfPresent("max_hamming", &f.max_hamming);
-  filter.ReadIfPresent("fundamental_threshold", &f.fundamental_threshold);
+  ReadFields(filter, {{"C1", &f.c1},
+                      {"alpha", &f.alpha},
+                      {"Q", &f.q},
+                      {"R", &f.r},
+                      {"P_init", &f.p_init},
+                      {"C2", &f.c2},
+                      {"delta", &f.delta},
+                      {"threshold", &f.threshold},
+                      {"box_margin", &f.box_margin},
+                      {"box_margin_fraction", &f.box_margin_fraction},
+                      {"search_radius", &f.search_radius},
+                      {"max_hamming", &f.max_hamming},
+                      {"fundamental_threshold", &f.fundamental_threshold}});
   filter.CheckOptions(f);
 
   // Detector: a shipped model by name, or explicit Darknet files.
@@ -146,11 +160,11 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
       options.detector = DetectorOptions();
     }
   }
-  detector.ReadIfPresent("input_width", &options.detector.input_width);
-  detector.ReadIfPresent("input_height", &options.detector.input_height);
-  detector.ReadIfPresent("confidence_threshold", &options.detector.confidence_threshold);
-  detector.ReadIfPresent("nms_threshold", &options.detector.nms_threshold);
-  detector.ReadIfPresent("num_threads", &options.detector.num_threads);
+  ReadFields(detector, {{"input_width", &options.detector.input_width},
+                        {"input_height", &options.detector.input_height},
+                        {"confidence_threshold", &options.detector.confidence_threshold},
+                        {"nms_threshold", &options.detector.nms_threshold},
+                        {"num_threads", &options.detector.num_threads}});
   std::vector<std::string> classes;
   if (detector.ReadIfPresent("dynamic_classes", &classes))
     options.detector.dynamic_classes = classes;

@@ -298,7 +298,7 @@ TEST(Interop, CameraOverRos2DrivesSlamWithinTenPercentOfDirectAte) {
   po.run_mapper = false;
   po.domain_id = domain;
   std::filesystem::create_directories(po.output_dir);
-  auto stop = std::make_shared<StopSignal>();
+  auto stop = std::make_shared<StopFlag>();
   std::vector<std::string> names = {"recorder", "slam"};
   if (po.NeedsDetectorComponent()) names.push_back("detector");
   std::map<std::string, std::thread> threads;
@@ -306,7 +306,7 @@ TEST(Interop, CameraOverRos2DrivesSlamWithinTenPercentOfDirectAte) {
   std::mutex mutex;
   // On any early return (a failed ASSERT): stop the components and join them.
   struct Joiner {
-    std::shared_ptr<StopSignal> stop;
+    std::shared_ptr<StopFlag> stop;
     std::map<std::string, std::thread>* threads;
     ~Joiner() {
       stop->Request();

@@ -42,6 +42,26 @@ ScopedStopSignals::~ScopedStopSignals() {
 
 int ScopedStopSignals::Received() { return g_received; }
 
+StopFlag::StopFlag(Signals signals) {
+  if (signals == Signals::kStop) signals_.emplace();
+}
+
+void StopFlag::Request() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    requested_ = true;
+  }
+  cv_.notify_all();
+}
+
+bool StopFlag::requested() const {
+  if (signal() != 0) return true;
+  std::lock_guard<std::mutex> lock(mutex_);
+  return requested_;
+}
+
+int StopFlag::signal() const { return signals_ ? ScopedStopSignals::Received() : 0; }
+
 bool ProcessCatchesSignal(pid_t pid, int sig) {
   std::ifstream status("/proc/" + std::to_string(pid) + "/status");
   std::string line;

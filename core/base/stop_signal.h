@@ -8,9 +8,19 @@
 //
 // The outermost scope installs the handlers (saving the previous ones) and clears the flag; it
 // restores the previous handlers when it ends. Nested scopes only add a reference.
+//
+// StopFlag is the one stop flag the loops and components share: Request() sets it, and one made
+// with StopFlag::Signals::kStop is also set by SIGINT / SIGTERM.
 #pragma once
 
 #include <sys/types.h>
+
+#include <algorithm>
+#include <chrono>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <optional>
 
 namespace dygslam {
 
@@ -28,5 +38,48 @@ class ScopedStopSignals {
   // The first SIGINT/SIGTERM received since the outermost scope began (0 if none).
   static int Received();
 };
+
+// The one stop flag of a long-running loop or component: set by Request() (end of data, a failed
+// peer, a test's teardown) and, when made with StopFlag::Signals::kStop, by SIGINT / SIGTERM
+// (it holds a ScopedStopSignals, so the handlers are installed while it lives). Loops poll
+// requested() or sleep in WaitFor(), which wakes on Request() at once and on a signal within
+// kSignalPollPeriod. Thread-safe; share it as a StopFlagPtr.
+class StopFlag {
+ public:
+  enum class Signals { kIgnore, kStop };
+  static constexpr std::chrono::milliseconds kSignalPollPeriod{20};
+
+  explicit StopFlag(Signals signals = Signals::kIgnore);
+  StopFlag(const StopFlag&) = delete;
+  StopFlag& operator=(const StopFlag&) = delete;
+
+  void Request();
+  // Request() was called, or (Signals::kStop) a SIGINT / SIGTERM was received.
+  bool requested() const;
+  // The signal that stopped it (Signals::kStop), 0 if none.
+  int signal() const;
+  // Sleeps up to `duration`; returns true if stop was requested.
+  template <class Rep, class Period>
+  bool WaitFor(std::chrono::duration<Rep, Period> duration) const {
+    const auto deadline = std::chrono::steady_clock::now() + duration;
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (true) {
+      if (requested_ || signal() != 0) return true;
+      const auto now = std::chrono::steady_clock::now();
+      if (now >= deadline) return false;
+      const auto slice = signals_ ? std::min<std::chrono::steady_clock::duration>(deadline - now,
+                                                                                  kSignalPollPeriod)
+                                  : deadline - now;
+      cv_.wait_for(lock, slice);
+    }
+  }
+
+ private:
+  std::optional<ScopedStopSignals> signals_;
+  mutable std::mutex mutex_;
+  mutable std::condition_variable cv_;
+  bool requested_ = false;
+};
+using StopFlagPtr = std::shared_ptr<StopFlag>;
 
 }  // namespace dygslam

@@ -4,6 +4,9 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <chrono>
+#include <thread>
+
 namespace dygslam {
 namespace {
 
@@ -36,6 +39,43 @@ TEST(StopSignals, NestedScopesShareTheFlagAndTheOutermostRestoresHandlers) {
   EXPECT_FALSE(HandlerInstalled(SIGTERM));
   ScopedStopSignals fresh;  // a new outermost scope starts clear
   EXPECT_EQ(ScopedStopSignals::Received(), 0);
+}
+
+TEST(StopFlag, RequestWakesAWaiterAndStays) {
+  StopFlag flag;
+  EXPECT_FALSE(flag.requested());
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_FALSE(flag.WaitFor(std::chrono::milliseconds(30)));  // times out unset
+  EXPECT_GE(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(30));
+  std::thread requester([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    flag.Request();
+  });
+  EXPECT_TRUE(flag.WaitFor(std::chrono::seconds(60)));  // woken by Request, not the timeout
+  requester.join();
+  EXPECT_TRUE(flag.requested());
+  EXPECT_EQ(flag.signal(), 0);
+}
+
+TEST(StopFlag, SignalsSetOnlyAFlagMadeToStopOnThem) {
+  ASSERT_FALSE(HandlerInstalled(SIGTERM));
+  {
+    StopFlag on_signals(StopFlag::Signals::kStop);  // installs the handlers while it lives
+    StopFlag plain;
+    EXPECT_TRUE(HandlerInstalled(SIGTERM));
+    EXPECT_FALSE(on_signals.requested());
+    std::thread raiser([] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      raise(SIGTERM);
+    });
+    EXPECT_TRUE(on_signals.WaitFor(std::chrono::seconds(60)));  // seen within the poll period
+    raiser.join();
+    EXPECT_EQ(on_signals.signal(), SIGTERM);
+    EXPECT_TRUE(on_signals.requested());
+    EXPECT_FALSE(plain.requested());
+    EXPECT_EQ(plain.signal(), 0);
+  }
+  EXPECT_FALSE(HandlerInstalled(SIGTERM));
 }
 
 }  // namespace

@@ -9,25 +9,26 @@
 
 namespace dygslam {
 
+namespace {
+struct ModeName {
+  DynamicFilterMode mode;
+  const char* name;
+};
+constexpr ModeName kModeNames[] = {{DynamicFilterMode::kNone, "none"},
+                                   {DynamicFilterMode::kBoxes, "boxes"},
+                                   {DynamicFilterMode::kGeometry, "geometry"},
+                                   {DynamicFilterMode::kFull, "full"}};
+}  // namespace
+
 const char* ToString(DynamicFilterMode mode) {
-  switch (mode) {
-    case DynamicFilterMode::kNone:
-      return "none";
-    case DynamicFilterMode::kBoxes:
-      return "boxes";
-    case DynamicFilterMode::kGeometry:
-      return "geometry";
-    case DynamicFilterMode::kFull:
-      return "full";
-  }
+  for (const ModeName& m : kModeNames)
+    if (m.mode == mode) return m.name;
   return "unknown";
 }
 
 DynamicFilterMode ParseDynamicFilterMode(const std::string& text) {
-  if (text == "none") return DynamicFilterMode::kNone;
-  if (text == "boxes") return DynamicFilterMode::kBoxes;
-  if (text == "geometry") return DynamicFilterMode::kGeometry;
-  if (text == "full") return DynamicFilterMode::kFull;
+  for (const ModeName& m : kModeNames)
+    if (text == m.name) return m.mode;
   throw InvalidOptions("invalid option DynamicFilter.mode: '" + text +
                        "' (expected none | boxes | geometry | full)");
 }

@@ -206,7 +206,4 @@ class DynamicFilter {
   std::vector<State> prev_states_;
 };
 
-// Whether `point` lies in any box (grown by `margin` px).
-bool InAnyBox(const cv::Point2f& point, const std::vector<Detection>& detections, double margin);
-
 }  // namespace dygslam

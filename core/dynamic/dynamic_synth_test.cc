@@ -7,10 +7,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/dynamic/dynamic_filter.h"
-#include "core/synth/synthetic_scene.h"
-#ifdef DYGSLAM_DYNAMIC_HAVE_ORB_EXTRACTOR
 #include "core/slam/orb_extractor.h"
-#endif
+#include "core/synth/synthetic_scene.h"
 
 namespace dygslam {
 namespace {
@@ -26,26 +24,16 @@ Counts RunFilter(const SyntheticScene& scene, const std::vector<SyntheticFrame>&
   DynamicFilterOptions options;
   options.mode = mode;
   DynamicFilter filter(options);
-#ifdef DYGSLAM_DYNAMIC_HAVE_ORB_EXTRACTOR
   const OrbExtractor extractor{OrbExtractorOptions()};  // 1000 features, ORB-SLAM2 defaults
-#else
-  cv::Ptr<cv::ORB> orb = cv::ORB::create(1000, 1.2f, 8, 31, 0, 2, cv::ORB::HARRIS_SCORE, 31, 20);
-#endif
   Counts c;
   *matching_ms = *probability_ms = 0;
   for (size_t k = 0; k < frames.size(); ++k) {
     const SyntheticFrame& f = frames[k];
     cv::Mat gray;
     cv::cvtColor(f.rgb, gray, cv::COLOR_BGR2GRAY);
-#ifdef DYGSLAM_DYNAMIC_HAVE_ORB_EXTRACTOR
     const OrbFeatures features = extractor.Extract(gray);
     const std::vector<cv::KeyPoint>& kps = features.keypoints;
     const cv::Mat desc = features.DescriptorMatrix();
-#else
-    std::vector<cv::KeyPoint> kps;
-    cv::Mat desc;
-    orb->detectAndCompute(gray, cv::noArray(), kps, desc);
-#endif
     // Detector boxes are looser than the ground-truth silhouettes: pad them by kPad px so the
     // dynamic region contains static background, as with a real detector.
     constexpr float kPad = 30.f;

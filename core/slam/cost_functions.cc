@@ -123,26 +123,25 @@ bool PoseManifold::MinusJacobian(const double* x, double* jacobian) const {
   return true;
 }
 
-bool MonoPoseCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
-  return EvaluatePose<2>(parameters[0], point_, obs_, sqrt_info_, model_, residuals,
-                         jacobians ? jacobians[0] : nullptr, nullptr);
+template <int kRows>
+bool PoseReprojectionCost<kRows>::Evaluate(double const* const* parameters, double* residuals,
+                                           double** jacobians) const {
+  return EvaluatePose<kRows>(parameters[0], point_, obs_, sqrt_info_, model_, residuals,
+                             jacobians ? jacobians[0] : nullptr, nullptr);
 }
 
-bool StereoPoseCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
-  return EvaluatePose<3>(parameters[0], point_, obs_, sqrt_info_, model_, residuals,
-                         jacobians ? jacobians[0] : nullptr, nullptr);
-}
-
-bool MonoBACost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+template <int kRows>
+bool BundleReprojectionCost<kRows>::Evaluate(double const* const* parameters, double* residuals,
+                                             double** jacobians) const {
   const Eigen::Map<const Eigen::Vector3d> point(parameters[1]);
-  return EvaluatePose<2>(parameters[0], point, obs_, sqrt_info_, model_, residuals,
-                         jacobians ? jacobians[0] : nullptr, jacobians ? jacobians[1] : nullptr);
+  return EvaluatePose<kRows>(parameters[0], point, obs_, sqrt_info_, model_, residuals,
+                             jacobians ? jacobians[0] : nullptr,
+                             jacobians ? jacobians[1] : nullptr);
 }
 
-bool StereoBACost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
-  const Eigen::Map<const Eigen::Vector3d> point(parameters[1]);
-  return EvaluatePose<3>(parameters[0], point, obs_, sqrt_info_, model_, residuals,
-                         jacobians ? jacobians[0] : nullptr, jacobians ? jacobians[1] : nullptr);
-}
+template class PoseReprojectionCost<2>;
+template class PoseReprojectionCost<3>;
+template class BundleReprojectionCost<2>;
+template class BundleReprojectionCost<3>;
 
 }  // namespace dygslam

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <ceres/ceres.h>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -35,59 +36,50 @@ struct ProjectionModel {
   double fx, fy, cx, cy, bf;
 };
 
-// Monocular reprojection: r = (obs - pi(R X + t)) * sqrt_info.  Pose-only (X constant).
-class MonoPoseCost : public ceres::SizedCostFunction<2, 7> {
+// Reprojection residual of kRows rows, pose only (the point X is constant):
+//   kRows = 2, monocular:         r = (obs - pi(R X + t)) * sqrt_info;
+//   kRows = 3, RGB-D "stereo":    r = ([u, v, u_right] - [pi(p), pi_x(p) - bf / z]) * sqrt_info.
+template <int kRows>
+class PoseReprojectionCost : public ceres::SizedCostFunction<kRows, 7> {
  public:
-  MonoPoseCost(const Eigen::Vector2d& obs, const Eigen::Vector3d& point, double sqrt_info,
-               const ProjectionModel& model)
+  using Observation = Eigen::Matrix<double, kRows, 1>;
+  PoseReprojectionCost(const Observation& obs, const Eigen::Vector3d& point, double sqrt_info,
+                       const ProjectionModel& model)
       : obs_(obs), point_(point), sqrt_info_(sqrt_info), model_(model) {}
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
 
  private:
-  Eigen::Vector2d obs_;
+  Observation obs_;
   Eigen::Vector3d point_;
   double sqrt_info_;
   ProjectionModel model_;
 };
+using MonoPoseCost = PoseReprojectionCost<2>;
+using StereoPoseCost = PoseReprojectionCost<3>;
 
-// RGB-D "stereo" reprojection: r = ([u, v, u_right] - [pi(p), pi_x(p) - bf / z]) * sqrt_info.
-class StereoPoseCost : public ceres::SizedCostFunction<3, 7> {
+// Bundle adjustment versions of the same residuals: parameter blocks pose (7) and point (3).
+template <int kRows>
+class BundleReprojectionCost : public ceres::SizedCostFunction<kRows, 7, 3> {
  public:
-  StereoPoseCost(const Eigen::Vector3d& obs, const Eigen::Vector3d& point, double sqrt_info,
-                 const ProjectionModel& model)
-      : obs_(obs), point_(point), sqrt_info_(sqrt_info), model_(model) {}
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
-
- private:
-  Eigen::Vector3d obs_;
-  Eigen::Vector3d point_;
-  double sqrt_info_;
-  ProjectionModel model_;
-};
-
-// Bundle adjustment versions: parameter blocks pose (7) and point (3).
-class MonoBACost : public ceres::SizedCostFunction<2, 7, 3> {
- public:
-  MonoBACost(const Eigen::Vector2d& obs, double sqrt_info, const ProjectionModel& model)
+  using Observation = Eigen::Matrix<double, kRows, 1>;
+  BundleReprojectionCost(const Observation& obs, double sqrt_info, const ProjectionModel& model)
       : obs_(obs), sqrt_info_(sqrt_info), model_(model) {}
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
 
  private:
-  Eigen::Vector2d obs_;
+  Observation obs_;
   double sqrt_info_;
   ProjectionModel model_;
 };
+using MonoBACost = BundleReprojectionCost<2>;
+using StereoBACost = BundleReprojectionCost<3>;
 
-class StereoBACost : public ceres::SizedCostFunction<3, 7, 3> {
- public:
-  StereoBACost(const Eigen::Vector3d& obs, double sqrt_info, const ProjectionModel& model)
-      : obs_(obs), sqrt_info_(sqrt_info), model_(model) {}
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
-
- private:
-  Eigen::Vector3d obs_;
-  double sqrt_info_;
-  ProjectionModel model_;
-};
+// Instantiated once, in cost_functions.cc.
+extern template class PoseReprojectionCost<2>;
+extern template class PoseReprojectionCost<3>;
+extern template class BundleReprojectionCost<2>;
+extern template class BundleReprojectionCost<3>;
 
 }  // namespace dygslam

@@ -8,90 +8,43 @@
 
 namespace dygslam {
 
-LocalMapper::LocalMapper(std::shared_ptr<Map> map, const LocalMappingOptions& options, bool threaded)
-    : map_(std::move(map)), options_(options), matcher_(options.matcher), threaded_(threaded) {
+LocalMapper::LocalMapper(std::shared_ptr<Map> map, const LocalMappingOptions& options,
+                         bool threaded)
+    : map_(std::move(map)),
+      options_(options),
+      matcher_(options.matcher),
+      threaded_(threaded),
+      queue_(
+          [this](std::shared_ptr<KeyFrame>& kf) {
+            abort_ba_ = false;
+            Process(kf);
+          },
+          threaded) {
   options_.Check();
-  if (threaded_) thread_ = std::thread([this] { Run(); });
 }
 
 LocalMapper::~LocalMapper() { Finish(); }
 
 void LocalMapper::SetPosesChangedCallback(MapChangedCallback callback) {
-  std::lock_guard<std::mutex> lock(queue_mutex_);
+  std::lock_guard<std::mutex> lock(callback_mutex_);
   poses_changed_ = std::move(callback);
 }
 
 void LocalMapper::SetKeyFrameDoneCallback(KeyFrameDoneCallback callback) {
-  std::lock_guard<std::mutex> lock(queue_mutex_);
+  std::lock_guard<std::mutex> lock(callback_mutex_);
   keyframe_done_ = std::move(callback);
 }
 
 void LocalMapper::InsertKeyFrame(std::shared_ptr<KeyFrame> kf) {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    queue_.push_back(std::move(kf));
-    idle_ = false;
-  }
+  queue_.Push(std::move(kf));
   abort_ba_ = true;
-  queue_cv_.notify_one();
 }
 
-size_t LocalMapper::QueueSize() const {
-  std::lock_guard<std::mutex> lock(queue_mutex_);
-  return queue_.size();
-}
+size_t LocalMapper::QueueSize() const { return queue_.Size(); }
 
-void LocalMapper::ProcessPending() {
-  while (true) {
-    std::shared_ptr<KeyFrame> kf;
-    {
-      std::lock_guard<std::mutex> lock(queue_mutex_);
-      if (queue_.empty()) break;
-      kf = queue_.front();
-      queue_.pop_front();
-    }
-    abort_ba_ = false;
-    Process(kf);
-  }
-  idle_ = true;
-}
+void LocalMapper::ProcessPending() { queue_.Drain(); }
 
-void LocalMapper::Finish() {
-  if (!threaded_) {
-    ProcessPending();
-    return;
-  }
-  {
-    std::unique_lock<std::mutex> lock(queue_mutex_);
-    done_cv_.wait(lock, [this] { return queue_.empty() && !busy_; });
-    stop_ = true;
-  }
-  queue_cv_.notify_all();
-  if (thread_.joinable()) thread_.join();
-}
-
-void LocalMapper::Run() {
-  while (true) {
-    std::shared_ptr<KeyFrame> kf;
-    {
-      std::unique_lock<std::mutex> lock(queue_mutex_);
-      queue_cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
-      if (queue_.empty() && stop_) break;
-      kf = queue_.front();
-      queue_.pop_front();
-      busy_ = true;
-      idle_ = false;
-    }
-    abort_ba_ = false;
-    Process(kf);
-    {
-      std::lock_guard<std::mutex> lock(queue_mutex_);
-      busy_ = false;
-      if (queue_.empty()) idle_ = true;
-    }
-    done_cv_.notify_all();
-  }
-}
+void LocalMapper::Finish() { queue_.Finish(); }
 
 LocalMappingStats LocalMapper::stats() const {
   std::lock_guard<std::mutex> lock(stats_mutex_);
@@ -133,7 +86,7 @@ void LocalMapper::Process(const std::shared_ptr<KeyFrame>& kf) {
   MapChangedCallback callback;
   KeyFrameDoneCallback done;
   {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
+    std::lock_guard<std::mutex> lock(callback_mutex_);
     callback = poses_changed_;
     done = keyframe_done_;
   }

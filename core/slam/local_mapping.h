@@ -14,6 +14,7 @@
 #include <mutex>
 #include <thread>
 
+#include "core/base/work_queue.h"
 #include "core/slam/map.h"
 #include "core/slam/matcher.h"
 #include "core/slam/optimizer.h"
@@ -60,7 +61,7 @@ class LocalMapper {
   void InsertKeyFrame(std::shared_ptr<KeyFrame> kf);
   // Processes queued keyframes in the caller's thread (deterministic mode).
   void ProcessPending();
-  bool Idle() const { return idle_.load(); }
+  bool Idle() const { return queue_.Idle(); }
   size_t QueueSize() const;
   void InterruptBA() { abort_ba_ = true; }
   // Waits until the queue is empty and the current keyframe is done, then stops the thread.
@@ -76,7 +77,6 @@ class LocalMapper {
   LocalMappingStats stats() const;
 
  private:
-  void Run();
   void Process(const std::shared_ptr<KeyFrame>& kf);
   void CullRecentPoints(const std::shared_ptr<KeyFrame>& kf);
   void CreateNewMapPoints(const std::shared_ptr<KeyFrame>& kf);
@@ -87,13 +87,7 @@ class LocalMapper {
   LocalMappingOptions options_;
   Matcher matcher_;
   bool threaded_;
-  mutable std::mutex queue_mutex_;
-  std::condition_variable queue_cv_;
-  std::condition_variable done_cv_;
-  std::deque<std::shared_ptr<KeyFrame>> queue_;
-  bool stop_ = false;
-  bool busy_ = false;
-  std::atomic<bool> idle_{true};
+  mutable std::mutex callback_mutex_;
   std::atomic<bool> abort_ba_{false};
   std::list<std::shared_ptr<MapPoint>> recent_points_;  // local mapping thread only
   MapChangedCallback poses_changed_;
@@ -101,7 +95,7 @@ class LocalMapper {
   std::vector<int64_t> culled_since_callback_;
   mutable std::mutex stats_mutex_;
   LocalMappingStats stats_;
-  std::thread thread_;
+  WorkQueue<std::shared_ptr<KeyFrame>> queue_;  // last: its worker uses everything above
 };
 
 }  // namespace dygslam

@@ -188,15 +188,15 @@ LoopCloser::LoopCloser(std::shared_ptr<Map> map, std::shared_ptr<KeyFrameDatabas
       options_(options),
       optimizer_(optimizer),
       matcher_(matcher),
-      threaded_(threaded) {
+      threaded_(threaded),
+      queue_([this](std::shared_ptr<KeyFrame>& kf) { Process(kf); }, threaded) {
   options_.Check();
-  if (threaded_) thread_ = std::thread([this] { Run(); });
 }
 
 LoopCloser::~LoopCloser() { Finish(); }
 
 void LoopCloser::SetCorrectionCallback(CorrectionCallback callback) {
-  std::lock_guard<std::mutex> lock(queue_mutex_);
+  std::lock_guard<std::mutex> lock(callback_mutex_);
   callback_ = std::move(callback);
 }
 
@@ -206,56 +206,20 @@ LoopClosingStats LoopCloser::stats() const {
 }
 
 void LoopCloser::InsertKeyFrame(std::shared_ptr<KeyFrame> kf) {
-  if (!threaded_) {
-    Process(kf);
-    return;
-  }
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    if (stop_) return;
-    queue_.push_back(std::move(kf));
-  }
-  queue_cv_.notify_one();
+  queue_.Push(std::move(kf));
+  queue_.Drain();  // unthreaded: processed now
 }
 
 void LoopCloser::Finish() {
-  if (threaded_) {
-    {
-      std::unique_lock<std::mutex> lock(queue_mutex_);
-      done_cv_.wait(lock, [this] { return (queue_.empty() && !busy_) || stop_; });
-      stop_ = true;
-    }
-    queue_cv_.notify_all();
-    if (thread_.joinable()) thread_.join();
-  }
+  queue_.Finish();
   std::lock_guard<std::mutex> lock(global_ba_mutex_);
   if (global_ba_thread_.joinable()) global_ba_thread_.join();
-}
-
-void LoopCloser::Run() {
-  while (true) {
-    std::shared_ptr<KeyFrame> kf;
-    {
-      std::unique_lock<std::mutex> lock(queue_mutex_);
-      queue_cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
-      if (queue_.empty() && stop_) break;
-      kf = queue_.front();
-      queue_.pop_front();
-      busy_ = true;
-    }
-    Process(kf);
-    {
-      std::lock_guard<std::mutex> lock(queue_mutex_);
-      busy_ = false;
-    }
-    done_cv_.notify_all();
-  }
 }
 
 void LoopCloser::Report(const std::vector<int64_t>& moved) {
   CorrectionCallback callback;
   {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
+    std::lock_guard<std::mutex> lock(callback_mutex_);
     callback = callback_;
   }
   if (callback && !moved.empty()) callback(moved);

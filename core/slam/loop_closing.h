@@ -25,6 +25,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/base/work_queue.h"
 #include "core/place/keyframe_database.h"
 #include "core/slam/loop_closing_options.h"
 #include "core/slam/map.h"
@@ -81,7 +82,6 @@ class LoopCloser {
 
  private:
   struct Loop;
-  void Run();
   void Process(const std::shared_ptr<KeyFrame>& kf);
   std::vector<std::shared_ptr<KeyFrame>> DetectLoop(const std::shared_ptr<KeyFrame>& kf);
   bool ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
@@ -107,17 +107,14 @@ class LoopCloser {
   int64_t last_loop_kf_id_ = -1;
   std::vector<std::pair<int64_t, int64_t>> loop_edges_;  // kept for later pose graphs
 
-  mutable std::mutex queue_mutex_;
-  std::condition_variable queue_cv_, done_cv_;
-  std::deque<std::shared_ptr<KeyFrame>> queue_;
-  bool stop_ = false, busy_ = false;
+  mutable std::mutex callback_mutex_;
   CorrectionCallback callback_;
   mutable std::mutex stats_mutex_;
   LoopClosingStats stats_;
   std::mutex global_ba_mutex_;
   std::thread global_ba_thread_;
   std::atomic<bool> global_ba_abort_{false};
-  std::thread thread_;
+  WorkQueue<std::shared_ptr<KeyFrame>> queue_;  // last: its worker uses everything above
 };
 
 }  // namespace dygslam

@@ -11,12 +11,9 @@
 #include <vector>
 
 #include "core/base/error.h"
-#include "tests/support/test_support.h"
-
-#ifdef DYGSLAM_SYNTH_TEST_HAVE_IO
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
-#endif
+#include "tests/support/test_support.h"
 
 namespace dygslam {
 namespace {
@@ -172,7 +169,6 @@ TEST(SyntheticSequence, UnwritableDirectoryIsNamed) {
   }
 }
 
-#ifdef DYGSLAM_SYNTH_TEST_HAVE_IO
 TEST(SyntheticSequence, LoadsThroughTheDatasetReader) {
   const std::string dir = testing::MakeTempDir("synth_io");
   const SyntheticOptions options = TinyOptions();
@@ -198,7 +194,6 @@ TEST(SyntheticSequence, LoadsThroughTheDatasetReader) {
               1e-6);
   }
 }
-#endif
 
 }  // namespace
 }  // namespace dygslam

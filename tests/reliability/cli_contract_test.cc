@@ -146,6 +146,27 @@ TEST_F(CliContract, SmallUsageErrorsExitTwo) {
   EXPECT_TRUE(Contains(security.err, "--security")) << security.err;
 }
 
+// Issue 17: `dygslam component` passed its numbers to std::stoi / std::stod (an exception, or
+// "1.5x" read as 1.5); now a usage error naming the option, as on `dygslam run`.
+TEST_F(CliContract, ComponentBadNumbersAreUsageErrorsNamingTheOption) {
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"window", "abc"},
+      {"window", "0"},
+      {"domain", "233"},
+      {"domain", "1e3"},
+      {"rate", "1.5x"},
+      {"loop-minutes", "-1"},
+      {"detection-wait-ms", "99999999999999999999"}};
+  for (const auto& [option, value] : bad) {
+    const auto r = Run({"component", "player", "--dataset", dir_, "--config", Config(), "--out",
+                        dir_ + "/out", "--" + option, value});
+    EXPECT_EQ(r.code, 2) << option << " " << value << "\n" << r.err;
+    EXPECT_TRUE(Contains(r.err, "--" + option + ": expected")) << r.err;
+    EXPECT_TRUE(Contains(r.err, "'" + value + "'")) << r.err;
+    EXPECT_FALSE(Contains(r.err, "internal error")) << r.err;
+  }
+}
+
 // Item 6: `eval` printed "rmse inf" (and null in JSON) with exit 0.
 TEST_F(CliContract, EvalWithOverflowingCoordinatesFails) {
   std::ofstream gt(dir_ + "/gt.txt"), est(dir_ + "/est.txt");

@@ -17,7 +17,6 @@
 #include <array>
 #include <cstdint>
 #include <map>
-#include <set>
 #include <string>
 
 namespace dygslam {
@@ -33,13 +32,7 @@ class RunWriters {
   // A status sample from `writer` naming `source`: the first participant to announce a source
   // owns it for the rest of the run.
   void Announce(const std::string& source, const WriterGuid& writer) {
-    owners_.emplace(source, std::set<ParticipantPrefix>{Prefix(writer)});
-  }
-  // For inputs that may come back as a new participant (a restarted player or detector): every
-  // participant that announces `source` is one of its owners. (An intruder must then announce
-  // itself, which a mistake or casual injection does not; DDS Security is the authentication.)
-  void AnnounceRestartable(const std::string& source, const WriterGuid& writer) {
-    owners_[source].insert(Prefix(writer));
+    owners_.emplace(source, Prefix(writer));
   }
   bool Known(const std::string& source) const { return owners_.count(source) > 0; }
   // kAccept: written by the participant that announced `source`; kReject: by another one;
@@ -47,7 +40,7 @@ class RunWriters {
   Verdict Check(const std::string& source, const WriterGuid& writer) const {
     const auto it = owners_.find(source);
     if (it == owners_.end()) return Verdict::kWait;
-    return it->second.count(Prefix(writer)) ? Verdict::kAccept : Verdict::kReject;
+    return it->second == Prefix(writer) ? Verdict::kAccept : Verdict::kReject;
   }
 
  private:
@@ -57,7 +50,7 @@ class RunWriters {
     for (size_t i = 0; i < p.size(); ++i) p[i] = writer[i];
     return p;
   }
-  std::map<std::string, std::set<ParticipantPrefix>> owners_;
+  std::map<std::string, ParticipantPrefix> owners_;
 };
 
 }  // namespace dygslam

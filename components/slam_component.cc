@@ -1,13 +1,11 @@
 #include "components/slam_component.h"
 
 #include <condition_variable>
-#include <deque>
 #include <limits>
 #include <map>
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
-#include "components/run_writers.h"
 #include "components/stream_status.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
@@ -137,111 +135,42 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
                                                            dds::TopicKind::kTrajectory);
   dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
                                                   dds::TopicKind::kStreamStatus);
-  // Only frames of the participant that announced "player" and detections of the one that
-  // announced "detector" (components/run_writers.h); samples that arrive before the announcement
-  // wait for it (at most kMaxUnverified), those of any other participant are dropped and counted.
-  RunWriters writers;
-  constexpr size_t kMaxUnverified = 64;
-  std::deque<std::pair<msg::RgbdFrame, WriterGuid>> unverified_frames;
-  std::deque<std::pair<msg::Detections, WriterGuid>> unverified_detections;
-  auto count_foreign = [&](const char* what) {  // mutex held
-    if (stats.foreign_samples++ == 0) {
-      LOG_WARNING << "slam: ignoring " << what
-                  << " from a participant that is not this run's (counted in the summary)";
-    }
-  };
-  auto accept_frame = [&](msg::RgbdFrame&& sample) {  // mutex held
-    try {
-      RgbdFrameData frame = RgbdFrameFromMsg(sample);
-      pairer.AddFrame(std::move(frame), Clock::now());
-      ++frames_received;
-      last_frame_time = Clock::now();
-    } catch (const InputError& e) {
-      ++stats.bad_samples;
-      LOG_WARNING << "slam: dropped frame seq " << sample.header().seq() << ": " << e.what();
-    }
-  };
-  auto accept_detections = [&](msg::Detections&& sample) {  // mutex held
-    try {
-      std::vector<Detection> dets = DetectionsFromMsg(sample);
-      const Timestamp stamp = TimeFromMsg(sample.header().stamp(), "Detections.header.stamp");
-      inference_ms[stamp.nanoseconds()] = sample.inference_ms();
-      pairer.AddDetections(stamp, std::move(dets));
-    } catch (const InputError& e) {
-      LOG_WARNING << "slam: dropped detections seq " << sample.header().seq() << ": " << e.what();
-    }
-  };
-  // Routes one sample by its writer: accept, drop (foreign) or keep until its source announces.
-  auto route = [&](auto&& sample, const WriterGuid& writer, const char* source, const char* what,
-                   auto& unverified, auto&& accept) {  // mutex held
-    switch (writers.Check(source, writer)) {
-      case RunWriters::Verdict::kAccept:
-        accept(std::move(sample));
-        break;
-      case RunWriters::Verdict::kReject:
-        count_foreign(what);
-        break;
-      case RunWriters::Verdict::kWait:
-        if (unverified.size() >= kMaxUnverified) {
-          unverified.pop_front();
-          count_foreign(what);
-        }
-        unverified.emplace_back(std::move(sample), writer);
-        break;
-    }
-  };
-  auto retry_unverified = [&] {  // mutex held; after an announcement
-    for (auto* queue : {&unverified_frames}) {
-      std::deque<std::pair<msg::RgbdFrame, WriterGuid>> pending;
-      pending.swap(*queue);
-      for (auto& [sample, writer] : pending) {
-        route(std::move(sample), writer, "player", "frames", *queue, accept_frame);
-      }
-    }
-    std::deque<std::pair<msg::Detections, WriterGuid>> pending;
-    pending.swap(unverified_detections);
-    for (auto& [sample, writer] : pending) {
-      route(std::move(sample), writer, "detector", "detections", unverified_detections,
-            accept_detections);
-    }
-  };
   dds::Reader<msg::RgbdFramePubSubType> frames(
       participant, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame,
-      [&](msg::RgbdFrame&& sample, const WriterGuid& writer) {
-        {
+      [&](msg::RgbdFrame&& sample) {
+        try {
+          RgbdFrameData frame = RgbdFrameFromMsg(sample);
           std::lock_guard<std::mutex> lock(mutex);
-          route(std::move(sample), writer, "player", "frames", unverified_frames, accept_frame);
+          pairer.AddFrame(std::move(frame), Clock::now());
+          ++frames_received;
+          last_frame_time = Clock::now();
+        } catch (const InputError& e) {
+          std::lock_guard<std::mutex> lock(mutex);
+          ++stats.bad_samples;
+          LOG_WARNING << "slam: dropped frame seq " << sample.header().seq() << ": " << e.what();
         }
         cv.notify_all();
       });
   dds::Reader<msg::DetectionsPubSubType> detections(
       participant, dds::topics::kDetections, dds::TopicKind::kDetections,
-      [&](msg::Detections&& sample, const WriterGuid& writer) {
-        {
+      [&](msg::Detections&& sample) {
+        try {
+          std::vector<Detection> dets = DetectionsFromMsg(sample);
+          const Timestamp stamp = TimeFromMsg(sample.header().stamp(), "Detections.header.stamp");
           std::lock_guard<std::mutex> lock(mutex);
-          route(std::move(sample), writer, "detector", "detections", unverified_detections,
-                accept_detections);
+          inference_ms[stamp.nanoseconds()] = sample.inference_ms();
+          pairer.AddDetections(stamp, std::move(dets));
+        } catch (const InputError& e) {
+          LOG_WARNING << "slam: dropped detections seq " << sample.header().seq() << ": "
+                      << e.what();
         }
         cv.notify_all();
       });
   dds::Reader<msg::StreamStatusPubSubType> status_reader(
       participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
-      [&](msg::StreamStatus&& s, const WriterGuid& writer) {
+      [&](msg::StreamStatus&& s) {
         std::lock_guard<std::mutex> lock(mutex);
-        const bool input = s.source() == "player" || s.source() == "detector";
-        const bool new_owner = writers.Check(s.source(), writer) != RunWriters::Verdict::kAccept;
-        if (input) {
-          writers.AnnounceRestartable(s.source(), writer);  // a restarted player / detector
-        } else {
-          writers.Announce(s.source(), writer);
-        }
-        if (new_owner) retry_unverified();
-        if (writers.Check(s.source(), writer) != RunWriters::Verdict::kAccept) {
-          count_foreign("status samples");
-          cv.notify_all();
-          return;
-        }
-        if (s.kind() == static_cast<uint8_t>(StreamEvent::kEndOfStream) && s.source() == "player") {
+        if (s.kind() == static_cast<uint8_t>(StreamEvent::kEndOfStream)) {
           end_frames = StreamFrameCountFromMsg(s);
           if (end_frames == std::numeric_limits<int64_t>::max()) {
             LOG_WARNING << "slam: END_OF_STREAM announces " << s.num_frames()
@@ -296,10 +225,9 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
     {
       std::unique_lock<std::mutex> lock(mutex);
       // Detector liveness from the matched writers of the detections topic.
-      const int detector_writers = detections.matched();
-      if (detector_writers > 0) detector_writers_seen = detector_writers;
-      pairer.SetDetectorAlive(detector_done ||
-                              !(detector_writers_seen > 0 && detector_writers == 0));
+      const int writers = detections.matched();
+      if (writers > 0) detector_writers_seen = writers;
+      pairer.SetDetectorAlive(detector_done || !(detector_writers_seen > 0 && writers == 0));
       paired = pairer.Next(Clock::now());
       if (!paired) {
         if (stats.frames_processed > 0 && !waiting) {
@@ -394,10 +322,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
            << stats.pairing.late_used << " carried forward)"
            << (stats.detector_lost ? " (detector lost)" : "") << "; busy " << stats.busy_s
            << " s, waited " << stats.wait_for_frames_s << " s for frames, "
-           << stats.wait_for_detections_s << " s for detections"
-           << (stats.foreign_samples > 0 ? "; ignored " + std::to_string(stats.foreign_samples) +
-                                               " samples from writers outside this run"
-                                         : std::string());
+           << stats.wait_for_detections_s << " s for detections";
   return stats;
 }
 

@@ -84,8 +84,6 @@ struct SlamStats {
   size_t keyframe_pose_updates = 0;
   size_t keyframes_removed = 0;
   size_t bad_samples = 0;
-  // Frames / detections / status samples of participants that are not this run's (dropped).
-  size_t foreign_samples = 0;
   bool detector_lost = false;
   // Where slam waited between its first and its last frame (seconds): no frame had arrived
   // (upstream: player / transport), or the oldest frame waited for its detections (detector).

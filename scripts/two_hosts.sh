@@ -123,7 +123,7 @@ for name in player detector slam mapper recorder; do
   echo "== $name: $(grep -E '^\[I\] '"$name"':' "$out/$name.log" | tail -2 | tr '\n' ' ')"
 done
 [[ $rc == 0 ]] || { echo "two_hosts.sh: a component failed (logs in $out)" >&2; exit 1; }
-echo "wall time: $(echo "$end - $start" | bc) s"
+echo "wall time: $(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.2f", b - a }') s"
 
 "$bin" run "$dataset" --config "$config" --out "$out/direct" --frames "$frames" --filter "$filter" \
   --direct --quiet "${deterministic[@]}" > "$out/direct.log" 2>&1

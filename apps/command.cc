@@ -60,6 +60,13 @@ std::filesystem::path PrepareOutputDir(const std::string& option, const std::str
   const fs::path dir(value);
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
     throw InputError(name + ": exists and is not a folder");
+  // A dataset folder (TUM / Bonn layout) is never an output folder: the run writes
+  // groundtruth.txt and would replace the dataset's own.
+  if (fs::exists(dir / "rgb.txt", ec) && fs::exists(dir / "depth.txt", ec))
+    throw InputError(name +
+                     ": is a dataset folder (it holds rgb.txt and depth.txt); the outputs "
+                     "(groundtruth.txt, trajectory.txt, ...) would overwrite its files: choose "
+                     "another folder");
   fs::create_directories(dir, ec);
   if (ec) throw InputError(name + ": cannot create the folder: " + ec.message());
   const fs::path probe = dir / (".dygslam_write_probe." + std::to_string(::getpid()));

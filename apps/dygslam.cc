@@ -37,14 +37,14 @@ void PrintHelp(std::ostream& out) {
     if (auto it = Commands().find(name); it != Commands().end()) summary = it->second.summary;
     const bool available = name == "help" || name == "version" || Commands().count(name) > 0;
     std::string left = "  " + name;
-    left.resize(12, ' ');
+    left.resize(std::max<size_t>(12, left.size() + 2), ' ');
     out << left << summary << (available ? "" : "  (not available in this build)") << "\n";
   }
   for (const auto& [name, command] : Commands()) {
     const auto& planned = PlannedCommands();
     if (std::find(planned.begin(), planned.end(), name) != planned.end()) continue;
     std::string left = "  " + name;
-    left.resize(12, ' ');
+    left.resize(std::max<size_t>(12, left.size() + 2), ' ');
     out << left << command.summary << "\n";
   }
   out << "\nRun 'dygslam <command> --help' for the options of a command.\n"

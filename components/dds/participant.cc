@@ -222,8 +222,9 @@ void RunDiscoveryServer(const std::string& listen, int domain_id,
   DomainParticipant* server =
       DomainParticipantFactory::get_instance()->create_participant(domain_id, qos);
   if (server == nullptr) {
-    throw std::runtime_error("Fast DDS: cannot start a discovery server on " + listen +
-                             " (is the address this host's and the port free?)");
+    throw InputError("--listen " + listen +
+                     ": cannot start a discovery server there (is the address one of this host's "
+                     "and the port free?)");
   }
   LOG_INFO << "discovery server on " << listen << ", domain " << domain_id << ", GUID prefix "
            << DiscoveryServerGuidPrefix(0);

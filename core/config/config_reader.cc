@@ -305,11 +305,19 @@ ConfigReader ConfigReader::FromFile(const std::string& path) {
   if (!std::filesystem::exists(path, ec)) throw InputError(path, 0, "settings file not found");
   if (std::filesystem::is_directory(path, ec))
     throw InputError(path, 0, "is a directory, expected a settings file");
+  // A pipe is fine (`--config <(...)`); a device (/dev/zero) or a socket would be read forever.
+  if (!std::filesystem::is_regular_file(path, ec) && !std::filesystem::is_fifo(path, ec))
+    throw InputError(path, 0, "settings file is not a regular file (a device or a socket)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, 0, "cannot open settings file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return FromString(text.str(), path);
+  // Settings files are a few KB; a bounded read keeps a huge or endless one from taking the memory.
+  constexpr size_t kMaxSettingsBytes = 16u << 20;
+  std::string text(kMaxSettingsBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<size_t>(in.gcount()));
+  if (text.size() > kMaxSettingsBytes)
+    throw InputError(path, 0, "settings file larger than 16 MiB: not a settings file");
+  return FromString(text, path);
 }
 
 const std::string& ConfigReader::path() const { return impl_->path; }

@@ -125,7 +125,7 @@ TEST_F(CliContract, ImplausibleCameraValuesAreErrorsNamingKeyAndLine) {
 TEST_F(CliContract, BadOutputFolderIsNamedBeforeTheRun) {
   std::ofstream(dir_ + "/a_file") << "x";
   for (const std::string& out : {std::string(""), dir_ + "/a_file", std::string("/sys/kernel"),
-                                std::string("/proc/dygslam_no/out")}) {
+                                 std::string("/proc/dygslam_no/out")}) {
     for (const char* command : {"run", "map"}) {
       // The dataset does not exist either: --out must be reported first.
       const auto r = Run({command, dir_ + "/missing", "--config", Config(), "--out", out});
@@ -301,6 +301,33 @@ TEST_F(CliContract, RunThatTracksNothingFailsWithASummary) {
                       "--filter", "none", "--quiet"});
   ExpectInputError(r, {"tracking failed: 0 of 15 frames tracked"});
   EXPECT_TRUE(Contains(r.out, "frames: 15 processed")) << r.out;
+}
+
+// Re-probe of issue 20 (2026-12-01): `--out` = the dataset folder made the recorder overwrite the
+// dataset's groundtruth.txt (data loss); a settings file that is /dev/zero was read until the
+// memory ran out.
+TEST_F(CliContract, OutputFolderThatIsADatasetIsRefusedAndNothingIsOverwritten) {
+  const fs::path dataset = fs::path(dir_) / "dataset";
+  fs::create_directories(dataset);
+  const std::string groundtruth = "# ground truth\n1.0 0 0 0 0 0 0 1\n";
+  std::ofstream(dataset / "rgb.txt") << "1.0 rgb/1.png\n";
+  std::ofstream(dataset / "depth.txt") << "1.0 depth/1.png\n";
+  std::ofstream(dataset / "groundtruth.txt") << groundtruth;
+  for (const char* mode : {"--direct", "--processes"}) {
+    const auto r = Run({"run", dataset.string(), "--config", Config(), "--out", dataset.string(),
+                        "--quiet", mode});
+    ExpectInputError(r, {"--out", "dataset folder"});
+    EXPECT_EQ(ReadAll((dataset / "groundtruth.txt").string()), groundtruth) << mode;
+  }
+  const auto r = Run({"map", dataset.string(), "--config", Config(), "--out", dataset.string()});
+  ExpectInputError(r, {"--out", "dataset folder"});
+}
+
+TEST_F(CliContract, SettingsFileThatIsADeviceIsRefused) {
+  const std::string link = (fs::path(dir_) / "zero.yaml").string();
+  fs::create_symlink("/dev/zero", link);
+  const auto r = Run({"run", dir_, "--config", link, "--out", dir_ + "/out", "--direct"});
+  ExpectInputError(r, {link, "not a regular file"});
 }
 
 }  // namespace

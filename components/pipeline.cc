@@ -320,8 +320,15 @@ int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop) {
         LOG_WARNING << "component " << name << " (pid " << pid << ") "
                     << (WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
                                             : "exited with " + std::to_string(WEXITSTATUS(status)));
-        if (name == "slam" || name == "recorder" || name == "mapper")
+        if (name == "slam" || name == "recorder" || name == "mapper" || name == "player")
           slam_or_recorder_failed = true;
+        // Without the frame source or slam nothing can go on: stop the others now (they flush
+        // what they have) instead of waiting for an end of stream that never comes. A failed
+        // detector is not a reason to stop: slam carries boxes forward / goes geometry-only.
+        if ((name == "player" || name == "slam") && !forwarded) {
+          LOG_ERROR << "a pipeline component failed (" << name << "); stopping the others";
+          stop->Request();
+        }
       }
       // The run is over when the recorder (and mapper) have written their outputs.
       bool outputs_done = true;

@@ -159,8 +159,15 @@ int RunMap(const std::vector<std::string>& args) {
   DatasetOptions dataset_options;
   dataset_options.refuse_outside_paths = p.Flag("strict-paths");
   const RgbdDataset dataset = RgbdDataset::Open(dataset_dir, dataset_options);
-  auto [first, last] = p.Has("frames") ? ParseFrameRange(p.Get("frames"), dataset.num_rgb_entries())
-                                       : std::pair<size_t, size_t>{0, dataset.num_rgb_entries()};
+  std::pair<size_t, size_t> range{0, dataset.num_rgb_entries()};
+  if (p.Has("frames")) {
+    try {  // a malformed or out-of-range --frames is a usage error (exit 2), as other numbers
+      range = ParseFrameRange(p.Get("frames"), dataset.num_rgb_entries());
+    } catch (const std::exception& e) {
+      return p.UsageError(e.what());
+    }
+  }
+  auto [first, last] = range;
   std::optional<Timestamp> reference_until;
   if (p.Has("reference-until")) {
     const double k = ParsePositive("reference-until", p.Get("reference-until"));

@@ -13,6 +13,7 @@
 //                is built by a KeyframeMapper thread
 // SIGINT / SIGTERM stop the run at any time: outputs are flushed (atomically) and the exit code
 // is 0.
+#include <octomap/OcTree.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -29,8 +30,6 @@
 #include <memory>
 #include <optional>
 #include <random>
-
-#include <octomap/OcTree.h>
 
 #include "apps/command.h"
 #include "core/base/error.h"
@@ -344,9 +343,15 @@ int RunRun(const std::vector<std::string>& args) {
   DatasetOptions dataset_options;
   dataset_options.refuse_outside_paths = p.Flag("strict-paths");
   const RgbdDataset dataset = RgbdDataset::Open(s.dataset_dir, dataset_options);
-  std::tie(s.first, s.last) = p.Has("frames")
-                                  ? ParseFrameRange(p.Get("frames"), dataset.num_rgb_entries())
-                                  : std::pair<size_t, size_t>{0, dataset.num_rgb_entries()};
+  s.first = 0;
+  s.last = dataset.num_rgb_entries();
+  if (p.Has("frames")) {
+    try {  // a malformed or out-of-range --frames is a usage error (exit 2), as other numbers
+      std::tie(s.first, s.last) = ParseFrameRange(p.Get("frames"), dataset.num_rgb_entries());
+    } catch (const std::exception& e) {
+      return p.UsageError(e.what());
+    }
+  }
   size_t skipped = 0;
   for (size_t k = s.first; k < s.last; ++k) {
     if (!dataset.FrameForRgbEntry(k)) ++skipped;

@@ -330,5 +330,20 @@ TEST_F(CliContract, SettingsFileThatIsADeviceIsRefused) {
   ExpectInputError(r, {link, "not a regular file"});
 }
 
+// Re-probe: a malformed --frames was exit 1; like every other malformed number it is a usage
+// error (exit 2) naming the option.
+TEST_F(CliContract, MalformedFrameRangeIsAUsageError) {
+  DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
+  for (const char* command : {"run", "map"}) {
+    for (const char* frames : {"5:abc", "-3:5", "0:99999999999999999999"}) {
+      const auto r = Run({command, dataset, "--config", Config(), "--out", dir_ + "/out",
+                          "--frames", frames, "--quiet"});
+      EXPECT_EQ(r.code, 2) << command << " --frames " << frames << "\n" << r.err;
+      EXPECT_TRUE(Contains(r.err, "--frames")) << r.err;
+      EXPECT_FALSE(Contains(r.err, "internal error")) << r.err;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace dygslam

@@ -25,11 +25,11 @@
 #include "core/base/error.h"
 #include "core/base/stop_signal.h"
 #include "core/config/settings.h"
+#include "core/io/bonn.h"
 #include "core/io/dataset.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
-#include "mapping/bonn_frames.h"
 #include "mapping/keyframe_mapper.h"
 #include "mapping/map_compare.h"
 #include "mapping/map_frame.h"
@@ -275,12 +275,12 @@ int RunMap(const std::vector<std::string>& args) {
       }
       if ((k - first) % every != 0) continue;
       const Timestamp stamp = dataset.frame(*index).rgb_stamp;
-      std::optional<Rigid3d> pose = mapping_data::InterpolatePose(given_poses, stamp);
+      std::optional<Rigid3d> pose = InterpolatePose(given_poses, stamp);
       if (!pose) {
         ++lost;
         continue;
       }
-      if (p.Flag("bonn-marker")) *pose = *pose * mapping_data::BonnMarkerFromCam();
+      if (p.Flag("bonn-marker")) *pose = *pose * BonnMarkerFromCam();
       KeyframeData keyframe;
       keyframe.id = static_cast<int64_t>(k);
       keyframe.stamp = stamp;

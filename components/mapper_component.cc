@@ -89,6 +89,15 @@ void MapperCore::Write() {
   builder_->WriteBinary(options_.map_path);
 }
 
+void MapperCore::WriteFull() {
+  if (options_.full_map_path.empty()) return;
+  if (builder_ != nullptr) {
+    builder_->WriteFull(options_.full_map_path);
+  } else if (base_) {
+    WriteOctoMapFull(*base_, options_.full_map_path);  // localization: the loaded map
+  }
+}
+
 MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const MapperOptions& options,
                       const StopSignalPtr& stop) {
   MapperCore core(options);
@@ -243,6 +252,7 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
                    "components)";
   }
   publish();
+  if (core.has_map()) core.WriteFull();
   msg::StreamStatus done;
   done.kind(static_cast<uint8_t>(StreamEvent::kComponentDone));
   done.source("mapper");
@@ -253,7 +263,8 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
   LOG_INFO << "mapper: " << stats.keyframes_received << " keyframe messages ("
            << core.num_inserted() << " new, " << core.num_pose_updates() << " pose updates, "
            << core.num_removed() << " removed), " << core.num_keyframes() << " keyframes in the map"
-           << (options.map_path.empty() ? "" : ", written to " + options.map_path);
+           << (options.map_path.empty() ? "" : ", written to " + options.map_path)
+           << (options.full_map_path.empty() ? "" : " and " + options.full_map_path);
   return stats;
 }
 

@@ -29,6 +29,9 @@ struct MapperOptions {
   // An existing OctoMap (.ot, e.g. a previous run's) the map continues from (issue 15): keyframes
   // are inserted on top of it; without keyframes (localization) it is the map. "": none.
   std::string base_map_path;
+  // At the end of the run, also the OctoMap with probabilities (.ot): what base_map_path of a
+  // later run continues (`dygslam run --save-map` sets DIR/map.ot). "" = not written.
+  std::string full_map_path;
   // Write map.bt + publish MapUpdate every this many inserted keyframes (0 = only at the end)...
   int update_every_keyframes = 5;
   // ... but at most this share of the wall time: after an update that took d seconds the next
@@ -62,6 +65,8 @@ class MapperCore {
   msg::MapUpdate MakeUpdate();
   // Atomic .bt write (no-op without map or path).
   void Write();
+  // The .ot (full_map_path), at the end of the run.
+  void WriteFull();
 
  private:
   MapperOptions options_;

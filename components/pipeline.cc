@@ -200,6 +200,10 @@ int RunComponentOn(const std::string& name, const PipelineOptions& options,
     MapperOptions m;
     m.map_path = (fs::path(options.output_dir) / "map.bt").string();
     m.base_map_path = options.load_octomap;
+    // With --save-map the OctoMap with probabilities too, what --load-octomap continues (as the
+    // direct mode writes it).
+    if (!options.save_map.empty())
+      m.full_map_path = (fs::path(options.output_dir) / "map.ot").string();
     m.flush_timeout_s = options.flush_timeout_s;
     m.octomap = options.octomap;
     fs::create_directories(options.output_dir);

@@ -13,15 +13,6 @@
 
 namespace {
 
-uint64_t Fnv1a(const std::string& bytes) {
-  uint64_t h = 1469598103934665603ULL;
-  for (char c : bytes) {
-    h ^= static_cast<uint8_t>(c);
-    h *= 1099511628211ULL;
-  }
-  return h;
-}
-
 std::string Rewrap(const std::string& input) {
   constexpr size_t kHeader = 20, kTrailer = 8;
   const std::string payload = input.size() > kHeader + kTrailer
@@ -33,7 +24,7 @@ std::string Rewrap(const std::string& input) {
   file.append(reinterpret_cast<const char*>(&version), 4);
   file.append(reinterpret_cast<const char*>(&size), 8);
   file += payload;
-  const uint64_t checksum = Fnv1a(file);
+  const uint64_t checksum = dygslam::MapFileChecksum(file.data(), file.size(), version);
   file.append(reinterpret_cast<const char*>(&checksum), 8);
   return file;
 }

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "core/base/error.h"
-#include "mapping/bonn_frames.h"
+#include "core/io/bonn.h"
 #include "mapping/map_compare.h"
 #include "mapping/map_render.h"
 #include "mapping/octomap_builder.h"
@@ -30,17 +30,13 @@ struct Frame {
 };
 
 std::vector<Frame> LoadFrames(const std::string& dir, int every) {
-  const auto depth_list = mapping_data::ReadDepthList(dir);
-  const auto gt = mapping_data::ReadTrajectory(dir + "/groundtruth.txt");
   std::vector<Frame> frames;
-  for (size_t i = 0; i < depth_list.size(); i += every) {
-    const auto pose = mapping_data::InterpolatePose(gt, depth_list[i].stamp);
-    if (!pose) continue;
+  for (GroundTruthDepthFrame& g : LoadGroundTruthDepthFrames(dir, every)) {
     Frame f;
-    f.keyframe.id = static_cast<int64_t>(i);
-    f.keyframe.stamp = depth_list[i].stamp;
-    f.keyframe.depth = mapping_data::LoadDepthMetres(depth_list[i].path);
-    f.gt = *pose;
+    f.keyframe.id = static_cast<int64_t>(g.index);
+    f.keyframe.stamp = g.stamp;
+    f.keyframe.depth = std::move(g.depth);
+    f.gt = g.world_from_body;
     frames.push_back(std::move(f));
   }
   return frames;
@@ -64,7 +60,7 @@ void CheckMarker(const std::vector<Frame>& frames, const PinholeCamera& camera) 
   options.resolution = 0.05;
   options.use_dynamic_mask = false;
   std::printf("marker_from_cam candidate (rows)        consistency  occupied_cells\n");
-  std::vector<Rigid3d> candidates = {mapping_data::BonnMarkerFromCam()};
+  std::vector<Rigid3d> candidates = {BonnMarkerFromCam()};
   if (std::getenv("DYGSLAM_MARKER_ALL_AXES") != nullptr) {
     for (const Eigen::Matrix3d& r : AxisRotations())
       candidates.emplace_back(r, Eigen::Vector3d::Zero());
@@ -127,7 +123,7 @@ int Main(int argc, char** argv) {
     }
   }
   if (dir.empty()) dir = "/work/shared/data/bonn_crowd_part";
-  const PinholeCamera camera = mapping_data::BonnCamera();
+  const PinholeCamera camera = BonnCamera();
   const std::vector<Frame> frames = LoadFrames(dir, every);
   std::printf("%zu frames with ground truth (every %d)\n", frames.size(), every);
   if (check_marker) {
@@ -143,7 +139,7 @@ int Main(int argc, char** argv) {
   OctoMapBuilder reference(camera, options), all(camera, options);
   for (const Frame& f : frames) {
     KeyframeData kf = f.keyframe;
-    kf.world_from_cam = raw_gt ? f.gt : f.gt * mapping_data::BonnMarkerFromCam();
+    kf.world_from_cam = raw_gt ? f.gt : f.gt * BonnMarkerFromCam();
     if (kf.id < 100) reference.Insert(kf);
     all.Insert(kf);
   }

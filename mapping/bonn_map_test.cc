@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <vector>
 
-#include "mapping/bonn_frames.h"
+#include "core/io/bonn.h"
 #include "mapping/map_compare.h"
 #include "mapping/octomap_builder.h"
 #include "tests/support/test_support.h"
@@ -20,19 +20,15 @@ struct BonnFrames {
 };
 
 BonnFrames Load(const std::string& dir, int every) {
-  const auto depth_list = mapping_data::ReadDepthList(dir);
-  const auto gt = mapping_data::ReadTrajectory(dir + "/groundtruth.txt");
   BonnFrames frames;
-  for (size_t i = 0; i < depth_list.size(); i += every) {
-    const auto body = mapping_data::InterpolatePose(gt, depth_list[i].stamp);
-    if (!body) continue;
+  for (GroundTruthDepthFrame& f : LoadGroundTruthDepthFrames(dir, every)) {
     KeyframeData kf;
-    kf.id = static_cast<int64_t>(i);
-    kf.stamp = depth_list[i].stamp;
-    kf.depth = mapping_data::LoadDepthMetres(depth_list[i].path);
-    kf.world_from_cam = *body * mapping_data::BonnMarkerFromCam();
+    kf.id = static_cast<int64_t>(f.index);
+    kf.stamp = f.stamp;
+    kf.depth = std::move(f.depth);
+    kf.world_from_cam = f.world_from_body * BonnMarkerFromCam();
     frames.keyframes.push_back(std::move(kf));
-    frames.body_poses.push_back(*body);
+    frames.body_poses.push_back(f.world_from_body);
   }
   return frames;
 }
@@ -47,7 +43,7 @@ TEST(BonnMap, PeopleLeaveGhostCellsWithoutAFilter) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
   const BonnFrames frames = Load(dir, 4);
   ASSERT_GE(frames.keyframes.size(), 85u);
-  const PinholeCamera camera = mapping_data::BonnCamera();
+  const PinholeCamera camera = BonnCamera();
   // Reference: people-free frames 0, 8, 16, ..., 96. Control: the other people-free frames
   // 4, 12, ..., 92 (same scene, different frames: the noise level of the measure).
   // Test: all frames 0..359 (every 4th).
@@ -80,7 +76,7 @@ TEST(BonnMap, PeopleLeaveGhostCellsWithoutAFilter) {
 TEST(BonnMap, MarkerCalibrationSharpensTheMap) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
   const BonnFrames frames = Load(dir, 8);
-  const PinholeCamera camera = mapping_data::BonnCamera();
+  const PinholeCamera camera = BonnCamera();
   OctoMapBuilder calibrated(camera, NoFilter()), body(camera, NoFilter());
   for (size_t i = 0; i < frames.keyframes.size(); ++i) {
     if (frames.keyframes[i].id >= 100) break;

@@ -9,15 +9,15 @@
 
 #include "core/base/error.h"
 #include "mapping/map_compare.h"
-#include "mapping/test_scene.h"
+#include "core/synth/box_room.h"
 
 namespace dygslam {
 namespace {
 
-using test_scene::Box;
-using test_scene::LookingAlong;
-using test_scene::MakeKeyframe;
-using test_scene::Scene;
+using box_room::Box;
+using box_room::LookingAlong;
+using box_room::MakeKeyframe;
+using box_room::Scene;
 
 OctoMapOptions TestOptions() {
   OctoMapOptions options;
@@ -32,10 +32,10 @@ Rigid3d PoseOf(int k) {
 
 // A person walks in front of the camera in the first half.
 KeyframeData Keyframe(int k) {
-  Scene scene = test_scene::DefaultRoom();
+  Scene scene = box_room::DefaultRoom();
   if (k < 6)
     scene.dynamic_boxes.push_back(Box{{0.5, -0.5 + 0.2 * k, 0.0}, {0.9, -0.1 + 0.2 * k, 1.7}});
-  return MakeKeyframe(k, scene, test_scene::SmallCamera(), PoseOf(k));
+  return MakeKeyframe(k, scene, box_room::SmallCamera(), PoseOf(k));
 }
 
 // Same occupied and free cells.
@@ -49,7 +49,7 @@ void ExpectSameMap(const octomap::OcTree& a, const octomap::OcTree& b) {
 }
 
 TEST(KeyframeMapper, AppliesInsertsCorrectionsAndRemovalsInOrder) {
-  const PinholeCamera camera = test_scene::SmallCamera();
+  const PinholeCamera camera = box_room::SmallCamera();
   KeyframeMapper mapper(camera, TestOptions());
   OctoMapBuilder direct(camera, TestOptions());
   std::vector<KeyframeData> sequence;
@@ -87,7 +87,7 @@ TEST(KeyframeMapper, AppliesInsertsCorrectionsAndRemovalsInOrder) {
 }
 
 TEST(KeyframeMapper, SubmitCopiesTheImages) {
-  const PinholeCamera camera = test_scene::SmallCamera();
+  const PinholeCamera camera = box_room::SmallCamera();
   KeyframeMapper mapper(camera, TestOptions(), KeyframeMapperOptions{64});
   OctoMapBuilder direct(camera, TestOptions());
   for (int k = 0; k < 8; ++k) {
@@ -104,7 +104,7 @@ TEST(KeyframeMapper, SubmitCopiesTheImages) {
 }
 
 TEST(KeyframeMapper, ConcurrentSubmittersAndBackPressureLoseNothing) {
-  const PinholeCamera camera = test_scene::SmallCamera();
+  const PinholeCamera camera = box_room::SmallCamera();
   KeyframeMapper mapper(camera, TestOptions(), KeyframeMapperOptions{1});
   std::vector<KeyframeData> keyframes;
   for (int k = 0; k < 16; ++k) keyframes.push_back(Keyframe(k));
@@ -138,7 +138,7 @@ TEST(KeyframeMapper, ConcurrentSubmittersAndBackPressureLoseNothing) {
 // A pose correction is applied by a background rebuild when the mapper is idle (share 1: as
 // soon as it is idle), not only when the map is read; with share 0 it waits for the read.
 TEST(KeyframeMapper, BackgroundRebuildAppliesCorrections) {
-  const PinholeCamera camera = test_scene::SmallCamera();
+  const PinholeCamera camera = box_room::SmallCamera();
   for (const double share : {1.0, 0.0}) {
     KeyframeMapperOptions mapper_options;
     mapper_options.max_rebuild_share = share;
@@ -161,7 +161,7 @@ TEST(KeyframeMapper, BackgroundRebuildAppliesCorrections) {
 
 // Corrections of a keyframe whose earlier correction is still queued merge into it.
 TEST(KeyframeMapper, QueuedCorrectionsOfAKeyframeCoalesce) {
-  const PinholeCamera camera = test_scene::SmallCamera();
+  const PinholeCamera camera = box_room::SmallCamera();
   KeyframeMapper mapper(camera, TestOptions());
   auto correction = [](int id, double dx) {
     KeyframeData k;
@@ -198,7 +198,7 @@ TEST(KeyframeMapper, QueuedCorrectionsOfAKeyframeCoalesce) {
 }
 
 TEST(KeyframeMapper, BadKeyframeSurfacesAtFlushNamingIt) {
-  const PinholeCamera camera = test_scene::SmallCamera();
+  const PinholeCamera camera = box_room::SmallCamera();
   KeyframeMapper mapper(camera, TestOptions());
   KeyframeData bad = Keyframe(0);
   bad.id = 42;

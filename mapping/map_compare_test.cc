@@ -6,13 +6,13 @@
 #include <stdexcept>
 
 #include "mapping/octomap_builder.h"
-#include "mapping/test_scene.h"
+#include "core/synth/box_room.h"
 
 namespace dygslam {
 namespace {
 
-using test_scene::Box;
-using test_scene::Scene;
+using box_room::Box;
+using box_room::Scene;
 
 TEST(MapCompare, CountsCellsOfHandMadeMaps) {
   octomap::OcTree a(0.1), b(0.1);
@@ -76,21 +76,21 @@ TEST(MapCompare, PrunedLeavesCountAsAllTheirCells) {
 // Ghosts of a walking person: the map from all frames (mask ignored) against a reference from
 // the same poses with nobody in the room. With the mask, the person's ghosts are gone.
 TEST(MapCompare, GhostVoxelsOfAWalkingPerson) {
-  const PinholeCamera camera = test_scene::SmallCamera();
+  const PinholeCamera camera = box_room::SmallCamera();
   OctoMapOptions options;
   options.pixel_stride = 1;
   OctoMapBuilder reference(camera, options), masked(camera, options);
   options.use_dynamic_mask = false;
   OctoMapBuilder unmasked(camera, options);
   for (int k = 0; k < 30; ++k) {
-    const Rigid3d pose = test_scene::LookingAlong({-1.2, 0, 1.2}, 0.2 * std::sin(0.3 * k));
-    Scene empty = test_scene::DefaultRoom();
+    const Rigid3d pose = box_room::LookingAlong({-1.2, 0, 1.2}, 0.2 * std::sin(0.3 * k));
+    Scene empty = box_room::DefaultRoom();
     Scene with_person = empty;
     const double y = -1.0 + 0.07 * k;
     with_person.dynamic_boxes.push_back({{0.31, y - 0.2, -0.02}, {0.71, y + 0.2, 1.68}});
-    reference.Insert(test_scene::MakeKeyframe(k, empty, camera, pose));
-    masked.Insert(test_scene::MakeKeyframe(k, with_person, camera, pose));
-    unmasked.Insert(test_scene::MakeKeyframe(k, with_person, camera, pose));
+    reference.Insert(box_room::MakeKeyframe(k, empty, camera, pose));
+    masked.Insert(box_room::MakeKeyframe(k, with_person, camera, pose));
+    unmasked.Insert(box_room::MakeKeyframe(k, with_person, camera, pose));
   }
   const GhostVoxelCounts none = CompareGhostVoxels(reference.tree(), reference.tree());
   EXPECT_EQ(none.occupied_a_free_b, 0u);

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "mapping/octomap_builder.h"
-#include "mapping/test_scene.h"
+#include "core/synth/box_room.h"
 
 namespace dygslam {
 namespace {
@@ -17,18 +17,18 @@ TEST(MapFrame, FindsTheFloorAndLevelsTheMap) {
   const Rigid3d tilted_from_room(
       Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 0.4, 0).normalized())),
       Eigen::Vector3d(0.7, -2.0, 0.4));
-  const PinholeCamera camera = test_scene::SmallCamera();
+  const PinholeCamera camera = box_room::SmallCamera();
   OctoMapOptions options;
   options.pixel_stride = 1;
   OctoMapBuilder builder(camera, options);
-  const test_scene::Scene scene = test_scene::DefaultRoom();
+  const box_room::Scene scene = box_room::DefaultRoom();
   Rigid3d first;
   for (int k = 0; k < 10; ++k) {
     // Looking a little down, so the floor is in view.
-    Rigid3d pose = test_scene::LookingAlong({-1.0, 0.2 * std::sin(k), 1.2}, 0.6 * k - 2.7);
+    Rigid3d pose = box_room::LookingAlong({-1.0, 0.2 * std::sin(k), 1.2}, 0.6 * k - 2.7);
     pose.rotation =
         pose.rotation * Eigen::Quaterniond(Eigen::AngleAxisd(-0.35, Eigen::Vector3d::UnitX()));
-    KeyframeData keyframe = test_scene::MakeKeyframe(k, scene, camera, pose);
+    KeyframeData keyframe = box_room::MakeKeyframe(k, scene, camera, pose);
     keyframe.world_from_cam = tilted_from_room * pose;
     if (k == 0) first = keyframe.world_from_cam;
     builder.Insert(keyframe);

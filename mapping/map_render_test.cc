@@ -6,7 +6,7 @@
 
 #include "core/base/error.h"
 #include "mapping/octomap_builder.h"
-#include "mapping/test_scene.h"
+#include "core/synth/box_room.h"
 #include "tests/support/test_support.h"
 
 namespace dygslam {
@@ -15,14 +15,14 @@ namespace {
 class MapRender : public ::testing::Test {
  protected:
   void SetUp() override {
-    const PinholeCamera camera = test_scene::SmallCamera();
+    const PinholeCamera camera = box_room::SmallCamera();
     OctoMapOptions options;
     options.pixel_stride = 1;
     builder_ = std::make_unique<OctoMapBuilder>(camera, options);
     for (int k = 0; k < 12; ++k) {
       builder_->Insert(
-          test_scene::MakeKeyframe(k, test_scene::DefaultRoom(), camera,
-                                   test_scene::LookingAlong({-1.2, 0, 1.2}, -0.9 + 0.15 * k)));
+          box_room::MakeKeyframe(k, box_room::DefaultRoom(), camera,
+                                   box_room::LookingAlong({-1.2, 0, 1.2}, -0.9 + 0.15 * k)));
     }
   }
   // Pixel of world (x, y) in an image of the map made with `ppc` pixels per cell.

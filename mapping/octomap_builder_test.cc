@@ -12,16 +12,16 @@
 
 #include "core/base/error.h"
 #include "mapping/map_compare.h"
-#include "mapping/test_scene.h"
+#include "core/synth/box_room.h"
 #include "tests/support/test_support.h"
 
 namespace dygslam {
 namespace {
 
-using test_scene::Box;
-using test_scene::LookingAlong;
-using test_scene::MakeKeyframe;
-using test_scene::Scene;
+using box_room::Box;
+using box_room::LookingAlong;
+using box_room::MakeKeyframe;
+using box_room::Scene;
 
 constexpr int kWalkFrames = 40;  // the person walks across the room
 constexpr int kAfterFrames = 6;  // then the camera keeps looking at the empty path
@@ -50,9 +50,9 @@ OctoMapOptions TestOptions() {
 
 // Inserts the walking-person sequence.
 void InsertWalk(OctoMapBuilder* builder) {
-  const PinholeCamera camera = test_scene::SmallCamera();
+  const PinholeCamera camera = box_room::SmallCamera();
   for (int k = 0; k < kWalkFrames + kAfterFrames; ++k) {
-    Scene scene = test_scene::DefaultRoom();
+    Scene scene = box_room::DefaultRoom();
     if (k < kWalkFrames) scene.dynamic_boxes.push_back(PersonAt(k));
     builder->Insert(MakeKeyframe(k, scene, camera, WalkPose(k)));
   }
@@ -60,7 +60,7 @@ void InsertWalk(OctoMapBuilder* builder) {
 
 // Within `margin` of a static surface of the default room.
 bool NearStaticSurface(const octomap::point3d& c, double margin) {
-  const Scene scene = test_scene::DefaultRoom();
+  const Scene scene = box_room::DefaultRoom();
   const Eigen::Vector3d p(c.x(), c.y(), c.z());
   for (int a = 0; a < 3; ++a) {
     if (std::abs(p[a] - scene.room.min[a]) < margin || std::abs(p[a] - scene.room.max[a]) < margin)
@@ -92,10 +92,10 @@ TEST(OctoMapOptions, CheckNamesTheField) {
 }
 
 TEST(OctoMapBuilder, RejectsMalformedKeyframes) {
-  const PinholeCamera camera = test_scene::SmallCamera();
+  const PinholeCamera camera = box_room::SmallCamera();
   OctoMapBuilder builder(camera, TestOptions());
   KeyframeData keyframe =
-      MakeKeyframe(7, test_scene::DefaultRoom(), camera, LookingAlong({0, 0, 1}, 0));
+      MakeKeyframe(7, box_room::DefaultRoom(), camera, LookingAlong({0, 0, 1}, 0));
   KeyframeData wrong_type = keyframe;
   wrong_type.depth.convertTo(wrong_type.depth, CV_16UC1, 5000.0);
   try {
@@ -122,8 +122,8 @@ TEST(OctoMapBuilder, RejectsMalformedKeyframes) {
 }
 
 TEST(OctoMapBuilder, ExtractLeavesOutMaskAndDynamicKeypoints) {
-  const PinholeCamera camera = test_scene::SmallCamera();
-  Scene scene = test_scene::DefaultRoom();
+  const PinholeCamera camera = box_room::SmallCamera();
+  Scene scene = box_room::DefaultRoom();
   scene.dynamic_boxes.push_back(PersonAt(20));
   KeyframeData keyframe = MakeKeyframe(1, scene, camera, WalkPose(20));
   const int mask_pixels = cv::countNonZero(keyframe.dynamic_mask);
@@ -170,7 +170,7 @@ TEST(OctoMapBuilder, ExtractLeavesOutMaskAndDynamicKeypoints) {
 // (1) walls and furniture are occupied, nothing else is; (3) free space between camera and
 // wall is cleared; space behind the wall is unknown.
 TEST(OctoMapBuilder, StaticStructureOccupiedAndFreeSpaceCleared) {
-  OctoMapBuilder builder(test_scene::SmallCamera(), TestOptions());
+  OctoMapBuilder builder(box_room::SmallCamera(), TestOptions());
   InsertWalk(&builder);
   const octomap::OcTree& tree = builder.tree();
 
@@ -184,7 +184,7 @@ TEST(OctoMapBuilder, StaticStructureOccupiedAndFreeSpaceCleared) {
   EXPECT_EQ(wall_occupied, wall_cells);
   EXPECT_EQ(CellState(tree, octomap::point3d(1.52, -1.25, 0.5)), 1);  // cabinet front
   EXPECT_EQ(CellState(tree, octomap::point3d(1.5, 0.3, -0.01)), 1);   // floor
-  const Box cabinet = test_scene::DefaultRoom().static_boxes[0];
+  const Box cabinet = box_room::DefaultRoom().static_boxes[0];
   EXPECT_GT(CountOccupiedInside(tree,
                                 [&](const octomap::point3d& c) {
                                   return cabinet.Contains(Eigen::Vector3d(c.x(), c.y(), c.z()),
@@ -223,20 +223,20 @@ TEST(OctoMapBuilder, StaticStructureOccupiedAndFreeSpaceCleared) {
 // (2) with the dynamic mask no cell on the person's path is occupied once it has left; with the
 // mask ignored the person leaves ghost cells (so this test can fail).
 TEST(OctoMapBuilder, DynamicMaskKeepsThePersonOut) {
-  OctoMapBuilder masked(test_scene::SmallCamera(), TestOptions());
+  OctoMapBuilder masked(box_room::SmallCamera(), TestOptions());
   InsertWalk(&masked);
   EXPECT_EQ(CountOccupiedInside(masked.tree(), OnPath), 0u);
 
   OctoMapOptions options = TestOptions();
   options.use_dynamic_mask = false;
-  OctoMapBuilder unmasked(test_scene::SmallCamera(), options);
+  OctoMapBuilder unmasked(box_room::SmallCamera(), options);
   InsertWalk(&unmasked);
   EXPECT_GT(CountOccupiedInside(unmasked.tree(), OnPath), 20u);
 }
 
 // (4) .bt and .ot round-trip, atomically written, readable by OctoMap itself.
 TEST(OctoMapBuilder, BinaryAndFullFilesRoundTrip) {
-  OctoMapBuilder builder(test_scene::SmallCamera(), TestOptions());
+  OctoMapBuilder builder(box_room::SmallCamera(), TestOptions());
   InsertWalk(&builder);
   const std::string dir = testing::MakeTempDir("octomap_io");
   const std::string bt = dir + "/map.bt";
@@ -292,10 +292,10 @@ TEST(OctoMapBuilder, BinaryAndFullFilesRoundTrip) {
 // inserted on top is the map of the whole walk; a rebuild starts from the loaded map again; a map
 // of another resolution is refused naming the file.
 TEST(OctoMapBuilder, ContinuesASavedMap) {
-  const PinholeCamera camera = test_scene::SmallCamera();
+  const PinholeCamera camera = box_room::SmallCamera();
   constexpr int kHalf = (kWalkFrames + kAfterFrames) / 2;
   auto keyframe = [&](int k) {
-    Scene scene = test_scene::DefaultRoom();
+    Scene scene = box_room::DefaultRoom();
     if (k < kWalkFrames) scene.dynamic_boxes.push_back(PersonAt(k));
     return MakeKeyframe(k, scene, camera, WalkPose(k));
   };
@@ -335,9 +335,9 @@ TEST(OctoMapBuilder, ContinuesASavedMap) {
 
 // (5) Pose corrections move the map; small ones do not trigger a rebuild.
 TEST(OctoMapBuilder, UpdatePosesMovesTheMap) {
-  const PinholeCamera camera = test_scene::SmallCamera();
+  const PinholeCamera camera = box_room::SmallCamera();
   OctoMapBuilder builder(camera, TestOptions());
-  const Scene scene = test_scene::DefaultRoom();
+  const Scene scene = box_room::DefaultRoom();
   for (int k = 0; k < 4; ++k) builder.Insert(MakeKeyframe(k, scene, camera, WalkPose(k)));
   const octomap::point3d wall(2.52, 0.1, 1.2), shifted_wall(2.22, 0.1, 1.2);
   EXPECT_EQ(CellState(builder.tree(), wall), 1);
@@ -386,9 +386,9 @@ TEST(OctoMapBuilder, UpdatePosesMovesTheMap) {
 
 // Culled keyframes leave the map.
 TEST(OctoMapBuilder, RemoveTakesAKeyframeOut) {
-  const PinholeCamera camera = test_scene::SmallCamera();
+  const PinholeCamera camera = box_room::SmallCamera();
   OctoMapBuilder builder(camera, TestOptions());
-  Scene with_crate = test_scene::DefaultRoom();
+  Scene with_crate = box_room::DefaultRoom();
   const Box crate{{0.31, -0.39, -0.02}, {0.71, 0.41, 0.68}};
   with_crate.static_boxes.push_back(crate);
   const auto in_crate = [&](const octomap::point3d& c) {
@@ -396,7 +396,7 @@ TEST(OctoMapBuilder, RemoveTakesAKeyframeOut) {
   };
   builder.Insert(MakeKeyframe(10, with_crate, camera, WalkPose(0)));
   EXPECT_GT(CountOccupiedInside(builder.tree(), in_crate), 20u);
-  builder.Insert(MakeKeyframe(11, test_scene::DefaultRoom(), camera, WalkPose(1)));
+  builder.Insert(MakeKeyframe(11, box_room::DefaultRoom(), camera, WalkPose(1)));
   EXPECT_TRUE(builder.Remove(10));
   EXPECT_FALSE(builder.Remove(10));
   EXPECT_FALSE(builder.Contains(10));

@@ -1,5 +1,6 @@
 #include "core/io/trajectory_io.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -89,6 +90,22 @@ void WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>&
     out += buffer;
   }
   WriteFileAtomically(path, out);
+}
+
+std::optional<Rigid3d> InterpolatePose(const std::vector<StampedPose>& trajectory, Timestamp stamp,
+                                       double max_gap) {
+  auto after = std::lower_bound(trajectory.begin(), trajectory.end(), stamp,
+                                [](const StampedPose& p, Timestamp t) { return p.stamp < t; });
+  if (after == trajectory.end()) return std::nullopt;
+  if (after->stamp == stamp) return after->world_from_cam;
+  if (after == trajectory.begin()) return std::nullopt;
+  const auto before = after - 1;
+  const double gap = SecondsBetween(before->stamp, after->stamp);
+  if (gap > max_gap) return std::nullopt;
+  const double s = SecondsBetween(before->stamp, stamp) / gap;
+  const Rigid3d& a = before->world_from_cam;
+  const Rigid3d& b = after->world_from_cam;
+  return Rigid3d(a.rotation.slerp(s, b.rotation), (1 - s) * a.translation + s * b.translation);
 }
 
 }  // namespace dygslam

@@ -1,6 +1,7 @@
 // TUM trajectory files: "t tx ty tz qx qy qz qw", world_from_cam (camera-to-world), 8 columns.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,5 +14,10 @@ namespace dygslam {
 std::vector<StampedPose> ReadTumTrajectory(const std::string& path);
 // Writes atomically (temporary file + rename). Quaternions normalised, qw >= 0 not enforced.
 void WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses);
+// Pose at `stamp` by linear / slerp interpolation between the neighbouring samples of a
+// trajectory sorted by stamp; nullopt outside it or where the neighbours are more than max_gap
+// seconds apart.
+std::optional<Rigid3d> InterpolatePose(const std::vector<StampedPose>& trajectory, Timestamp stamp,
+                                       double max_gap = 0.1);
 
 }  // namespace dygslam

@@ -24,8 +24,13 @@ constexpr size_t kTrailerBytes = 8;         // checksum
 // Coordinates of keypoints beyond this are not from an image: corrupt.
 constexpr double kMaxPixelCoordinate = 1e5;
 
-uint64_t Fnv1a(const char* data, size_t size) {
-  uint64_t h = 1469598103934665603ULL;
+// FNV-1a, 64 bit. Version 1 files were written with a mistyped offset basis (one digit short);
+// they are still read with it. Version 2 uses the standard basis 14695981039346656037.
+constexpr uint64_t kFnvOffsetBasis = 14695981039346656037ULL;
+constexpr uint64_t kFnvOffsetBasisVersion1 = 1469598103934665603ULL;
+
+uint64_t Fnv1a(const char* data, size_t size, uint64_t basis = kFnvOffsetBasis) {
+  uint64_t h = basis;
   for (size_t i = 0; i < size; ++i) {
     h ^= static_cast<uint8_t>(data[i]);
     h *= 1099511628211ULL;
@@ -331,6 +336,10 @@ MapFileInfo SaveMapFile(const std::string& path, const Map& map, const MapFileSe
   return info;
 }
 
+uint64_t MapFileChecksum(const char* data, size_t size, uint32_t version) {
+  return Fnv1a(data, size, version == 1 ? kFnvOffsetBasisVersion1 : kFnvOffsetBasis);
+}
+
 LoadedMap DecodeMapFile(const std::string& bytes, const std::string& source,
                         const MapFileSettings& run_settings,
                         const std::shared_ptr<const CameraGeometry>& geometry) {
@@ -348,9 +357,10 @@ LoadedMap DecodeMapFile(const std::string& bytes, const std::string& source,
   uint64_t payload_size = 0;
   std::memcpy(&version, bytes.data() + 8, 4);
   std::memcpy(&payload_size, bytes.data() + 12, 8);
-  if (version != kMapFileVersion)
+  if (version < kOldestReadableMapFileVersion || version > kMapFileVersion)
     throw fail("map file format version " + std::to_string(version) +
-               ", this build reads version " + std::to_string(kMapFileVersion));
+               ", this build reads versions " + std::to_string(kOldestReadableMapFileVersion) +
+               " to " + std::to_string(kMapFileVersion));
   const uint64_t body = bytes.size() - kHeaderBytes - kTrailerBytes;
   if (payload_size > body)
     throw fail("truncated map file: " + std::to_string(bytes.size()) + " bytes, the header says " +
@@ -361,7 +371,7 @@ LoadedMap DecodeMapFile(const std::string& bytes, const std::string& source,
                " bytes after the end of the map");
   uint64_t stored = 0;
   std::memcpy(&stored, bytes.data() + bytes.size() - 8, 8);
-  if (stored != Fnv1a(bytes.data(), bytes.size() - 8))
+  if (stored != MapFileChecksum(bytes.data(), bytes.size() - 8, version))
     throw fail("corrupt map file: checksum mismatch (the file was changed or damaged)");
 
   Reader r(bytes, kHeaderBytes, kHeaderBytes + payload_size, source);

@@ -27,7 +27,9 @@
 
 namespace dygslam {
 
-constexpr uint32_t kMapFileVersion = 1;
+constexpr uint32_t kMapFileVersion = 2;
+// Version 1 differs only in its checksum's FNV offset basis; it is still read.
+constexpr uint32_t kOldestReadableMapFileVersion = 1;
 
 // The settings a map depends on; a map is loaded only when they match the run's.
 struct MapFileSettings {
@@ -59,6 +61,10 @@ struct MapFileInfo {
 // The file's bytes for `map` (the caller must not let another thread change the map: the map's
 // mutex is taken here). Deterministic: the same map gives the same bytes.
 std::string EncodeMapFile(const Map& map, const MapFileSettings& settings);
+
+// The checksum a map file of `version` stores in its last 8 bytes, over everything before them
+// (FNV-1a 64; version 1 used another offset basis).
+uint64_t MapFileChecksum(const char* data, size_t size, uint32_t version);
 
 // Writes EncodeMapFile atomically to `path`; throws InputError naming `path` when it cannot be
 // written. Returns what was written.

@@ -3,16 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <set>
-
 #include <opencv2/calib3d.hpp>
+#include <set>
 
 #include "core/slam/relocalization.h"
 
 namespace dygslam {
 
-Tracker::Tracker(const TrackingOptions& options, std::shared_ptr<Map> map, LocalMapper& local_mapper,
-                 bool deterministic)
+Tracker::Tracker(const TrackingOptions& options, std::shared_ptr<Map> map,
+                 LocalMapper& local_mapper, bool deterministic)
     : options_(options),
       map_(std::move(map)),
       local_mapper_(local_mapper),
@@ -41,7 +40,8 @@ TrackResult Tracker::Track(Frame frame) {
         if (last_frame_.has_pose)
           predicted =
               velocity_ ? *velocity_ * last_frame_.cam_from_world : last_frame_.cam_from_world;
-        if (velocity_ && frame.id > last_relocalization_frame_id_ + 1) ok = TrackWithMotionModel(frame);
+        if (velocity_ && frame.id > last_relocalization_frame_id_ + 1)
+          ok = TrackWithMotionModel(frame);
         if (!ok) ok = TrackReferenceKeyFrame(frame);
       }
       if (!ok) {
@@ -60,8 +60,10 @@ TrackResult Tracker::Track(Frame frame) {
         result.state = relocalized ? TrackingState::kRelocalized : TrackingState::kOk;
         result.cam_from_world = frame.cam_from_world;
         result.num_inliers = last_inliers_;
-        velocity_ = last_frame_.has_pose ? std::optional<Rigid3d>(frame.cam_from_world * last_frame_.cam_from_world.Inverse())
-                                         : std::nullopt;
+        velocity_ = last_frame_.has_pose
+                        ? std::optional<Rigid3d>(frame.cam_from_world *
+                                                 last_frame_.cam_from_world.Inverse())
+                        : std::nullopt;
         // Points matched as outliers are dropped before the frame becomes "last".
         for (size_t i = 0; i < frame.size(); ++i) {
           if (frame.outlier[i]) frame.map_points[i] = nullptr;
@@ -82,7 +84,8 @@ TrackResult Tracker::Track(Frame frame) {
         result.num_inliers = 0;
         velocity_ = frame.cam_from_world * last_frame_.cam_from_world.Inverse();
         records_.push_back({frame.stamp, reference_kf_->id,
-                            frame.cam_from_world * reference_kf_->cam_from_world.Inverse(), result.state});
+                            frame.cam_from_world * reference_kf_->cam_from_world.Inverse(),
+                            result.state});
         last_frame_ = frame;
       } else {
         lost_ = true;
@@ -218,7 +221,8 @@ bool Tracker::TrackReferenceKeyFrame(Frame& frame) {
       matches = matcher_.SearchByDescriptors(*reference_kf_, frame, 0.7);
     }
     if (matches < 15) continue;
-    frame.cam_from_world = last_frame_.has_pose ? last_frame_.cam_from_world : reference_kf_->cam_from_world;
+    frame.cam_from_world =
+        last_frame_.has_pose ? last_frame_.cam_from_world : reference_kf_->cam_from_world;
     frame.has_pose = true;
     OptimizePose(frame, options_.optimizer);
     if (frame.DiscardOutliers() >= options_.min_inliers) return true;
@@ -261,7 +265,9 @@ void Tracker::UpdateLocalMap(Frame& frame) {
     kf->track_reference_for_frame = frame.id;
   }
   const size_t direct = local_keyframes_.size();
-  for (size_t k = 0; k < direct && static_cast<int>(local_keyframes_.size()) < options_.local_keyframes_max; ++k) {
+  for (size_t k = 0;
+       k < direct && static_cast<int>(local_keyframes_.size()) < options_.local_keyframes_max;
+       ++k) {
     for (int64_t id : local_keyframes_[k]->BestCovisibles(10)) {
       auto n = map_->GetKeyFrame(id);
       if (!n || n->bad || n->track_reference_for_frame == frame.id) continue;
@@ -286,7 +292,9 @@ bool Tracker::TrackLocalMap(Frame& frame) {
   const CameraGeometry& g = *frame.geometry;
   for (const auto& mp : frame.map_points) {
     if (!mp) continue;
-    mp->visible_count++;
+    // The map's statistics (visible / found, for point culling) are left alone in localization:
+    // a localization run does not change the loaded map, not even its counters.
+    if (!localization_) mp->visible_count++;
     mp->last_frame_seen = frame.id;
     mp->track_in_view = false;
   }
@@ -312,7 +320,7 @@ bool Tracker::TrackLocalMap(Frame& frame) {
     mp->track_proj_xr = u - g.bf * inv_z;
     mp->track_view_cos = view_cos;
     mp->track_scale_level = mp->PredictScale(dist, g);
-    mp->visible_count++;
+    if (!localization_) mp->visible_count++;
     ++to_match;
   }
   if (to_match > 0) {
@@ -329,7 +337,7 @@ bool Tracker::TrackLocalMap(Frame& frame) {
       frame.outlier[i] = 0;
       continue;
     }
-    mp->found_count++;
+    if (!localization_) mp->found_count++;
     if (mp->NumObservations() > 0) {
       ++inliers;
       if (frame.in_dynamic_region.empty() || !frame.in_dynamic_region[i]) ++static_inliers;
@@ -339,9 +347,10 @@ bool Tracker::TrackLocalMap(Frame& frame) {
   // The pose must rest on enough points outside the dynamic regions: features kept inside a
   // person's box (judged static by the geometry probability) can still move with the person,
   // and when a person fills the view the few background points left cannot hold the pose.
-  const int needed = frame.id < last_relocalization_frame_id_ + options_.max_frames_between_keyframes
-                         ? options_.relocalized_min_inliers
-                         : options_.local_map_min_inliers;
+  const int needed =
+      frame.id < last_relocalization_frame_id_ + options_.max_frames_between_keyframes
+          ? options_.relocalized_min_inliers
+          : options_.local_map_min_inliers;
   return static_inliers >= needed ||
          (static_inliers >= options_.local_map_min_inliers && last_relocalization_frame_id_ < 0);
 }
@@ -365,7 +374,8 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
       ++untracked_close;
     }
   }
-  const bool need_close = tracked_close < options_.close_tracked_min && untracked_close > options_.close_untracked_min;
+  const bool need_close =
+      tracked_close < options_.close_tracked_min && untracked_close > options_.close_untracked_min;
   const double ratio = kfs < 2 ? 0.4 : options_.ref_ratio;
   const bool c1a = frame.id >= last_kf_frame_id_ + options_.max_frames_between_keyframes;
   const bool c1b = mapper_idle;

@@ -62,9 +62,9 @@ TEST(MapFileCli, DamagedOrForeignMapIsAClearErrorWithNoOutput) {
   }
   {
     std::string bad = bytes;
-    bad[8] = 2;
+    bad[8] = 9;
     cases.push_back(
-        {"version 2", bad, "bonn.yaml", "format version 2, this build reads version 1"});
+        {"version 9", bad, "bonn.yaml", "format version 9, this build reads versions 1 to 2"});
   }
   cases.push_back({"other camera", bytes, "tum1.yaml", "different camera: Camera.fx"});
 
@@ -105,6 +105,75 @@ TEST(MapFileCli, DamagedOrForeignMapIsAClearErrorWithNoOutput) {
   std::getline(csv, first);
   EXPECT_NE(first.find(",relocalized,"), std::string::npos) << first;
 }
+
+// The DDS pipeline (one process and --processes): --save-map writes the SLAM map and map.ot at the
+// end; a second run with --load-map --localization --load-octomap localizes from the first frame,
+// the slam component announces the loaded map, nothing is added to it, and the static map of the
+// localization run is the loaded OctoMap.
+class MapFileDds : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(MapFileDds, SaveThenLocalizeWithTheLoadedMaps) {
+  DYGSLAM_REQUIRE_DATASET(data, "bonn_crowd_part");
+  DYGSLAM_REQUIRE_FILE(testing::DygslamBinary(), "dygslam binary");
+  const fs::path dir = testing::MakeTempDir("map_file_dds");
+  const fs::path map = dir / "crowd.dygmap";
+  auto run = [&](const std::string& name, std::vector<std::string> extra) {
+    std::vector<std::string> args = {"run",
+                                     data,
+                                     "--config",
+                                     Config("bonn.yaml"),
+                                     "--frames",
+                                     "0:60",
+                                     "--deterministic",
+                                     "--filter",
+                                     "none",
+                                     "--domain",
+                                     "132",
+                                     "--out",
+                                     (dir / name).string()};
+    if (!GetParam().empty()) args.push_back(GetParam());
+    args.insert(args.end(), extra.begin(), extra.end());
+    return testing::RunDygslam(args, dir.string());
+  };
+  const testing::ProcessResult made = run("mapping", {"--save-map", map.string()});
+  ASSERT_EQ(made.code, 0) << made.err;
+  ASSERT_TRUE(fs::exists(map)) << made.err;
+  ASSERT_TRUE(fs::exists(dir / "mapping" / "map.ot")) << made.err;
+  const std::string map_bytes = ReadBytes(map);
+
+  const testing::ProcessResult loc =
+      run("localization",
+          {"--load-map", map.string(), "--localization", "--load-octomap",
+           (dir / "mapping" / "map.ot").string(), "--save-map", (dir / "again.dygmap").string()});
+  ASSERT_EQ(loc.code, 0) << loc.err;
+  const std::string all = loc.out + loc.err;
+  EXPECT_NE(all.find("started from map file " + map.string()), std::string::npos) << all;
+  // Every frame has a pose, the first one relocalized in the loaded map.
+  std::ifstream csv(dir / "localization" / "frames.csv");
+  std::string line;
+  std::getline(csv, line);
+  int rows = 0, with_pose = 0;
+  std::string first;
+  while (std::getline(csv, line)) {
+    if (rows++ == 0) first = line;
+    with_pose += line.find(",ok,") != std::string::npos ||
+                 line.find(",relocalized,") != std::string::npos ||
+                 line.find(",fallback,") != std::string::npos;
+  }
+  EXPECT_EQ(rows, 60);
+  EXPECT_EQ(with_pose, 60);
+  EXPECT_NE(first.find(",relocalized,"), std::string::npos) << first;
+  // Localization adds nothing: the map saved again is the loaded one, byte for byte, and the
+  // static map is the loaded OctoMap.
+  EXPECT_TRUE(ReadBytes(dir / "again.dygmap") == map_bytes);
+  EXPECT_TRUE(ReadBytes(dir / "localization" / "map.bt") == ReadBytes(dir / "mapping" / "map.bt"));
+}
+
+INSTANTIATE_TEST_SUITE_P(Modes, MapFileDds, ::testing::Values("", "--processes"),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                           return info.param.empty() ? std::string("OneProcess")
+                                                     : std::string("Processes");
+                         });
 
 }  // namespace
 }  // namespace dygslam

@@ -1,6 +1,8 @@
 // SLAM map files (issue 15) on generated frames: save -> load -> save is byte-identical, a loaded
 // map localizes every frame deterministically without growing, a loaded map without localization
 // is extended with continuing ids, and every kind of damaged file gives its clear InputError.
+#include "core/slam/map_file.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -69,7 +71,8 @@ class MapFileTest : public ::testing::Test {
   // Feeds every frame to a system started from `path`; returns the tracked trajectory and the
   // number of frames with a pose.
   static std::vector<StampedPose> Replay(const std::string& path, bool localization,
-                                         MapStatistics* sizes, int* tracked, bool* first_tracked) {
+                                         MapStatistics* sizes, int* tracked, bool* first_tracked,
+                                         const std::string& save = "") {
     SystemOptions options = Options();
     options.load_map = path;
     options.localization = localization;
@@ -83,6 +86,7 @@ class MapFileTest : public ::testing::Test {
     }
     system.Shutdown();
     *sizes = system.MapSizes();
+    if (!save.empty()) system.SaveMap(save);
     return system.Trajectory();
   }
   static std::string LoadError(const std::string& path, SystemOptions options = Options()) {
@@ -130,12 +134,15 @@ TEST_F(MapFileTest, LocalizationTracksEveryFrameDeterministicallyWithoutGrowing)
   MapStatistics sizes_a, sizes_b;
   int tracked_a = 0, tracked_b = 0;
   bool first_a = false, first_b = false;
-  const auto a = Replay(MapPath(), true, &sizes_a, &tracked_a, &first_a);
+  const auto a = Replay(MapPath(), true, &sizes_a, &tracked_a, &first_a, *dir_ + "/after.dygmap");
   const auto b = Replay(MapPath(), true, &sizes_b, &tracked_b, &first_b);
   EXPECT_TRUE(first_a);
   EXPECT_EQ(tracked_a, static_cast<int>(frames_->size()));
   EXPECT_EQ(sizes_a.keyframes, mapping_sizes_->keyframes);
   EXPECT_EQ(sizes_a.map_points, mapping_sizes_->map_points);
+  // The map is not changed by localizing in it, not even its statistics: saved after the run, the
+  // same bytes.
+  EXPECT_TRUE(ReadBytes(*dir_ + "/after.dygmap") == ReadBytes(MapPath()));
   // Identical run to run (deterministic mode), pose for pose.
   ASSERT_EQ(a.size(), b.size());
   for (size_t i = 0; i < a.size(); ++i) {
@@ -205,6 +212,33 @@ TEST_F(MapFileTest, LoadedMapWithoutLocalizationIsExtendedWithContinuingIds) {
   EXPECT_GT(sizes.keyframes, half_sizes.keyframes);
 }
 
+// A version-1 file (the same payload, its checksum with version 1's FNV offset basis) still
+// loads, to the same map; the same bytes labelled version 2 are a checksum mismatch.
+TEST_F(MapFileTest, VersionOneFilesAreStillRead) {
+  const std::string good = ReadBytes(MapPath());
+  ASSERT_EQ(static_cast<uint8_t>(good[8]), kMapFileVersion);
+  std::string v1 = good.substr(0, good.size() - 8);
+  v1[8] = 1;
+  const uint64_t checksum = MapFileChecksum(v1.data(), v1.size(), 1);
+  ASSERT_NE(checksum, MapFileChecksum(v1.data(), v1.size(), 2));
+  v1.append(reinterpret_cast<const char*>(&checksum), 8);
+  const std::string path = *dir_ + "/version1.dygmap";
+  WriteBytes(path, v1);
+  SystemOptions options = Options();
+  options.load_map = path;
+  System loaded(options);
+  ASSERT_TRUE(loaded.LoadedMapInfo().has_value());
+  EXPECT_EQ(loaded.LoadedMapInfo()->version, 1u);
+  EXPECT_EQ(loaded.LoadedMapInfo()->keyframes, mapping_sizes_->keyframes);
+  // Saved again: the current version, byte-identical to the file the mapping run wrote.
+  loaded.SaveMap(*dir_ + "/version1_again.dygmap");
+  EXPECT_TRUE(ReadBytes(*dir_ + "/version1_again.dygmap") == good);
+  std::string mislabelled = v1;
+  mislabelled[8] = 2;
+  WriteBytes(path, mislabelled);
+  EXPECT_NE(LoadError(path).find("checksum mismatch"), std::string::npos) << LoadError(path);
+}
+
 TEST_F(MapFileTest, DamagedFilesGiveClearErrors) {
   const std::string good = ReadBytes(MapPath());
   const std::string path = *dir_ + "/damaged.dygmap";
@@ -230,7 +264,7 @@ TEST_F(MapFileTest, DamagedFilesGiveClearErrors) {
     std::string bad = good;
     bad[8] = 7;
     WriteBytes(path, bad);
-    EXPECT_NE(LoadError(path).find("format version 7, this build reads version 1"),
+    EXPECT_NE(LoadError(path).find("format version 7, this build reads versions 1 to 2"),
               std::string::npos)
         << LoadError(path);
   }

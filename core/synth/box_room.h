@@ -1,4 +1,4 @@
-// Synthetic RGB-D scene for the mapping tests: a closed box room with static furniture boxes and
+// Box-room RGB-D scene for the mapping tests: a closed box room with static furniture boxes and
 // optional moving boxes (person-sized), rendered analytically (exact depth, exact dynamic mask).
 // World frame: z up. Camera frame: optical (x right, y down, z forward).
 #pragma once
@@ -11,7 +11,7 @@
 #include "core/base/rigid3.h"
 #include "core/base/types.h"
 
-namespace dygslam::test_scene {
+namespace dygslam::box_room {
 
 struct Box {
   Eigen::Vector3d min, max;
@@ -40,4 +40,4 @@ void Render(const Scene& scene, const PinholeCamera& camera, const Rigid3d& worl
 KeyframeData MakeKeyframe(int64_t id, const Scene& scene, const PinholeCamera& camera,
                           const Rigid3d& world_from_cam);
 
-}  // namespace dygslam::test_scene
+}  // namespace dygslam::box_room

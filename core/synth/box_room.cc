@@ -1,9 +1,9 @@
-#include "mapping/test_scene.h"
+#include "core/synth/box_room.h"
 
 #include <cmath>
 #include <limits>
 
-namespace dygslam::test_scene {
+namespace dygslam::box_room {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -100,4 +100,4 @@ KeyframeData MakeKeyframe(int64_t id, const Scene& scene, const PinholeCamera& c
   return keyframe;
 }
 
-}  // namespace dygslam::test_scene
+}  // namespace dygslam::box_room

@@ -401,7 +401,8 @@ bool CyclonePeer::WaitForCameraReaders(std::chrono::milliseconds timeout) const 
 }
 
 void CyclonePeer::PublishFrame(int64_t stamp_ns, const cv::Mat& bgr, const cv::Mat& depth,
-                               const PeerCamera& camera, const std::string& frame_id) {
+                               const PeerCamera& camera, const std::string& frame_id,
+                               const std::string& color_encoding) {
   Impl& i = *impl_;
   std::string frame = frame_id;
   std_msgs_msg_Header header;
@@ -412,12 +413,11 @@ void CyclonePeer::PublishFrame(int64_t stamp_ns, const cv::Mat& bgr, const cv::M
   info.header = header;
   info.width = camera.width;
   info.height = camera.height;
-  std::string model = "plumb_bob";
+  std::string model = camera.model;
   info.distortion_model = model.data();
-  double d[5];
-  for (int k = 0; k < 5; ++k) d[k] = camera.d[k];
-  info.d._buffer = d;
-  info.d._length = info.d._maximum = 5;
+  std::vector<double> d = camera.d;
+  info.d._buffer = d.data();
+  info.d._length = info.d._maximum = static_cast<uint32_t>(d.size());
   info.d._release = false;
   const double k9[9] = {camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1};
   const double r9[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
@@ -444,9 +444,13 @@ void CyclonePeer::PublishFrame(int64_t stamp_ns, const cv::Mat& bgr, const cv::M
     m.data._release = false;
     Check(dds_write(writer, &m), "write image " + enc);
   };
-  cv::Mat rgb;
-  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-  write_image(i.color, rgb, "rgb8");
+  if (color_encoding.empty()) {
+    cv::Mat rgb;
+    cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+    write_image(i.color, rgb, "rgb8");
+  } else {
+    write_image(i.color, bgr, color_encoding);
+  }
   write_image(i.depth, depth, depth.type() == CV_32FC1 ? "32FC1" : "16UC1");
 }
 

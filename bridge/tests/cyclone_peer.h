@@ -60,7 +60,8 @@ struct PeerOctomap {
 struct PeerCamera {
   int width = 640, height = 480;
   double fx = 0, fy = 0, cx = 0, cy = 0;
-  double d[5] = {0, 0, 0, 0, 0};
+  std::string model = "plumb_bob";
+  std::vector<double> d = std::vector<double>(5, 0.0);
 };
 
 // ros_discovery_info as decoded with the Humble or Jazzy IDL (Gid 24 or 16 bytes).
@@ -129,9 +130,11 @@ class CyclonePeer {
                  const std::string& info_topic);
   bool WaitForCameraReaders(std::chrono::milliseconds timeout) const;
   // Colour as "rgb8" (from BGR), depth as "16UC1" (millimetres) or "32FC1" (metres), plus
-  // CameraInfo (plumb_bob), all with the same stamp and frame_id.
+  // CameraInfo (camera.model, camera.d), all with the same stamp and frame_id. With
+  // `color_encoding`, `bgr` is sent as it is under that encoding instead.
   void PublishFrame(int64_t stamp_ns, const cv::Mat& bgr, const cv::Mat& depth,
-                    const PeerCamera& camera, const std::string& frame_id);
+                    const PeerCamera& camera, const std::string& frame_id,
+                    const std::string& color_encoding = "");
 
  private:
   struct Impl;

@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "bridge/ros2_bridge.h"
+#include "bridge/ros2_convert.h"
 #include "bridge/tests/cyclone_peer.h"
 #include "components/convert.h"
 #include "components/dds/participant.h"
@@ -29,6 +30,7 @@
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
 #include "dygslam_msg/CameraPosePubSubTypes.h"
+#include "dygslam_msg/RgbdFramePubSubTypes.h"
 #include "run/system_config.h"
 #include "tests/support/test_support.h"
 
@@ -371,6 +373,121 @@ TEST_F(InteropLan, RosDiscoveryInfoDecodesWithTheJazzyIdl) {
 
 TEST_F(InteropLan, RosDiscoveryInfoDecodesWithTheHumbleIdl) {
   CheckGraphEntry(143, ros2::RosDistro::kHumble, "/robot1/perception", "slam_bridge");
+}
+
+// Camera conventions through the bridge: an Azure-Kinect-like camera (rational_polynomial with 8
+// coefficients) sending yuv422 colour. The frame the bridge forwards to the pipeline is the
+// rectified BGR image and depth, equal to ImageRectifier applied to ColorFromRos / DepthFromRos of
+// the same message, with a distortion-free camera. Samples whose frame_id has a leading '/' and
+// colour in an unknown encoding are rejected and counted by kind; none of them is forwarded.
+TEST_F(InteropLan, CameraConventionsAndRejectedSamplesThroughTheBridge) {
+  const int domain = 144;
+  std::mutex mutex;
+  std::vector<RgbdFrameData> forwarded;
+  auto ref = PipelineParticipant(domain, "test_frames");
+  dds::Reader<msg::RgbdFramePubSubType> frames(ref, dds::topics::kRgbdFrame,
+                                               dds::TopicKind::kRgbdFrame, [&](msg::RgbdFrame&& m) {
+                                                 RgbdFrameData f = RgbdFrameFromMsg(m);
+                                                 std::lock_guard<std::mutex> lock(mutex);
+                                                 forwarded.push_back(std::move(f));
+                                               });
+  ros2::RosBridgeOptions bo;
+  bo.outbound = false;
+  bo.wait_for_components.clear();
+  bo.window = 0;
+  bo.max_pending_frames = 100;
+  ros2::RosBridge bridge(PipelineParticipant(domain, "test_bridge"), RosParticipant(domain), bo);
+  CyclonePeer peer(domain, PeerNetwork::kDefault);
+  peer.Advertise("rt/camera/camera/color/image_raw",
+                 "rt/camera/camera/aligned_depth_to_color/image_raw",
+                 "rt/camera/camera/color/camera_info");
+  ASSERT_TRUE(peer.WaitForCameraReaders(std::chrono::seconds(15)));
+  ASSERT_TRUE(frames.WaitForWriters(1, std::chrono::seconds(15)));
+
+  // 320x240 with the Azure Kinect colour camera's field of view and rational coefficients.
+  testing::PeerCamera camera;
+  camera.width = 320;
+  camera.height = 240;
+  camera.fx = camera.fy = 151.4;
+  camera.cx = 159.5;
+  camera.cy = 119.5;
+  camera.model = "rational_polynomial";
+  camera.d = {0.4939, -2.6706, 0.00052, -0.00021, 1.5226, 0.3729, -2.5011, 1.4474};
+  cv::RNG rng(21);
+  cv::Mat yuv(camera.height, camera.width, CV_8UC2), depth(camera.height, camera.width, CV_16UC1);
+  rng.fill(yuv, cv::RNG::UNIFORM, 16, 240);
+  rng.fill(depth, cv::RNG::UNIFORM, 500, 4000);
+
+  const std::string color = "/camera/camera/color/image_raw";
+  const std::string depth_topic = "/camera/camera/aligned_depth_to_color/image_raw";
+  const std::string info = "/camera/camera/color/camera_info";
+  const std::set<std::string> kinds = {color + ".header.frame_id", depth_topic + ".header.frame_id",
+                                       info + ".header.frame_id", color + ".encoding"};
+  int64_t stamp = 1000000000;
+  // Rejected samples (best effort: published again until every kind was seen, at most 5 times).
+  bool all_kinds = false;
+  for (int round = 0; round < 5 && !all_kinds; ++round) {
+    peer.PublishFrame(stamp += 33000000, yuv, depth, camera, "/camera_link", "yuv422");
+    peer.PublishFrame(stamp += 33000000, yuv, depth, camera, "camera_link", "nv21");
+    all_kinds = WaitUntil([&] { return bridge.stats().rejected.size() == kinds.size(); },
+                          std::chrono::seconds(3));
+  }
+  const ros2::RosBridgeStats bad = bridge.stats();
+  std::set<std::string> seen;
+  size_t sum = 0;
+  for (const auto& [kind, count] : bad.rejected) {
+    seen.insert(kind);
+    sum += count;
+  }
+  EXPECT_EQ(seen, kinds);
+  EXPECT_EQ(bad.bad_samples, sum);
+  EXPECT_EQ(bad.frames_forwarded, 0u);
+
+  // Good frames: forwarded rectified.
+  const int64_t last_bad_stamp = stamp;
+  int64_t good_stamp = 0;
+  for (int attempt = 0; attempt < 5; ++attempt) {
+    good_stamp = stamp += 33000000;
+    peer.PublishFrame(good_stamp, yuv, depth, camera, "camera_link", "yuv422");
+    if (WaitUntil(
+            [&] {
+              std::lock_guard<std::mutex> lock(mutex);
+              return !forwarded.empty();
+            },
+            std::chrono::seconds(3))) {
+      break;
+    }
+  }
+  std::lock_guard<std::mutex> lock(mutex);
+  ASSERT_FALSE(forwarded.empty());
+  const RgbdFrameData& f = forwarded.front();
+  EXPECT_GT(f.stamp.nanoseconds(), last_bad_stamp) << "a rejected frame was forwarded";
+  EXPECT_FALSE(f.camera.HasDistortion());
+  EXPECT_DOUBLE_EQ(f.camera.fx, camera.fx);
+  EXPECT_DOUBLE_EQ(f.depth_scale, 1000.0);
+
+  // The reference: the same messages through the conversion functions and ImageRectifier.
+  sensor_msgs::msg::CameraInfo ci;
+  ci.width(camera.width);
+  ci.height(camera.height);
+  ci.k({camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1});
+  ci.distortion_model(camera.model);
+  ci.d(camera.d);
+  const ros2::ImageRectifier rectifier(ros2::CameraFromRos(ci, "ref"));
+  sensor_msgs::msg::Image image;
+  image.width(camera.width);
+  image.height(camera.height);
+  image.encoding("yuv422");
+  image.step(camera.width * 2);
+  image.data().assign(yuv.data, yuv.data + yuv.total() * yuv.elemSize());
+  const cv::Mat raw_bgr = ros2::ColorFromRos(image, "ref");
+  const cv::Mat expected_bgr = rectifier.Color(raw_bgr);
+  const cv::Mat expected_depth = rectifier.Depth(depth);
+  ASSERT_EQ(f.rgb.size(), expected_bgr.size());
+  EXPECT_EQ(cv::norm(f.rgb, expected_bgr, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(f.depth, expected_depth, cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::norm(f.rgb, raw_bgr, cv::NORM_L1), 0.0) << "the colour was not rectified";
+  EXPECT_EQ(bridge.stats().bad_samples, bad.bad_samples) << "a good frame was rejected";
 }
 
 }  // namespace

@@ -141,6 +141,8 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   o.outbound = !p.Flag("no-outbound");
   o.node_name = p.Get("node-name");
   o.node_namespace = p.Get("node-namespace");
+  ros2::CheckNodeName(o.node_name, "--node-name");
+  ros2::CheckNodeNamespace(o.node_namespace, "--node-namespace");
   o.ros_distro = ros2::ParseRosDistro(p.Get("ros-distro"), "--ros-distro");
   o.announce_node = !p.Flag("no-node");
   o.wait_for_components.clear();

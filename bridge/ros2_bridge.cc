@@ -67,9 +67,15 @@ void RosBridgeOptions::Check() const {
     DYGSLAM_CHECK_OPTION(!map_frame.empty(), "map_frame");
     DYGSLAM_CHECK_OPTION(!world_frame.empty(), "world_frame");
     DYGSLAM_CHECK_OPTION(!camera_frame.empty(), "camera_frame");
-    for (const std::string* f : {&map_frame, &world_frame, &camera_frame, &image_frame}) {
-      DYGSLAM_CHECK_OPTION(f->empty() || (*f)[0] != '/',
-                           "frame ids (no leading '/': tf2 refuses them)");
+    const std::pair<const char*, const std::string*> frames[] = {{"map_frame", &map_frame},
+                                                                 {"world_frame", &world_frame},
+                                                                 {"camera_frame", &camera_frame},
+                                                                 {"image_frame", &image_frame}};
+    for (const auto& [name, frame] : frames) {
+      if (!frame->empty() && (*frame)[0] == '/') {
+        throw InvalidOptions(std::string("invalid option ") + name + ": '" + *frame +
+                             "' starts with '/' (tf2 refuses frame ids with a leading '/')");
+      }
     }
     DYGSLAM_CHECK_OPTION(map_frame != camera_frame && map_frame != world_frame,
                          "map_frame distinct from camera_frame and world_frame");

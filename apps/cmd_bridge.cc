@@ -64,7 +64,10 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   p.AddOption("color-topic", "TOPIC", "colour sensor_msgs/Image (overrides the preset)");
   p.AddOption("depth-topic", "TOPIC", "depth aligned to colour, 16UC1 mm or 32FC1 m");
   p.AddOption("camera-info-topic", "TOPIC", "colour sensor_msgs/CameraInfo");
-  p.AddOption("depth-unit", "M", "metres per 16UC1 depth count", "0.001");
+  p.AddOption("depth-unit", "M",
+              "metres per 16UC1 depth count (0.001 = millimetres, the ROS convention;\n"
+              "e.g. 0.00025 for cameras counting quarter millimetres)",
+              "0.001");
   p.AddOption("max-stamp-diff", "S", "colour/depth pairing tolerance (s)", "0.02");
   p.AddOption("window", "N", "frames in flight to slam (back-pressure)", "2");
   p.AddOption("max-pending", "N",
@@ -85,6 +88,17 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
               d.camera_frame);
   p.AddOption("image-frame", "FRAME", "frame of the detections (default: the images' frame_id)");
   p.AddOption("path-every", "N", "publish the online path every N poses", "10");
+  p.AddOption("node-name", "NAME", "ROS 2 node name shown by `ros2 node list`", d.node_name);
+  p.AddOption("node-namespace", "NS", "ROS 2 node namespace", d.node_namespace);
+  p.AddOption("ros-distro", "NAME",
+              "ROS 2 distribution of the peers: humble | jazzy (iron, kilted, rolling as jazzy);\n"
+              "sets the layout of ros_discovery_info",
+              "jazzy");
+  p.AddFlag("no-node", "do not announce a ROS 2 node (ros_discovery_info)");
+  p.AddFlag("ros-no-shm",
+            "ROS 2 side over UDP only (no shared memory; containers without ipc: host)");
+  p.AddFlag("ros-loopback",
+            "ROS 2 side on the pipeline's participant (shared memory + 127.0.0.1 only)");
   p.AddFlag("no-ros-axes", "map = SLAM world axes (optical: z forward) instead of REP 103");
   p.AddFlag("no-tf", "do not publish /tf");
   p.AddFlag("no-inbound", "outbound only (the frames come from elsewhere, e.g. the player)");
@@ -125,6 +139,12 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   o.publish_tf = !p.Flag("no-tf");
   o.inbound = !p.Flag("no-inbound");
   o.outbound = !p.Flag("no-outbound");
+  o.node_name = p.Get("node-name");
+  o.node_namespace = p.Get("node-namespace");
+  ros2::CheckNodeName(o.node_name, "--node-name");
+  ros2::CheckNodeNamespace(o.node_namespace, "--node-namespace");
+  o.ros_distro = ros2::ParseRosDistro(p.Get("ros-distro"), "--ros-distro");
+  o.announce_node = !p.Flag("no-node");
   o.wait_for_components.clear();
   {
     const std::string list = p.Get("wait-for");
@@ -183,7 +203,7 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   }
   dds::ParticipantOptions po;
   po.domain_id = domain;
-  po.name = "dygslam_ros2_bridge";
+  po.name = "dygslam_ros2_bridge_pipeline";
   po.partition = partition;
   LOG_INFO << "ros2 bridge on domain " << domain
            << (partition.empty() ? "" : " (pipeline partition '" + partition + "')") << ": in "
@@ -192,7 +212,13 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
            << ", " << o.detections_topic << ", " << o.octomap_topic;
   ros2::RosBridgeStats s;
   try {
-    s = ros2::RunBridge(dds::Participant::Create(po), o, stop);
+    auto pipeline_participant = dds::Participant::Create(po);
+    std::shared_ptr<dds::Participant> ros_participant = pipeline_participant;
+    if (!p.Flag("ros-loopback")) {
+      ros_participant =
+          dds::Participant::Create(ros2::RosParticipantOptions(domain, !p.Flag("ros-no-shm")));
+    }
+    s = ros2::RunBridge(pipeline_participant, ros_participant, o, stop);
   } catch (...) {
     stop->Request();
     for (std::thread& t : threads) t.join();
@@ -206,6 +232,9 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
             << ", dropped waiting " << s.dropped_pending << ", bad " << s.bad_samples << "); "
             << s.poses << " poses, " << s.paths << " paths, " << s.detections
             << " detection arrays, " << s.maps << " maps published\n";
+  for (const auto& [kind, count] : s.rejected) {
+    std::cerr << "ros2 bridge: rejected " << count << " sample(s): " << kind << "\n";
+  }
   return result;
 }
 

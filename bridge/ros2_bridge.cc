@@ -11,6 +11,7 @@
 #include "bridge/rgbd_sync.h"
 #include "bridge/ros2_convert.h"
 #include "bridge/ros2_endpoint.h"
+#include "bridge/ros2_graph_type.h"
 #include "components/convert.h"
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
@@ -66,10 +67,35 @@ void RosBridgeOptions::Check() const {
     DYGSLAM_CHECK_OPTION(!map_frame.empty(), "map_frame");
     DYGSLAM_CHECK_OPTION(!world_frame.empty(), "world_frame");
     DYGSLAM_CHECK_OPTION(!camera_frame.empty(), "camera_frame");
+    const std::pair<const char*, const std::string*> frames[] = {{"map_frame", &map_frame},
+                                                                 {"world_frame", &world_frame},
+                                                                 {"camera_frame", &camera_frame},
+                                                                 {"image_frame", &image_frame}};
+    for (const auto& [name, frame] : frames) {
+      if (!frame->empty() && (*frame)[0] == '/') {
+        throw InvalidOptions(std::string("invalid option ") + name + ": '" + *frame +
+                             "' starts with '/' (tf2 refuses frame ids with a leading '/')");
+      }
+    }
     DYGSLAM_CHECK_OPTION(map_frame != camera_frame && map_frame != world_frame,
                          "map_frame distinct from camera_frame and world_frame");
     DYGSLAM_CHECK_OPTION(path_every >= 0, "path_every");
   }
+  if (announce_node) {
+    CheckNodeName(node_name, "node_name");
+    CheckNodeNamespace(node_namespace, "node_namespace");
+  }
+}
+
+dds::ParticipantOptions RosParticipantOptions(int domain_id, bool shared_memory) {
+  dds::ParticipantOptions o;
+  o.domain_id = domain_id;
+  o.name = "dygslam_ros2_bridge";
+  o.xml_profile_name = "dygslam_ros";
+  o.network.all_interfaces = true;
+  o.network.shared_memory = shared_memory;
+  o.user_data = kRosEnclaveUserData;
+  return o;
 }
 
 void RosBridgeOptions::ApplyCameraPreset(const std::string& preset) {
@@ -100,6 +126,13 @@ namespace {
 // Logs the first few occurrences, then every 100th.
 bool ShouldLog(size_t count) { return count <= 5 || count % 100 == 0; }
 
+Guid ToGuid(const eprosima::fastrtps::rtps::GUID_t& g) {
+  Guid out{};
+  std::copy(g.guidPrefix.value, g.guidPrefix.value + 12, out.begin());
+  std::copy(g.entityId.value, g.entityId.value + 4, out.begin() + 12);
+  return out;
+}
+
 msg::StreamStatus MakeStatus(StreamEvent event, uint64_t num_frames, uint64_t seq) {
   msg::StreamStatus s;
   s.kind(static_cast<uint8_t>(event));
@@ -112,7 +145,8 @@ msg::StreamStatus MakeStatus(StreamEvent event, uint64_t num_frames, uint64_t se
 }  // namespace
 
 struct RosBridge::Impl {
-  std::shared_ptr<dds::Participant> participant;
+  std::shared_ptr<dds::Participant> participant;      // pipeline topics
+  std::shared_ptr<dds::Participant> ros_participant;  // ROS 2 topics
   RosBridgeOptions options;
   Rigid3d map_from_world;
 
@@ -124,6 +158,7 @@ struct RosBridge::Impl {
   // Inbound.
   RgbdSynchronizer sync;
   std::optional<RosCamera> camera;
+  std::unique_ptr<ImageRectifier> rectifier;  // for `camera`
   std::string image_frame_id;
   std::deque<RgbdFrameData> pending;
   uint64_t next_seq = 0;
@@ -154,6 +189,9 @@ struct RosBridge::Impl {
   std::unique_ptr<RosWriter<tf2_msgs::msg::TFMessagePubSubType>> tf_static_writer;
   std::unique_ptr<RosWriter<vision_msgs::msg::Detection2DArrayPubSubType>> detections_writer;
   std::unique_ptr<RosWriter<octomap_msgs::msg::OctomapPubSubType>> octomap_writer;
+  std::unique_ptr<RosWriter<ParticipantEntitiesInfoPubSubType<RosDistro::kHumble>>> graph_humble;
+  std::unique_ptr<RosWriter<ParticipantEntitiesInfoPubSubType<RosDistro::kJazzy>>> graph_jazzy;
+  RosParticipantEntities graph;
 
   std::unique_ptr<RosReader<sensor_msgs::msg::ImagePubSubType>> color_reader, depth_reader;
   std::unique_ptr<RosReader<sensor_msgs::msg::CameraInfoPubSubType>> info_reader;
@@ -165,8 +203,10 @@ struct RosBridge::Impl {
 
   std::thread inbound_thread, outbound_thread;
 
-  Impl(std::shared_ptr<dds::Participant> p, const RosBridgeOptions& o)
+  Impl(std::shared_ptr<dds::Participant> p, std::shared_ptr<dds::Participant> r,
+       const RosBridgeOptions& o)
       : participant(std::move(p)),
+        ros_participant(std::move(r)),
         options(o),
         map_from_world(MapFromWorld(o.ros_axes)),
         sync(RgbdSyncOptions{o.max_stamp_difference_s, 16}) {}
@@ -177,6 +217,7 @@ struct RosBridge::Impl {
     StampedImage item;
     std::string frame_id = image.header().frame_id();
     try {
+      CheckFrameId(frame_id, topic + ".header.frame_id");
       item.stamp = TimeFromRos(image.header().stamp(), topic + ".header.stamp");
       if (is_color) {
         item.image = ColorFromRos(image, topic);
@@ -187,10 +228,7 @@ struct RosBridge::Impl {
       }
     } catch (const InputError& e) {
       std::lock_guard<std::mutex> lock(mutex);
-      ++stats.bad_samples;
-      if (ShouldLog(stats.bad_samples)) {
-        LOG_WARNING << "ros2 bridge: dropped image: " << e.what();
-      }
+      RejectLocked(e.what());
       return;
     }
     std::lock_guard<std::mutex> lock(mutex);
@@ -221,20 +259,17 @@ struct RosBridge::Impl {
     const cv::Size depth_size = pair.depth.image.size();
     std::string error;
     if (depth_size != color_size) {
-      error = options.depth_topic + ": depth " + std::to_string(depth_size.width) + "x" +
-              std::to_string(depth_size.height) + " differs from colour " +
+      error = options.depth_topic + ".width/height: depth " + std::to_string(depth_size.width) +
+              "x" + std::to_string(depth_size.height) + " differs from colour " +
               std::to_string(color_size.width) + "x" + std::to_string(color_size.height) +
               " (subscribe to the depth image aligned to colour)";
     } else if (color_size != cv::Size(c.width, c.height)) {
-      error = options.camera_info_topic + ": CameraInfo " + std::to_string(c.width) + "x" +
-              std::to_string(c.height) + " differs from the images " +
+      error = options.camera_info_topic + ".width/height: CameraInfo " + std::to_string(c.width) +
+              "x" + std::to_string(c.height) + " differs from the images " +
               std::to_string(color_size.width) + "x" + std::to_string(color_size.height);
     }
     if (!error.empty()) {
-      ++stats.bad_samples;
-      if (ShouldLog(stats.bad_samples)) {
-        LOG_WARNING << "ros2 bridge: frame dropped: " << error;
-      }
+      RejectLocked(error);
       return;
     }
     RgbdFrameData frame;
@@ -242,8 +277,8 @@ struct RosBridge::Impl {
     frame.frame_id = image_frame_id.empty() ? "camera" : image_frame_id;
     frame.camera = c;
     frame.depth_scale = pair.depth.depth_scale;
-    frame.rgb = std::move(pair.color.image);
-    frame.depth = std::move(pair.depth.image);
+    frame.rgb = rectifier->Color(pair.color.image);
+    frame.depth = rectifier->Depth(pair.depth.image);
     pending.push_back(std::move(frame));
     last_frame_time = Clock::now();
     while (pending.size() > options.max_pending_frames) {
@@ -256,28 +291,46 @@ struct RosBridge::Impl {
 
   void OnCameraInfo(sensor_msgs::msg::CameraInfo&& info) {
     try {
+      CheckFrameId(info.header().frame_id(), options.camera_info_topic + ".header.frame_id");
       RosCamera c = CameraFromRos(info, options.camera_info_topic);
+      if (camera && *camera == c) {
+        std::lock_guard<std::mutex> lock(mutex);
+        ++stats.camera_info_received;
+        return;
+      }
+      // A new or changed calibration: rectification maps (outside the lock, ~10 ms).
+      auto r = std::make_unique<ImageRectifier>(c);
       std::lock_guard<std::mutex> lock(mutex);
       ++stats.camera_info_received;
-      const bool first = !camera;
-      if (first || c.camera.fx != camera->camera.fx || c.camera.width != camera->camera.width) {
-        LOG_INFO << "ros2 bridge: camera " << c.camera.width << "x" << c.camera.height << " fx "
-                 << c.camera.fx << " fy " << c.camera.fy << " cx " << c.camera.cx << " cy "
-                 << c.camera.cy << " (" << info.distortion_model() << ")"
-                 << " from " << options.camera_info_topic
-                 << "; the SLAM settings (Camera.*) must match";
-        if (c.ignored_distortion) {
-          LOG_WARNING << "ros2 bridge: distortion coefficients k4..k6 of "
-                      << info.distortion_model() << " are ignored (pinhole k1 k2 p1 p2 k3 model)";
-        }
+      const PinholeCamera& p = c.camera;
+      LOG_INFO << "ros2 bridge: camera " << p.width << "x" << p.height << " fx " << p.fx << " fy "
+               << p.fy << " cx " << p.cx << " cy " << p.cy << " (" << info.distortion_model()
+               << ") from " << options.camera_info_topic << "; the SLAM settings (Camera.*) must "
+               << "match";
+      if (c.rectify) {
+        LOG_WARNING << "ros2 bridge: " << info.distortion_model()
+                    << " distortion is not the pipeline's model (k1 k2 p1 p2 k3): the bridge "
+                       "rectifies the images to the same K without distortion; set Camera.k1, "
+                       "k2, p1, p2, k3 to 0 in the SLAM settings";
       }
       camera = c;
+      rectifier = std::move(r);
     } catch (const InputError& e) {
       std::lock_guard<std::mutex> lock(mutex);
-      ++stats.bad_samples;
-      if (ShouldLog(stats.bad_samples)) {
-        LOG_WARNING << "ros2 bridge: " << e.what();
-      }
+      RejectLocked(e.what());
+    }
+  }
+
+  // Counts a rejected sample under its kind (the field before ": " in the reason) and logs the
+  // first of each kind (locked).
+  void RejectLocked(const std::string& reason) {
+    const size_t colon = reason.find(": ");
+    const std::string kind = colon == std::string::npos ? reason : reason.substr(0, colon);
+    ++stats.bad_samples;
+    if (++stats.rejected[kind] == 1) {
+      LOG_WARNING << "ros2 bridge: rejected a sample: " << reason
+                  << " (further samples rejected for " << kind
+                  << " are counted, see the final statistics)";
     }
   }
 
@@ -465,7 +518,7 @@ struct RosBridge::Impl {
     auto& p = participant;
     const auto& o = options;
     const RosQos reliable = RosQos::Default();
-    ros = RosSession::Create(p);
+    ros = RosSession::Create(ros_participant);
     consumers_deadline = Clock::now() + std::chrono::milliseconds(
                                             static_cast<int64_t>(o.wait_for_components_s * 1000));
     if (o.inbound) {
@@ -536,6 +589,46 @@ struct RosBridge::Impl {
           ros, DdsTopicName(o.camera_info_topic, "camera_info_topic"), sensor,
           [this](sensor_msgs::msg::CameraInfo&& m) { OnCameraInfo(std::move(m)); });
     }
+    AnnounceNode();
+  }
+
+  // The ROS 2 graph entry: one node owning the ROS readers and writers (ros2_graph.h).
+  void AnnounceNode() {
+    graph.participant = ToGuid(ros_participant->get()->guid());
+    if (!options.announce_node) return;
+    RosNodeEntities node;
+    node.node_namespace = options.node_namespace;
+    node.node_name = options.node_name;
+    for (const auto* r : {color_reader.get(), depth_reader.get()}) {
+      if (r != nullptr) node.readers.push_back(ToGuid(r->guid()));
+    }
+    if (info_reader) node.readers.push_back(ToGuid(info_reader->guid()));
+    if (pose_writer) node.writers.push_back(ToGuid(pose_writer->guid()));
+    if (odom_writer) node.writers.push_back(ToGuid(odom_writer->guid()));
+    if (path_writer) node.writers.push_back(ToGuid(path_writer->guid()));
+    for (const auto* w : {tf_writer.get(), tf_static_writer.get()}) {
+      if (w != nullptr) node.writers.push_back(ToGuid(w->guid()));
+    }
+    if (detections_writer) node.writers.push_back(ToGuid(detections_writer->guid()));
+    if (octomap_writer) node.writers.push_back(ToGuid(octomap_writer->guid()));
+    graph.nodes = {node};
+    // rmw's ros_discovery_info QoS: reliable, transient local, keep-last 1.
+    if (options.ros_distro == RosDistro::kHumble) {
+      graph_humble =
+          std::make_unique<RosWriter<ParticipantEntitiesInfoPubSubType<RosDistro::kHumble>>>(
+              ros, kRosDiscoveryTopic, RosQos::TransientLocal());
+      graph_humble->Write(graph);
+    } else {
+      graph_jazzy =
+          std::make_unique<RosWriter<ParticipantEntitiesInfoPubSubType<RosDistro::kJazzy>>>(
+              ros, kRosDiscoveryTopic, RosQos::TransientLocal());
+      graph_jazzy->Write(graph);
+    }
+    LOG_INFO << "ros2 bridge: ROS 2 node "
+             << (options.node_namespace == "/" ? "" : options.node_namespace) << "/"
+             << options.node_name << " (" << node.readers.size() << " subscriptions, "
+             << node.writers.size() << " publishers; ros_discovery_info for "
+             << RosDistroName(options.ros_distro) << ")";
   }
 
   void Stop() {
@@ -562,11 +655,20 @@ struct RosBridge::Impl {
   }
 };
 
-RosBridge::RosBridge(std::shared_ptr<dds::Participant> participant,
-                     const RosBridgeOptions& options) {
+RosBridge::RosBridge(std::shared_ptr<dds::Participant> pipeline,
+                     std::shared_ptr<dds::Participant> ros, const RosBridgeOptions& options) {
   options.Check();
-  impl_ = std::make_unique<Impl>(std::move(participant), options);
+  if (ros == nullptr) ros = pipeline;
+  impl_ = std::make_unique<Impl>(std::move(pipeline), std::move(ros), options);
   impl_->Start();
+}
+
+RosBridge::RosBridge(std::shared_ptr<dds::Participant> participant, const RosBridgeOptions& options)
+    : RosBridge(participant, participant, options) {}
+
+RosParticipantEntities RosBridge::graph_entry() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->graph;
 }
 
 RosBridge::~RosBridge() {
@@ -605,9 +707,10 @@ RosBridgeStats RosBridge::stats() const {
   return s;
 }
 
-RosBridgeStats RunBridge(std::shared_ptr<dds::Participant> participant,
-                         const RosBridgeOptions& options, const StopFlagPtr& stop) {
-  RosBridge bridge(std::move(participant), options);
+RosBridgeStats RunBridge(std::shared_ptr<dds::Participant> pipeline,
+                         std::shared_ptr<dds::Participant> ros, const RosBridgeOptions& options,
+                         const StopFlagPtr& stop) {
+  RosBridge bridge(std::move(pipeline), std::move(ros), options);
   std::optional<Clock::time_point> slam_done_at;
   while (!stop->WaitFor(std::chrono::milliseconds(50))) {
     if (!bridge.stats().end_of_stream_sent || !bridge.slam_done()) continue;

@@ -19,23 +19,29 @@
 // (dygslam/map_update, binary, in world_frame); /tf_static map -> world_frame once
 // (transient-local). map_from_world = MapFromWorld(ros_axes).
 //
+// Two participants: the pipeline's topics stay on the pipeline participant (shared memory +
+// 127.0.0.1 by default, the pipeline's partition), the ROS 2 topics live on a ROS participant
+// with the ROS network profile (RosParticipantOptions: UDP on every interface of the host, as
+// ROS 2 nodes, so a same-host peer that announces its LAN address -- rmw_cyclonedds with default
+// settings -- is reachable). The ROS participant also publishes the bridge's ROS 2 graph entry
+// (ros_discovery_info, ros2_graph.h): `ros2 node list` shows node_namespace/node_name.
+//
 // DDS partitions: the pipeline side (dygslam/* topics) uses the participant's partition
 // (dds::ParticipantOptions::partition = the pipeline's, e.g. `dygslam component ... --partition
 // NAME`), the ROS 2 side always the default partition (ROS 2 uses none).
 #pragma once
 
 #include <cstddef>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "bridge/ros2_graph.h"
 #include "components/component_common.h"
+#include "components/dds/participant.h"
 
 namespace dygslam {
-
-namespace dds {
-class Participant;
-}
 
 namespace ros2 {
 
@@ -79,6 +85,12 @@ struct RosBridgeOptions {
   bool publish_tf = true;
   int path_every = 10;  // online path every N tracked poses (0 = only the final trajectory)
 
+  // --- ROS 2 graph (ros_discovery_info).
+  bool announce_node = true;
+  std::string node_name = "dygslam";
+  std::string node_namespace = "/";
+  RosDistro ros_distro = RosDistro::kJazzy;  // Gid size of ros_discovery_info
+
   void Check() const;
   // Topic defaults of common ROS 2 camera drivers: "realsense" (realsense2_camera >= 4.54:
   // /camera/camera/...), "realsense-legacy" (/camera/...), "azure-kinect" (Azure_Kinect_ROS_Driver:
@@ -95,15 +107,29 @@ struct RosBridgeStats {
   size_t dropped_no_camera_info = 0;
   size_t dropped_pending = 0;  // max_pending_frames exceeded
   size_t ack_timeouts = 0;
-  size_t bad_samples = 0;  // rejected ROS messages (logged with the field)
+  size_t bad_samples = 0;  // rejected ROS messages (sum of `rejected`)
+  // Rejected ROS messages by kind (the field at fault, e.g. "<topic>.encoding"); the first of
+  // each kind is logged with the reason.
+  std::map<std::string, size_t> rejected;
   bool end_of_stream_sent = false;
   // Outbound.
   size_t poses = 0, paths = 0, transforms = 0, detections = 0, maps = 0;
   size_t bad_pipeline_samples = 0;
 };
 
+// The ROS network profile of the bridge's ROS participant: UDPv4 on every interface (no
+// whitelist; 4 MiB socket buffers), shared memory (16 MiB segment) unless `shared_memory` is
+// false (containers without a shared /dev/shm), USER_DATA "enclave=/;". With
+// FASTRTPS_DEFAULT_PROFILES_FILE set, the XML's participant profile "dygslam_ros" (or its default
+// profile) is used instead.
+dds::ParticipantOptions RosParticipantOptions(int domain_id, bool shared_memory = true);
+
 class RosBridge {
  public:
+  // `ros` carries the ROS 2 topics, `pipeline` the dygslam/* topics (may be the same).
+  RosBridge(std::shared_ptr<dds::Participant> pipeline, std::shared_ptr<dds::Participant> ros,
+            const RosBridgeOptions& options);
+  // One participant for both sides.
   RosBridge(std::shared_ptr<dds::Participant> participant, const RosBridgeOptions& options);
   ~RosBridge();
   RosBridge(const RosBridge&) = delete;
@@ -116,6 +142,8 @@ class RosBridge {
   // slam is done and the mapper (if one is running) has published its last map.
   bool outputs_done() const;
   RosBridgeStats stats() const;
+  // What the bridge announced on ros_discovery_info (empty nodes if announce_node is false).
+  RosParticipantEntities graph_entry() const;
 
  private:
   struct Impl;
@@ -124,8 +152,9 @@ class RosBridge {
 
 // Runs the bridge until `stop` (or, after END_OF_STREAM, until slam is done and the final
 // outputs were republished). Returns its statistics.
-RosBridgeStats RunBridge(std::shared_ptr<dds::Participant> participant,
-                         const RosBridgeOptions& options, const StopFlagPtr& stop);
+RosBridgeStats RunBridge(std::shared_ptr<dds::Participant> pipeline,
+                         std::shared_ptr<dds::Participant> ros, const RosBridgeOptions& options,
+                         const StopFlagPtr& stop);
 
 }  // namespace ros2
 }  // namespace dygslam

@@ -1,12 +1,14 @@
 #include "bridge/ros2_convert.h"
 
+#include <octomap/OcTree.h>
+
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <sstream>
-
-#include <octomap/OcTree.h>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "core/base/error.h"
 
@@ -38,10 +40,9 @@ void CheckLayout(const sensor_msgs::msg::Image& image, int bytes_per_pixel,
   }
   const uint64_t row = static_cast<uint64_t>(image.width()) * bytes_per_pixel;
   if (image.step() < row) {
-    Fail(field + ".step", std::to_string(image.step()) + " < width " +
-                              std::to_string(image.width()) + " x " +
-                              std::to_string(bytes_per_pixel) + " bytes (" + image.encoding() +
-                              ")");
+    Fail(field + ".step",
+         std::to_string(image.step()) + " < width " + std::to_string(image.width()) + " x " +
+             std::to_string(bytes_per_pixel) + " bytes (" + image.encoding() + ")");
   }
   const uint64_t needed = static_cast<uint64_t>(image.step()) * image.height();
   if (image.data().size() < needed) {
@@ -80,8 +81,7 @@ Timestamp TimeFromRos(const builtin_interfaces::msg::Time& time, const std::stri
   if (time.nanosec() >= 1000000000u) {
     Fail(field + ".nanosec", std::to_string(time.nanosec()) + " >= 1e9");
   }
-  return Timestamp::FromNanoseconds(static_cast<int64_t>(time.sec()) * 1000000000 +
-                                    time.nanosec());
+  return Timestamp::FromNanoseconds(static_cast<int64_t>(time.sec()) * 1000000000 + time.nanosec());
 }
 
 std_msgs::msg::Header HeaderToRos(Timestamp stamp, const std::string& frame_id) {
@@ -91,10 +91,39 @@ std_msgs::msg::Header HeaderToRos(Timestamp stamp, const std::string& frame_id) 
   return h;
 }
 
+namespace {
+
+// cv::cvtColor code of a ROS Bayer encoding (cv_bridge's mapping: OpenCV names a pattern by the
+// second row's second and third pixels), -1 if `e` is not one.
+int BayerCode(const std::string& e) {
+  const std::string p = e.substr(0, 10);
+  if (p == "bayer_rggb") return cv::COLOR_BayerBG2BGR;
+  if (p == "bayer_bggr") return cv::COLOR_BayerRG2BGR;
+  if (p == "bayer_gbrg") return cv::COLOR_BayerGR2BGR;
+  if (p == "bayer_grbg") return cv::COLOR_BayerGB2BGR;
+  return -1;
+}
+
+// 16-bit pixels (byte order per is_bigendian) to 8 bits (the high byte).
+cv::Mat HighByte(const sensor_msgs::msg::Image& image) {
+  const cv::Mat view = View(image, CV_16UC1);
+  cv::Mat out(view.size(), CV_8UC1);
+  const int hi = image.is_bigendian() ? 0 : 1;
+  for (int r = 0; r < view.rows; ++r) {
+    const uint8_t* in = view.ptr<uint8_t>(r);
+    uint8_t* o = out.ptr<uint8_t>(r);
+    for (int c = 0; c < view.cols; ++c) o[c] = in[2 * c + hi];
+  }
+  return out;
+}
+
+}  // namespace
+
 cv::Mat ColorFromRos(const sensor_msgs::msg::Image& image, const std::string& field) {
   const std::string& e = image.encoding();
   int channels = 0;
   int code = -1;  // cvtColor code, -1 = copy
+  bool sixteen_bit = false;
   if (e == "bgr8" || e == "8UC3") {
     channels = 3;
   } else if (e == "rgb8") {
@@ -109,13 +138,38 @@ cv::Mat ColorFromRos(const sensor_msgs::msg::Image& image, const std::string& fi
   } else if (e == "mono8" || e == "8UC1") {
     channels = 1;
     code = cv::COLOR_GRAY2BGR;
+  } else if (e == "mono16") {
+    channels = 1;
+    sixteen_bit = true;
+    code = cv::COLOR_GRAY2BGR;
+  } else if (e == "yuv422" || e == "uyvy") {
+    channels = 2;
+    code = cv::COLOR_YUV2BGR_UYVY;
+  } else if (e == "yuv422_yuy2" || e == "yuyv") {
+    channels = 2;
+    code = cv::COLOR_YUV2BGR_YUY2;
+  } else if (BayerCode(e) >= 0 && (e.size() == 11 && e[10] == '8')) {
+    channels = 1;
+    code = BayerCode(e);
+  } else if (BayerCode(e) >= 0 && e.size() == 12 && e.substr(10) == "16") {
+    channels = 1;
+    sixteen_bit = true;
+    code = BayerCode(e);
   } else {
     Fail(field + ".encoding", "'" + e +
                                   "' is not a supported colour encoding (bgr8, rgb8, bgra8, "
-                                  "rgba8, mono8)");
+                                  "rgba8, mono8, mono16, yuv422, yuv422_yuy2, bayer_rggb8, "
+                                  "bayer_bggr8, bayer_gbrg8, bayer_grbg8, bayer_*16)");
   }
-  CheckLayout(image, channels, field);
-  const cv::Mat view = View(image, CV_8UC(channels));
+  if (channels == 2 && image.width() % 2 != 0) {
+    Fail(field + ".width", "odd width " + std::to_string(image.width()) + " for " + e +
+                               " (two pixels share one U/V pair)");
+  }
+  CheckLayout(image, sixteen_bit ? 2 : channels, field);
+  if (BayerCode(e) >= 0 && (image.width() < 2 || image.height() < 2)) {
+    Fail(field, "a Bayer image needs at least 2x2 pixels");
+  }
+  const cv::Mat view = sixteen_bit ? HighByte(image) : View(image, CV_8UC(channels));
   cv::Mat out;
   if (code < 0) {
     out = view.clone();
@@ -163,8 +217,9 @@ DepthImage DepthFromRos(const sensor_msgs::msg::Image& image, double depth_unit,
     out.depth_scale = 1.0;
   } else {
     Fail(field + ".encoding",
-         "'" + e + "' is not a supported depth encoding (16UC1 / mono16 = millimetres, 32FC1 = "
-                   "metres)");
+         "'" + e +
+             "' is not a supported depth encoding (16UC1 / mono16 = millimetres, 32FC1 = "
+             "metres)");
   }
   return out;
 }
@@ -175,11 +230,20 @@ sensor_msgs::msg::Image ImageToRos(const cv::Mat& image, Timestamp stamp,
   m.header(HeaderToRos(stamp, frame_id));
   std::string encoding;
   switch (image.type()) {
-    case CV_8UC3: encoding = "bgr8"; break;
-    case CV_8UC1: encoding = "mono8"; break;
-    case CV_16UC1: encoding = "16UC1"; break;
-    case CV_32FC1: encoding = "32FC1"; break;
-    default: throw std::invalid_argument("ImageToRos: unsupported Mat type");
+    case CV_8UC3:
+      encoding = "bgr8";
+      break;
+    case CV_8UC1:
+      encoding = "mono8";
+      break;
+    case CV_16UC1:
+      encoding = "16UC1";
+      break;
+    case CV_32FC1:
+      encoding = "32FC1";
+      break;
+    default:
+      throw std::invalid_argument("ImageToRos: unsupported Mat type");
   }
   m.encoding(encoding);
   m.width(static_cast<uint32_t>(image.cols));
@@ -198,9 +262,8 @@ RosCamera CameraFromRos(const sensor_msgs::msg::CameraInfo& info, const std::str
   RosCamera out;
   if (info.width() == 0 || info.height() == 0 || info.width() > kMaxSide ||
       info.height() > kMaxSide) {
-    Fail(field, "image size " + std::to_string(info.width()) + "x" +
-                    std::to_string(info.height()) + " outside [1, " + std::to_string(kMaxSide) +
-                    "]");
+    Fail(field, "image size " + std::to_string(info.width()) + "x" + std::to_string(info.height()) +
+                    " outside [1, " + std::to_string(kMaxSide) + "]");
   }
   const auto& k = info.k();
   if (!AllFinite(k.data(), k.size())) Fail(field + ".k", "non-finite value");
@@ -227,28 +290,87 @@ RosCamera CameraFromRos(const sensor_msgs::msg::CameraInfo& info, const std::str
   const std::vector<double>& d = info.d();
   if (!AllFinite(d.data(), d.size())) Fail(field + ".d", "non-finite coefficient");
   const std::string& model = info.distortion_model();
-  if (model == "plumb_bob" || model == "rational_polynomial" ||
-      ((model.empty() || model == "none") && d.empty())) {
-    const size_t max = model == "rational_polynomial" ? 8 : 5;
-    if (d.size() > max) {
-      Fail(field + ".d", std::to_string(d.size()) + " coefficients for '" + model +
-                             "' (at most " + std::to_string(max) + ")");
-    }
-    double v[5] = {0, 0, 0, 0, 0};
-    for (size_t i = 0; i < d.size() && i < 5; ++i) v[i] = d[i];
-    c.k1 = v[0];
-    c.k2 = v[1];
-    c.p1 = v[2];
-    c.p2 = v[3];
-    c.k3 = v[4];
-    for (size_t i = 5; i < d.size(); ++i) {
-      if (d[i] != 0.0) out.ignored_distortion = true;
-    }
+  size_t count = 0;
+  if (model == "plumb_bob") {
+    out.model = DistortionModel::kPlumbBob;
+    count = 5;
+  } else if (model == "rational_polynomial") {
+    out.model = DistortionModel::kRationalPolynomial;
+    count = 8;
+  } else if (model == "equidistant") {
+    out.model = DistortionModel::kEquidistant;
+    count = 4;
+  } else if ((model.empty() || model == "none") && d.empty()) {
+    out.model = DistortionModel::kNone;
   } else {
-    Fail(field + ".distortion_model", "'" + model +
-                                          "' is not supported (plumb_bob, rational_polynomial)");
+    Fail(field + ".distortion_model",
+         "'" + model + "' is not supported (plumb_bob, rational_polynomial, equidistant)");
+  }
+  if (d.size() > count) {
+    Fail(field + ".d", std::to_string(d.size()) + " coefficients for '" + model + "' (at most " +
+                           std::to_string(count) + ")");
+  }
+  out.coefficients.assign(count, 0.0);
+  std::copy(d.begin(), d.end(), out.coefficients.begin());
+  if (out.model == DistortionModel::kEquidistant) {
+    out.rectify = std::any_of(d.begin(), d.end(), [](double v) { return v != 0.0; });
+  } else if (out.model == DistortionModel::kRationalPolynomial) {
+    out.rectify = std::any_of(d.begin() + std::min<size_t>(5, d.size()), d.end(),
+                              [](double v) { return v != 0.0; });
+  }
+  if (!out.rectify && count >= 5) {
+    c.k1 = out.coefficients[0];
+    c.k2 = out.coefficients[1];
+    c.p1 = out.coefficients[2];
+    c.p2 = out.coefficients[3];
+    c.k3 = out.coefficients[4];
   }
   return out;
+}
+
+bool RosCamera::operator==(const RosCamera& o) const {
+  const PinholeCamera& a = camera;
+  const PinholeCamera& b = o.camera;
+  return model == o.model && coefficients == o.coefficients && rectify == o.rectify &&
+         a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy &&
+         a.cx == b.cx && a.cy == b.cy && a.k1 == b.k1 && a.k2 == b.k2 && a.p1 == b.p1 &&
+         a.p2 == b.p2 && a.k3 == b.k3;
+}
+
+ImageRectifier::ImageRectifier(const RosCamera& c) {
+  if (!c.rectify) return;
+  const cv::Mat k = c.camera.K();
+  const cv::Size size(c.camera.width, c.camera.height);
+  const cv::Mat d(c.coefficients, true);
+  if (c.model == DistortionModel::kEquidistant) {
+    cv::fisheye::initUndistortRectifyMap(k, d, cv::Mat::eye(3, 3, CV_64F), k, size, CV_32FC1,
+                                         map_x_, map_y_);
+  } else {
+    cv::initUndistortRectifyMap(k, d, cv::Mat::eye(3, 3, CV_64F), k, size, CV_32FC1, map_x_,
+                                map_y_);
+  }
+}
+
+cv::Mat ImageRectifier::Color(const cv::Mat& image) const {
+  if (!active()) return image;
+  cv::Mat out;
+  cv::remap(image, out, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  return out;
+}
+
+cv::Mat ImageRectifier::Depth(const cv::Mat& depth) const {
+  if (!active()) return depth;
+  cv::Mat out;
+  cv::remap(depth, out, map_x_, map_y_, cv::INTER_NEAREST, cv::BORDER_CONSTANT);
+  return out;
+}
+
+void CheckFrameId(const std::string& frame_id, const std::string& field) {
+  if (!frame_id.empty() && frame_id[0] == '/') {
+    Fail(field, "frame id '" + frame_id +
+                    "' starts with '/': tf2 refuses such ids (ROS 2 frame ids have no leading "
+                    "'/'; fix the driver's frame_id parameter)");
+  }
 }
 
 sensor_msgs::msg::CameraInfo CameraToRos(const PinholeCamera& c, Timestamp stamp,
@@ -341,8 +463,7 @@ nav_msgs::msg::Odometry OdometryToRos(const StampedPose& current,
       // prev_from_cur, expressed in the current (child) frame: v = R_cur^T (t_cur - t_prev) / dt.
       const Rigid3d& a = previous->world_from_cam;
       const Rigid3d& b = current.world_from_cam;
-      const Eigen::Vector3d v =
-          b.rotation.conjugate() * (b.translation - a.translation) / dt;
+      const Eigen::Vector3d v = b.rotation.conjugate() * (b.translation - a.translation) / dt;
       const Eigen::AngleAxisd delta(a.rotation.conjugate() * b.rotation);
       // The axis of prev_from_cur is the same in both camera frames (it is fixed by the
       // rotation), so this is the angular velocity in the current frame.

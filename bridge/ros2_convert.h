@@ -3,10 +3,13 @@
 //
 // Conventions:
 // - Inbound images: colour "bgr8" / "rgb8" / "bgra8" / "rgba8" / "mono8" (and "8UC3" = bgr8,
-//   "8UC1" = mono8) -> CV_8UC3 BGR. Depth "16UC1" / "mono16" -> CV_16UC1 raw counts with
-//   depth_scale = 1 / depth_unit (ROS: millimetres, depth_unit 0.001 -> depth_scale 1000; NOT the
-//   TUM / Bonn factor 5000), "32FC1" -> CV_32FC1 metres (NaN / inf / negative -> 0 = no
-//   measurement). is_bigendian = 1 is honoured. Rows may be padded (step > width x bytes per pixel).
+//   "8UC1" = mono8), "mono16" (IR / grey cameras: the high byte), "yuv422" (UYVY, the ROS 2
+//   name) / "yuv422_yuy2" (YUYV), "bayer_rggb8" / "bayer_bggr8" / "bayer_gbrg8" / "bayer_grbg8"
+//   and their 16-bit forms (demosaiced with cv::cvtColor, as cv_bridge) -> CV_8UC3 BGR. Depth
+//   "16UC1" / "mono16" -> CV_16UC1 raw counts with depth_scale = 1 / depth_unit (ROS: millimetres,
+//   depth_unit 0.001 -> depth_scale 1000; NOT the TUM / Bonn factor 5000), "32FC1" -> CV_32FC1
+//   metres (NaN / inf / negative -> 0 = no measurement). is_bigendian = 1 is honoured. Rows may be
+//   padded (step > width x bytes per pixel).
 // - Outbound geometry: the SLAM world frame is the first camera's optical frame (x right, y down,
 //   z forward). With ros_axes the `map` frame is REP 103 (x forward, y left, z up):
 //   map_from_world = MapFromWorld(true); the camera frame stays an optical frame.
@@ -14,11 +17,10 @@
 #pragma once
 
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "builtin_interfaces/msg/Time.h"
 #include "core/base/camera.h"
@@ -59,17 +61,44 @@ DepthImage DepthFromRos(const sensor_msgs::msg::Image& image, double depth_unit,
 sensor_msgs::msg::Image ImageToRos(const cv::Mat& image, Timestamp stamp,
                                    const std::string& frame_id);
 
+enum class DistortionModel { kNone, kPlumbBob, kRationalPolynomial, kEquidistant };
+
 struct RosCamera {
+  // What the pipeline gets: K, and k1 k2 p1 p2 k3 unless the bridge rectifies.
   PinholeCamera camera;
-  // Non-zero coefficients the pinhole model cannot use (rational_polynomial k4..k6): the
-  // caller warns.
-  bool ignored_distortion = false;
+  DistortionModel model = DistortionModel::kNone;
+  // D as received, padded with zeros: 5 (plumb_bob), 8 (rational_polynomial k1 k2 p1 p2 k3 k4 k5
+  // k6, OpenCV's order), 4 (equidistant k1 k2 k3 k4, OpenCV's fisheye model).
+  std::vector<double> coefficients;
+  // The model is not the pipeline's (k1 k2 p1 p2 k3): equidistant, or rational_polynomial with a
+  // non-zero k4..k6. The images are then rectified (ImageRectifier) to `camera`: the same K and
+  // no distortion, so the SLAM settings need Camera.k1..k3 = p1 = p2 = 0.
+  bool rectify = false;
+  bool operator==(const RosCamera& o) const;
 };
 // K (fx, fy, cx, cy), D by distortion_model: "plumb_bob" (k1 k2 p1 p2 k3, shorter lists padded
-// with 0), "rational_polynomial" (first five used), "" / "none" with no coefficients.
-// Rejects uncalibrated (K[0] == 0), non-finite values, other models, binning > 1 and a
-// region of interest smaller than the image.
+// with 0), "rational_polynomial" (up to 8), "equidistant" (up to 4), "" / "none" with no
+// coefficients. Rejects uncalibrated (K[0] == 0), non-finite values, other models, binning > 1
+// and a region of interest smaller than the image.
 RosCamera CameraFromRos(const sensor_msgs::msg::CameraInfo& info, const std::string& field);
+// Undistorts images of a RosCamera with rectify = true to its pinhole `camera` (same K): all 8
+// rational_polynomial coefficients (cv::initUndistortRectifyMap) or the equidistant model
+// (cv::fisheye::initUndistortRectifyMap). Maps are computed once. Without rectify it is the
+// identity (the images are returned as they are).
+class ImageRectifier {
+ public:
+  explicit ImageRectifier(const RosCamera& camera);
+  bool active() const { return !map_x_.empty(); }
+  cv::Mat Color(const cv::Mat& image) const;  // bilinear
+  cv::Mat Depth(const cv::Mat& depth) const;  // nearest (no depth mixed across edges)
+
+ private:
+  cv::Mat map_x_, map_y_;
+};
+
+// A ROS frame id for tf2: tf2 refuses ids with a leading '/'. Throws InputError naming `field`.
+void CheckFrameId(const std::string& frame_id, const std::string& field);
+
 sensor_msgs::msg::CameraInfo CameraToRos(const PinholeCamera& camera, Timestamp stamp,
                                          const std::string& frame_id);
 

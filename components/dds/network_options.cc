@@ -42,6 +42,11 @@ void NetworkOptions::Check() const {
                            "' is not an IPv4 address (give the address of this host's interface)");
     }
   }
+  if (all_interfaces && !interfaces.empty()) {
+    throw InvalidOptions(
+        "invalid option DDS interface: a list of interfaces and 'all interfaces' exclude each "
+        "other");
+  }
   if (!discovery_server.empty()) ParseEndpoint(discovery_server, "discovery server");
 }
 

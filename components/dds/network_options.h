@@ -15,6 +15,9 @@ struct NetworkOptions {
   // IPv4 addresses of this host's interfaces that UDP may use (a whitelist). Empty: 127.0.0.1
   // only, nothing leaves the machine.
   std::vector<std::string> interfaces;
+  // UDP on every interface of this host, no whitelist (as ROS 2 nodes do; the ROS 2 bridge's
+  // ROS-side participant). Excludes `interfaces`.
+  bool all_interfaces = false;
   // Fast DDS's shared-memory transport (same host only). Off for a run that must show the
   // network path, or where /dev/shm is not shared (containers without `ipc: host`).
   bool shared_memory = true;

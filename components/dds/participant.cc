@@ -31,7 +31,8 @@ void ParticipantOptions::Check() const {
   DYGSLAM_CHECK_OPTION(domain_id >= 0 && domain_id <= 232, "domain_id");
   DYGSLAM_CHECK_OPTION(!name.empty(), "participant name");
   DYGSLAM_CHECK_OPTION(use_shm || use_udp_loopback, "transports (shm or udp)");
-  DYGSLAM_CHECK_OPTION(network.shared_memory || use_udp_loopback || !network.interfaces.empty(),
+  DYGSLAM_CHECK_OPTION(network.shared_memory || use_udp_loopback || !network.interfaces.empty() ||
+                           network.all_interfaces,
                        "transports (shared memory off and no UDP interface)");
   network.Check();
   DYGSLAM_CHECK_OPTION(shm_segment_size >= (1u << 20), "shm_segment_size");
@@ -75,7 +76,11 @@ std::string Describe(const ParticipantOptions& options) {
   std::string text;
   if (options.use_shm && options.network.shared_memory) text += "SHM + ";
   text += "UDPv4 ";
-  if (options.network.interfaces.empty()) text += "127.0.0.1";
+  if (options.network.all_interfaces) {
+    text += "all interfaces";
+  } else if (options.network.interfaces.empty()) {
+    text += "127.0.0.1";
+  }
   for (size_t i = 0; i < options.network.interfaces.size(); ++i) {
     text += (i ? "," : "") + options.network.interfaces[i];
   }
@@ -100,6 +105,13 @@ std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& optio
                        "FASTRTPS_DEFAULT_PROFILES_FILE: cannot load the XML profiles");
     }
     factory->get_default_participant_qos(qos);
+    if (!options.xml_profile_name.empty() &&
+        factory->get_participant_qos_from_profile(options.xml_profile_name, qos) !=
+            ReturnCode_t::RETCODE_OK) {
+      factory->get_default_participant_qos(qos);
+      LOG_INFO << "participant '" << options.name << "': no profile '" << options.xml_profile_name
+               << "' in " << profiles << ", using its default profile";
+    }
     xml = true;
   } else {
     qos = PARTICIPANT_QOS_DEFAULT;
@@ -109,9 +121,13 @@ std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& optio
       shm->segment_size(options.shm_segment_size);
       qos.transport().user_transports.push_back(shm);
     }
-    if (options.use_udp_loopback || !options.network.interfaces.empty()) {
+    if (options.use_udp_loopback || !options.network.interfaces.empty() ||
+        options.network.all_interfaces) {
       auto udp = std::make_shared<UDPv4TransportDescriptor>();
-      if (options.network.interfaces.empty()) {
+      if (options.network.all_interfaces) {
+        // No whitelist: every interface, and remote locators on this host's own addresses
+        // (a same-host peer announcing its LAN address) are kept.
+      } else if (options.network.interfaces.empty()) {
         udp->interfaceWhiteList.push_back("127.0.0.1");
       } else {
         for (const std::string& address : options.network.interfaces) {
@@ -138,6 +154,10 @@ std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& optio
     }
   }
   qos.name(options.name);
+  if (!options.user_data.empty()) {
+    qos.user_data().data_vec(std::vector<eprosima::fastrtps::rtps::octet>(options.user_data.begin(),
+                                                                          options.user_data.end()));
+  }
 
   std::shared_ptr<Participant> result(new Participant());
   result->domain_id_ = options.domain_id;

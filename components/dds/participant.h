@@ -34,6 +34,11 @@ struct ParticipantOptions {
   std::string name = "dygslam";
   // Honour FASTRTPS_DEFAULT_PROFILES_FILE when it is set.
   bool use_xml_profile = true;
+  // With an XML profile: the participant profile of this name if the XML has one, else the
+  // XML's default profile ("" = always the default profile).
+  std::string xml_profile_name;
+  // Participant USER_DATA (e.g. ROS 2's "enclave=/;"), applied with or without an XML profile.
+  std::string user_data;
   bool use_shm = true;
   bool use_udp_loopback = true;
   uint32_t shm_segment_size = 16u << 20;   // bytes

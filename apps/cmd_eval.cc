@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "apps/command.h"
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/file_util.h"
@@ -64,7 +65,7 @@ double ParseSeconds(const ArgParser& p, const std::string& option) {
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
   if (text.empty() || *end != '\0' || !std::isfinite(v)) {
-    throw InvalidOptions("--" + option + ": expected seconds, got '" + text + "'");
+    throw InvalidOptions("--" + option + ": expected seconds, got '" + EchoValue(text) + "'");
   }
   return v;
 }

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "apps/command.h"
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/bench/bench_report.h"
 #include "core/bench/bench_runner.h"
@@ -178,7 +179,7 @@ int ParseCount(const ArgParser& p, const std::string& option, int min, int max) 
   const long v = std::strtol(text.c_str(), &end, 10);
   if (text.empty() || *end != '\0' || v < min || v > max)
     throw InvalidOptions("--" + option + ": expected an integer in [" + std::to_string(min) + ", " +
-                         std::to_string(max) + "], got '" + text + "'");
+                         std::to_string(max) + "], got '" + EchoValue(text) + "'");
   return static_cast<int>(v);
 }
 

@@ -118,7 +118,15 @@ int Dispatch(const std::vector<std::string>& argv) {
   } catch (const InputError& e) {
     std::cerr << "dygslam " << name << ": error: " << BoundedMessage(e.what()) << "\n";
   } catch (const InvalidOptions& e) {
-    std::cerr << "dygslam " << name << ": error: " << BoundedMessage(e.what()) << "\n";
+    const std::string message = e.what();
+    if (message.rfind("--", 0) == 0) {
+      // A malformed or out-of-range option value ("--runs: expected ..."): a usage error.
+      std::cerr << "dygslam " << name << ": " << BoundedMessage(message) << "\n(dygslam " << name
+                << " --help for details)\n";
+      code = 2;
+    } else {
+      std::cerr << "dygslam " << name << ": error: " << BoundedMessage(message) << "\n";
+    }
   } catch (const std::exception& e) {
     std::cerr << "dygslam " << name << ": internal error: " << BoundedMessage(e.what()) << "\n";
   }

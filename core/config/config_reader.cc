@@ -1,5 +1,6 @@
 #include "core/config/config_reader.h"
 
+#include <yaml-cpp/depthguard.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -300,6 +301,12 @@ ConfigReader ConfigReader::FromString(const std::string& text, const std::string
   impl->path = name;
   try {
     impl->root = YAML::Load(Preprocess(text));
+  } catch (const YAML::DeepRecursion& e) {
+    // yaml-cpp's own guard (thousands of levels) says "bad file": say what is wrong.
+    throw InputError(name, e.mark.line >= 0 ? e.mark.line + 1 : 0,
+                     "nested deeper than " + std::to_string(kMaxDepth) +
+                         " levels (the YAML parser gave up at " + std::to_string(e.depth()) +
+                         "); not a settings file");
   } catch (const YAML::Exception& e) {
     throw InputError(name, e.mark.line >= 0 ? e.mark.line + 1 : 0, "malformed YAML: " + e.msg);
   }

@@ -105,6 +105,25 @@ TEST_F(CliReprobe, ComponentUsageErrorsExitTwoNamingTheOption) {
       {"--partition 'run*'"});
 }
 
+// F9: eval / bench option values were exit 1, --delta named the internal field
+// ("invalid option delta: requires std::isfinite(delta) && delta > 0").
+TEST_F(CliReprobe, OptionValueErrorsOfEvalAndBenchAreUsageErrors) {
+  const std::string gt = dir_ + "/gt.txt";
+  std::ofstream(gt) << "1.0 0 0 0 0 0 0 1\n2.0 1 0 0 0 0 0 1\n3.0 2 0 0 0 0 0 1\n";
+  for (const auto& [option, value] :
+       std::vector<std::pair<std::string, std::string>>{{"--delta", "-1"},
+                                                        {"--delta", "0"},
+                                                        {"--max-diff", "abc"},
+                                                        {"--max-diff", "0"},
+                                                        {"--offset", "nan"}}) {
+    const auto r = Run({"eval", gt, gt, option, value});
+    ExpectError(r, 2, {option + ": expected", "'" + value + "'"});
+    EXPECT_FALSE(Contains(r.err, "invalid option")) << r.err;
+  }
+  EXPECT_EQ(Run({"eval", gt, gt}).code, 0);
+  ExpectError(Run({"bench", dir_, "--runs", "0"}), 2, {"--runs: expected an integer in [1, 100]"});
+}
+
 // F5 / F18: values were echoed whole (a 100 kB argument) and binary bytes raw.
 TEST_F(CliReprobe, EchoedArgumentsAreBoundedAndEscaped) {
   const std::string huge(100000, 'z');
@@ -218,13 +237,13 @@ TEST_F(CliReprobe, DirectRunThatFailsLateWritesWhatWasComputed) {
 TEST_F(CliReprobe, LocalizationRunWritesTheLoadedMapsStaticMap) {
   DYGSLAM_REQUIRE_DATASET(data, "bonn_crowd_part");
   const std::string map_file = dir_ + "/slam.map";
-  const auto saved = Run({"run", data, "--config", Config(), "--frames", "0:20", "--direct",
-                          "--filter", "none", "--quiet", "--no-map", "--out", dir_ + "/first",
-                          "--save-map", map_file});
+  const auto saved =
+      Run({"run", data, "--config", Config(), "--frames", "0:20", "--direct", "--filter", "none",
+           "--quiet", "--no-map", "--out", dir_ + "/first", "--save-map", map_file});
   ASSERT_EQ(saved.code, 0) << saved.err;
-  const auto r = Run({"run", data, "--config", Config(), "--frames", "0:20", "--direct", "--filter",
-                      "none", "--quiet", "--out", dir_ + "/second", "--load-map", map_file,
-                      "--localization"});
+  const auto r =
+      Run({"run", data, "--config", Config(), "--frames", "0:20", "--direct", "--filter", "none",
+           "--quiet", "--out", dir_ + "/second", "--load-map", map_file, "--localization"});
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(Contains(r.out, "map.bt: the static map of " + map_file)) << r.out;
   ASSERT_TRUE(fs::exists(dir_ + "/second/map.bt")) << r.out;

@@ -110,6 +110,19 @@ TEST(SettingsReprobe, ComplexAndNullKeysAreErrorsWithTheirLine) {
   }
 }
 
+// F18: nesting deep enough for yaml-cpp's own guard said "malformed YAML: bad file".
+TEST(SettingsReprobe, DeepNestingSaysSoAtAnyDepth) {
+  const int line = CountLines(BonnYaml()) + 2;
+  for (const int depth : {40, 5000}) {
+    const std::string text = BonnYaml() + "Tracking:\n  deep: " + std::string(depth, '[') +
+                             std::string(depth, ']') + "\n";
+    const std::string message = ErrorOf(text);
+    EXPECT_TRUE(Contains(message, "bad.yaml:" + std::to_string(line) + ": nested deeper than 32"))
+        << depth << ": " << message;
+    EXPECT_FALSE(Contains(message, "bad file")) << message;
+  }
+}
+
 // F17: Camera.bf is the baseline times fx; bf / fx <= 0 or > 1 m is no RGB-D camera.
 TEST(SettingsReprobe, ImplausibleCameraBfIsAnErrorNamingKeyAndLine) {
   const std::string base = BonnYaml();

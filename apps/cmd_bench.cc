@@ -38,13 +38,13 @@
 #include "core/bench/feature_figure.h"
 #include "core/bench/rgbd_odometry_baseline.h"
 #include "core/config/settings.h"
-#include "run/run_settings.h"
-#include "run/system_config.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
+#include "run/run_settings.h"
+#include "run/system_config.h"
 
 #ifndef DYGSLAM_VERSION
 #define DYGSLAM_VERSION "unknown"

@@ -7,8 +7,8 @@
 #ifdef DYGSLAM_HAVE_COMPONENTS
 #include <algorithm>
 #include <cstdlib>
-#include <iterator>
 #include <iostream>
+#include <iterator>
 #include <sstream>
 #include <tuple>
 
@@ -98,8 +98,8 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   // Everything the command line can get wrong is a usage error (exit 2) naming the option as the
   // user types it, found before any DDS participant exists.
   const std::string name = p.Positional("NAME");
-  static const char* const kNames[] = {"player", "detector", "slam", "mapper", "recorder",
-                                       "pipeline"};
+  static const char* const kNames[] = {"player", "detector", "slam",
+                                       "mapper", "recorder", "pipeline"};
   if (std::find(std::begin(kNames), std::end(kNames), name) == std::end(kNames))
     return p.UsageError("unknown component '" + EchoValue(name) +
                         "' (expected player | detector | slam | mapper | recorder | pipeline | "
@@ -154,7 +154,8 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   o.detector_model = p.Get("detector-model");
   // Bad numbers are usage errors naming the option (exit 2), as on `dygslam run`.
   int64_t window = 0, wait_ms = 0, domain = 0;
-  if (!p.GetNumber("rate", 0, 1e6, &o.rate) || !p.GetInt("window", 1, dds::kFrameHistoryDepth - 1, &window) ||
+  if (!p.GetNumber("rate", 0, 1e6, &o.rate) ||
+      !p.GetInt("window", 1, dds::kFrameHistoryDepth - 1, &window) ||
       !p.GetNumber("loop-minutes", 0, 1e6, &o.loop_minutes) ||
       !p.GetInt("detection-wait-ms", 0, 3600000, &wait_ms) || !p.GetInt("domain", -1, 232, &domain))
     return p.exit_code();

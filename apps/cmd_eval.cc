@@ -67,8 +67,9 @@ double ParseSeconds(const ArgParser& p, const std::string& option, bool positive
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
   if (text.empty() || *end != '\0' || !std::isfinite(v) || (positive && !(v > 0))) {
-    throw InvalidOptions("--" + option + ": expected " + (positive ? "seconds above 0" : "seconds") +
-                         ", got '" + EchoValue(text) + "'");
+    throw InvalidOptions("--" + option + ": expected " +
+                         (positive ? "seconds above 0" : "seconds") + ", got '" + EchoValue(text) +
+                         "'");
   }
   return v;
 }

@@ -154,8 +154,8 @@ int RunMap(const std::vector<std::string>& args) {
   if (from_trajectory) {
     const double e = ParsePositive("every", p.Get("every"));
     if (e != std::floor(e))
-      return p.UsageError("--every: expected a positive integer, got '" + EchoValue(p.Get("every")) +
-                          "'");
+      return p.UsageError("--every: expected a positive integer, got '" +
+                          EchoValue(p.Get("every")) + "'");
     every = static_cast<int>(e);
   } else if (p.Has("every") || p.Flag("bonn-marker")) {
     return p.UsageError("--every and --bonn-marker need --trajectory");

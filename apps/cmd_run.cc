@@ -116,20 +116,20 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   DatasetRunSummary summary;
   try {
     summary = RunDatasetFrames(dataset, system, run, [&](size_t k, const FrameResult& r) {
-        ++done;
-        if (r.state == TrackingState::kLost) ++lost;
-        if (r.world_from_cam) online.push_back({r.stamp, *r.world_from_cam});
-        ++outcome.states[ToString(r.state)];
-        csv += FramesCsvRow(FrameRowFromResult(r));
-        if (s.progress && (done % 10 == 0 || k + 1 == s.last)) {
-          const double elapsed =
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-          std::fprintf(stderr, "\r[run] frame %zu/%zu  %.1f fps  state=%s  lost=%zu   ",
-                       k + 1 - s.first, total, done / std::max(elapsed, 1e-9), ToString(r.state),
-                       lost);
-          std::fflush(stderr);
-        }
-      });
+      ++done;
+      if (r.state == TrackingState::kLost) ++lost;
+      if (r.world_from_cam) online.push_back({r.stamp, *r.world_from_cam});
+      ++outcome.states[ToString(r.state)];
+      csv += FramesCsvRow(FrameRowFromResult(r));
+      if (s.progress && (done % 10 == 0 || k + 1 == s.last)) {
+        const double elapsed =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::fprintf(stderr, "\r[run] frame %zu/%zu  %.1f fps  state=%s  lost=%zu   ",
+                     k + 1 - s.first, total, done / std::max(elapsed, 1e-9), ToString(r.state),
+                     lost);
+        std::fflush(stderr);
+      }
+    });
   } catch (const std::exception&) {
     failure = std::current_exception();
     summary.processed = done;
@@ -429,11 +429,13 @@ int RunRun(const std::vector<std::string>& args) {
   // nothing to insert: map.bt is then the loaded map's static map (its map points).
   if (s.map && !s.system.load_map.empty() && s.load_octomap.empty() &&
       !fs::exists(s.out / "map.bt")) {
-    const size_t points = WriteMapFileOctoMap(s.out.string(), s.system.load_map, s.system, s.octomap);
+    const size_t points =
+        WriteMapFileOctoMap(s.out.string(), s.system.load_map, s.system, s.octomap);
     if (points > 0)
-      std::printf("map.bt: the static map of %s (%zu map point observations; the run added no "
-                  "keyframe)\n",
-                  s.system.load_map.c_str(), points);
+      std::printf(
+          "map.bt: the static map of %s (%zu map point observations; the run added no "
+          "keyframe)\n",
+          s.system.load_map.c_str(), points);
   }
 
   const fs::path trajectory_path = s.out / "trajectory.txt";
@@ -467,8 +469,8 @@ int RunRun(const std::vector<std::string>& args) {
   if (!groundtruth.empty() && trajectory.size() >= 3) {
     try {
       const AteResult ate = ComputeAte(groundtruth, trajectory);
-      std::printf("ATE RMSE %.4f m (mean %.4f, median %.4f, max %.4f; %zu pairs)\n",
-                  ate.error.rmse, ate.error.mean, ate.error.median, ate.error.max, ate.num_pairs);
+      std::printf("ATE RMSE %.4f m (mean %.4f, median %.4f, max %.4f; %zu pairs)\n", ate.error.rmse,
+                  ate.error.mean, ate.error.median, ate.error.max, ate.num_pairs);
     } catch (const std::exception& e) {  // e.g. no stamp in common: the outputs stand
       std::printf("ATE: not evaluated (%s)\n", EchoValue(e.what(), 500).c_str());
     }

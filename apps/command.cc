@@ -89,8 +89,7 @@ std::filesystem::path PrepareOutputDir(const std::string& option, const std::str
   // The folders this call creates (deepest first), removed again by RemoveUnusedOutputDirs when
   // the command fails before writing anything into them.
   std::vector<fs::path> created;
-  for (fs::path d = dir.lexically_normal(); !d.empty() && !fs::exists(d, ec);
-       d = d.parent_path()) {
+  for (fs::path d = dir.lexically_normal(); !d.empty() && !fs::exists(d, ec); d = d.parent_path()) {
     created.push_back(d);
     if (d == d.parent_path()) break;
   }

@@ -57,7 +57,7 @@ void PrintHelp(std::ostream& out) {
 }
 
 // An error message as printed: every line through EchoValue (binary bytes escaped), at most
-// 4000 characters in all, so that a value echoed whole somewhere deep down cannot flood stderr.
+// 2000 characters in all, so that a value echoed whole somewhere deep down cannot flood stderr.
 std::string BoundedMessage(const std::string& message) {
   constexpr size_t kMaxChars = 2000;
   std::string out;
@@ -68,7 +68,8 @@ std::string BoundedMessage(const std::string& message) {
     out += EchoValue(message.substr(start, end - start), kMaxChars - out.size());
     start = end + 1;
   }
-  if (start <= message.size()) out += " ... (message of " + std::to_string(message.size()) + " bytes)";
+  if (start <= message.size())
+    out += " ... (message of " + std::to_string(message.size()) + " bytes)";
   return out;
 }
 
@@ -88,7 +89,8 @@ int Dispatch(const std::vector<std::string>& argv) {
       return Commands().at(args[0]).run({"--help"});
     }
     if (!args.empty() && args[0] != "help" && args[0] != "version") {
-      std::cerr << "dygslam help: unknown command '" << EchoValue(args[0]) << "' (see 'dygslam help')\n";
+      std::cerr << "dygslam help: unknown command '" << EchoValue(args[0])
+                << "' (see 'dygslam help')\n";
       return 2;
     }
     PrintHelp(std::cout);

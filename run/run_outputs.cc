@@ -1,10 +1,9 @@
 #include "run/run_outputs.h"
 
-#include <cstdio>
-#include <filesystem>
-
 #include <octomap/OcTree.h>
 
+#include <cstdio>
+#include <filesystem>
 #include <map>
 #include <memory>
 
@@ -94,11 +93,11 @@ size_t WriteMapFileOctoMap(const std::string& directory, const std::string& map_
                       static_cast<float>(p.z()));
     }
     if (cloud.size() == 0) continue;
-    tree.insertPointCloud(cloud,
-                          octomap::point3d(static_cast<float>(centre.x()),
-                                           static_cast<float>(centre.y()),
-                                           static_cast<float>(centre.z())),
-                          octomap.max_range, octomap.lazy_eval, octomap.discretize);
+    tree.insertPointCloud(
+        cloud,
+        octomap::point3d(static_cast<float>(centre.x()), static_cast<float>(centre.y()),
+                         static_cast<float>(centre.z())),
+        octomap.max_range, octomap.lazy_eval, octomap.discretize);
     inserted += cloud.size();
   }
   if (inserted == 0) return 0;

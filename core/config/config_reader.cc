@@ -158,7 +158,8 @@ double ParseDouble(const YAML::Node& node, const Fail& fail) {
   char* end = nullptr;
   errno = 0;
   const double v = std::strtod(begin, &end);
-  if (text.empty() || end == begin || *end != '\0') fail("expected a number, found '" + EchoValue(text) + "'");
+  if (text.empty() || end == begin || *end != '\0')
+    fail("expected a number, found '" + EchoValue(text) + "'");
   if (!std::isfinite(v) || errno == ERANGE)
     fail("value must be a finite number, found '" + EchoValue(text) + "'");
   return v;
@@ -376,7 +377,8 @@ ConfigReader ConfigReader::Section(const std::string& name) const {
   const Hit h = ConfigLookup::Find(impl_->path, impl_->root, full);
   if (h.line > 0 && !h.value.IsNull() && !h.value.IsMap()) {
     throw InputError(impl_->path, h.line,
-                     "section '" + EchoValue(full) + "' must be a map of 'key: value' entries, found a " +
+                     "section '" + EchoValue(full) +
+                         "' must be a map of 'key: value' entries, found a " +
                          (h.value.IsSequence() ? "list" : "single value"));
   }
   return ConfigReader(impl_, full);

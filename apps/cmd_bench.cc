@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "apps/command.h"
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/bench/bench_report.h"
 #include "core/bench/bench_runner.h"
@@ -37,13 +38,13 @@
 #include "core/bench/feature_figure.h"
 #include "core/bench/rgbd_odometry_baseline.h"
 #include "core/config/settings.h"
-#include "run/run_settings.h"
-#include "run/system_config.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
+#include "run/run_settings.h"
+#include "run/system_config.h"
 
 #ifndef DYGSLAM_VERSION
 #define DYGSLAM_VERSION "unknown"
@@ -178,7 +179,7 @@ int ParseCount(const ArgParser& p, const std::string& option, int min, int max) 
   const long v = std::strtol(text.c_str(), &end, 10);
   if (text.empty() || *end != '\0' || v < min || v > max)
     throw InvalidOptions("--" + option + ": expected an integer in [" + std::to_string(min) + ", " +
-                         std::to_string(max) + "], got '" + text + "'");
+                         std::to_string(max) + "], got '" + EchoValue(text) + "'");
   return static_cast<int>(v);
 }
 

@@ -5,14 +5,18 @@
 // Compiled only when the DDS components are built (dygslam_components defines
 // DYGSLAM_HAVE_COMPONENTS for its users).
 #ifdef DYGSLAM_HAVE_COMPONENTS
+#include <algorithm>
 #include <cstdlib>
 #include <iostream>
+#include <iterator>
 #include <sstream>
 #include <tuple>
 
 #include "apps/command.h"
 #include "components/bench_transport.h"
+#include "components/dds/qos.h"
 #include "components/pipeline.h"
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/config/settings.h"
 #include "run/run_settings.h"
@@ -23,13 +27,13 @@ namespace {
 std::pair<size_t, size_t> ParseEntryRange(const std::string& text) {
   const auto colon = text.find(':');
   if (colon == std::string::npos)
-    throw InvalidOptions("--frames: expected FIRST:LAST, got '" + text + "'");
+    throw InvalidOptions("--frames: expected FIRST:LAST, got '" + EchoValue(text) + "'");
   auto parse = [&](const std::string& s) -> size_t {
     if (s.empty()) return 0;
-    if (s.size() > 18) throw InvalidOptions("--frames: number too large: '" + s + "'");
+    if (s.size() > 18) throw InvalidOptions("--frames: number too large: '" + EchoValue(s) + "'");
     for (char c : s)
       if (c < '0' || c > '9')
-        throw InvalidOptions("--frames: not a non-negative integer: '" + s + "'");
+        throw InvalidOptions("--frames: not a non-negative integer: '" + EchoValue(s) + "'");
     return std::stoul(s);
   };
   return {parse(text.substr(0, colon)), parse(text.substr(colon + 1))};
@@ -90,13 +94,41 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   p.AddFlag("no-mapper", "no mapper component");
   p.AddFlag("processes", "NAME = pipeline: one process per component (else threads)");
   if (!p.Parse(args)) return p.exit_code();
+  if (!CheckFilterOption(&p)) return 2;
+  // Everything the command line can get wrong is a usage error (exit 2) naming the option as the
+  // user types it, found before any DDS participant exists.
+  const std::string name = p.Positional("NAME");
+  static const char* const kNames[] = {"player", "detector", "slam",
+                                       "mapper", "recorder", "pipeline"};
+  if (std::find(std::begin(kNames), std::end(kNames), name) == std::end(kNames))
+    return p.UsageError("unknown component '" + EchoValue(name) +
+                        "' (expected player | detector | slam | mapper | recorder | pipeline | "
+                        "bench-transport)");
 
   PipelineOptions o;
   o.dataset_dir = p.Get("dataset");
   o.output_dir = p.Get("out");
   o.settings_path = p.Get("config");
-  if (o.settings_path.empty()) return p.UsageError("--config is required");
+  if (o.settings_path.empty())
+    return p.UsageError("--config FILE is required: the settings YAML of the run (e.g. " +
+                        ConfigDir() + "/bonn.yaml)");
+  if (o.dataset_dir.empty() && (name == "player" || name == "pipeline"))
+    return p.UsageError("the " + name +
+                        " needs --dataset DIR: the dataset folder that holds rgb.txt and "
+                        "depth.txt (e.g. --dataset data/bonn_crowd_part)");
+  if (o.output_dir.empty()) return p.UsageError("--out: empty folder name");
   if (o.dataset_dir.empty()) o.dataset_dir = "-";  // only the player reads it
+  if (p.Get("partition").find_first_of("*?[]") != std::string::npos)
+    return p.UsageError("--partition '" + EchoValue(p.Get("partition")) +
+                        "': wildcards (* ? [ ]) would join other runs; give a plain name");
+  try {
+    std::tie(o.first_entry, o.last_entry) = ParseEntryRange(p.Get("frames"));
+  } catch (const InvalidOptions& e) {
+    return p.UsageError(e.what());
+  }
+  if (o.last_entry != 0 && o.last_entry <= o.first_entry)
+    return p.UsageError("--frames '" + EchoValue(p.Get("frames")) +
+                        "': empty range (LAST must be above FIRST)");
   {
     const RunConfiguration c =
         LoadRunConfiguration({o.settings_path, CliSettingsReadOptions(false), p.Get("filter"),
@@ -120,10 +152,10 @@ int RunComponentCommand(const std::vector<std::string>& args) {
     o.system.detector.names_path = p.Get("detector-names");
   }
   o.detector_model = p.Get("detector-model");
-  std::tie(o.first_entry, o.last_entry) = ParseEntryRange(p.Get("frames"));
   // Bad numbers are usage errors naming the option (exit 2), as on `dygslam run`.
   int64_t window = 0, wait_ms = 0, domain = 0;
-  if (!p.GetNumber("rate", 0, 1e6, &o.rate) || !p.GetInt("window", 1, 1000000, &window) ||
+  if (!p.GetNumber("rate", 0, 1e6, &o.rate) ||
+      !p.GetInt("window", 1, dds::kFrameHistoryDepth - 1, &window) ||
       !p.GetNumber("loop-minutes", 0, 1e6, &o.loop_minutes) ||
       !p.GetInt("detection-wait-ms", 0, 3600000, &wait_ms) || !p.GetInt("domain", -1, 232, &domain))
     return p.exit_code();
@@ -145,15 +177,15 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   try {
     o.network.Check();
   } catch (const InvalidOptions& e) {
-    return p.UsageError(e.what());
+    return p.UsageError("--dds-interface / --discovery-server: " + EchoValue(e.what(), 400));
   }
   o.progress = p.Flag("progress");
   o.wait_for_components = p.Flag("wait-for-components");
 
   o.processes = p.Flag("processes");
-  if (p.Positional("NAME") == "pipeline") return RunPipeline(o);  // the whole pipeline
+  if (name == "pipeline") return RunPipeline(o);  // the whole pipeline
   auto stop = std::make_shared<StopFlag>(StopFlag::Signals::kStop);
-  return RunComponent(p.Positional("NAME"), o, stop);
+  return RunComponent(name, o, stop);
 }
 
 const CommandRegistrar kRegistrar({"component", "(internal) run one DDS pipeline component",

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "apps/command.h"
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/file_util.h"
@@ -59,12 +60,16 @@ std::string JsonNumber(double v) {
   return buf;
 }
 
-double ParseSeconds(const ArgParser& p, const std::string& option) {
+// --OPTION as seconds; `positive`: above 0. A malformed or out-of-range value is a usage error
+// naming the option (InvalidOptions "--OPTION: ...": exit 2).
+double ParseSeconds(const ArgParser& p, const std::string& option, bool positive) {
   const std::string text = p.Get(option);
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !std::isfinite(v)) {
-    throw InvalidOptions("--" + option + ": expected seconds, got '" + text + "'");
+  if (text.empty() || *end != '\0' || !std::isfinite(v) || (positive && !(v > 0))) {
+    throw InvalidOptions("--" + option + ": expected " +
+                         (positive ? "seconds above 0" : "seconds") + ", got '" + EchoValue(text) +
+                         "'");
   }
   return v;
 }
@@ -123,19 +128,20 @@ int RunEval(const std::vector<std::string>& args) {
   p.AddOption("save-aligned", "FILE", "write the aligned estimate as a TUM trajectory");
   if (!p.Parse(args)) return p.exit_code();
 
+  // The options first: a usage error is found before the files are read.
+  AteOptions ate_options;
+  ate_options.max_time_difference = ParseSeconds(p, "max-diff", /*positive=*/true);
+  ate_options.offset = ParseSeconds(p, "offset", /*positive=*/false);
+  RpeOptions rpe_options;
+  rpe_options.delta = ParseSeconds(p, "delta", /*positive=*/true);
+  rpe_options.offset = ate_options.offset;
+
   const std::string gt_path = p.Positional("GROUNDTRUTH");
   const std::string est_path = p.Positional("ESTIMATE");
   const std::vector<StampedPose> gt = ReadTumTrajectory(gt_path);
   const std::vector<StampedPose> est = ReadTumTrajectory(est_path);
   if (est.empty()) throw InputError(est_path, 0, "estimate has no poses");
   if (gt.empty()) throw InputError(gt_path, 0, "ground truth has no poses");
-
-  AteOptions ate_options;
-  ate_options.max_time_difference = ParseSeconds(p, "max-diff");
-  ate_options.offset = ParseSeconds(p, "offset");
-  RpeOptions rpe_options;
-  rpe_options.delta = ParseSeconds(p, "delta");
-  rpe_options.offset = ate_options.offset;
   const AteResult ate = ComputeAte(gt, est, ate_options);
   const RpeResult rpe = ComputeRpe(gt, est, rpe_options);
 

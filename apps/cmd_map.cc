@@ -22,6 +22,7 @@
 #include <optional>
 
 #include "apps/command.h"
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/base/stop_signal.h"
 #include "core/config/settings.h"
@@ -52,7 +53,8 @@ double ParsePositive(const std::string& option, const std::string& text) {
     used = 0;
   }
   if (used != text.size() || !(value > 0) || !std::isfinite(value))
-    throw InvalidOptions("--" + option + ": expected a positive number, got '" + text + "'");
+    throw InvalidOptions("--" + option + ": expected a positive number, got '" + EchoValue(text) +
+                         "'");
   return value;
 }
 
@@ -116,6 +118,7 @@ int RunMap(const std::vector<std::string>& args) {
             "fixed seeds and synchronous local mapping: identical output run to run");
   AddDatasetRunFlags(&p);
   if (!p.Parse(args)) return p.exit_code();
+  if (!CheckFilterOption(&p)) return 2;
   // A stop request ends the frame loop; the outputs are then written from what was processed
   // (shares the flag of dygslam main's early scope, so a signal during setup counts too).
   const StopFlag stop(StopFlag::Signals::kStop);
@@ -142,13 +145,17 @@ int RunMap(const std::vector<std::string>& args) {
     map_options.resolution = ParsePositive("resolution", p.Get("resolution"));
   if (p.Flag("no-mask") || options.filter_mode == FilterMode::kNone)
     map_options.use_dynamic_mask = false;
+  if (p.Has("resolution") && !(map_options.resolution > 0.001 && map_options.resolution <= 10))
+    return p.UsageError("--resolution '" + EchoValue(p.Get("resolution")) +
+                        "': expected a leaf size in metres above 0.001, at most 10");
   map_options.Check();
   const bool from_trajectory = p.Has("trajectory");
   int every = 1;
   if (from_trajectory) {
     const double e = ParsePositive("every", p.Get("every"));
     if (e != std::floor(e))
-      return p.UsageError("--every: expected a positive integer, got '" + p.Get("every") + "'");
+      return p.UsageError("--every: expected a positive integer, got '" +
+                          EchoValue(p.Get("every")) + "'");
     every = static_cast<int>(e);
   } else if (p.Has("every") || p.Flag("bonn-marker")) {
     return p.UsageError("--every and --bonn-marker need --trajectory");

@@ -23,6 +23,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -32,6 +33,7 @@
 #include <random>
 
 #include "apps/command.h"
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "core/base/stop_signal.h"
@@ -108,22 +110,31 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   const auto t0 = std::chrono::steady_clock::now();
   const size_t total = s.last - s.first;
   size_t done = 0, lost = 0;  // for the progress line
-  const DatasetRunSummary summary =
-      RunDatasetFrames(dataset, system, run, [&](size_t k, const FrameResult& r) {
-        ++done;
-        if (r.state == TrackingState::kLost) ++lost;
-        if (r.world_from_cam) online.push_back({r.stamp, *r.world_from_cam});
-        ++outcome.states[ToString(r.state)];
-        csv += FramesCsvRow(FrameRowFromResult(r));
-        if (s.progress && (done % 10 == 0 || k + 1 == s.last)) {
-          const double elapsed =
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-          std::fprintf(stderr, "\r[run] frame %zu/%zu  %.1f fps  state=%s  lost=%zu   ",
-                       k + 1 - s.first, total, done / std::max(elapsed, 1e-9), ToString(r.state),
-                       lost);
-          std::fflush(stderr);
-        }
-      });
+  // A bad input found mid-run (an image that does not decode) ends the loop, but what the frames
+  // before it gave is written below like on a stop signal; then the error is reported (exit 1).
+  std::exception_ptr failure;
+  DatasetRunSummary summary;
+  try {
+    summary = RunDatasetFrames(dataset, system, run, [&](size_t k, const FrameResult& r) {
+      ++done;
+      if (r.state == TrackingState::kLost) ++lost;
+      if (r.world_from_cam) online.push_back({r.stamp, *r.world_from_cam});
+      ++outcome.states[ToString(r.state)];
+      csv += FramesCsvRow(FrameRowFromResult(r));
+      if (s.progress && (done % 10 == 0 || k + 1 == s.last)) {
+        const double elapsed =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::fprintf(stderr, "\r[run] frame %zu/%zu  %.1f fps  state=%s  lost=%zu   ",
+                     k + 1 - s.first, total, done / std::max(elapsed, 1e-9), ToString(r.state),
+                     lost);
+        std::fflush(stderr);
+      }
+    });
+  } catch (const std::exception&) {
+    failure = std::current_exception();
+    summary.processed = done;
+    summary.lost = lost;
+  }
   outcome.processed = summary.processed;
   outcome.lost = summary.lost;
   if (s.progress) std::fprintf(stderr, "\n");
@@ -163,6 +174,13 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   WriteTumTrajectory((s.out / "trajectory_online.txt").string(), online);
   // With --save-map, map.ot too (the OctoMap with probabilities, what --load-octomap continues).
   if (mapper) WriteMapperBinary(s.out.string(), *mapper, /*with_full_map=*/!s.save_map.empty());
+  if (failure) {
+    std::fprintf(stderr,
+                 "[run] stopped by an error after %zu frames: the outputs of those frames are "
+                 "written to %s (trajectory.txt, keyframes.txt, frames.csv%s)\n",
+                 outcome.processed, s.out.string().c_str(), mapper ? ", map.bt" : "");
+    std::rethrow_exception(failure);
+  }
   return outcome;
 }
 
@@ -271,6 +289,7 @@ int RunRun(const std::vector<std::string>& args) {
               "continue this OctoMap (.ot, e.g. map.ot of a --save-map run): keyframes are\n"
               "inserted on top; in --localization it is the map");
   if (!p.Parse(args)) return p.exit_code();
+  if (!CheckFilterOption(&p)) return 2;
   if (p.Flag("processes") && p.Flag("direct"))
     return p.UsageError("--processes and --direct exclude each other");
   if (p.Has("security") && (p.Flag("direct") || p.Has("detections")))
@@ -282,6 +301,9 @@ int RunRun(const std::vector<std::string>& args) {
                  "dygslam run: warning: DYGSLAM_DDS_SECURITY_DIR is set but --direct uses no DDS "
                  "(nothing to secure)\n");
   }
+  if (p.Get("partition").find_first_of("*?[]") != std::string::npos)
+    return p.UsageError("--partition '" + EchoValue(p.Get("partition")) +
+                        "': wildcards (* ? [ ]) would join other runs; give a plain name");
   if (p.Flag("strict-settings")) ::setenv("DYGSLAM_STRICT_SETTINGS", "1", 1);  // --processes
   // The output folder first: a bad --out is found before the run, not after it.
   const fs::path out_dir = PrepareOutputDir("out", p.Get("out"));
@@ -307,7 +329,11 @@ int RunRun(const std::vector<std::string>& args) {
   if (p.Has("load-octomap")) {
     if (!s.map) return p.UsageError("--load-octomap and --no-map exclude each other");
     s.load_octomap = p.Get("load-octomap");
-    ReadOctoMap(s.load_octomap);  // checked before any work (InputError naming the file)
+    try {  // checked before any work (InputError naming the option and the file)
+      ReadOctoMap(s.load_octomap);
+    } catch (const InputError& e) {
+      throw InputError(std::string("--load-octomap: ") + e.what());
+    }
   }
   if (p.Has("load-map")) {
     // Checked before any work: a bad map is an error naming the file, no output is written.
@@ -352,6 +378,20 @@ int RunRun(const std::vector<std::string>& args) {
       return p.UsageError(e.what());
     }
   }
+  // The ground truth is optional and only scores the run: a malformed groundtruth.txt is found
+  // here, before any frame, and the run goes on without evaluation (its trajectory is what
+  // matters; `dygslam eval` scores it once the file is fixed).
+  std::vector<StampedPose> groundtruth;
+  if (dataset.has_groundtruth()) {
+    try {
+      groundtruth = ReadTumTrajectory(dataset.groundtruth_path());
+    } catch (const InputError& e) {
+      std::fprintf(stderr,
+                   "dygslam run: warning: %s; the run goes on without evaluation (fix the file, "
+                   "then `dygslam eval GROUNDTRUTH OUT/trajectory.txt`)\n",
+                   e.what());
+    }
+  }
   size_t skipped = 0;
   for (size_t k = s.first; k < s.last; ++k) {
     if (!dataset.FrameForRgbEntry(k)) ++skipped;
@@ -385,6 +425,18 @@ int RunRun(const std::vector<std::string>& args) {
   }
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // A --load-map run that added no keyframe (--localization, or nothing new seen) gave the mapper
+  // nothing to insert: map.bt is then the loaded map's static map (its map points).
+  if (s.map && !s.system.load_map.empty() && s.load_octomap.empty() &&
+      !fs::exists(s.out / "map.bt")) {
+    const size_t points =
+        WriteMapFileOctoMap(s.out.string(), s.system.load_map, s.system, s.octomap);
+    if (points > 0)
+      std::printf(
+          "map.bt: the static map of %s (%zu map point observations; the run added no "
+          "keyframe)\n",
+          s.system.load_map.c_str(), points);
+  }
 
   const fs::path trajectory_path = s.out / "trajectory.txt";
   const std::vector<StampedPose> trajectory = fs::exists(trajectory_path)
@@ -414,10 +466,17 @@ int RunRun(const std::vector<std::string>& args) {
   }
   std::printf("filter: %s%s\n", p.Get("filter").c_str(),
               s.system.deterministic ? " (deterministic)" : "");
-  if (dataset.has_groundtruth() && trajectory.size() >= 3) {
-    const AteResult ate = ComputeAte(ReadTumTrajectory(dataset.groundtruth_path()), trajectory);
-    std::printf("ATE RMSE %.4f m (mean %.4f, median %.4f, max %.4f; %zu pairs)\n", ate.error.rmse,
-                ate.error.mean, ate.error.median, ate.error.max, ate.num_pairs);
+  if (!groundtruth.empty() && trajectory.size() >= 3) {
+    try {
+      const AteResult ate = ComputeAte(groundtruth, trajectory);
+      std::printf("ATE RMSE %.4f m (mean %.4f, median %.4f, max %.4f; %zu pairs)\n", ate.error.rmse,
+                  ate.error.mean, ate.error.median, ate.error.max, ate.num_pairs);
+    } catch (const std::exception& e) {  // e.g. no stamp in common: the outputs stand
+      std::printf("ATE: not evaluated (%s)\n", EchoValue(e.what(), 500).c_str());
+    }
+  } else if (dataset.has_groundtruth() && groundtruth.empty()) {
+    std::printf("ATE: not evaluated (%s: see the warning above)\n",
+                dataset.groundtruth_path().c_str());
   }
   const bool has_map = fs::exists(s.out / "map.bt");
   std::printf("outputs: %s/{trajectory.txt,trajectory_online.txt,keyframes.txt,frames.csv%s}\n",

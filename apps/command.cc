@@ -12,8 +12,10 @@
 #include <iostream>
 #include <sstream>
 
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/io/file_util.h"
+#include "core/system/system.h"
 
 namespace dygslam::cli {
 namespace {
@@ -52,9 +54,26 @@ std::string ScriptsDir() {
   return "scripts";
 }
 
+namespace {
+std::vector<std::filesystem::path>& CreatedOutputDirs() {
+  static std::vector<std::filesystem::path> dirs;
+  return dirs;
+}
+}  // namespace
+
+void RemoveUnusedOutputDirs() {
+  std::error_code ec;
+  // Deepest first; std::filesystem::remove leaves a folder that holds anything.
+  for (const std::filesystem::path& d : CreatedOutputDirs()) {
+    if (std::filesystem::is_directory(d, ec) && std::filesystem::is_empty(d, ec))
+      std::filesystem::remove(d, ec);
+  }
+  CreatedOutputDirs().clear();
+}
+
 std::filesystem::path PrepareOutputDir(const std::string& option, const std::string& value) {
   namespace fs = std::filesystem;
-  const std::string name = "--" + option + " '" + Abbreviate(value) + "'";
+  const std::string name = "--" + option + " '" + EchoValue(value) + "'";
   if (value.empty()) throw InputError("--" + option + ": empty folder name");
   std::error_code ec;
   const fs::path dir(value);
@@ -67,8 +86,16 @@ std::filesystem::path PrepareOutputDir(const std::string& option, const std::str
                      ": is a dataset folder (it holds rgb.txt and depth.txt); the outputs "
                      "(groundtruth.txt, trajectory.txt, ...) would overwrite its files: choose "
                      "another folder");
+  // The folders this call creates (deepest first), removed again by RemoveUnusedOutputDirs when
+  // the command fails before writing anything into them.
+  std::vector<fs::path> created;
+  for (fs::path d = dir.lexically_normal(); !d.empty() && !fs::exists(d, ec); d = d.parent_path()) {
+    created.push_back(d);
+    if (d == d.parent_path()) break;
+  }
   fs::create_directories(dir, ec);
   if (ec) throw InputError(name + ": cannot create the folder: " + ec.message());
+  CreatedOutputDirs().insert(CreatedOutputDirs().end(), created.begin(), created.end());
   const fs::path probe = dir / (".dygslam_write_probe." + std::to_string(::getpid()));
   FILE* f = std::fopen(probe.c_str(), "wb");
   if (f == nullptr) {
@@ -95,6 +122,21 @@ void AddDatasetRunFlags(ArgParser* p) {
              "unknown keys in the settings file are errors, not warnings (also "
              "DYGSLAM_STRICT_SETTINGS=1)");
   p->AddFlag("strict-paths", "image paths outside DATASET_DIR are errors, not warnings");
+}
+
+bool CheckFilterOption(ArgParser* p) {
+  try {
+    SystemOptions scratch;
+    ApplyFilterConfiguration(p->Get("filter"), &scratch);
+    return true;
+  } catch (const InvalidOptions&) {
+    std::string list;
+    for (const std::string& name : FilterConfigurationNames())
+      list += (list.empty() ? "" : " | ") + name;
+    p->UsageError("--filter '" + EchoValue(p->Get("filter")) + "': unknown filter (expected " +
+                  list + ")");
+    return false;
+  }
 }
 
 bool IsTrackingFailure(size_t processed, size_t tracked) {
@@ -191,7 +233,7 @@ bool ArgParser::GetInt(const std::string& option, int64_t min_value, int64_t max
     return true;
   }
   exit_code_ = UsageError("--" + option + ": expected an integer in " + std::to_string(min_value) +
-                          ".." + std::to_string(max_value) + ", got '" + text + "'");
+                          ".." + std::to_string(max_value) + ", got '" + EchoValue(text) + "'");
   return false;
 }
 
@@ -212,7 +254,7 @@ bool ArgParser::GetNumber(const std::string& option, double min_value, double ma
   }
   std::ostringstream message;
   message << "--" << option << ": expected a number in " << min_value << ".." << max_value
-          << ", got '" << text << "'";
+          << ", got '" << EchoValue(text) << "'";
   exit_code_ = UsageError(message.str());
   return false;
 }
@@ -246,12 +288,12 @@ bool ArgParser::Parse(const std::vector<std::string>& args) {
         if (s.name == name) spec = &s;
       }
       if (spec == nullptr) {
-        exit_code_ = UsageError("unknown option --" + name);
+        exit_code_ = UsageError("unknown option --" + EchoValue(name));
         return false;
       }
       if (spec->is_flag) {
         if (has_value) {
-          exit_code_ = UsageError("option --" + name + " takes no value");
+          exit_code_ = UsageError("option --" + EchoValue(name) + " takes no value");
           return false;
         }
         option_values_[name] = "1";
@@ -268,7 +310,7 @@ bool ArgParser::Parse(const std::vector<std::string>& args) {
       continue;
     }
     if (next_positional >= positionals_.size()) {
-      exit_code_ = UsageError("unexpected argument '" + a + "'");
+      exit_code_ = UsageError("unexpected argument '" + EchoValue(a) + "'");
       return false;
     }
     positional_values_[positionals_[next_positional++].first] = a;

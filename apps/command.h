@@ -103,8 +103,12 @@ std::string ConfigDir();
 // The output folder given as `--<option> value`, checked before any work: InputError naming the
 // option when the value is empty, names something that is not a folder (/etc/passwd), or the
 // folder cannot be created or written (a probe file is created and removed, so a read-only folder
-// is found up front, not after the whole run). Creates the folder.
+// is found up front, not after the whole run). Creates the folder (and missing parents).
 std::filesystem::path PrepareOutputDir(const std::string& option, const std::string& value);
+// Removes the folders PrepareOutputDir created when they are still empty (a command that failed
+// before writing anything leaves no empty output folder behind). The dispatcher calls it when a
+// command exits non-zero.
+void RemoveUnusedOutputDirs();
 
 // How the command line reads settings files: unknown keys warn, or are errors with the flag
 // --strict-settings or DYGSLAM_STRICT_SETTINGS=1 (which child processes inherit). Warnings are not
@@ -113,6 +117,11 @@ SettingsReadOptions CliSettingsReadOptions(bool strict_flag);
 // The flags of the commands that run the SLAM on a dataset folder (run, map), in this order:
 // --quiet, --strict-settings, --strict-paths.
 void AddDatasetRunFlags(ArgParser* p);
+
+// The --filter value of run / map / component / bench checked as a usage error naming the option
+// ("--filter 'x': unknown filter (expected none | boxes | ...)"); false after printing it (the
+// command then exits 2).
+bool CheckFilterOption(ArgParser* p);
 
 // A SLAM run that processed no frame or tracked fewer than 10 % of them failed (exit 1), even when
 // every part of it ran: its trajectory says nothing.

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "apps/command.h"
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/base/stop_signal.h"
 
@@ -55,6 +56,23 @@ void PrintHelp(std::ostream& out) {
          "  dygslam bench DATA_DIR [--runs N] [--quick] [--update-benchmarks BENCHMARKS.md]\n";
 }
 
+// An error message as printed: every line through EchoValue (binary bytes escaped), at most
+// 2000 characters in all, so that a value echoed whole somewhere deep down cannot flood stderr.
+std::string BoundedMessage(const std::string& message) {
+  constexpr size_t kMaxChars = 2000;
+  std::string out;
+  size_t start = 0;
+  while (start <= message.size() && out.size() < kMaxChars) {
+    const size_t end = std::min(message.find('\n', start), message.size());
+    if (start > 0) out += '\n';
+    out += EchoValue(message.substr(start, end - start), kMaxChars - out.size());
+    start = end + 1;
+  }
+  if (start <= message.size())
+    out += " ... (message of " + std::to_string(message.size()) + " bytes)";
+  return out;
+}
+
 int Dispatch(const std::vector<std::string>& argv) {
   if (argv.empty()) {
     PrintHelp(std::cerr);
@@ -71,7 +89,8 @@ int Dispatch(const std::vector<std::string>& argv) {
       return Commands().at(args[0]).run({"--help"});
     }
     if (!args.empty() && args[0] != "help" && args[0] != "version") {
-      std::cerr << "dygslam help: unknown command '" << args[0] << "' (see 'dygslam help')\n";
+      std::cerr << "dygslam help: unknown command '" << EchoValue(args[0])
+                << "' (see 'dygslam help')\n";
       return 2;
     }
     PrintHelp(std::cout);
@@ -79,7 +98,7 @@ int Dispatch(const std::vector<std::string>& argv) {
   }
   if (name == "version" || name == "--version") {
     if (!args.empty()) {
-      std::cerr << "dygslam version: takes no arguments, got '" << args[0] << "'\n";
+      std::cerr << "dygslam version: takes no arguments, got '" << EchoValue(args[0]) << "'\n";
       return 2;
     }
     std::cout << "dygslam " << DYGSLAM_VERSION << "\n";
@@ -92,21 +111,30 @@ int Dispatch(const std::vector<std::string>& argv) {
       std::cerr << "dygslam " << name << ": not available yet in this build\n";
       return 2;
     }
-    std::cerr << "dygslam: unknown command '" << name << "' (see 'dygslam help')\n";
+    std::cerr << "dygslam: unknown command '" << EchoValue(name) << "' (see 'dygslam help')\n";
     return 2;
   }
+  int code = 1;
   try {
-    return it->second.run(args);
+    code = it->second.run(args);
   } catch (const InputError& e) {
-    std::cerr << "dygslam " << name << ": error: " << e.what() << "\n";
-    return 1;
+    std::cerr << "dygslam " << name << ": error: " << BoundedMessage(e.what()) << "\n";
   } catch (const InvalidOptions& e) {
-    std::cerr << "dygslam " << name << ": error: " << e.what() << "\n";
-    return 1;
+    const std::string message = e.what();
+    if (message.rfind("--", 0) == 0) {
+      // A malformed or out-of-range option value ("--runs: expected ..."): a usage error.
+      std::cerr << "dygslam " << name << ": " << BoundedMessage(message) << "\n(dygslam " << name
+                << " --help for details)\n";
+      code = 2;
+    } else {
+      std::cerr << "dygslam " << name << ": error: " << BoundedMessage(message) << "\n";
+    }
   } catch (const std::exception& e) {
-    std::cerr << "dygslam " << name << ": internal error: " << e.what() << "\n";
-    return 1;
+    std::cerr << "dygslam " << name << ": internal error: " << BoundedMessage(e.what()) << "\n";
   }
+  // A command that failed before writing anything leaves no empty --out folder behind.
+  if (code != 0) RemoveUnusedOutputDirs();
+  return code;
 }
 
 }  // namespace

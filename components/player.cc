@@ -69,8 +69,17 @@ std::vector<StampedPose> DatasetPlayer::GroundTruth() const {
   const Timestamp first = dataset_.frame(indices_.front()).rgb_stamp;
   const Timestamp last = dataset_.frame(indices_.back()).rgb_stamp;
   const Timestamp margin = Timestamp::FromNanoseconds(100000000);  // 0.1 s
+  std::vector<StampedPose> all;
+  try {
+    all = ReadTumTrajectory(dataset_.groundtruth_path());
+  } catch (const InputError& e) {
+    // Ground truth only scores the run: a malformed file does not stop the frames (`dygslam run`
+    // has warned about it before starting the pipeline).
+    LOG_WARNING << "player: ground truth not published: " << e.what();
+    return {};
+  }
   std::vector<StampedPose> result;
-  for (const StampedPose& p : ReadTumTrajectory(dataset_.groundtruth_path())) {
+  for (const StampedPose& p : all) {
     if (p.stamp.nanoseconds() >= first.nanoseconds() - margin.nanoseconds() &&
         p.stamp.nanoseconds() <= last.nanoseconds() + margin.nanoseconds()) {
       result.push_back(p);

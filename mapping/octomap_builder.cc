@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -378,6 +379,14 @@ void WriteOctoMapFull(const octomap::OcTree& tree, const std::string& path) {
 }
 
 std::unique_ptr<octomap::OcTree> ReadOctoMap(const std::string& path) {
+  // A binary input is read from a regular file only: a FIFO nobody writes into would block the
+  // open forever, and the reader seeks back to the start.
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(path, 0, "OctoMap file not found");
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw InputError(path, 0,
+                     "OctoMap file is not a regular file (a FIFO, a device or a folder); OctoMaps "
+                     "are read from regular files");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, 0, "cannot open OctoMap file");
   std::string header;

@@ -1,6 +1,7 @@
 #include "run/dataset_runner.h"
 
 #include <chrono>
+#include <exception>
 #include <filesystem>
 #include <string>
 
@@ -33,11 +34,14 @@ DatasetRunSummary RunDatasetFrames(const RgbdDataset& dataset, System& system,
   DatasetRunSummary summary;
   const auto t0 = std::chrono::steady_clock::now();
   cv::Mat next_rgb;  // loaded one frame ahead so its detection overlaps this frame's tracking
+  // A bad next image is reported when its own turn comes: the frames before it are all fed.
+  std::exception_ptr next_error;
   for (size_t k = options.first_entry; k < options.last_entry; ++k) {
     if (options.stop && options.stop()) {
       summary.interrupted = true;
       break;
     }
+    if (next_error) std::rethrow_exception(next_error);
     const auto index = dataset.FrameForRgbEntry(k);
     if (!index) {
       ++summary.skipped;
@@ -49,8 +53,13 @@ DatasetRunSummary RunDatasetFrames(const RgbdDataset& dataset, System& system,
     const Timestamp stamp = stamp_of(*index);
     if (prefetch && k + 1 < options.last_entry) {
       if (const auto next = dataset.FrameForRgbEntry(k + 1)) {
-        next_rgb = dataset.LoadRgb(*next, width, height);
-        system.PrefetchDetections(next_rgb, stamp_of(*next));
+        try {
+          next_rgb = dataset.LoadRgb(*next, width, height);
+          system.PrefetchDetections(next_rgb, stamp_of(*next));
+        } catch (const InputError&) {
+          next_rgb = cv::Mat();
+          next_error = std::current_exception();
+        }
       }
     }
     const FrameResult r = options.detections != nullptr

@@ -57,8 +57,9 @@ struct DatasetRunSummary {
 // Called after each fed frame with its rgb.txt entry and the System's result.
 using FrameCallback = std::function<void(size_t entry, const FrameResult& result)>;
 
-// Feeds the frames; throws what the dataset throws for a bad image (InputError naming it) and
-// InvalidOptions for a range outside the dataset. Does not shut the System down.
+// Feeds the frames; throws what the dataset throws for a bad image (InputError naming it), after
+// feeding every frame before it, and InvalidOptions for a range outside the dataset. Does not
+// shut the System down (the caller can still write what the frames before the error gave).
 DatasetRunSummary RunDatasetFrames(const RgbdDataset& dataset, System& system,
                                    const DatasetRunOptions& options,
                                    const FrameCallback& on_frame = {});

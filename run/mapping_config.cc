@@ -23,34 +23,8 @@ void ReadOptions(const ConfigReader& root, OctoMapOptions* options) {
   s.ReadIfPresent("lazy_eval", &options->lazy_eval);
   s.ReadIfPresent("discretize", &options->discretize);
   s.ReadIfPresent("rebuild_displacement", &options->rebuild_displacement);
-  // A misspelt key would silently keep its default: name it.
-  static const char* const kKnown[] = {"resolution",
-                                       "max_range",
-                                       "min_range",
-                                       "prob_hit",
-                                       "prob_miss",
-                                       "clamping_min",
-                                       "clamping_max",
-                                       "occupancy_threshold",
-                                       "pixel_stride",
-                                       "voxel_filter_size",
-                                       "use_voxel_filter",
-                                       "use_dynamic_mask",
-                                       "dynamic_mask_dilation_px",
-                                       "dynamic_keypoint_radius_px",
-                                       "lazy_eval",
-                                       "discretize",
-                                       "rebuild_displacement"};
-  for (const std::string& key : s.Keys()) {
-    const std::string name = key.substr(s.prefix().size() + 1);
-    bool known = false;
-    std::string list;
-    for (const char* k : kKnown) {
-      known = known || name == k;
-      list += (list.empty() ? "" : ", ") + std::string(k);
-    }
-    if (!known) s.Fail(name, "unknown key (known: " + list + ")");
-  }
+  // A misspelt key is reported where every other section's is: LoadSettings warns about it with
+  // its line and the closest known key (an error with --strict-settings), KnownSettingsKeys().
   s.CheckOptions(*options);
 }
 

@@ -1,9 +1,18 @@
 #include "run/run_outputs.h"
 
+#include <octomap/OcTree.h>
+
 #include <cstdio>
 #include <filesystem>
+#include <map>
+#include <memory>
 
 #include "core/io/trajectory_io.h"
+#include "core/place/vocabulary.h"
+#include "core/slam/frame.h"
+#include "core/slam/map.h"
+#include "core/slam/map_file.h"
+#include "core/slam/orb_extractor.h"
 #include "mapping/keyframe_mapper.h"
 
 namespace dygslam {
@@ -49,6 +58,52 @@ void WriteMapperBinary(const std::string& directory, KeyframeMapper& mapper, boo
     b.WriteBinary((fs::path(directory) / "map.bt").string());
     if (with_full_map) b.WriteFull((fs::path(directory) / "map.ot").string());
   });
+}
+
+size_t WriteMapFileOctoMap(const std::string& directory, const std::string& map_file,
+                           const SystemOptions& options, const OctoMapOptions& octomap) {
+  octomap.Check();
+  // The map as the System loads it: the same camera geometry, pyramid and vocabulary identity.
+  const OrbExtractor extractor(options.orb);
+  const auto geometry = std::make_shared<CameraGeometry>(
+      CameraGeometry::Create(options.camera, options.sensor, extractor));
+  uint64_t vocabulary_checksum = 0;
+  if (!options.loop_closing.vocabulary.empty())
+    vocabulary_checksum = Vocabulary::Load(options.loop_closing.vocabulary).Checksum();
+  const LoadedMap loaded = LoadMapFile(
+      map_file, MapFileSettings::Of(*geometry, options.orb.scale_factor, vocabulary_checksum),
+      geometry);
+  octomap::OcTree tree(octomap.resolution);
+  tree.setProbHit(octomap.prob_hit);
+  tree.setProbMiss(octomap.prob_miss);
+  tree.setClampingThresMin(octomap.clamping_min);
+  tree.setClampingThresMax(octomap.clamping_max);
+  tree.setOccupancyThres(octomap.occupancy_threshold);
+  size_t inserted = 0;
+  // Keyframes in id order, each with the points it observes within range: one scan per keyframe.
+  for (const auto& [id, keyframe] : loaded.map->keyframes()) {
+    const Eigen::Vector3d centre = keyframe->CameraCenter();
+    octomap::Pointcloud cloud;
+    for (const auto& point : keyframe->map_points) {
+      if (!point || point->bad) continue;
+      const Eigen::Vector3d& p = point->position;
+      const double range = (p - centre).norm();
+      if (!p.allFinite() || range < octomap.min_range || range > octomap.max_range) continue;
+      cloud.push_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                      static_cast<float>(p.z()));
+    }
+    if (cloud.size() == 0) continue;
+    tree.insertPointCloud(
+        cloud,
+        octomap::point3d(static_cast<float>(centre.x()), static_cast<float>(centre.y()),
+                         static_cast<float>(centre.z())),
+        octomap.max_range, octomap.lazy_eval, octomap.discretize);
+    inserted += cloud.size();
+  }
+  if (inserted == 0) return 0;
+  tree.updateInnerOccupancy();
+  WriteOctoMapBinary(tree, (fs::path(directory) / "map.bt").string());
+  return inserted;
 }
 
 }  // namespace dygslam

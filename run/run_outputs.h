@@ -12,6 +12,7 @@
 #include "core/base/timestamp.h"
 #include "core/base/types.h"
 #include "core/system/system.h"
+#include "mapping/octomap_builder.h"
 
 namespace dygslam {
 
@@ -39,5 +40,13 @@ void WriteSystemTrajectories(const std::string& directory, const System& system)
 // base map (and DIR/map.ot, the OctoMap with probabilities, with `with_full_map`).
 void WriteMapperBinary(const std::string& directory, KeyframeMapper& mapper,
                        bool with_full_map = false);
+
+// The static map of a SLAM map file (--load-map) as DIR/map.bt, for a run that added no keyframe
+// of its own (--localization): the file's map points, each inserted by ray casting from the
+// centre of every keyframe that observes it (free space cleared along the ray), with the sensor
+// model and range of `octomap`. The map file is read against `options` like CheckMapFile. Returns
+// the number of map points inserted (0: nothing written).
+size_t WriteMapFileOctoMap(const std::string& directory, const std::string& map_file,
+                           const SystemOptions& options, const OctoMapOptions& octomap);
 
 }  // namespace dygslam

@@ -1,10 +1,13 @@
 #include "run/system_config.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <initializer_list>
 #include <variant>
 
+#include "core/base/echo.h"
 #include "core/base/error.h"
 
 #ifndef DYGSLAM_DEFAULT_VOCABULARY
@@ -24,6 +27,44 @@ struct SettingsField {
 void ReadFields(const ConfigReader& section, std::initializer_list<SettingsField> fields) {
   for (const SettingsField& f : fields)
     std::visit([&](auto* field) { section.ReadIfPresent(f.key, field); }, f.field);
+}
+
+// The class names of a names file (one per line, trimmed, blank lines skipped); empty when the
+// file is not a readable regular file (the detector reports that when it is created).
+std::vector<std::string> ReadClassNames(const std::string& path) {
+  std::error_code ec;
+  std::vector<std::string> names;
+  if (path.empty() || !std::filesystem::is_regular_file(path, ec)) return names;
+  std::ifstream in(path);
+  std::string line;
+  while (names.size() < 100000 && std::getline(in, line)) {
+    const size_t b = line.find_first_not_of(" \t\r");
+    const size_t e = line.find_last_not_of(" \t\r");
+    if (b != std::string::npos) names.push_back(line.substr(b, e - b + 1));
+  }
+  return names;
+}
+
+// Every Detector.dynamic_classes entry must be a class of the model (after its aliases): a
+// misspelt one ("persn") would silently never match, and the detector, created later, could only
+// name its names file, not the settings key that asked for the class.
+void CheckDynamicClasses(const ConfigReader& detector, const DetectorOptions& options) {
+  const std::vector<std::string> names = ReadClassNames(options.names_path);
+  if (names.empty()) return;
+  std::vector<std::string> canonical;
+  for (const std::string& n : names) {
+    auto it = options.class_aliases.find(n);
+    canonical.push_back(it == options.class_aliases.end() ? n : it->second);
+  }
+  for (const std::string& wanted : options.dynamic_classes) {
+    if (std::find(canonical.begin(), canonical.end(), wanted) != canonical.end()) continue;
+    std::string known;
+    for (size_t i = 0; i < canonical.size() && i < 8; ++i)
+      known += (i == 0 ? "" : ", ") + EchoValue(canonical[i], 40);
+    if (canonical.size() > 8) known += ", ... (" + std::to_string(canonical.size()) + " classes)";
+    detector.Fail("dynamic_classes", "'" + EchoValue(wanted) + "' is not a class of the model (" +
+                                         EchoValue(options.names_path) + ": " + known + ")");
+  }
 }
 
 }  // namespace
@@ -72,8 +113,13 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
       if (path.is_relative() && !settings.path.empty())
         path = std::filesystem::path(settings.path).parent_path() / path;
       lc.vocabulary = path.lexically_normal().string();
-      if (!std::filesystem::exists(lc.vocabulary))
-        loops.Fail("vocabulary", "file not found: " + lc.vocabulary);
+      std::error_code ec;
+      if (!std::filesystem::exists(lc.vocabulary, ec))
+        loops.Fail("vocabulary", "file not found: " + EchoValue(lc.vocabulary));
+      // A binary input: a FIFO nobody writes into would block the run forever.
+      if (!std::filesystem::is_regular_file(lc.vocabulary, ec))
+        loops.Fail("vocabulary", "not a regular file (a FIFO, a device or a folder): " +
+                                     EchoValue(lc.vocabulary));
     }
   } else if (const char* env = std::getenv("DYGSLAM_VOCABULARY"); env != nullptr && *env != '\0') {
     lc.vocabulary = env;
@@ -116,7 +162,7 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
     try {
       options.filter_mode = ParseFilterMode(mode);
     } catch (const InvalidOptions& e) {
-      filter.Fail("mode", e.what());
+      filter.Fail("mode", EchoValue(e.what(), 600));
     }
   }
   DynamicFilterOptions& f = options.filter;
@@ -149,7 +195,15 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
     try {
       options.detector = DetectorOptionsForModel(model);
     } catch (const InputError& e) {
-      detector.Fail("model", e.what());
+      // The name is echoed bounded (a 50 MB value was echoed whole, twice).
+      std::string message = e.what();
+      if (!model.empty()) {
+        const std::string echoed = EchoValue(model);
+        for (size_t at = message.find(model); at != std::string::npos;
+             at = message.find(model, at + echoed.size()))
+          message.replace(at, model.size(), echoed);
+      }
+      detector.Fail("model", EchoValue(message, 1000));
     }
   } else {
     try {
@@ -166,8 +220,10 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                         {"nms_threshold", &options.detector.nms_threshold},
                         {"num_threads", &options.detector.num_threads}});
   std::vector<std::string> classes;
-  if (detector.ReadIfPresent("dynamic_classes", &classes))
+  if (detector.ReadIfPresent("dynamic_classes", &classes)) {
     options.detector.dynamic_classes = classes;
+    CheckDynamicClasses(detector, options.detector);
+  }
   // The values of the file, checked here so that a bad one names its line (model files that are
   // resolved later stand in as placeholders).
   DetectorOptions check = options.detector;

@@ -201,7 +201,8 @@ TEST(BenchCommand, BadInputIsNamed) {
           .exit_code,
       1);
   EXPECT_NE(ReadText(err).find("bogus"), std::string::npos) << ReadText(err);
-  EXPECT_EQ(RunDygslam("bench " + root.string() + " --runs 0", err).exit_code, 1);
+  // A malformed or out-of-range number is a usage error (exit 2), as in every command.
+  EXPECT_EQ(RunDygslam("bench " + root.string() + " --runs 0", err).exit_code, 2);
   EXPECT_NE(ReadText(err).find("--runs"), std::string::npos) << ReadText(err);
   // A folder without any sequence.
   EXPECT_EQ(RunDygslam("bench " + root.string() + " --out " + (root / "o").string(), err).exit_code,

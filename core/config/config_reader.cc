@@ -1,5 +1,6 @@
 #include "core/config/config_reader.h"
 
+#include <yaml-cpp/depthguard.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -11,6 +12,9 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+
+#include "core/base/echo.h"
+#include "core/base/input_file.h"
 
 namespace dygslam {
 
@@ -38,6 +42,13 @@ void FindAll(const YAML::Node& node, const std::string& key, std::vector<Hit>* h
       FindAll(entry.second, key.substr(k.size() + 1), hits);
     }
   }
+}
+
+std::string Trim(const std::string& s) {
+  const size_t b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return "";
+  const size_t e = s.find_last_not_of(" \t");
+  return s.substr(b, e - b + 1);
 }
 
 // Settings files are small: deeper nesting or more nodes than this is not a settings file (and
@@ -69,6 +80,18 @@ void CheckTree(const YAML::Node& node, const std::string& path, int line,
   if (node.IsMap()) {
     for (const auto& entry : node) {
       const int key_line = entry.first.Mark().line >= 0 ? entry.first.Mark().line + 1 : line;
+      // Settings keys are names: a complex key (`? [a, b]`, `{a: 1}: x`) or a null key (`~: 1`,
+      // `: 1`) can name no setting and would be skipped without a word.
+      if (entry.first.IsSequence() || entry.first.IsMap()) {
+        throw InputError(path, key_line,
+                         std::string("a ") + (entry.first.IsSequence() ? "list" : "map") +
+                             " used as a key (YAML complex key '? ...'); settings keys are names");
+      }
+      if (!entry.first.IsScalar() || Trim(entry.first.Scalar()).empty()) {
+        throw InputError(path, key_line,
+                         "empty or null key ('~', 'null' or nothing before ':'); settings keys "
+                         "are names");
+      }
       CheckTree(entry.first, path, key_line, ancestors, visited);
       CheckTree(entry.second, path, key_line, ancestors, visited);
     }
@@ -97,13 +120,6 @@ void CollectKeys(const YAML::Node& node, const std::string& prefix, std::vector<
       out->push_back(key);
     }
   }
-}
-
-std::string Trim(const std::string& s) {
-  const size_t b = s.find_first_not_of(" \t");
-  if (b == std::string::npos) return "";
-  const size_t e = s.find_last_not_of(" \t");
-  return s.substr(b, e - b + 1);
 }
 
 std::string Lower(std::string s) {
@@ -136,15 +152,16 @@ double ParseDouble(const YAML::Node& node, const Fail& fail) {
       (!lower.empty() && (lower[0] == '-' || lower[0] == '+')) ? lower.substr(1) : lower;
   if (unsigned_lower == ".nan" || unsigned_lower == ".inf" || unsigned_lower == "nan" ||
       unsigned_lower == "inf" || unsigned_lower == "infinity") {
-    fail("value must be a finite number, found '" + text + "'");
+    fail("value must be a finite number, found '" + EchoValue(text) + "'");
   }
   const char* begin = text.c_str();
   char* end = nullptr;
   errno = 0;
   const double v = std::strtod(begin, &end);
-  if (text.empty() || end == begin || *end != '\0') fail("expected a number, found '" + text + "'");
+  if (text.empty() || end == begin || *end != '\0')
+    fail("expected a number, found '" + EchoValue(text) + "'");
   if (!std::isfinite(v) || errno == ERANGE)
-    fail("value must be a finite number, found '" + text + "'");
+    fail("value must be a finite number, found '" + EchoValue(text) + "'");
   return v;
 }
 
@@ -163,12 +180,12 @@ int64_t ParseInt(const YAML::Node& node, int64_t lo, int64_t hi, const Fail& fai
     const double d = std::strtod(begin, &fend);
     if (!text.empty() && fend != begin && *fend == '\0' && std::isfinite(d) && d == std::floor(d) &&
         std::abs(d) < 9e15) {
-      if (d < double(lo) || d > double(hi)) fail("integer out of range: '" + text + "'");
+      if (d < double(lo) || d > double(hi)) fail("integer out of range: '" + EchoValue(text) + "'");
       return static_cast<int64_t>(d);
     }
-    fail("expected an integer, found '" + text + "'");
+    fail("expected an integer, found '" + EchoValue(text) + "'");
   }
-  if (errno == ERANGE || v < lo || v > hi) fail("integer out of range: '" + text + "'");
+  if (errno == ERANGE || v < lo || v > hi) fail("integer out of range: '" + EchoValue(text) + "'");
   return v;
 }
 
@@ -178,7 +195,7 @@ bool ParseBool(const YAML::Node& node, const Fail& fail) {
   const std::string text = Lower(Trim(node.Scalar()));
   if (text == "true" || text == "yes" || text == "on" || text == "1") return true;
   if (text == "false" || text == "no" || text == "off" || text == "0") return false;
-  fail("expected true/false (or 1/0), found '" + node.Scalar() + "'");
+  fail("expected true/false (or 1/0), found '" + EchoValue(node.Scalar()) + "'");
   return false;
 }
 
@@ -285,6 +302,12 @@ ConfigReader ConfigReader::FromString(const std::string& text, const std::string
   impl->path = name;
   try {
     impl->root = YAML::Load(Preprocess(text));
+  } catch (const YAML::DeepRecursion& e) {
+    // yaml-cpp's own guard (thousands of levels) says "bad file": say what is wrong.
+    throw InputError(name, e.mark.line >= 0 ? e.mark.line + 1 : 0,
+                     "nested deeper than " + std::to_string(kMaxDepth) +
+                         " levels (the YAML parser gave up at " + std::to_string(e.depth()) +
+                         "); not a settings file");
   } catch (const YAML::Exception& e) {
     throw InputError(name, e.mark.line >= 0 ? e.mark.line + 1 : 0, "malformed YAML: " + e.msg);
   }
@@ -308,13 +331,19 @@ ConfigReader ConfigReader::FromFile(const std::string& path) {
   // A pipe is fine (`--config <(...)`); a device (/dev/zero) or a socket would be read forever.
   if (!std::filesystem::is_regular_file(path, ec) && !std::filesystem::is_fifo(path, ec))
     throw InputError(path, 0, "settings file is not a regular file (a device or a socket)");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, 0, "cannot open settings file");
   // Settings files are a few KB; a bounded read keeps a huge or endless one from taking the memory.
   constexpr size_t kMaxSettingsBytes = 16u << 20;
-  std::string text(kMaxSettingsBytes + 1, '\0');
-  in.read(text.data(), static_cast<std::streamsize>(text.size()));
-  text.resize(static_cast<size_t>(in.gcount()));
+  std::string text;
+  if (std::filesystem::is_fifo(path, ec)) {
+    // A pipe nobody writes into is an error after a while, not a hang.
+    text = ReadPipeBounded(path, kMaxSettingsBytes, "settings file");
+  } else {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path, 0, "cannot open settings file");
+    text.assign(kMaxSettingsBytes + 1, '\0');
+    in.read(text.data(), static_cast<std::streamsize>(text.size()));
+    text.resize(static_cast<size_t>(in.gcount()));
+  }
   if (text.size() > kMaxSettingsBytes)
     throw InputError(path, 0, "settings file larger than 16 MiB: not a settings file");
   return FromString(text, path);
@@ -334,7 +363,7 @@ struct ConfigLookup {
     FindAll(root, full_key, &hits);
     if (hits.size() > 1) {
       throw InputError(path, hits[1].line,
-                       "key '" + full_key + "' is given more than once (also on line " +
+                       "key '" + EchoValue(full_key) + "' is given more than once (also on line " +
                            std::to_string(hits[0].line) + ")");
     }
     if (hits.empty()) return Hit{};
@@ -348,7 +377,8 @@ ConfigReader ConfigReader::Section(const std::string& name) const {
   const Hit h = ConfigLookup::Find(impl_->path, impl_->root, full);
   if (h.line > 0 && !h.value.IsNull() && !h.value.IsMap()) {
     throw InputError(impl_->path, h.line,
-                     "section '" + full + "' must be a map of 'key: value' entries, found a " +
+                     "section '" + EchoValue(full) +
+                         "' must be a map of 'key: value' entries, found a " +
                          (h.value.IsSequence() ? "list" : "single value"));
   }
   return ConfigReader(impl_, full);
@@ -399,6 +429,10 @@ size_t EditDistance(const std::string& a_in, const std::string& b_in) {
 bool IsKnown(const std::string& key, const std::vector<std::string>& known) {
   for (const std::string& k : known) {
     if (k == key) return true;
+    // A known section given as a list or a single value (`OctoMap: [..]`, `Viewer: ~`): not an
+    // unknown key; the module that reads the section says what is wrong with it.
+    if (k.size() > key.size() && k.compare(0, key.size(), key) == 0 && k[key.size()] == '.')
+      return true;
     // "Viewer.*": every key below Viewer.
     if (k.size() >= 2 && k.compare(k.size() - 2, 2, ".*") == 0 &&
         key.compare(0, k.size() - 1, k, 0, k.size() - 1) == 0) {
@@ -413,6 +447,16 @@ bool IsKnown(const std::string& key, const std::vector<std::string>& known) {
 std::vector<ConfigReader::UnknownKey> ConfigReader::UnknownKeys(
     const std::vector<std::string>& known) const {
   std::vector<UnknownKey> out;
+  // What a misspelling may stand for: a known key, or a section (`OctoMapp: [..]`).
+  std::vector<std::string> candidates;
+  for (const std::string& k : known) {
+    if (k.size() >= 2 && k.compare(k.size() - 2, 2, ".*") == 0) continue;
+    candidates.push_back(k);
+    for (size_t dot = k.find('.'); dot != std::string::npos; dot = k.find('.', dot + 1)) {
+      if (std::find(candidates.begin(), candidates.end(), k.substr(0, dot)) == candidates.end())
+        candidates.push_back(k.substr(0, dot));
+    }
+  }
   for (const std::string& key : Keys()) {
     if (IsKnown(key, known)) continue;
     UnknownKey u;
@@ -423,8 +467,7 @@ std::vector<ConfigReader::UnknownKey> ConfigReader::UnknownKeys(
     }
     // The closest known key, if it is close: a few edits, at most a third of the key.
     size_t best = std::numeric_limits<size_t>::max();
-    for (const std::string& k : known) {
-      if (k.size() >= 2 && k.compare(k.size() - 2, 2, ".*") == 0) continue;
+    for (const std::string& k : candidates) {
       const size_t d = EditDistance(key, k);
       if (d < best) {
         best = d;
@@ -440,7 +483,7 @@ std::vector<ConfigReader::UnknownKey> ConfigReader::UnknownKeys(
 std::string ConfigReader::UnknownKeyMessage(const UnknownKey& unknown) const {
   return InputError::Format(
       impl_->path, unknown.line,
-      "unknown key '" + unknown.key + "'" +
+      "unknown key '" + EchoValue(unknown.key) + "'" +
           (unknown.closest.empty() ? std::string(" (not a dygslam or ORB-SLAM2 settings key)")
                                    : " (did you mean '" + unknown.closest + "'?)"));
 }
@@ -452,7 +495,7 @@ void ConfigReader::Fail(const std::string& key, const std::string& message) cons
     line = LineOf(key);
   } catch (const InputError&) {
   }
-  throw InputError(impl_->path, line, "key '" + full + "': " + message);
+  throw InputError(impl_->path, line, "key '" + EchoValue(full) + "': " + message);
 }
 
 namespace {
@@ -545,7 +588,7 @@ bool ConfigReader::ReadIfPresent(const std::string& key, T* value) const {
   const Hit h = ConfigLookup::Find(impl_->path, impl_->root, full);
   if (h.line <= 0 || h.value.IsNull()) return false;
   const auto fail = [&](const std::string& m) -> void {
-    throw InputError(impl_->path, h.line, "key '" + full + "': " + m);
+    throw InputError(impl_->path, h.line, "key '" + EchoValue(full) + "': " + m);
   };
   *value = Converter<T>::Convert(h.value, fail);
   return true;

@@ -50,6 +50,27 @@ void CheckPlausibleCamera(const ConfigReader& camera, const PinholeCamera& c) {
   }
 }
 
+// Camera.bf is ORB-SLAM2's stereo baseline times fx (the RGB-D "virtual right camera"): bf / fx is
+// a baseline in metres, a few centimetres for a Kinect-class sensor (TUM / Bonn: 40 / 535 =
+// 0.075 m). Zero or negative has no meaning; above 1 m no RGB-D sensor exists, and the close/far
+// depth threshold ThDepth * bf / fx would put every point "close".
+void CheckPlausibleBaseline(const ConfigReader& camera, const PinholeCamera& c,
+                            const RgbdSensorOptions& sensor) {
+  constexpr double kMaxBaselineM = 1.0;
+  const double baseline = sensor.bf / c.fx;
+  const std::string what = "Camera.bf is the stereo baseline times Camera.fx (" + Short(sensor.bf) +
+                           " / " + Short(c.fx) + " px = " + Short(baseline) + " m)";
+  if (!(sensor.bf > 0)) {
+    camera.Fail("bf", "must be > 0: " + what + "; RGB-D sensors have a few centimetres (e.g. " +
+                          Short(0.075 * c.fx) + " for 0.075 m)");
+  }
+  if (!(baseline <= kMaxBaselineM)) {
+    camera.Fail("bf", "implausible baseline: " + what + ", expected at most " +
+                          Short(kMaxBaselineM) + " m (e.g. " + Short(0.075 * c.fx) +
+                          " for 0.075 m; is it given in mm or without the factor fx?)");
+  }
+}
+
 Settings ReadSettings(ConfigReader reader, const SettingsReadOptions& read_options) {
   Settings s;
   s.path = reader.path();
@@ -85,6 +106,7 @@ Settings ReadSettings(ConfigReader reader, const SettingsReadOptions& read_optio
   orb.ReadIfPresent("minThFAST", &s.orb.min_th_fast);
   reader.CheckOptions(s.camera);
   CheckPlausibleCamera(camera, s.camera);
+  if (camera.Has("bf")) CheckPlausibleBaseline(camera, s.camera, s.sensor);
   reader.CheckOptions(s.sensor);
   reader.CheckOptions(s.orb);
   s.reader = std::move(reader);

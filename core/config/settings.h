@@ -44,7 +44,8 @@ const std::vector<std::string>& KnownSettingsKeys();
 //     ORBextractor.minThFAST (7)
 // Keys ORB-SLAM2 has but dygslam does not use (Camera.RGB, Viewer.*) are ignored.
 // Plausible ranges (InputError otherwise): focal lengths 0.05..100 times the larger image side,
-// principal point inside the image, |k1|, |k2|, |k3| <= 10, |p1|, |p2| <= 1.
+// principal point inside the image, |k1|, |k2|, |k3| <= 10, |p1|, |p2| <= 1, and when Camera.bf is
+// given a baseline bf / fx above 0 and at most 1 m.
 // Unknown keys: a warning (or, with UnknownKeyPolicy::kError, an InputError) naming file:line
 // and the closest known key. A section given as a list is an error.
 // Throws InputError naming the file, line and key (bad values, failed Check()).

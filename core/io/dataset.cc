@@ -309,18 +309,18 @@ cv::Mat RgbdDataset::LoadDepth(size_t i, int expected_width, int expected_height
 std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total) {
   const auto colon = text.find(':');
   if (colon == std::string::npos)
-    throw InvalidOptions("--frames: expected FIRST:LAST, got '" + text + "'");
+    throw InvalidOptions("--frames: expected FIRST:LAST, got '" + Abbreviate(text) + "'");
   auto parse = [&](const std::string& s, size_t def) -> size_t {
     if (s.empty()) return def;
-    if (s.size() > 12) throw InvalidOptions("--frames: number too large: '" + s + "'");
+    if (s.size() > 12) throw InvalidOptions("--frames: number too large: '" + Abbreviate(s) + "'");
     for (char c : s)
       if (c < '0' || c > '9')
-        throw InvalidOptions("--frames: not a non-negative integer: '" + s + "'");
+        throw InvalidOptions("--frames: not a non-negative integer: '" + Abbreviate(s) + "'");
     return std::stoul(s);
   };
   const size_t first = parse(text.substr(0, colon), 0);
   const size_t last = std::min(parse(text.substr(colon + 1), total), total);
-  if (first >= last) throw InvalidOptions("--frames: empty range '" + text + "'");
+  if (first >= last) throw InvalidOptions("--frames: empty range '" + Abbreviate(text) + "'");
   return {first, last};
 }
 

@@ -12,7 +12,7 @@ double ParseNumber(const std::string& path, int line, const std::string& field, 
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
   if (end == text.c_str() || *end != '\0' || !std::isfinite(v))
-    throw InputError(path, line, field + ": not a finite number: '" + text + "'");
+    throw InputError(path, line, field + ": not a finite number: '" + Abbreviate(text) + "'");
   return v;
 }
 }  // namespace
@@ -27,7 +27,9 @@ std::map<Timestamp, std::vector<Detection>> ReadDetections(const std::string& pa
       throw InputError(path, line.line_number,
                        "expected 7 columns 'timestamp x y w h class_id score', got " + std::to_string(t.size()));
     const auto stamp = Timestamp::Parse(t[0]);
-    if (!stamp) throw InputError(path, line.line_number, "timestamp: not a decimal number: '" + t[0] + "'");
+    if (!stamp)
+      throw InputError(path, line.line_number,
+                       "timestamp: not a decimal number: '" + Abbreviate(t[0]) + "'");
     if (!first && *stamp < previous)
       throw InputError(path, line.line_number, "timestamp " + t[0] + " goes backwards (previous " + previous.ToString() + ")");
     first = false;

@@ -9,7 +9,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/base/echo.h"
 #include "core/base/error.h"
+#include "core/base/input_file.h"
 
 namespace dygslam {
 namespace fs = std::filesystem;
@@ -41,8 +43,7 @@ void WriteFileAtomically(const std::string& path, const std::string& content) {
 }
 
 std::string Abbreviate(const std::string& text, size_t max_chars) {
-  if (text.size() <= max_chars) return text;
-  return text.substr(0, max_chars) + "... (" + std::to_string(text.size()) + " bytes)";
+  return EchoValue(text, max_chars);
 }
 
 std::vector<TextLine> ReadDataLines(const std::string& path) {
@@ -52,8 +53,21 @@ std::vector<TextLine> ReadDataLines(const std::string& path) {
   // A pipe is fine (`<(...)`); a device (/dev/zero) would be read forever.
   if (!fs::is_regular_file(path, ec) && !fs::is_fifo(path, ec))
     throw InputError(path, 0, "not a regular file (a device or a socket)");
-  std::ifstream in(path);
-  if (!in) throw InputError(path, 0, "cannot open file for reading");
+  // A pipe is read with a bound on the wait for its writer (a FIFO nobody writes into would block
+  // forever) and on its size; a regular file is streamed.
+  std::istringstream piped;
+  std::ifstream file;
+  const bool pipe = fs::is_fifo(path, ec);
+  if (pipe) {
+    constexpr size_t kMaxPipeBytes = size_t{1} << 30;
+    std::string content = ReadPipeBounded(path, kMaxPipeBytes, "list file");
+    if (content.size() > kMaxPipeBytes) throw InputError(path, 0, "pipe sent more than 1 GiB");
+    piped.str(std::move(content));
+  } else {
+    file.open(path);
+    if (!file) throw InputError(path, 0, "cannot open file for reading");
+  }
+  std::istream& in = pipe ? static_cast<std::istream&>(piped) : file;
   std::vector<TextLine> lines;
   std::string raw;
   int number = 0;

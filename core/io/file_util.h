@@ -17,13 +17,14 @@ struct TextLine {
   std::vector<std::string> tokens;
 };
 
-// `text` for a message: at most `max_chars` characters, longer text cut with "... (N bytes)".
+// `text` for a message: at most `max_chars` characters, longer text cut with "... (N bytes)",
+// binary bytes escaped (EchoValue, core/base/echo.h).
 std::string Abbreviate(const std::string& text, size_t max_chars = 200);
 
 // Reads `path` and returns its data lines: '#' starts a comment (whole line), blank lines are
 // skipped, tokens are separated by spaces, tabs or commas; a UTF-8 byte order mark at the start
 // is skipped. Throws InputError if the file is missing, unreadable, or a device or socket (a pipe
-// is read).
+// is read: its writer must send something within kPipeWaitSeconds, core/base/input_file.h).
 std::vector<TextLine> ReadDataLines(const std::string& path);
 
 }  // namespace dygslam

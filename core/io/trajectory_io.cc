@@ -20,12 +20,14 @@ double ParseValue(const std::string& file, int line, int column, const std::stri
   errno = 0;
   const double v = std::strtod(begin, &end);
   if (end == begin || *end != '\0') {
-    throw InputError(file, line,
-                     "column " + std::to_string(column) + ": not a number: '" + text + "'");
+    throw InputError(
+        file, line,
+        "column " + std::to_string(column) + ": not a number: '" + Abbreviate(text) + "'");
   }
   if (!std::isfinite(v) || errno == ERANGE) {
-    throw InputError(file, line,
-                     "column " + std::to_string(column) + ": non-finite value '" + text + "'");
+    throw InputError(
+        file, line,
+        "column " + std::to_string(column) + ": non-finite value '" + Abbreviate(text) + "'");
   }
   return v;
 }
@@ -41,7 +43,9 @@ std::vector<StampedPose> ReadTumTrajectory(const std::string& path) {
           "expected 8 columns 't tx ty tz qx qy qz qw', found " + std::to_string(l.tokens.size()));
     }
     const std::optional<Timestamp> stamp = Timestamp::Parse(l.tokens[0]);
-    if (!stamp) throw InputError(path, l.line_number, "malformed timestamp '" + l.tokens[0] + "'");
+    if (!stamp)
+      throw InputError(path, l.line_number,
+                       "malformed timestamp '" + Abbreviate(l.tokens[0]) + "'");
     double v[7];
     for (int c = 0; c < 7; ++c) v[c] = ParseValue(path, l.line_number, c + 2, l.tokens[c + 1]);
     const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);  // (w, x, y, z)

@@ -61,7 +61,7 @@ struct PipelineOptions {
   // DDS interfaces / shared memory / discovery server (default: this machine only).
   dds::NetworkOptions network;
   bool progress = false;  // recorder prints a progress line on stderr
-  // The player waits for the STARTED announcement of every other component of this pipeline
+  // The player waits for the READY announcement of every other component of this pipeline
   // (set by RunPipeline; `dygslam component player --wait-for-components` by hand).
   bool wait_for_components = false;
   // On stop: how long mapper and recorder wait for slam's last outputs (seconds).

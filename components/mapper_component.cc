@@ -145,7 +145,9 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
   };
 
   size_t since_update = 0;
-  std::optional<Clock::time_point> idle_after_done;
+  // Since when no keyframe of this run arrived after slam's DONE (counting = true).
+  bool idle_counting = false;
+  Clock::time_point idle_since;
   bool writer_seen = false;
   std::optional<std::chrono::steady_clock::time_point> writer_gone_since;
   std::optional<std::chrono::steady_clock::time_point> flush_deadline;
@@ -206,17 +208,18 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
       // slam's DONE is written after its last keyframe (and after waiting for acknowledgements);
       // order is only kept per writer, so allow a short grace period (300 ms without a keyframe
       // of this run) after DONE.
-      if (slam_done && !idle_after_done) idle_after_done = Clock::now();
-      if (idle_after_done && Clock::now() - *idle_after_done > std::chrono::milliseconds(300)) {
-        break;
+      if (slam_done && !idle_counting) {
+        idle_counting = true;
+        idle_since = Clock::now();
       }
+      if (idle_counting && Clock::now() - idle_since > std::chrono::milliseconds(300)) break;
       if (flush_deadline &&
           (std::chrono::steady_clock::now() >= *flush_deadline || keyframes.matched() == 0)) {
         break;
       }
       continue;
     }
-    idle_after_done.reset();
+    idle_counting = false;
     try {
       PinholeCamera camera;
       const KeyframeData k = KeyframeFromMsg(*sample, &camera);

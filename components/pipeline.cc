@@ -164,8 +164,9 @@ std::vector<ComponentKind> PipelineComponents(const PipelineOptions& options) {
   return kinds;
 }
 
-void RunComponentKind(ComponentKind kind, const PipelineOptions& options,
-                      std::shared_ptr<dds::Participant> participant, const StopFlagPtr& stop) {
+// Returns the samples the component ignored (writers outside this run).
+size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
+                        std::shared_ptr<dds::Participant> participant, const StopFlagPtr& stop) {
   switch (kind) {
     case ComponentKind::kPlayer: {
       PlayerOptions p;
@@ -184,19 +185,19 @@ void RunComponentKind(ComponentKind kind, const PipelineOptions& options,
         }
       }
       RunPlayer(participant, p, stop);
-      return;
+      return 0;
     }
     case ComponentKind::kDetector:
       RunDetector(participant, DetectorOptionsFor(options), stop);
-      return;
+      return 0;
     case ComponentKind::kSlam: {
       SlamComponentOptions s;
       s.system = options.system;
       s.external_detections = options.run_detector;
       s.detection_wait = options.detection_wait;
       s.save_map = options.save_map;
-      RunSlam(participant, s, stop);
-      return;
+      const SlamStats stats = RunSlam(participant, s, stop);
+      return stats.foreign_frames + stats.foreign_detections;
     }
     case ComponentKind::kMapper: {
       MapperOptions m;
@@ -205,16 +206,14 @@ void RunComponentKind(ComponentKind kind, const PipelineOptions& options,
       m.flush_timeout_s = options.flush_timeout_s;
       m.octomap = options.octomap;
       fs::create_directories(options.output_dir);
-      RunMapper(participant, m, stop);
-      return;
+      return RunMapper(participant, m, stop).foreign_samples;
     }
     case ComponentKind::kRecorder: {
       RecorderOptions r;
       r.output_dir = options.output_dir;
       r.flush_timeout_s = options.flush_timeout_s;
       r.progress = options.progress;
-      RunRecorder(participant, r, stop);
-      return;
+      return RunRecorder(participant, r, stop).foreign_samples;
     }
     case ComponentKind::kRos2Bridge:
       break;
@@ -227,9 +226,11 @@ void RunComponentKind(ComponentKind kind, const PipelineOptions& options,
 // (its peers react: slam finishes when the frame source failed, mapper and recorder write what
 // they have when slam failed) and the error goes on to the caller.
 int RunComponentOn(ComponentKind kind, const PipelineOptions& options,
-                   std::shared_ptr<dds::Participant> participant, const StopFlagPtr& stop) {
+                   std::shared_ptr<dds::Participant> participant, const StopFlagPtr& stop,
+                   size_t* ignored_samples = nullptr) {
   try {
-    RunComponentKind(kind, options, participant, stop);
+    const size_t ignored = RunComponentKind(kind, options, participant, stop);
+    if (ignored_samples != nullptr) *ignored_samples += ignored;
   } catch (const std::exception& e) {
     try {
       dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
@@ -274,7 +275,8 @@ std::shared_ptr<dds::Participant> MakeParticipant(const PipelineOptions& options
   return dds::Participant::Create(p);
 }
 
-int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop) {
+int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop,
+                     size_t* ignored_samples) {
   auto participant = MakeParticipant(options, "pipeline");
   std::map<ComponentKind, int> codes;
   std::mutex mutex;
@@ -282,14 +284,16 @@ int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop) {
   for (const ComponentKind kind : PipelineComponents(options)) {
     threads.emplace_back([&, kind] {
       int code = 1;
+      size_t ignored = 0;
       try {
-        code = RunComponentOn(kind, options, participant, stop);
+        code = RunComponentOn(kind, options, participant, stop, &ignored);
       } catch (const std::exception& e) {
         LOG_ERROR << ToString(kind) << ": " << e.what();
         stop->Request();  // one component failed: stop the others (they flush)
       }
       std::lock_guard<std::mutex> lock(mutex);
       codes[kind] = code;
+      *ignored_samples += ignored;
     });
   }
   for (std::thread& t : threads) t.join();
@@ -418,12 +422,16 @@ int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
   options.wait_for_components = true;
   fs::create_directories(options.output_dir);
   auto stop = std::make_shared<StopFlag>(StopFlag::Signals::kStop);
-  const int code =
-      options.processes ? RunProcesses(options, stop) : RunSingleProcess(options, stop);
+  size_t ignored_samples = 0;
+  const int code = options.processes ? RunProcesses(options, stop)
+                                     : RunSingleProcess(options, stop, &ignored_samples);
   if (const int sig = stop->signal(); sig != 0) {
     LOG_INFO << "stopped by signal " << sig << "; outputs flushed";
   }
-  if (report != nullptr) report->signaled = stop->signal() != 0;
+  if (report != nullptr) {
+    report->signaled = stop->signal() != 0;
+    report->ignored_samples = ignored_samples;
+  }
   return code;
 }
 

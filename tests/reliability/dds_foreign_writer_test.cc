@@ -166,6 +166,8 @@ TEST(DdsForeignWriter, RunIgnoresAndCountsSamplesOfOtherParticipants) {
   EXPECT_GT(std::stol(m[1]), 0) << log;
   EXPECT_GT(std::stol(m[2]), 0) << log;
   EXPECT_NE(log.find("slam: 60 frames"), std::string::npos) << log;
+  // And the run's summary (stdout) says it.
+  EXPECT_NE(ReadAll(dir + "/stdout.txt").find("dds: ignored"), std::string::npos) << log;
   EXPECT_NE(log.find("outside this run"), std::string::npos) << log;
 }
 

@@ -235,8 +235,12 @@ int RunComponentOn(ComponentKind kind, const PipelineOptions& options,
     try {
       dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
                                                       dds::TopicKind::kStreamStatus);
+      // A component that fails at start fails before discovery is done: give the peers' status
+      // readers a moment to match (bounded), then wait until they have the announcement.
+      status.WaitForReaders(1, std::chrono::seconds(3));
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
       status.Write(ToMsg(ComponentStatus::Failed(kind, e.what())));
-      status.WaitForAcknowledgments(std::chrono::milliseconds(500));
+      status.WaitForAcknowledgments(std::chrono::milliseconds(2000));
     } catch (const std::exception&) {
       // The announcement is a courtesy; the error itself is what matters.
     }

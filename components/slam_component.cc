@@ -129,9 +129,10 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   Clock::time_point last_frame_time = Clock::now();
   int detector_writers_seen = 0;
   std::map<int64_t, double> inference_ms;  // detector component's time per frame stamp (ns)
-  bool detector_done = false;  // the detector announced COMPONENT_DONE (finished, not lost)
-  bool carrying = false;       // the previous frame ran with boxes carried forward (log once)
-  bool geometry_only = false;  // the previous frame ran without any boxes (log once)
+  bool detector_done = false;    // the detector announced COMPONENT_DONE (finished, not lost)
+  bool detector_failed = false;  // the detector announced FAILED: no detections will come
+  bool carrying = false;         // the previous frame ran with boxes carried forward (log once)
+  bool geometry_only = false;    // the previous frame ran without any boxes (log once)
 
   dds::Writer<msg::CameraPosePubSubType> pose_writer(participant, dds::topics::kCameraPose,
                                                      dds::TopicKind::kCameraPose);
@@ -235,6 +236,10 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
           if (s.event == StreamEvent::kComponentDone && s.source == ComponentKind::kDetector) {
             detector_done = true;
           }
+          if (s.event == StreamEvent::kFailed && s.source == ComponentKind::kDetector) {
+            LOG_WARNING << "slam: the detector failed: " << s.reason;
+            detector_failed = true;
+          }
           if (s.event == StreamEvent::kStarted) release_held();
         }
         cv.notify_all();
@@ -285,7 +290,10 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
       // Detector liveness from the matched writers of the detections topic.
       const int writers = detections.matched();
       if (writers > 0) detector_writers_seen = writers;
-      pairer.SetDetectorAlive(detector_done || !(detector_writers_seen > 0 && writers == 0));
+      // A detector that announced FAILED is gone even if it never matched (e.g. no model): in
+      // --deterministic mode slam would otherwise wait for its detections forever.
+      pairer.SetDetectorAlive(!detector_failed &&
+                              (detector_done || !(detector_writers_seen > 0 && writers == 0)));
       paired = pairer.Next(Clock::now());
       if (!paired) {
         if (stats.frames_processed > 0 && !waiting) {

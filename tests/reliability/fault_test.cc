@@ -186,6 +186,28 @@ TEST_F(Faults, DetectorKilledAndRestartedIsUsedAgain) {
   EXPECT_GT(ReadTumTrajectory(tmp + "/out/trajectory.txt").size(), 280u);
 }
 
+// A detector that fails at start (no models) in `dygslam run --processes --deterministic`: it
+// announces FAILED and slam stops waiting for its detections (geometry-only) instead of waiting
+// for them forever (before: the run hung; found while measuring this branch).
+TEST_F(Faults, DetectorFailingAtStartDoesNotHangADeterministicRun) {
+  const std::string tmp = testing::MakeTempDir("fault_detector_fails");
+  const std::string no_models = tmp + "/no_models";
+  fs::create_directories(no_models);
+  const std::vector<std::string> args = {
+      "run",      dataset_,   "--config", Config(), "--out",           tmp + "/out",
+      "--frames", "0:30",     "--filter", "full",   "--deterministic", "--processes",
+      "--quiet",  "--domain", "125"};
+  ::setenv("DYGSLAM_MODELS_DIR", no_models.c_str(), 1);
+  const pid_t run = Spawn(args, tmp + "/run.log");
+  ::unsetenv("DYGSLAM_MODELS_DIR");
+  const int code = Wait(run, 90.0);
+  const std::string log = ReadAll(tmp + "/run.log");
+  EXPECT_EQ(code, 0) << "a failed detector does not fail the run\n" << log;
+  EXPECT_NE(log.find("slam: the detector failed"), std::string::npos) << log;
+  EXPECT_NE(log.find("slam: 30 frames"), std::string::npos) << log;
+  EXPECT_GT(ReadTumTrajectory(tmp + "/out/trajectory.txt").size(), 20u) << log;
+}
+
 // True once process PID catches `sig` (its handler is installed), within 20 s.
 bool WaitUntilCatches(pid_t pid, int sig) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);

@@ -81,6 +81,7 @@ struct RunOutcome {
   std::map<std::string, size_t> states;  // frames per tracking state (frames.csv `state`)
   bool interrupted = false;
   int exit_code = 0;
+  size_t ignored_samples = 0;  // DDS: samples of writers outside this run (components/protocol.h)
 };
 
 RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
@@ -224,6 +225,7 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
   StopReport report;
   outcome.exit_code = RunPipeline(o, &report);
   outcome.interrupted = report.signaled;
+  outcome.ignored_samples = report.ignored_samples;
   if (fs::exists(s.out / "frames.csv")) {
     for (const TextLine& line : ReadDataLines((s.out / "frames.csv").string())) {
       if (line.tokens.size() < 2 || line.tokens[0] == "stamp") continue;
@@ -478,6 +480,12 @@ int RunRun(const std::vector<std::string>& args) {
     std::printf("ATE: not evaluated (%s: see the warning above)\n",
                 dataset.groundtruth_path().c_str());
   }
+#ifdef DYGSLAM_HAVE_COMPONENTS
+  if (outcome.ignored_samples > 0) {
+    std::printf("dds: %s\n",
+                IgnoredSamplesNote(std::to_string(outcome.ignored_samples) + " samples").c_str());
+  }
+#endif
   const bool has_map = fs::exists(s.out / "map.bt");
   std::printf("outputs: %s/{trajectory.txt,trajectory_online.txt,keyframes.txt,frames.csv%s}\n",
               s.out.string().c_str(), has_map ? ",map.bt" : "");

@@ -526,6 +526,9 @@ struct RosBridge::Impl {
           p, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame);
       status_writer = std::make_unique<dds::Writer<msg::StreamStatusPubSubType>>(
           p, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus);
+      // slam takes frames only from announced writers (components/protocol.h).
+      status_writer->Write(ToMsg(ComponentStatus::Started(
+          ComponentKind::kRos2Bridge, {{DataTopic::kFrames, frame_writer->guid()}})));
     }
     if (o.outbound) {
       pose_writer = std::make_unique<RosWriter<geometry_msgs::msg::PoseStampedPubSubType>>(
@@ -559,7 +562,7 @@ struct RosBridge::Impl {
         p, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
         [this](msg::StreamStatus&& s) {
           std::lock_guard<std::mutex> lock(mutex);
-          if (s.kind() == static_cast<uint8_t>(StreamEvent::kStarted)) started.insert(s.source());
+          if (s.kind() == static_cast<uint8_t>(StreamEvent::kReady)) started.insert(s.source());
           if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone)) {
             if (s.source() == "slam") slam_done = true;
             if (s.source() == "mapper") mapper_done = true;

@@ -1,5 +1,6 @@
-// Pieces shared by the component shells: the stop flag (core/base), stream-status kinds, a small
-// blocking queue. No DDS types here.
+// Pieces shared by the component shells: the stop flag (core/base), the protocol
+// (components/protocol.h: component kinds, typed status, writer ownership), a small blocking queue.
+// No DDS entities here.
 #pragma once
 
 #include <chrono>
@@ -9,24 +10,10 @@
 #include <mutex>
 #include <optional>
 
+#include "components/protocol.h"
 #include "core/base/stop_signal.h"
 
 namespace dygslam {
-
-// The components' stop flag is core/base's StopFlag. The old names stay for the slam and mapper
-// components' files (changed on other branches); new code says StopFlag / StopFlagPtr.
-using StopSignal = StopFlag;
-using StopSignalPtr = StopFlagPtr;
-
-// msg::StreamStatus::kind values.
-// kMapLoaded (slam, issue 15): the SLAM map file it started from; num_frames = its keyframe
-// count, header.frame_id = "map <checksum hex> <path>".
-enum class StreamEvent : uint8_t {
-  kStarted = 0,
-  kEndOfStream = 1,
-  kComponentDone = 2,
-  kMapLoaded = 3
-};
 
 // Unbounded FIFO for handing samples from a DDS listener thread to a worker thread.
 template <class T>

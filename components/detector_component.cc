@@ -5,7 +5,6 @@
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
-#include "components/stream_status.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "dygslam_msg/DetectionsPubSubTypes.h"
@@ -42,21 +41,30 @@ DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
       [&](msg::RgbdFrame&& frame) { queue.Push(std::move(frame)); });
   dds::Reader<msg::StreamStatusPubSubType> status_reader(
       participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
-      [&](msg::StreamStatus&& s) {
-        if (s.kind() == static_cast<uint8_t>(StreamEvent::kEndOfStream)) {
+      [&](msg::StreamStatus&& m) {
+        ComponentStatus s;
+        try {
+          s = StatusFromMsg(m);
+        } catch (const InputError& e) {
+          LOG_WARNING << "detector: ignored status: " << e.what();
+          return;
+        }
+        if (s.event == StreamEvent::kEndOfStream && IsFrameSource(s.source)) {
           std::lock_guard<std::mutex> lock(mutex);
-          end_frames = StreamFrameCountFromMsg(s);
+          end_frames = StreamFrameCountFromMsg(m);
           if (end_frames == std::numeric_limits<int64_t>::max()) {
-            LOG_WARNING << "detector: END_OF_STREAM announces " << s.num_frames()
+            LOG_WARNING << "detector: END_OF_STREAM announces " << m.num_frames()
                         << " frames; finishing when the stream goes idle";
           }
         }
       });
+  status.Write(ToMsg(ComponentStatus::Started(ComponentKind::kDetector,
+                                              {{DataTopic::kDetections, writer.guid()}})));
 
   double total_ms = 0;
   size_t received = 0;
   auto idle_since = std::chrono::steady_clock::now();
-  StartAnnouncer announcer("detector");
+  ReadyAnnouncer announcer(ComponentKind::kDetector);
   while (!stop->requested()) {
     announcer.Poll(status, frames.matched() > 0 && writer.matched() > 0);
     std::optional<msg::RgbdFrame> sample = queue.Pop(std::chrono::milliseconds(20));
@@ -84,11 +92,7 @@ DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
     }
   }
   if (stats.frames_processed > 0) stats.mean_inference_ms = total_ms / stats.frames_processed;
-  msg::StreamStatus done;
-  done.kind(static_cast<uint8_t>(StreamEvent::kComponentDone));
-  done.source("detector");
-  done.num_frames(stats.frames_processed);
-  status.Write(done);
+  status.Write(ToMsg(ComponentStatus::Done(ComponentKind::kDetector, stats.frames_processed)));
   writer.WaitForAcknowledgments(std::chrono::milliseconds(2000));
   LOG_INFO << "detector: " << stats.frames_processed << " frames, mean inference "
            << stats.mean_inference_ms << " ms";

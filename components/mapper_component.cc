@@ -8,8 +8,7 @@
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
-#include "components/run_writers.h"
-#include "components/stream_status.h"
+#include "components/protocol.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "dygslam_msg/KeyframePubSubTypes.h"
@@ -99,17 +98,17 @@ void MapperCore::WriteFull() {
 }
 
 MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const MapperOptions& options,
-                      const StopSignalPtr& stop) {
+                      const StopFlagPtr& stop) {
   MapperCore core(options);
   MapperStats stats;
   BlockingQueue<std::pair<msg::Keyframe, WriterGuid>> queue;
   std::mutex mutex;
   bool slam_done = false;
-  // Only keyframes of the participant that announced "slam" (components/run_writers.h); the ones
-  // that arrive before the announcement wait for it.
-  RunWriters writers;
-  std::deque<std::pair<msg::Keyframe, WriterGuid>> waiting;
-  constexpr size_t kMaxWaiting = 256;
+  // Only keyframes of the writers announced by this run's slam (components/protocol.h); the ones
+  // that arrive before the announcement wait for it (bounded).
+  RunWriters writers;  // guarded by mutex
+  WriterGate<msg::Keyframe> gate(&writers, DataTopic::kKeyframe, 256, std::chrono::seconds(5));
+  std::deque<msg::Keyframe> admitted;  // guarded by mutex, in writer order
 
   dds::Writer<msg::MapUpdatePubSubType> updates(participant, dds::topics::kMapUpdate,
                                                 dds::TopicKind::kMapUpdate);
@@ -122,14 +121,23 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
                                                  });
   dds::Reader<msg::StreamStatusPubSubType> status_reader(
       participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
-      [&](msg::StreamStatus&& s, const WriterGuid& writer) {
+      [&](msg::StreamStatus&& m) {
+        ComponentStatus s;
+        try {
+          s = StatusFromMsg(m);
+        } catch (const InputError& e) {
+          LOG_WARNING << "mapper: ignored status: " << e.what();
+          return;
+        }
         std::lock_guard<std::mutex> lock(mutex);
-        writers.Announce(s.source(), writer);
-        if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone) && s.source() == "slam" &&
-            writers.Check("slam", writer) == RunWriters::Verdict::kAccept) {
+        writers.Announce(s);
+        if (s.source == ComponentKind::kSlam &&
+            (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed)) {
           slam_done = true;
         }
       });
+  status.Write(ToMsg(
+      ComponentStatus::Started(ComponentKind::kMapper, {{DataTopic::kMapUpdate, updates.guid()}})));
 
   using Clock = std::chrono::steady_clock;
   std::optional<Clock::time_point> next_update_allowed;
@@ -146,11 +154,13 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
   };
 
   size_t since_update = 0;
-  int idle_after_done = 0;
+  // Since when no keyframe of this run arrived after slam's DONE (counting = true).
+  bool idle_counting = false;
+  Clock::time_point idle_since;
   bool writer_seen = false;
   std::optional<std::chrono::steady_clock::time_point> writer_gone_since;
   std::optional<std::chrono::steady_clock::time_point> flush_deadline;
-  StartAnnouncer announcer("mapper");
+  ReadyAnnouncer announcer(ComponentKind::kMapper);
   while (true) {
     announcer.Poll(status, keyframes.matched() > 0);
     if (stop->requested() && !flush_deadline) {
@@ -169,43 +179,30 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
     }
     std::optional<msg::Keyframe> sample;
     {
-      // A keyframe that waited for slam's announcement first, then the queue.
-      std::lock_guard<std::mutex> lock(mutex);
-      if (!waiting.empty() && writers.Known("slam")) {
-        auto [k, writer] = std::move(waiting.front());
-        waiting.pop_front();
-        if (writers.Check("slam", writer) == RunWriters::Verdict::kAccept) {
-          sample = std::move(k);
-        } else {
-          ++stats.foreign_samples;
+      // Received keyframes pass the gate; admitted ones are used in order.
+      std::optional<std::pair<msg::Keyframe, WriterGuid>> received;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (admitted.empty()) {
+          std::vector<msg::Keyframe> ready;
+          gate.Release(Clock::now(), &ready);  // announced meanwhile, or expired
+          admitted.insert(admitted.end(), std::make_move_iterator(ready.begin()),
+                          std::make_move_iterator(ready.end()));
         }
       }
-    }
-    if (!sample) {
-      std::optional<std::pair<msg::Keyframe, WriterGuid>> received =
-          queue.Pop(std::chrono::milliseconds(waiting.empty() ? 50 : 5));
-      if (received) {
+      if (!admitted.empty() ||
+          (received = queue.Pop(std::chrono::milliseconds(gate.held() > 0 ? 5 : 50)))) {
         std::lock_guard<std::mutex> lock(mutex);
-        switch (writers.Check("slam", received->second)) {
-          case RunWriters::Verdict::kAccept:
-            if (waiting.empty()) {
-              sample = std::move(received->first);
-            } else {
-              waiting.push_back(std::move(*received));  // keep slam's order
-            }
-            break;
-          case RunWriters::Verdict::kWait:
-            if (waiting.size() < kMaxWaiting) {
-              waiting.push_back(std::move(*received));
-            } else {
-              ++stats.foreign_samples;
-            }
-            break;
-          case RunWriters::Verdict::kReject:
-            ++stats.foreign_samples;
-            break;
+        if (received) {
+          std::vector<msg::Keyframe> ready;
+          gate.Offer(std::move(received->first), received->second, Clock::now(), &ready);
+          admitted.insert(admitted.end(), std::make_move_iterator(ready.begin()),
+                          std::make_move_iterator(ready.end()));
         }
-        if (!sample) continue;
+        if (!admitted.empty()) {
+          sample = std::move(admitted.front());
+          admitted.pop_front();
+        }  // else held until its writer is announced (or ignored): idle for what follows
       }
     }
     if (!sample) {
@@ -218,15 +215,20 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
       }
       std::lock_guard<std::mutex> lock(mutex);
       // slam's DONE is written after its last keyframe (and after waiting for acknowledgements);
-      // order is only kept per writer, so allow a short grace period (6 x 50 ms) after DONE.
-      if (slam_done && ++idle_after_done >= 6) break;
+      // order is only kept per writer, so allow a short grace period (300 ms without a keyframe
+      // of this run) after DONE.
+      if (slam_done && !idle_counting) {
+        idle_counting = true;
+        idle_since = Clock::now();
+      }
+      if (idle_counting && Clock::now() - idle_since > std::chrono::milliseconds(300)) break;
       if (flush_deadline &&
           (std::chrono::steady_clock::now() >= *flush_deadline || keyframes.matched() == 0)) {
         break;
       }
       continue;
     }
-    idle_after_done = 0;
+    idle_counting = false;
     try {
       PinholeCamera camera;
       const KeyframeData k = KeyframeFromMsg(*sample, &camera);
@@ -244,20 +246,18 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
       LOG_WARNING << "mapper: dropped keyframe " << sample->id() << ": " << e.what();
     }
   }
-  stats.foreign_samples += waiting.size();  // their writer never announced itself
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    gate.Close();  // their writer never announced itself
+    stats.foreign_samples = gate.ignored();
+  }
   if (stats.foreign_samples > 0) {
-    LOG_WARNING << "mapper: ignored " << stats.foreign_samples
-                << " keyframes from writers outside this run (another process on the DDS domain "
-                   "published into it; without --security any local process can: see README, DDS "
-                   "components)";
+    LOG_WARNING << "mapper: "
+                << IgnoredSamplesNote(std::to_string(stats.foreign_samples) + " keyframes");
   }
   publish();
   if (core.has_map()) core.WriteFull();
-  msg::StreamStatus done;
-  done.kind(static_cast<uint8_t>(StreamEvent::kComponentDone));
-  done.source("mapper");
-  done.num_frames(core.num_keyframes());
-  status.Write(done);
+  status.Write(ToMsg(ComponentStatus::Done(ComponentKind::kMapper, core.num_keyframes())));
   updates.WaitForAcknowledgments(std::chrono::milliseconds(3000));
   status.WaitForAcknowledgments(std::chrono::milliseconds(2000));
   LOG_INFO << "mapper: " << stats.keyframes_received << " keyframe messages ("

@@ -86,6 +86,6 @@ struct MapperStats {
 };
 
 MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const MapperOptions& options,
-                      const StopSignalPtr& stop);
+                      const StopFlagPtr& stop);
 
 }  // namespace dygslam

@@ -18,6 +18,7 @@
 #include <thread>
 
 #include "components/dds/participant.h"
+#include "components/dds/pubsub.h"
 #include "components/dds/qos.h"
 #include "components/detector_component.h"
 #include "components/mapper_component.h"
@@ -27,6 +28,7 @@
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "core/base/stop_signal.h"
+#include "dygslam_msg/StreamStatusPubSubTypes.h"
 
 namespace dygslam {
 
@@ -152,74 +154,111 @@ std::vector<std::string> ComponentArgs(const PipelineOptions& o) {
 
 namespace {
 
-std::vector<std::string> ComponentNames(const PipelineOptions& options) {
+std::vector<ComponentKind> PipelineComponents(const PipelineOptions& options) {
   // Consumers first, the player last.
-  std::vector<std::string> names = {"recorder"};
-  if (options.run_mapper) names.push_back("mapper");
-  names.push_back("slam");
-  if (options.NeedsDetectorComponent()) names.push_back("detector");
-  names.push_back("player");
-  return names;
+  std::vector<ComponentKind> kinds = {ComponentKind::kRecorder};
+  if (options.run_mapper) kinds.push_back(ComponentKind::kMapper);
+  kinds.push_back(ComponentKind::kSlam);
+  if (options.NeedsDetectorComponent()) kinds.push_back(ComponentKind::kDetector);
+  kinds.push_back(ComponentKind::kPlayer);
+  return kinds;
 }
 
-int RunComponentOn(const std::string& name, const PipelineOptions& options,
-                   std::shared_ptr<dds::Participant> participant, const StopFlagPtr& stop) {
-  if (name == "player") {
-    PlayerOptions p;
-    p.dataset_dir = options.dataset_dir;
-    p.camera = options.system.camera;
-    p.depth_scale = options.system.sensor.depth_map_factor;
-    p.rate = options.rate;
-    p.first_entry = options.first_entry;
-    p.last_entry = options.last_entry;
-    p.window = options.window;
-    p.loop_minutes = options.loop_minutes;
-    p.expected_readers = options.NeedsDetectorComponent() ? 2 : 1;
-    if (options.wait_for_components) {
-      for (const std::string& component : ComponentNames(options)) {
-        if (component != "player") p.wait_for_components.push_back(component);
+// Returns the samples the component ignored (writers outside this run).
+size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
+                        std::shared_ptr<dds::Participant> participant, const StopFlagPtr& stop) {
+  switch (kind) {
+    case ComponentKind::kPlayer: {
+      PlayerOptions p;
+      p.dataset_dir = options.dataset_dir;
+      p.camera = options.system.camera;
+      p.depth_scale = options.system.sensor.depth_map_factor;
+      p.rate = options.rate;
+      p.first_entry = options.first_entry;
+      p.last_entry = options.last_entry;
+      p.window = options.window;
+      p.loop_minutes = options.loop_minutes;
+      p.expected_readers = options.NeedsDetectorComponent() ? 2 : 1;
+      if (options.wait_for_components) {
+        for (const ComponentKind component : PipelineComponents(options)) {
+          if (component != ComponentKind::kPlayer) p.wait_for_components.push_back(component);
+        }
       }
+      RunPlayer(participant, p, stop);
+      return 0;
     }
-    RunPlayer(participant, p, stop);
-    return 0;
+    case ComponentKind::kDetector:
+      RunDetector(participant, DetectorOptionsFor(options), stop);
+      return 0;
+    case ComponentKind::kSlam: {
+      SlamComponentOptions s;
+      s.system = options.system;
+      s.external_detections = options.run_detector;
+      s.detection_wait = options.detection_wait;
+      s.save_map = options.save_map;
+      const SlamStats stats = RunSlam(participant, s, stop);
+      return stats.foreign_frames + stats.foreign_detections;
+    }
+    case ComponentKind::kMapper: {
+      MapperOptions m;
+      m.map_path = (fs::path(options.output_dir) / "map.bt").string();
+      m.base_map_path = options.load_octomap;
+      // With --save-map the OctoMap with probabilities too, what --load-octomap continues (as the
+      // direct mode writes it).
+      if (!options.save_map.empty())
+        m.full_map_path = (fs::path(options.output_dir) / "map.ot").string();
+      m.flush_timeout_s = options.flush_timeout_s;
+      m.octomap = options.octomap;
+      fs::create_directories(options.output_dir);
+      return RunMapper(participant, m, stop).foreign_samples;
+    }
+    case ComponentKind::kRecorder: {
+      RecorderOptions r;
+      r.output_dir = options.output_dir;
+      r.flush_timeout_s = options.flush_timeout_s;
+      r.progress = options.progress;
+      return RunRecorder(participant, r, stop).foreign_samples;
+    }
+    case ComponentKind::kRos2Bridge:
+      break;
   }
-  if (name == "detector") {
-    RunDetector(participant, DetectorOptionsFor(options), stop);
-    return 0;
+  throw InvalidOptions(std::string("component '") + ToString(kind) +
+                       "' is not run by the pipeline (" + PipelineComponentNames() + ")");
+}
+
+// Runs component `kind`; one that fails announces FAILED with the reason on the status topic
+// (its peers react: slam finishes when the frame source failed, mapper and recorder write what
+// they have when slam failed) and the error goes on to the caller.
+int RunComponentOn(ComponentKind kind, const PipelineOptions& options,
+                   std::shared_ptr<dds::Participant> participant, const StopFlagPtr& stop,
+                   size_t* ignored_samples = nullptr) {
+  try {
+    const size_t ignored = RunComponentKind(kind, options, participant, stop);
+    if (ignored_samples != nullptr) *ignored_samples += ignored;
+  } catch (const std::exception& e) {
+    try {
+      dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
+                                                      dds::TopicKind::kStreamStatus);
+      // A component that fails at start fails before discovery is done: give the peers' status
+      // readers a moment to match (bounded), then wait until they have the announcement.
+      status.WaitForReaders(1, std::chrono::seconds(3));
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+      status.Write(ToMsg(ComponentStatus::Failed(kind, e.what())));
+      status.WaitForAcknowledgments(std::chrono::milliseconds(2000));
+    } catch (const std::exception&) {
+      // The announcement is a courtesy; the error itself is what matters.
+    }
+    throw;
   }
-  if (name == "slam") {
-    SlamComponentOptions s;
-    s.system = options.system;
-    s.external_detections = options.run_detector;
-    s.detection_wait = options.detection_wait;
-    s.save_map = options.save_map;
-    RunSlam(participant, s, stop);
-    return 0;
+  return 0;
+}
+
+ComponentKind ComponentKindOrThrow(const std::string& name) {
+  const auto kind = ComponentKindFromName(name);
+  if (!kind || *kind == ComponentKind::kRos2Bridge) {
+    throw InvalidOptions("unknown component '" + name + "' (" + PipelineComponentNames() + ")");
   }
-  if (name == "mapper") {
-    MapperOptions m;
-    m.map_path = (fs::path(options.output_dir) / "map.bt").string();
-    m.base_map_path = options.load_octomap;
-    // With --save-map the OctoMap with probabilities too, what --load-octomap continues (as the
-    // direct mode writes it).
-    if (!options.save_map.empty())
-      m.full_map_path = (fs::path(options.output_dir) / "map.ot").string();
-    m.flush_timeout_s = options.flush_timeout_s;
-    m.octomap = options.octomap;
-    fs::create_directories(options.output_dir);
-    RunMapper(participant, m, stop);
-    return 0;
-  }
-  if (name == "recorder") {
-    RecorderOptions r;
-    r.output_dir = options.output_dir;
-    r.flush_timeout_s = options.flush_timeout_s;
-    r.progress = options.progress;
-    RunRecorder(participant, r, stop);
-    return 0;
-  }
-  throw InvalidOptions("unknown component '" + name +
-                       "' (player | detector | slam | mapper | recorder)");
+  return *kind;
 }
 
 // PipelineOptions::security_dir -> the credentials of component `name`.
@@ -244,27 +283,30 @@ std::shared_ptr<dds::Participant> MakeParticipant(const PipelineOptions& options
   return dds::Participant::Create(p);
 }
 
-int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop) {
+int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop,
+                     size_t* ignored_samples) {
   auto participant = MakeParticipant(options, "pipeline");
-  std::map<std::string, int> codes;
+  std::map<ComponentKind, int> codes;
   std::mutex mutex;
   std::vector<std::thread> threads;
-  for (const std::string& name : ComponentNames(options)) {
-    threads.emplace_back([&, name] {
+  for (const ComponentKind kind : PipelineComponents(options)) {
+    threads.emplace_back([&, kind] {
       int code = 1;
+      size_t ignored = 0;
       try {
-        code = RunComponentOn(name, options, participant, stop);
+        code = RunComponentOn(kind, options, participant, stop, &ignored);
       } catch (const std::exception& e) {
-        LOG_ERROR << name << ": " << e.what();
+        LOG_ERROR << ToString(kind) << ": " << e.what();
         stop->Request();  // one component failed: stop the others (they flush)
       }
       std::lock_guard<std::mutex> lock(mutex);
-      codes[name] = code;
+      codes[kind] = code;
+      *ignored_samples += ignored;
     });
   }
   for (std::thread& t : threads) t.join();
   int result = 0;
-  for (const auto& [name, code] : codes) {
+  for (const auto& [kind, code] : codes) {
     if (code != 0) result = 1;
   }
   return result;
@@ -273,11 +315,12 @@ int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop) {
 // True when child PID runs the component (exec done: between fork and exec it still carries the
 // runner's handlers, and a signal it takes there is lost) and /proc/PID/status lists `sig` among
 // the signals it catches (SigCgt: its main() has installed the handler).
-bool ComponentCatchesSignal(pid_t pid, const std::string& component, int sig) {
+bool ComponentCatchesSignal(pid_t pid, ComponentKind component, int sig) {
   std::ifstream cmdline_file("/proc/" + std::to_string(pid) + "/cmdline");
   const std::string cmdline((std::istreambuf_iterator<char>(cmdline_file)),
                             std::istreambuf_iterator<char>());
-  if (cmdline.find(std::string("component") + '\0' + component + '\0') == std::string::npos)
+  if (cmdline.find(std::string("component") + '\0' + ToString(component) + '\0') ==
+      std::string::npos)
     return false;
   return ProcessCatchesSignal(pid, sig);
 }
@@ -286,9 +329,9 @@ int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop) {
   const std::string exe =
       options.executable.empty() ? fs::read_symlink("/proc/self/exe").string() : options.executable;
   const std::vector<std::string> args = ComponentArgs(options);
-  std::map<pid_t, std::string> children;
-  for (const std::string& name : ComponentNames(options)) {
-    std::vector<std::string> argv = {exe, "component", name};
+  std::map<pid_t, ComponentKind> children;
+  for (const ComponentKind kind : PipelineComponents(options)) {
+    std::vector<std::string> argv = {exe, "component", ToString(kind)};
     argv.insert(argv.end(), args.begin(), args.end());
     std::vector<char*> cargv;
     for (std::string& s : argv) cargv.push_back(s.data());
@@ -299,19 +342,21 @@ int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop) {
       execv(exe.c_str(), cargv.data());
       std::_Exit(127);
     }
-    children[pid] = name;
-    LOG_INFO << "started component " << name << " (pid " << pid << ")";
+    children[pid] = kind;
+    LOG_INFO << "started component " << ToString(kind) << " (pid " << pid << ")";
   }
   int result = 0;
   bool forwarded = false;
   std::set<pid_t> signalled;
   auto stop_time = std::chrono::steady_clock::time_point::max();
-  bool slam_or_recorder_failed = false;
+  bool run_failed = false;
   while (!children.empty()) {
     int status = 0;
     const pid_t pid = waitpid(-1, &status, WNOHANG);
     if (pid > 0) {
-      const std::string name = children.count(pid) ? children[pid] : "?";
+      if (children.count(pid) == 0) continue;  // not one of ours
+      const ComponentKind kind = children[pid];
+      const char* name = ToString(kind);
       children.erase(pid);
       const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
       // After the outputs are written the runner stops the others with SIGTERM; a component that
@@ -324,20 +369,19 @@ int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop) {
         LOG_WARNING << "component " << name << " (pid " << pid << ") "
                     << (WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
                                             : "exited with " + std::to_string(WEXITSTATUS(status)));
-        if (name == "slam" || name == "recorder" || name == "mapper" || name == "player")
-          slam_or_recorder_failed = true;
+        if (FailureFailsRun(kind)) run_failed = true;
         // Without the frame source or slam nothing can go on: stop the others now (they flush
         // what they have) instead of waiting for an end of stream that never comes. A failed
         // detector is not a reason to stop: slam carries boxes forward / goes geometry-only.
-        if ((name == "player" || name == "slam") && !forwarded) {
+        if (FailureStopsPipeline(kind) && !forwarded) {
           LOG_ERROR << "a pipeline component failed (" << name << "); stopping the others";
           stop->Request();
         }
       }
       // The run is over when the recorder (and mapper) have written their outputs.
       bool outputs_done = true;
-      for (const auto& [p, n] : children) {
-        if (n == "recorder" || n == "mapper") outputs_done = false;
+      for (const auto& [p, k] : children) {
+        if (WritesOutputs(k)) outputs_done = false;
       }
       if (outputs_done && !forwarded) {
         stop->Request();
@@ -359,14 +403,14 @@ int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop) {
     }
     if (forwarded && std::chrono::steady_clock::now() - stop_time > std::chrono::seconds(30)) {
       for (const auto& [p, n] : children) {
-        LOG_WARNING << "component " << n << " did not stop; killing it";
+        LOG_WARNING << "component " << ToString(n) << " did not stop; killing it";
         kill(p, SIGKILL);
       }
       stop_time = std::chrono::steady_clock::time_point::max();
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  if (slam_or_recorder_failed) result = 1;
+  if (run_failed) result = 1;
   return result;
 }
 
@@ -375,7 +419,8 @@ int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop) {
 int RunComponent(const std::string& name, const PipelineOptions& options, const StopFlagPtr& stop) {
   options.Check();
   BoundMallocArenas();
-  return RunComponentOn(name, options, MakeParticipant(options, name), stop);
+  const ComponentKind kind = ComponentKindOrThrow(name);
+  return RunComponentOn(kind, options, MakeParticipant(options, name), stop);
 }
 
 int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
@@ -385,12 +430,16 @@ int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
   options.wait_for_components = true;
   fs::create_directories(options.output_dir);
   auto stop = std::make_shared<StopFlag>(StopFlag::Signals::kStop);
-  const int code =
-      options.processes ? RunProcesses(options, stop) : RunSingleProcess(options, stop);
+  size_t ignored_samples = 0;
+  const int code = options.processes ? RunProcesses(options, stop)
+                                     : RunSingleProcess(options, stop, &ignored_samples);
   if (const int sig = stop->signal(); sig != 0) {
     LOG_INFO << "stopped by signal " << sig << "; outputs flushed";
   }
-  if (report != nullptr) report->signaled = stop->signal() != 0;
+  if (report != nullptr) {
+    report->signaled = stop->signal() != 0;
+    report->ignored_samples = ignored_samples;
+  }
   return code;
 }
 

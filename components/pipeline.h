@@ -61,7 +61,7 @@ struct PipelineOptions {
   // DDS interfaces / shared memory / discovery server (default: this machine only).
   dds::NetworkOptions network;
   bool progress = false;  // recorder prints a progress line on stderr
-  // The player waits for the STARTED announcement of every other component of this pipeline
+  // The player waits for the READY announcement of every other component of this pipeline
   // (set by RunPipeline; `dygslam component player --wait-for-components` by hand).
   bool wait_for_components = false;
   // On stop: how long mapper and recorder wait for slam's last outputs (seconds).
@@ -81,6 +81,10 @@ int RunComponent(const std::string& name, const PipelineOptions& options, const 
 
 struct StopReport {
   bool signaled = false;  // stopped by SIGINT / SIGTERM (outputs flushed)
+  // Samples of writers no component of this run announced, ignored by slam, recorder and mapper
+  // (components/protocol.h). Single-process mode only: with --processes each component's own
+  // summary line says it.
+  size_t ignored_samples = 0;
 };
 // Runs the whole pipeline until the end of the data or a signal. Returns 0 on success (also when
 // stopped by a signal), 1 if a component failed.

@@ -11,7 +11,6 @@
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
-#include "components/stream_status.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "core/io/trajectory_io.h"
@@ -88,6 +87,32 @@ std::vector<StampedPose> DatasetPlayer::GroundTruth() const {
   return result;
 }
 
+LatencyReservoir::LatencyReservoir(size_t capacity) : capacity_(std::max<size_t>(capacity, 1)) {
+  sample_.reserve(std::min<size_t>(capacity_, 1024));
+}
+
+void LatencyReservoir::Add(double value) {
+  ++count_;
+  if (sample_.size() < capacity_) {
+    sample_.push_back(value);
+    return;
+  }
+  // Algorithm R: the k-th value replaces a random kept one with probability capacity / k.
+  state_ ^= state_ >> 12;
+  state_ ^= state_ << 25;
+  state_ ^= state_ >> 27;
+  const uint64_t r = (state_ * 0x2545f4914f6cdd1dULL) % count_;
+  if (r < capacity_) sample_[r] = value;
+}
+
+double LatencyReservoir::Quantile(double q) const {
+  if (sample_.empty()) return 0;
+  std::vector<double> sorted = sample_;
+  std::sort(sorted.begin(), sorted.end());
+  const size_t index = std::min(sorted.size() - 1, static_cast<size_t>(q * sorted.size() + 1e-9));
+  return sorted[index];
+}
+
 PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const PlayerOptions& options,
                       const StopFlagPtr& stop) {
   using Clock = std::chrono::steady_clock;
@@ -101,10 +126,10 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   int64_t acked = -1;  // highest seq whose pose was received
   // End-to-end latency: when each frame was published, and from it to its pose's arrival here.
   std::map<uint64_t, Clock::time_point> sent;
-  std::vector<double> latency_ms;
+  LatencyReservoir latency_ms;
   std::optional<Clock::time_point> first_sent, last_pose;
   bool slam_done = false;
-  std::set<std::string> started;  // components that announced STARTED
+  std::set<ComponentKind> ready;  // components that announced READY
   dds::Writer<msg::RgbdFramePubSubType> frames(participant, dds::topics::kRgbdFrame,
                                                dds::TopicKind::kRgbdFrame);
   dds::Writer<msg::GroundTruthPosePubSubType> gt_writer(participant, dds::topics::kGroundTruth,
@@ -120,8 +145,7 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
           const auto it = sent.find(pose.header().seq());
           if (it != sent.end()) {
             const auto now = Clock::now();
-            latency_ms.push_back(
-                std::chrono::duration<double, std::milli>(now - it->second).count());
+            latency_ms.Add(std::chrono::duration<double, std::milli>(now - it->second).count());
             last_pose = now;
             sent.erase(sent.begin(), std::next(it));
           }
@@ -130,17 +154,30 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
       });
   dds::Reader<msg::StreamStatusPubSubType> status_reader(
       participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
-      [&](msg::StreamStatus&& s) {
+      [&](msg::StreamStatus&& m) {
+        ComponentStatus s;
+        try {
+          s = StatusFromMsg(m);
+        } catch (const InputError& e) {
+          LOG_WARNING << "player: ignored status: " << e.what();
+          return;
+        }
         {
           std::lock_guard<std::mutex> lock(mutex);
-          if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone) &&
-              s.source() == "slam") {
+          if (s.source == ComponentKind::kSlam &&
+              (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed)) {
             slam_done = true;
           }
-          if (s.kind() == static_cast<uint8_t>(StreamEvent::kStarted)) started.insert(s.source());
+          if (s.event == StreamEvent::kReady) ready.insert(s.source);
         }
         cv.notify_all();
       });
+  // Who we are and which writers are ours (the consumers accept frames and ground truth only
+  // from announced writers; components/protocol.h).
+  status.Write(ToMsg(ComponentStatus::Started(
+      ComponentKind::kPlayer,
+      {{DataTopic::kFrames, frames.guid()}, {DataTopic::kGroundTruth, gt_writer.guid()}},
+      player.num_frames())));
 
   const auto readers_deadline =
       Clock::now() +
@@ -159,8 +196,8 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
     std::unique_lock<std::mutex> lock(mutex);
     auto missing = [&] {
       std::string names;
-      for (const std::string& name : options.wait_for_components) {
-        if (!started.count(name)) names += (names.empty() ? "" : ", ") + name;
+      for (const ComponentKind kind : options.wait_for_components) {
+        if (!ready.count(kind)) names += std::string(names.empty() ? "" : ", ") + ToString(kind);
       }
       return names;
     };
@@ -168,11 +205,10 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
       cv.wait_for(lock, std::chrono::milliseconds(20));
     }
     if (!missing().empty() && !stop->requested()) {
-      LOG_WARNING << "player: no start announcement from " << missing() << " after "
+      LOG_WARNING << "player: no READY announcement from " << missing() << " after "
                   << options.wait_for_components_s << " s; playing anyway";
     }
   }
-  status.Write(MakeStreamStatus(StreamEvent::kStarted, "player", player.num_frames(), 0));
 
   if (options.publish_ground_truth) {
     uint64_t seq = 0;
@@ -234,8 +270,8 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
     ++stats.frames_published;
   }
   const uint64_t last_seq = stats.frames_published == 0 ? 0 : stats.frames_published - 1;
-  status.Write(
-      MakeStreamStatus(StreamEvent::kEndOfStream, "player", stats.frames_published, last_seq));
+  status.Write(ToMsg(
+      ComponentStatus::EndOfStream(ComponentKind::kPlayer, stats.frames_published, last_seq)));
   LOG_INFO << "player: published " << stats.frames_published << " frames, end of stream";
   // Stay alive (frames and ground truth remain available to late readers) until slam is done.
   {
@@ -245,16 +281,12 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   {
     std::lock_guard<std::mutex> lock(mutex);
-    stats.poses_timed = latency_ms.size();
-    if (!latency_ms.empty()) {
-      std::sort(latency_ms.begin(), latency_ms.end());
-      stats.latency_median_ms = latency_ms[latency_ms.size() / 2];
-      stats.latency_p95_ms =
-          latency_ms[std::min(latency_ms.size() - 1, latency_ms.size() * 95 / 100)];
-    }
-    if (first_sent && last_pose && latency_ms.size() > 1) {
-      stats.poses_per_second =
-          (latency_ms.size() - 1) / std::chrono::duration<double>(*last_pose - *first_sent).count();
+    stats.poses_timed = latency_ms.count();
+    stats.latency_median_ms = latency_ms.Quantile(0.5);
+    stats.latency_p95_ms = latency_ms.Quantile(0.95);
+    if (first_sent && last_pose && latency_ms.count() > 1) {
+      stats.poses_per_second = (latency_ms.count() - 1) /
+                               std::chrono::duration<double>(*last_pose - *first_sent).count();
     }
   }
   if (stats.poses_timed > 0) {

@@ -43,10 +43,9 @@ struct PlayerOptions {
   // Wait for at least one frame reader before the first frame (seconds).
   double wait_for_readers_s = 10.0;
   int expected_readers = 1;
-  // Components whose STARTED announcement (StreamStatus, source = name) the player waits for
-  // before the first frame (the pipeline lists the ones it runs), at most
-  // wait_for_components_s seconds.
-  std::vector<std::string> wait_for_components;
+  // Components whose READY announcement (components/protocol.h) the player waits for before the
+  // first frame (the pipeline lists the ones it runs), at most wait_for_components_s seconds.
+  std::vector<ComponentKind> wait_for_components;
   double wait_for_components_s = 60.0;
   bool publish_ground_truth = true;
   // > 0: replay the range again and again until this much wall time has passed (soak runs); each
@@ -70,6 +69,26 @@ class DatasetPlayer {
   PlayerOptions options_;
   RgbdDataset dataset_;
   std::vector<size_t> indices_;  // dataset frame index of each played frame
+};
+
+// Latency statistics in bounded memory (soak runs publish frames for hours): a uniform random
+// sample of at most `capacity` values (reservoir sampling, fixed seed), exact while fewer values
+// than that were added.
+class LatencyReservoir {
+ public:
+  explicit LatencyReservoir(size_t capacity = 4096);
+  void Add(double value);
+  size_t count() const { return count_; }         // values added
+  size_t size() const { return sample_.size(); }  // values kept (<= capacity)
+  // q-quantile (0..1) of the kept values, as the element at index floor(q * size) of the sorted
+  // sample (0 when empty).
+  double Quantile(double q) const;
+
+ private:
+  size_t capacity_;
+  size_t count_ = 0;
+  std::vector<double> sample_;
+  uint64_t state_ = 0x9e3779b97f4a7c15ULL;  // xorshift64* state
 };
 
 struct PlayerStats {

@@ -8,8 +8,7 @@
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
-#include "components/run_writers.h"
-#include "components/stream_status.h"
+#include "components/protocol.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "core/io/file_util.h"
@@ -123,31 +122,14 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
 
   dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
                                                   dds::TopicKind::kStreamStatus);
-  // Only the writers of this run (components/run_writers.h): poses and trajectories from the
-  // participant that announced "slam", ground truth from the one that announced "player".
+  // Only the writers announced by this run's components (components/protocol.h): poses and
+  // trajectories of slam, ground truth of the player; early samples wait briefly for the
+  // announcement.
   RunWriters writers;
-  std::vector<std::pair<msg::CameraPose, WriterGuid>> waiting_poses;
-  std::vector<std::pair<msg::Trajectory, WriterGuid>> waiting_trajectories;
-  std::vector<std::pair<msg::GroundTruthPose, WriterGuid>> waiting_ground_truth;
-  constexpr size_t kMaxWaiting = 4096;
-  // Returns true when the sample may be used now; keeps it for later (kWait) or counts it.
-  auto admit = [&](const char* source, const WriterGuid& writer, auto&& message,
-                   auto* waiting) -> bool {
-    switch (writers.Check(source, writer)) {
-      case RunWriters::Verdict::kAccept:
-        return true;
-      case RunWriters::Verdict::kWait:
-        if (waiting->size() < kMaxWaiting) {
-          waiting->emplace_back(std::move(message), writer);
-          return false;
-        }
-        break;
-      case RunWriters::Verdict::kReject:
-        break;
-    }
-    ++stats.foreign_samples;
-    return false;
-  };
+  constexpr auto kMaxHold = std::chrono::milliseconds(5000);
+  WriterGate<msg::CameraPose> pose_gate(&writers, DataTopic::kCameraPose, 4096, kMaxHold);
+  WriterGate<msg::Trajectory> trajectory_gate(&writers, DataTopic::kTrajectory, 16, kMaxHold);
+  WriterGate<msg::GroundTruthPose> truth_gate(&writers, DataTopic::kGroundTruth, 65536, kMaxHold);
   const auto add_pose = [&](const msg::CameraPose& p) {
     try {
       core.AddPose(p);
@@ -187,63 +169,70 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
       ++stats.bad_samples;
     }
   };
-  // Replays the samples that waited for `source`'s announcement (or counts them as foreign).
-  auto replay = [&](auto* waiting, const char* source, const auto& use) {
-    if (!writers.Known(source)) return;
-    auto pending = std::move(*waiting);
-    waiting->clear();
-    for (auto& [message, writer] : pending) {
-      if (writers.Check(source, writer) == RunWriters::Verdict::kAccept) {
-        use(message);
-      } else {
-        ++stats.foreign_samples;
-      }
-    }
+  // Passes a sample through its gate and uses what may be used now (under `mutex`).
+  auto admit = [&](auto* gate, auto&& sample, const WriterGuid& writer, const auto& use) {
+    std::vector<std::decay_t<decltype(sample)>> ready;
+    gate->Offer(std::move(sample), writer, std::chrono::steady_clock::now(), &ready);
+    for (const auto& message : ready) use(message);
   };
-  dds::Reader<msg::CameraPosePubSubType> poses(
-      participant, dds::topics::kCameraPose, dds::TopicKind::kCameraPose,
-      [&](msg::CameraPose&& p, const WriterGuid& writer) {
-        std::lock_guard<std::mutex> lock(mutex);
-        if (admit("slam", writer, std::move(p), &waiting_poses)) add_pose(p);
-      });
+  auto release_held = [&] {
+    const auto now = std::chrono::steady_clock::now();
+    std::vector<msg::CameraPose> ready_poses;
+    std::vector<msg::Trajectory> ready_trajectories;
+    std::vector<msg::GroundTruthPose> ready_truth;
+    pose_gate.Release(now, &ready_poses);
+    trajectory_gate.Release(now, &ready_trajectories);
+    truth_gate.Release(now, &ready_truth);
+    for (const auto& p : ready_poses) add_pose(p);
+    for (const auto& t : ready_trajectories) set_trajectory(t);
+    for (const auto& g : ready_truth) add_ground_truth(g);
+  };
+  dds::Reader<msg::CameraPosePubSubType> poses(participant, dds::topics::kCameraPose,
+                                               dds::TopicKind::kCameraPose,
+                                               [&](msg::CameraPose&& p, const WriterGuid& writer) {
+                                                 std::lock_guard<std::mutex> lock(mutex);
+                                                 admit(&pose_gate, std::move(p), writer, add_pose);
+                                               });
   dds::Reader<msg::TrajectoryPubSubType> trajectories(
       participant, dds::topics::kTrajectory, dds::TopicKind::kTrajectory,
       [&](msg::Trajectory&& t, const WriterGuid& writer) {
         std::lock_guard<std::mutex> lock(mutex);
-        if (admit("slam", writer, std::move(t), &waiting_trajectories)) set_trajectory(t);
+        admit(&trajectory_gate, std::move(t), writer, set_trajectory);
       });
   dds::Reader<msg::GroundTruthPosePubSubType> ground_truth(
       participant, dds::topics::kGroundTruth, dds::TopicKind::kGroundTruth,
       [&](msg::GroundTruthPose&& p, const WriterGuid& writer) {
         std::lock_guard<std::mutex> lock(mutex);
-        if (admit("player", writer, std::move(p), &waiting_ground_truth)) add_ground_truth(p);
+        admit(&truth_gate, std::move(p), writer, add_ground_truth);
       });
   dds::Reader<msg::StreamStatusPubSubType> status_reader(
       participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
-      [&](msg::StreamStatus&& s, const WriterGuid& writer) {
-        std::lock_guard<std::mutex> lock(mutex);
-        writers.Announce(s.source(), writer);
-        replay(&waiting_poses, "slam", add_pose);
-        replay(&waiting_trajectories, "slam", set_trajectory);
-        replay(&waiting_ground_truth, "player", add_ground_truth);
-        // A second participant announcing the same component is not this run's.
-        if (writers.Check(s.source(), writer) != RunWriters::Verdict::kAccept) {
-          if (s.source() == "slam" || s.source() == "player") ++stats.foreign_samples;
+      [&](msg::StreamStatus&& m) {
+        ComponentStatus s;
+        try {
+          s = StatusFromMsg(m);
+        } catch (const InputError& e) {
+          LOG_WARNING << "recorder: ignored status: " << e.what();
           return;
         }
-        if (s.kind() == static_cast<uint8_t>(StreamEvent::kStarted) && s.source() == "player") {
-          total_frames = s.num_frames();
+        std::lock_guard<std::mutex> lock(mutex);
+        writers.Announce(s);
+        if (s.event == StreamEvent::kStarted) release_held();
+        if (s.event == StreamEvent::kStarted && s.source == ComponentKind::kPlayer) {
+          total_frames = s.num_frames;
         }
-        if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone) && s.source() == "slam") {
+        if (s.source == ComponentKind::kSlam &&
+            (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed)) {
           slam_done = true;
           cv.notify_all();
         }
       });
+  status.Write(ToMsg(ComponentStatus::Started(ComponentKind::kRecorder, {})));
 
   {
     std::unique_lock<std::mutex> lock(mutex);
     std::optional<std::chrono::steady_clock::time_point> done_at, flush_deadline;
-    StartAnnouncer announcer("recorder");
+    ReadyAnnouncer announcer(ComponentKind::kRecorder);
     while (true) {
       if (!announcer.done()) {
         // Never write while holding `mutex`: intra-process delivery runs our own listeners
@@ -275,24 +264,22 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
         break;
       }
       cv.wait_for(lock, std::chrono::milliseconds(50));
+      release_held();  // expire held samples
     }
     // Samples whose writer never announced itself: not from this run either.
-    stats.foreign_samples +=
-        waiting_poses.size() + waiting_trajectories.size() + waiting_ground_truth.size();
+    pose_gate.Close();
+    trajectory_gate.Close();
+    truth_gate.Close();
+    stats.foreign_samples = pose_gate.ignored() + trajectory_gate.ignored() + truth_gate.ignored();
     stats.final_trajectory = core.has_final_trajectory();
     stats.trajectory_path = core.Write();
     if (options.progress && core.num_frames() > 0) std::fprintf(stderr, "\n");
   }
-  msg::StreamStatus done;
-  done.kind(static_cast<uint8_t>(StreamEvent::kComponentDone));
-  done.source("recorder");
-  status.Write(done);
+  status.Write(ToMsg(ComponentStatus::Done(ComponentKind::kRecorder)));
   status.WaitForAcknowledgments(std::chrono::milliseconds(2000));
   if (stats.foreign_samples > 0) {
-    LOG_WARNING << "recorder: ignored " << stats.foreign_samples
-                << " samples from writers outside this run (another process on the DDS domain "
-                   "published into it; without --security any local process can: see README, DDS "
-                   "components)";
+    LOG_WARNING << "recorder: "
+                << IgnoredSamplesNote(std::to_string(stats.foreign_samples) + " samples");
   }
   LOG_INFO << "recorder: wrote " << stats.trajectory_path
            << (stats.final_trajectory ? " (final trajectory)" : " (online poses)");

@@ -68,7 +68,7 @@ class RecorderCore {
 struct RecorderStats {
   size_t poses = 0;
   size_t bad_samples = 0;
-  // Samples from participants other than the run's slam / player (components/run_writers.h).
+  // Samples of writers no component of this run announced (components/protocol.h), ignored.
   size_t foreign_samples = 0;
   bool final_trajectory = false;
   std::string trajectory_path;

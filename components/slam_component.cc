@@ -6,7 +6,6 @@
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
-#include "components/stream_status.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "dygslam_msg/CameraPosePubSubTypes.h"
@@ -101,8 +100,15 @@ msg::CameraPose CameraPoseToMsg(const FrameResult& r, uint64_t seq, bool detecti
   return m;
 }
 
+namespace {
+// Samples whose writer has not been announced (yet) wait at most this long / this many.
+constexpr std::chrono::milliseconds kMaxHold{5000};
+constexpr size_t kMaxHeldFrames = 32;
+constexpr size_t kMaxHeldDetections = 256;
+}  // namespace
+
 SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
-                  const SlamComponentOptions& options, const StopSignalPtr& stop) {
+                  const SlamComponentOptions& options, const StopFlagPtr& stop) {
   using Clock = FramePairer::Clock;
   options.Check();
   SlamCore core(options);
@@ -123,9 +129,10 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   Clock::time_point last_frame_time = Clock::now();
   int detector_writers_seen = 0;
   std::map<int64_t, double> inference_ms;  // detector component's time per frame stamp (ns)
-  bool detector_done = false;  // the detector announced COMPONENT_DONE (finished, not lost)
-  bool carrying = false;       // the previous frame ran with boxes carried forward (log once)
-  bool geometry_only = false;  // the previous frame ran without any boxes (log once)
+  bool detector_done = false;    // the detector announced COMPONENT_DONE (finished, not lost)
+  bool detector_failed = false;  // the detector announced FAILED: no detections will come
+  bool carrying = false;         // the previous frame ran with boxes carried forward (log once)
+  bool geometry_only = false;    // the previous frame ran without any boxes (log once)
 
   dds::Writer<msg::CameraPosePubSubType> pose_writer(participant, dds::topics::kCameraPose,
                                                      dds::TopicKind::kCameraPose);
@@ -135,54 +142,112 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
                                                            dds::TopicKind::kTrajectory);
   dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
                                                   dds::TopicKind::kStreamStatus);
+  // Frames and detections only from writers announced by this run's components (STARTED, see
+  // components/protocol.h); early ones wait briefly for their writer's announcement.
+  RunWriters run_writers;  // guarded by mutex
+  WriterGate<msg::RgbdFrame> frame_gate(&run_writers, DataTopic::kFrames, kMaxHeldFrames, kMaxHold);
+  WriterGate<msg::Detections> detection_gate(&run_writers, DataTopic::kDetections,
+                                             kMaxHeldDetections, kMaxHold);
+  // Admitted samples -> the pairer, in the order the gates admit them (called under `mutex`).
+  auto use_frames = [&](std::vector<msg::RgbdFrame>* ready) {
+    for (msg::RgbdFrame& sample : *ready) {
+      try {
+        pairer.AddFrame(RgbdFrameFromMsg(sample), Clock::now());
+        ++frames_received;
+        last_frame_time = Clock::now();
+      } catch (const InputError& e) {
+        ++stats.bad_samples;
+        LOG_WARNING << "slam: dropped frame seq " << sample.header().seq() << ": " << e.what();
+      }
+    }
+    ready->clear();
+  };
+  auto use_detections = [&](std::vector<msg::Detections>* ready) {
+    for (msg::Detections& sample : *ready) {
+      try {
+        std::vector<Detection> dets = DetectionsFromMsg(sample);
+        const Timestamp stamp = TimeFromMsg(sample.header().stamp(), "Detections.header.stamp");
+        inference_ms[stamp.nanoseconds()] = sample.inference_ms();
+        pairer.AddDetections(stamp, std::move(dets));
+      } catch (const InputError& e) {
+        LOG_WARNING << "slam: dropped detections seq " << sample.header().seq() << ": " << e.what();
+      }
+    }
+    ready->clear();
+  };
+  // Held samples whose writer was announced meanwhile are used; expired ones counted (under
+  // `mutex`).
+  auto release_held = [&] {
+    std::vector<msg::RgbdFrame> ready_frames;
+    std::vector<msg::Detections> ready_detections;
+    frame_gate.Release(Clock::now(), &ready_frames);
+    detection_gate.Release(Clock::now(), &ready_detections);
+    use_frames(&ready_frames);
+    use_detections(&ready_detections);
+  };
   dds::Reader<msg::RgbdFramePubSubType> frames(
       participant, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame,
-      [&](msg::RgbdFrame&& sample) {
-        try {
-          RgbdFrameData frame = RgbdFrameFromMsg(sample);
+      [&](msg::RgbdFrame&& sample, const WriterGuid& writer) {
+        {
           std::lock_guard<std::mutex> lock(mutex);
-          pairer.AddFrame(std::move(frame), Clock::now());
-          ++frames_received;
-          last_frame_time = Clock::now();
-        } catch (const InputError& e) {
-          std::lock_guard<std::mutex> lock(mutex);
-          ++stats.bad_samples;
-          LOG_WARNING << "slam: dropped frame seq " << sample.header().seq() << ": " << e.what();
+          std::vector<msg::RgbdFrame> ready;
+          frame_gate.Offer(std::move(sample), writer, Clock::now(), &ready);
+          use_frames(&ready);
         }
         cv.notify_all();
       });
   dds::Reader<msg::DetectionsPubSubType> detections(
       participant, dds::topics::kDetections, dds::TopicKind::kDetections,
-      [&](msg::Detections&& sample) {
-        try {
-          std::vector<Detection> dets = DetectionsFromMsg(sample);
-          const Timestamp stamp = TimeFromMsg(sample.header().stamp(), "Detections.header.stamp");
+      [&](msg::Detections&& sample, const WriterGuid& writer) {
+        {
           std::lock_guard<std::mutex> lock(mutex);
-          inference_ms[stamp.nanoseconds()] = sample.inference_ms();
-          pairer.AddDetections(stamp, std::move(dets));
-        } catch (const InputError& e) {
-          LOG_WARNING << "slam: dropped detections seq " << sample.header().seq() << ": "
-                      << e.what();
+          std::vector<msg::Detections> ready;
+          detection_gate.Offer(std::move(sample), writer, Clock::now(), &ready);
+          use_detections(&ready);
         }
         cv.notify_all();
       });
   dds::Reader<msg::StreamStatusPubSubType> status_reader(
       participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
-      [&](msg::StreamStatus&& s) {
-        std::lock_guard<std::mutex> lock(mutex);
-        if (s.kind() == static_cast<uint8_t>(StreamEvent::kEndOfStream)) {
-          end_frames = StreamFrameCountFromMsg(s);
-          if (end_frames == std::numeric_limits<int64_t>::max()) {
-            LOG_WARNING << "slam: END_OF_STREAM announces " << s.num_frames()
-                        << " frames; finishing when the stream goes idle";
-          }
+      [&](msg::StreamStatus&& m) {
+        ComponentStatus s;
+        try {
+          s = StatusFromMsg(m);
+        } catch (const InputError& e) {
+          LOG_WARNING << "slam: ignored status: " << e.what();
+          return;
         }
-        if (s.kind() == static_cast<uint8_t>(StreamEvent::kComponentDone) &&
-            s.source() == "detector") {
-          detector_done = true;
+        {
+          std::lock_guard<std::mutex> lock(mutex);
+          run_writers.Announce(s);
+          if (s.event == StreamEvent::kEndOfStream && IsFrameSource(s.source)) {
+            end_frames = StreamFrameCountFromMsg(m);
+            if (end_frames == std::numeric_limits<int64_t>::max()) {
+              LOG_WARNING << "slam: END_OF_STREAM announces " << m.num_frames()
+                          << " frames; finishing when the stream goes idle";
+            }
+          }
+          if (s.event == StreamEvent::kFailed && IsFrameSource(s.source)) {
+            // No more frames will come: finish with the ones that arrived.
+            LOG_WARNING << "slam: the frame source (" << ToString(s.source)
+                        << ") failed: " << s.reason;
+            end_frames = static_cast<int64_t>(frames_received + stats.bad_samples);
+          }
+          if (s.event == StreamEvent::kComponentDone && s.source == ComponentKind::kDetector) {
+            detector_done = true;
+          }
+          if (s.event == StreamEvent::kFailed && s.source == ComponentKind::kDetector) {
+            LOG_WARNING << "slam: the detector failed: " << s.reason;
+            detector_failed = true;
+          }
+          if (s.event == StreamEvent::kStarted) release_held();
         }
         cv.notify_all();
       });
+  status.Write(ToMsg(ComponentStatus::Started(
+      ComponentKind::kSlam, {{DataTopic::kCameraPose, pose_writer.guid()},
+                             {DataTopic::kKeyframe, keyframe_writer.guid()},
+                             {DataTopic::kTrajectory, trajectory_writer.guid()}})));
 
   auto publish_keyframes = [&](const std::vector<KeyframeData>& keyframes) {
     for (const KeyframeData& k : keyframes) {
@@ -200,7 +265,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
     }
   };
 
-  StartAnnouncer announcer("slam");
+  ReadyAnnouncer announcer(ComponentKind::kSlam);
   bool waiting = false;  // after the first frame: no frame ready since wait_since
   Clock::time_point wait_since = Clock::now();
   bool waited_with_frames = false;  // a frame was pending during that wait
@@ -209,13 +274,10 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
     announcer.Poll(status, frames.matched() > 0 &&
                                (!pairing_options.needs_detections || detections.matched() > 0));
     if (announcer.done() && !map_announced) {
-      // The map this slam starts from (issue 15), after STARTED so the readers are matched.
+      // The map this slam starts from (issue 15), after READY so the readers are matched.
       const MapFileInfo info = *core.LoadedMapInfo();
-      char id[32];
-      std::snprintf(id, sizeof(id), "%016llx", static_cast<unsigned long long>(info.checksum));
-      msg::StreamStatus loaded = MakeStreamStatus(StreamEvent::kMapLoaded, "slam", info.keyframes);
-      loaded.header().frame_id("map " + std::string(id) + " " + options.system.load_map);
-      status.Write(loaded);
+      status.Write(ToMsg(ComponentStatus::MapLoaded(ComponentKind::kSlam, info.keyframes,
+                                                    info.checksum, options.system.load_map)));
       LOG_INFO << "slam: started from map file " << options.system.load_map << " ("
                << DescribeMapFile(info) << ")"
                << (options.system.localization ? ", localization" : "");
@@ -224,10 +286,14 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
     std::optional<PairedFrame> paired;
     {
       std::unique_lock<std::mutex> lock(mutex);
+      release_held();  // expire held samples
       // Detector liveness from the matched writers of the detections topic.
       const int writers = detections.matched();
       if (writers > 0) detector_writers_seen = writers;
-      pairer.SetDetectorAlive(detector_done || !(detector_writers_seen > 0 && writers == 0));
+      // A detector that announced FAILED is gone even if it never matched (e.g. no model): in
+      // --deterministic mode slam would otherwise wait for its detections forever.
+      pairer.SetDetectorAlive(!detector_failed &&
+                              (detector_done || !(detector_writers_seen > 0 && writers == 0)));
       paired = pairer.Next(Clock::now());
       if (!paired) {
         if (stats.frames_processed > 0 && !waiting) {
@@ -300,12 +366,12 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
     std::lock_guard<std::mutex> lock(mutex);
     stats.pairing = pairer.stats();
     stats.detector_lost = pairer.detector_lost() || stats.pairing.lost_episodes > 0;
+    frame_gate.Close();
+    detection_gate.Close();
+    stats.foreign_frames = frame_gate.ignored();
+    stats.foreign_detections = detection_gate.ignored();
   }
-  msg::StreamStatus done;
-  done.kind(static_cast<uint8_t>(StreamEvent::kComponentDone));
-  done.source("slam");
-  done.num_frames(stats.frames_processed);
-  status.Write(done);
+  status.Write(ToMsg(ComponentStatus::Done(ComponentKind::kSlam, stats.frames_processed)));
   // Let reliable readers (mapper, recorder) get everything before the writers go away.
   keyframe_writer.WaitForAcknowledgments(std::chrono::milliseconds(10000));
   trajectory_writer.WaitForAcknowledgments(std::chrono::milliseconds(5000));
@@ -323,6 +389,11 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
            << (stats.detector_lost ? " (detector lost)" : "") << "; busy " << stats.busy_s
            << " s, waited " << stats.wait_for_frames_s << " s for frames, "
            << stats.wait_for_detections_s << " s for detections";
+  if (stats.foreign_frames + stats.foreign_detections > 0) {
+    LOG_WARNING << "slam: "
+                << IgnoredSamplesNote(std::to_string(stats.foreign_frames) + " frames and " +
+                                      std::to_string(stats.foreign_detections) + " detections");
+  }
   return stats;
 }
 

@@ -7,8 +7,10 @@
 // newest earlier boxes carried forward (CameraPose.detections_carried_forward), geometry-only
 // when there are none recent; reported in the stats and in CameraPose.detections_missing). Ends
 // when END_OF_STREAM's frame count has been processed (or 3 s after END_OF_STREAM without new
-// frames, or on stop): System::Shutdown(), final trajectories published, StreamStatus
-// COMPONENT_DONE "slam".
+// frames, or on stop; or when the frame source announces FAILED): System::Shutdown(), final
+// trajectories published, COMPONENT_DONE. Frames and detections are taken only from writers that
+// this run's components announced (STARTED; components/protocol.h); others are ignored, counted
+// and reported.
 #pragma once
 
 #include <chrono>
@@ -90,9 +92,12 @@ struct SlamStats {
   double wait_for_frames_s = 0;
   double wait_for_detections_s = 0;
   double busy_s = 0;  // processing frames (System + publishing)
+  // Samples of writers no component of this run announced (components/protocol.h), ignored.
+  size_t foreign_frames = 0;
+  size_t foreign_detections = 0;
 };
 
 SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
-                  const SlamComponentOptions& options, const StopSignalPtr& stop);
+                  const SlamComponentOptions& options, const StopFlagPtr& stop);
 
 }  // namespace dygslam

@@ -16,6 +16,7 @@
 # DYGSLAM_DOMAIN_ID sets the DDS domain (default 0; the run's partition is unique anyway).
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
+source "$here/scripts/netns_lib.sh"
 if [ "${1:-}" = "--pipeline" ]; then
   mode=${2:?--pipeline needs default or processes}
   case "$mode" in default) flag= ;; processes) flag=--processes ;;
@@ -33,8 +34,7 @@ if [ "${1:-}" = "--pipeline" ]; then
   echo "pipeline soak ($mode): $minutes min of $dataset (filter $filter, map on) -> $out;" \
        "$(nproc) cores; load at start: $(cut -d' ' -f1-3 /proc/loadavg)" | tee "$out/summary.txt"
   py=python3; [ -x /usr/bin/python3 ] && py=/usr/bin/python3
-  unshare -n bash -c 'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$@"' soak \
-    "$py" - "$out" "$bin" run "$dataset" --filter "$filter" --loop-minutes "$minutes" \
+  netns_run "$py" - "$out" "$bin" run "$dataset" --filter "$filter" --loop-minutes "$minutes" \
       --out "$out/run" --quiet ${DYGSLAM_DOMAIN_ID:+--domain $DYGSLAM_DOMAIN_ID} $flag <<'PY' | tee -a "$out/summary.txt"
 import csv, os, subprocess, sys, time
 out, cmd = sys.argv[1], sys.argv[2:]

@@ -17,6 +17,7 @@
 # FILTER: $SPEED_FILTER (default full). DYGSLAM_DOMAIN_ID sets the DDS domain.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
+source "$here/scripts/netns_lib.sh"
 if [ "${1:-}" = "--modes" ]; then
   shift
   build=${1:-$here/build-rel}
@@ -37,8 +38,7 @@ if [ "${1:-}" = "--modes" ]; then
       case $mode in direct) flag=--direct ;; default) flag= ;; processes) flag=--processes ;; esac
       dir=$out/$mode-$r
       rm -rf "$dir"
-      unshare -n bash -c 'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$@"' speed \
-        /usr/bin/time -f "cpu_s %U %S" "$bin" run "$dataset" --filter "$filter" --out "$dir" --quiet \
+      netns_run /usr/bin/time -f "cpu_s %U %S" "$bin" run "$dataset" --filter "$filter" --out "$dir" --quiet \
         ${DYGSLAM_DOMAIN_ID:+--domain $DYGSLAM_DOMAIN_ID} $flag "$@" > "$dir.log" 2>&1 ||
         { echo "run $mode-$r failed:" >&2; tail -n 20 "$dir.log" >&2; exit 1; }
       echo "  $mode run $r: $(grep -o '[0-9.]* fps' "$dir.log" | head -1), $(grep -o 'ATE RMSE [0-9.]* m' "$dir.log" | head -1), $(grep -a 'cpu_s' "$dir.log")"

@@ -17,6 +17,7 @@
 # TWO_HOSTS_DOMAIN (DDS domain, default 46). Needs root (network + mount namespaces).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
+source "$root/scripts/netns_lib.sh"
 out=${1:?usage: two_hosts.sh OUT_DIR [--discovery-server] [--frames A:B] [--rate R] [--filter MODE] [--deterministic]}
 shift
 frames=0:120 rate=0 filter=full server=0 deterministic=()
@@ -44,10 +45,8 @@ rm -rf "$out"
 mkdir -p "$out/hosts" "$out/direct"
 
 # Two namespaces (network + mount), kept alive by a sleeping process each.
-unshare -n -m --propagation private sleep 100000 &
-host_a=$!
-unshare -n -m --propagation private sleep 100000 &
-host_b=$!
+netns_hold host_a
+netns_hold host_b
 pids=()
 cleanup() {
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
@@ -55,13 +54,6 @@ cleanup() {
   wait 2>/dev/null || true
 }
 trap cleanup EXIT
-self_net=$(readlink /proc/self/ns/net)
-for h in $host_a $host_b; do
-  for _ in $(seq 100); do
-    [[ $(readlink /proc/$h/ns/net 2>/dev/null) != "$self_net" ]] && break
-    sleep 0.02
-  done
-done
 # Unique names: the pair is created in this namespace before it moves (parallel runs).
 if_a=dA$$ if_b=dB$$
 ip link add "$if_a" netns "$host_a" type veth peer name "$if_b" netns "$host_b"

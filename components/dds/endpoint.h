@@ -25,7 +25,7 @@
 #include <thread>
 
 #include "components/dds/participant.h"
-#include "components/run_writers.h"
+#include "components/protocol.h"
 
 namespace dygslam::dds {
 
@@ -74,6 +74,15 @@ class TypedWriter {
   bool WaitForReaders(int count, std::chrono::milliseconds timeout) const {
     return internal::WaitForMatched([this] { return matched(); }, count, timeout);
   }
+  // This writer's GUID (what readers see as the sample's publication handle), announced in the
+  // component's STARTED status (components/protocol.h).
+  WriterGuid guid() const {
+    const eprosima::fastrtps::rtps::GUID_t& g = writer_->guid();
+    WriterGuid out{};
+    for (size_t i = 0; i < 12; ++i) out[i] = g.guidPrefix.value[i];
+    for (size_t i = 0; i < 4; ++i) out[12 + i] = g.entityId.value[i];
+    return out;
+  }
   // Waits until every matched reliable reader acknowledged all samples; false on timeout.
   bool WaitForAcknowledgments(std::chrono::milliseconds timeout) {
     const eprosima::fastrtps::Duration_t d(
@@ -94,7 +103,7 @@ class TypedReader {
  public:
   using Message = typename PubSubType::type;
   using Callback = std::function<void(Message&&)>;
-  // Also given the GUID of the writer of each sample (components/run_writers.h).
+  // Also given the GUID of the writer of each sample (components/protocol.h).
   using CallbackWithWriter = std::function<void(Message&&, const WriterGuid&)>;
 
   // callback runs on a DDS listener thread: keep it short (enqueue + notify).

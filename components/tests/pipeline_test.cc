@@ -37,12 +37,7 @@ std::string Config() {
   return std::string(std::getenv("DYGSLAM_SOURCE_DIR")) + "/config/bonn.yaml";
 }
 
-std::string ReadAll(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using testing::ReadAll;
 
 // Starts `args` with stdout + stderr to `log`; new_group: own process group (for a Ctrl-C-like
 // signal to the whole group).

@@ -9,9 +9,10 @@
 # Needs CAP_SYS_ADMIN (root); without it, falls back to running the command directly only if
 # DYGSLAM_NETNS_OPTIONAL=1 (the components then still use SHM + 127.0.0.1 only).
 set -e
-if unshare -n -m --propagation private true 2>/dev/null; then
-  exec unshare -n -m --propagation private bash -c 'mount -t tmpfs -o mode=1777 dygslam-test-shm /dev/shm &&
-    ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$@"' run_in_netns "$@"
+source "$(dirname "$(readlink -f "$0")")/../../scripts/netns_lib.sh"
+if netns_available; then
+  netns_run "$@"
+  exit
 fi
 if [ "${DYGSLAM_NETNS_OPTIONAL:-0}" = "1" ]; then
   exec "$@"

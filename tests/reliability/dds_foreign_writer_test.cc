@@ -1,9 +1,10 @@
 // A local program that joins the run's DDS partition (as one that joins "*" does) and publishes
 // forged samples while `dygslam run` works (issue 20 item 3): before the fix the recorder wrote its
-// 5-pose Trajectory as trajectory.txt and its CameraPose samples into trajectory_online.txt, and
-// the mapper inserted its keyframes. Now the recorder and the mapper take samples only from the
-// run's own slam participant, drop and count the others, and say so. Runs in a private network
-// namespace (the test emulator), on its own domain.
+// 5-pose Trajectory as trajectory.txt and its CameraPose samples into trajectory_online.txt, the
+// mapper inserted its keyframes and slam tracked its frames. Now the recorder, the mapper and slam
+// take samples only from the writers the run's components announced (components/protocol.h),
+// drop and count the others, and say so. Runs in a private network namespace (the test
+// emulator), on its own domain.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -13,8 +14,8 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
+#include <opencv2/core.hpp>
+#include <regex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -24,7 +25,9 @@
 #include "components/dds/pubsub.h"
 #include "core/io/trajectory_io.h"
 #include "dygslam_msg/CameraPosePubSubTypes.h"
+#include "dygslam_msg/DetectionsPubSubTypes.h"
 #include "dygslam_msg/KeyframePubSubTypes.h"
+#include "dygslam_msg/RgbdFramePubSubTypes.h"
 #include "dygslam_msg/TrajectoryPubSubTypes.h"
 #include "tests/support/test_support.h"
 
@@ -32,12 +35,7 @@ namespace dygslam {
 namespace {
 namespace fs = std::filesystem;
 
-std::string ReadAll(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using testing::ReadAll;
 
 constexpr double kForgedStamp = 4242.0;  // far from the dataset's stamps
 
@@ -60,6 +58,19 @@ TEST(DdsForeignWriter, RunIgnoresAndCountsSamplesOfOtherParticipants) {
                                                      dds::TopicKind::kCameraPose);
   dds::Writer<msg::KeyframePubSubType> keyframe_writer(intruder, dds::topics::kKeyframe,
                                                        dds::TopicKind::kKeyframe);
+  dds::Writer<msg::RgbdFramePubSubType> frame_writer(intruder, dds::topics::kRgbdFrame,
+                                                     dds::TopicKind::kRgbdFrame);
+  dds::Writer<msg::DetectionsPubSubType> detections_writer(intruder, dds::topics::kDetections,
+                                                           dds::TopicKind::kDetections);
+  // A well-formed frame of the run's size (bonn.yaml: 640x480) with a forged stamp: slam would
+  // track it (a frames.csv row at that stamp) if it took it.
+  RgbdFrameData forged_frame;
+  forged_frame.camera.fx = forged_frame.camera.fy = 540;
+  forged_frame.camera.cx = 320;
+  forged_frame.camera.cy = 240;
+  forged_frame.rgb = cv::Mat(480, 640, CV_8UC3, cv::Scalar(90, 120, 150));
+  cv::randu(forged_frame.rgb, cv::Scalar::all(0), cv::Scalar::all(255));
+  forged_frame.depth = cv::Mat(480, 640, CV_16UC1, cv::Scalar(10000));
   std::vector<StampedPose> forged;
   for (int i = 0; i < 5; ++i) {
     StampedPose p;
@@ -120,6 +131,10 @@ TEST(DdsForeignWriter, RunIgnoresAndCountsSamplesOfOtherParticipants) {
       msg::Keyframe keyframe;
       keyframe.id(1000000 + static_cast<int64_t>(published));
       keyframe_writer.Write(keyframe);
+      forged_frame.stamp = Timestamp::FromSeconds(kForgedStamp + published % 5);
+      forged_frame.seq = published;
+      if (published % 5 == 0) frame_writer.Write(RgbdFrameToMsg(forged_frame));  // 1.5 MB each
+      detections_writer.Write(DetectionsToMsg({}, forged_frame.stamp, published, 1.0));
       ++published;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -131,6 +146,8 @@ TEST(DdsForeignWriter, RunIgnoresAndCountsSamplesOfOtherParticipants) {
   // The run's own trajectory, none of the forged poses.
   const auto trajectory = ReadTumTrajectory(dir + "/out/trajectory.txt");
   EXPECT_GE(trajectory.size(), 50u) << log;
+  EXPECT_EQ(ReadAll(dir + "/out/frames.csv").find("\n4242."), std::string::npos)
+      << "slam tracked a forged frame";
   for (const char* name : {"trajectory.txt", "trajectory_online.txt", "keyframes.txt"}) {
     for (const StampedPose& p : ReadTumTrajectory(dir + "/out/" + name)) {
       const bool forged_stamp =
@@ -141,6 +158,16 @@ TEST(DdsForeignWriter, RunIgnoresAndCountsSamplesOfOtherParticipants) {
   // Counted and reported.
   EXPECT_NE(log.find("recorder: ignored"), std::string::npos) << log;
   EXPECT_NE(log.find("mapper: ignored"), std::string::npos) << log;
+  // slam: the forged frames (and detections) were ignored, its own 60 frames processed.
+  std::smatch m;
+  ASSERT_TRUE(
+      std::regex_search(log, m, std::regex(R"(slam: ignored (\d+) frames and (\d+) detections)")))
+      << log;
+  EXPECT_GT(std::stol(m[1]), 0) << log;
+  EXPECT_GT(std::stol(m[2]), 0) << log;
+  EXPECT_NE(log.find("slam: 60 frames"), std::string::npos) << log;
+  // And the run's summary (stdout) says it.
+  EXPECT_NE(ReadAll(dir + "/stdout.txt").find("dds: ignored"), std::string::npos) << log;
   EXPECT_NE(log.find("outside this run"), std::string::npos) << log;
 }
 

@@ -63,6 +63,13 @@ std::string MakeTempDir(const std::string& prefix) {
   return dir.string();
 }
 
+std::string ReadAll(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
 std::string DygslamBinary() {
   const char* bin = std::getenv("DYGSLAM_BINARY_DIR");
   return (fs::path(bin ? bin : DYGSLAM_BAKED_BINARY_DIR) / "apps" / "dygslam").string();
@@ -95,16 +102,10 @@ ProcessResult RunDygslam(const std::vector<std::string>& args, const std::string
   const pid_t pid = SpawnDygslam(args, out, err);
   int status = 0;
   waitpid(pid, &status, 0);
-  const auto read_all = [](const std::string& path) {
-    std::ifstream in(path);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  };
   ProcessResult r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  r.out = read_all(out);
-  r.err = read_all(err);
+  r.out = ReadAll(out);
+  r.err = ReadAll(err);
   return r;
 }
 

@@ -27,6 +27,10 @@ inline constexpr const char* kHowToGetData =
 // A fresh empty directory under the build tree (or /tmp), unique per call.
 std::string MakeTempDir(const std::string& prefix);
 
+// The whole content of file `path` ("" when it cannot be read: a test then fails on what is missing
+// in it, with the rest of its message).
+std::string ReadAll(const std::string& path);
+
 // The built `dygslam` executable ($DYGSLAM_BINARY_DIR/apps/dygslam).
 std::string DygslamBinary();
 // What a finished child process left: its exit code (128 + signal when killed) and output.

@@ -603,17 +603,17 @@ struct RosBridge::Impl {
     node.node_namespace = options.node_namespace;
     node.node_name = options.node_name;
     for (const auto* r : {color_reader.get(), depth_reader.get()}) {
-      if (r != nullptr) node.readers.push_back(ToGuid(r->guid()));
+      if (r != nullptr) node.readers.push_back(ToGuid(r->rtps_guid()));
     }
-    if (info_reader) node.readers.push_back(ToGuid(info_reader->guid()));
-    if (pose_writer) node.writers.push_back(ToGuid(pose_writer->guid()));
-    if (odom_writer) node.writers.push_back(ToGuid(odom_writer->guid()));
-    if (path_writer) node.writers.push_back(ToGuid(path_writer->guid()));
+    if (info_reader) node.readers.push_back(ToGuid(info_reader->rtps_guid()));
+    if (pose_writer) node.writers.push_back(ToGuid(pose_writer->rtps_guid()));
+    if (odom_writer) node.writers.push_back(ToGuid(odom_writer->rtps_guid()));
+    if (path_writer) node.writers.push_back(ToGuid(path_writer->rtps_guid()));
     for (const auto* w : {tf_writer.get(), tf_static_writer.get()}) {
-      if (w != nullptr) node.writers.push_back(ToGuid(w->guid()));
+      if (w != nullptr) node.writers.push_back(ToGuid(w->rtps_guid()));
     }
-    if (detections_writer) node.writers.push_back(ToGuid(detections_writer->guid()));
-    if (octomap_writer) node.writers.push_back(ToGuid(octomap_writer->guid()));
+    if (detections_writer) node.writers.push_back(ToGuid(detections_writer->rtps_guid()));
+    if (octomap_writer) node.writers.push_back(ToGuid(octomap_writer->rtps_guid()));
     graph.nodes = {node};
     // rmw's ros_discovery_info QoS: reliable, transient local, keep-last 1.
     if (options.ros_distro == RosDistro::kHumble) {

@@ -61,8 +61,8 @@ class TypedWriter {
   TypedWriter(const TypedWriter&) = delete;
   TypedWriter& operator=(const TypedWriter&) = delete;
 
-  // The writer's GUID (GUID prefix of its participant + entity id).
-  eprosima::fastrtps::rtps::GUID_t guid() const { return writer_->guid(); }
+  // The writer's GUID as Fast DDS types it (GUID prefix of its participant + entity id).
+  eprosima::fastrtps::rtps::GUID_t rtps_guid() const { return writer_->guid(); }
   // False if the middleware refused the sample (e.g. blocked longer than max_blocking_time).
   bool Write(const Message& message) { return writer_->write(const_cast<Message*>(&message)); }
   int matched() const {
@@ -133,7 +133,7 @@ class TypedReader {
 
   int matched() const { return listener_.matched.load(); }
   // The reader's GUID (GUID prefix of its participant + entity id).
-  eprosima::fastrtps::rtps::GUID_t guid() const { return reader_->guid(); }
+  eprosima::fastrtps::rtps::GUID_t rtps_guid() const { return reader_->guid(); }
   bool WaitForWriters(int count, std::chrono::milliseconds timeout) const {
     return internal::WaitForMatched([this] { return matched(); }, count, timeout);
   }

@@ -68,8 +68,10 @@ void DynamicFilterOptions::Check() const {
                        "DynamicFilter.depth_residual_weight");
   DYGSLAM_CHECK_OPTION(depth_residual_scale > 0 && std::isfinite(depth_residual_scale),
                        "DynamicFilter.depth_residual_scale");
-  DYGSLAM_CHECK_OPTION(anchor_max_age >= 1 && anchor_max_age <= 1000, "DynamicFilter.anchor_max_age");
-  DYGSLAM_CHECK_OPTION(pnp_threshold > 0 && std::isfinite(pnp_threshold), "DynamicFilter.pnp_threshold");
+  DYGSLAM_CHECK_OPTION(anchor_max_age >= 1 && anchor_max_age <= 1000,
+                       "DynamicFilter.anchor_max_age");
+  DYGSLAM_CHECK_OPTION(pnp_threshold > 0 && std::isfinite(pnp_threshold),
+                       "DynamicFilter.pnp_threshold");
   DYGSLAM_CHECK_OPTION(pnp_iterations > 0, "DynamicFilter.pnp_iterations");
   DYGSLAM_CHECK_OPTION(pnp_min_inliers >= 6, "DynamicFilter.pnp_min_inliers");
   DYGSLAM_CHECK_OPTION(pnp_min_inlier_fraction >= 0 && pnp_min_inlier_fraction <= 1,

@@ -128,12 +128,12 @@ struct DynamicFilterOptions {
   // The residual enters eq. 5 divided by this (px): eq. 5's alpha and C1 were set for 1-D
   // epipolar distances; the 2-D residual of a static point over a longer baseline is larger.
   double depth_residual_scale = 1.0;
-  int anchor_max_age = 10;            // frames; then the anchor restarts from the measurement
-  double pnp_threshold = 2.0;         // px, RANSAC inlier threshold
+  int anchor_max_age = 10;     // frames; then the anchor restarts from the measurement
+  double pnp_threshold = 2.0;  // px, RANSAC inlier threshold
   int pnp_iterations = 100;
   int pnp_min_inliers = 20;
   double pnp_min_inlier_fraction = 0.3;
-  double outside_p_init = 0.2;        // prior of a new track outside the boxes (full mode)
+  double outside_p_init = 0.2;  // prior of a new track outside the boxes (full mode)
   // Expansion (eq. 11) with depth: only from matched features whose depth differs by at most
   // this (metres) when both have depth, so a wall behind a person does not inherit the
   // person's probability. <= 0: off.

@@ -1,8 +1,8 @@
 #include "core/system/system.h"
 
 #include <algorithm>
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <deque>
 #include <future>
 #include <mutex>

@@ -404,8 +404,7 @@ TEST(DynamicFilterSequence, DepthResidualTracksTheCameraAndAbstainsWithoutDepth)
       if (!r.motion_model_ok) continue;
       ++motion_ok;
       const Rigid3d truth = CamFromWorldAt(f) * CamFromWorldAt(f - 1).Inverse();
-      const Eigen::Vector3d t(r.prev_translation[0], r.prev_translation[1],
-                              r.prev_translation[2]);
+      const Eigen::Vector3d t(r.prev_translation[0], r.prev_translation[1], r.prev_translation[2]);
       max_translation_error = std::max(max_translation_error, (t - truth.translation).norm());
     }
     if (with_depth) {

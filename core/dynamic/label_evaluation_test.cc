@@ -174,18 +174,20 @@ TEST(DynamicLabelsSynthetic, WalkersStopTurnAndOneIsNeverDetected) {
   //   geometry-epipolar precision 0.63 recall 0.59 undetected 0.48   (the paper's test alone)
   //   geometry          precision 0.36 recall 0.63 undetected 0.91   (depth-residual test)
   //   paper             precision 0.88 recall 0.41 static-in-box kept 0.86 undetected 0.08
-  //   full              precision 0.78 recall 0.82 static-in-box kept 0.88 undetected 0.51
-  // Standing movers are dynamic by label but still: no geometry sees them, hence the recalls.
+  //   full              precision 0.92 recall 0.42 static-in-box kept 0.94 undetected 0.18
+  // (full with the depth-residual test, measured before it was limited to geometry mode:
+  // 0.78 / 0.82 / 0.88 / 0.51.) Standing movers are dynamic by label but still: no motion test
+  // sees them, hence the recalls.
   const LabelCounts& full = c.at("full");
+  const LabelCounts& geometry = c.at("geometry");
   EXPECT_EQ(c.at("boxes").static_in_region_kept, 0);
   EXPECT_LT(c.at("boxes").UndetectedRecall(), 0.3);
-  EXPECT_GE(full.Recall(), 0.75);
-  EXPECT_GE(full.Precision(), 0.72);
-  EXPECT_GT(full.Precision(), c.at("boxes").Precision() + 0.2);
-  EXPECT_GE(full.StaticInBoxKept(), 0.8);
-  EXPECT_GE(full.UndetectedRecall(), 0.45);
-  EXPECT_GT(full.UndetectedRecall(), c.at("paper").UndetectedRecall() + 0.3);
-  EXPECT_GE(c.at("geometry").UndetectedRecall(), 0.8);
+  EXPECT_GE(full.Precision(), 0.85);
+  EXPECT_GE(full.Recall(), 0.35);
+  EXPECT_GE(full.StaticInBoxKept(), 0.85);
+  EXPECT_GE(geometry.Recall(), 0.55);
+  EXPECT_GE(geometry.UndetectedRecall(), 0.8);
+  EXPECT_GT(geometry.UndetectedRecall(), c.at("geometry-epipolar").UndetectedRecall() + 0.3);
 }
 
 // A mover passing close in front of a slow camera: it fills about half the view.
@@ -201,14 +203,14 @@ TEST(DynamicLabelsSynthetic, MoverFillingHalfTheView) {
   const auto c = RunAll(data, "near");
   ASSERT_GT(c.at("boxes").NumDynamic(), 300) << "the near mover is hardly visible";
   // Measured (seed 9): boxes precision 0.43 recall 1.00; geometry-epipolar 0.54 / 0.90;
-  // geometry 0.47 / 0.96; paper 0.63 / 0.72 (static-in-box kept 0.42); full 0.65 / 1.00
-  // (static-in-box kept 0.77).
+  // geometry 0.47 / 0.96; paper 0.63 / 0.72 (static-in-box kept 0.42); full 0.61 / 0.64
+  // (static-in-box kept 0.69; with the depth-residual test 0.65 / 1.00 / 0.77).
   const LabelCounts& full = c.at("full");
-  EXPECT_GE(full.Recall(), 0.97);
-  EXPECT_GE(full.Precision(), 0.6);
-  EXPECT_GT(full.Precision(), c.at("boxes").Precision() + 0.15);
-  EXPECT_GE(full.StaticInBoxKept(), 0.68);
+  EXPECT_GE(full.Precision(), 0.55);
+  EXPECT_GE(full.Recall(), 0.55);
+  EXPECT_GE(full.StaticInBoxKept(), 0.6);
   EXPECT_GE(c.at("geometry").Recall(), 0.9);
+  EXPECT_GT(c.at("geometry").Recall(), c.at("geometry-epipolar").Recall() + 0.03);
 }
 
 }  // namespace

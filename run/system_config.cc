@@ -178,7 +178,13 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                       {"box_margin_fraction", &f.box_margin_fraction},
                       {"search_radius", &f.search_radius},
                       {"max_hamming", &f.max_hamming},
-                      {"fundamental_threshold", &f.fundamental_threshold}});
+                      {"fundamental_threshold", &f.fundamental_threshold},
+                      {"depth_residual", &f.depth_residual},
+                      {"depth_residual_scale", &f.depth_residual_scale},
+                      {"depth_residual_weight", &f.depth_residual_weight},
+                      {"anchor_max_age", &f.anchor_max_age},
+                      {"outside_p_init", &f.outside_p_init},
+                      {"expansion_depth_gap", &f.expansion_depth_gap}});
   filter.CheckOptions(f);
 
   // Detector: a shipped model by name, or explicit Darknet files.

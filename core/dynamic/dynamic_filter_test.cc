@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <opencv2/calib3d.hpp>
@@ -206,6 +207,7 @@ struct SyntheticFrame {
   cv::Mat descriptors;
   std::vector<Detection> detections;
   std::vector<bool> truth_dynamic;
+  std::vector<float> depths;  // z in the camera frame, metres (1 % noise)
 };
 
 // Random static points + a person-sized moving cluster, seen by a moving camera. Descriptors are
@@ -246,7 +248,9 @@ class SequenceGenerator {
       const Eigen::Vector3d x =
           t.moving ? Eigen::Vector3d(t.point + k * person_velocity_) : t.point;
       cv::Point2f uv;
-      if (!camera_.Project(cam_from_world * x, &uv)) continue;
+      const Eigen::Vector3d x_cam = cam_from_world * x;
+      if (!camera_.Project(x_cam, &uv)) continue;
+      f.depths.push_back(static_cast<float>(x_cam.z() * (1.0 + 0.01 * noise(rng_))));
       uv.x += static_cast<float>(noise(rng_));
       uv.y += static_cast<float>(noise(rng_));
       cv::KeyPoint kp(uv, 31.f * std::pow(1.2f, t.octave), -1, 1.f, t.octave);
@@ -367,6 +371,53 @@ TEST(DynamicFilterSequence, FullModeRemovesMovingKeepsStatic) {
   // Geometry only (no boxes) still finds most of the moving object.
   EXPECT_GT(geom.recall(), 0.6);
   EXPECT_GT(geom.precision(), 0.6);
+}
+
+// The depth-residual test (ours, issue 22) on a static scene seen by a moving camera: the motion
+// from PnP-RANSAC matches the true motion, static anchors do not drift (nothing is flagged over
+// 12 frames); without depth the motion cannot be estimated and the filter abstains. Known limit
+// (BENCHMARKS.md, *Geometry that earns its place*): with this generator's person cluster moving
+// at 0.6 m/s (19 % of the matches), the frame-to-frame PnP takes the cluster in as inliers (the
+// translation / rotation trade-off explains its 1-2 px per frame) and the motion is biased.
+TEST(DynamicFilterSequence, DepthResidualTracksTheCameraAndAbstainsWithoutDepth) {
+  const Camera cam;
+  const cv::Matx33d k(cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
+  for (const bool with_depth : {true, false}) {
+    SCOPED_TRACE(with_depth ? "with depth" : "without depth");
+    SequenceGenerator gen(23, Eigen::Vector3d::Zero());  // the "person" stands still
+    DynamicFilterOptions options;
+    options.mode = DynamicFilterMode::kGeometry;
+    DynamicFilter filter(options);
+    int motion_ok = 0, flagged = 0, observed = 0;
+    double max_translation_error = 0;
+    for (int f = 0; f < 12; ++f) {
+      const SyntheticFrame frame = gen.Frame(f);
+      std::vector<float> depths = frame.depths;
+      if (!with_depth) std::fill(depths.begin(), depths.end(), 0.f);
+      FilterInput input(frame.keypoints, frame.descriptors, frame.detections);
+      input.depths = &depths;
+      input.camera_matrix = &k;
+      const FilterResult r = filter.Process(input);
+      EXPECT_TRUE(r.used_depth_residual);
+      flagged += r.num_dynamic;
+      for (const FeatureStatus& fs : r.features) observed += fs.has_observation;
+      if (!r.motion_model_ok) continue;
+      ++motion_ok;
+      const Rigid3d truth = CamFromWorldAt(f) * CamFromWorldAt(f - 1).Inverse();
+      const Eigen::Vector3d t(r.prev_translation[0], r.prev_translation[1], r.prev_translation[2]);
+      max_translation_error = std::max(max_translation_error, (t - truth.translation).norm());
+    }
+    if (with_depth) {
+      // Measured: translation within 0.6 mm of the truth (camera steps of 13 mm), 0 flagged.
+      EXPECT_EQ(motion_ok, 11);  // every frame after the first
+      EXPECT_LT(max_translation_error, 0.002);
+      EXPECT_GT(observed, 11 * 500);
+    } else {
+      EXPECT_EQ(motion_ok, 0);
+      EXPECT_EQ(observed, 0);
+    }
+    EXPECT_EQ(flagged, 0);
+  }
 }
 
 TEST(DynamicFilterSequence, StaticCameraUsesHomographyAndFindsMover) {

@@ -99,6 +99,14 @@ void SyntheticOptions::Check() const {
       "num_moving_objects/object_size (lanes would overlap in this room)");
   DYGSLAM_CHECK_OPTION(object_speed > 0 && object_speed <= 5, "object_speed");
   DYGSLAM_CHECK_OPTION(objects_start_frame >= 0, "objects_start_frame");
+  DYGSLAM_CHECK_OPTION(object_pause >= 0 && object_pause <= 60, "object_pause");
+  DYGSLAM_CHECK_OPTION(num_undetected_objects >= 0 && num_undetected_objects <= num_moving_objects,
+                       "num_undetected_objects (at most num_moving_objects)");
+  DYGSLAM_CHECK_OPTION(
+      near_object_distance == 0 ||
+          (near_object_distance >= path_amplitude + object_size.x() / 2 + 0.3 &&
+           near_object_distance + object_size.x() + 0.02 <= NearLaneX(*this) - CameraBaseX(*this)),
+      "near_object_distance (0, or clear of the camera path and of the first lane)");
   DYGSLAM_CHECK_OPTION(depth_noise_coefficient >= 0 && depth_noise_coefficient < 0.1,
                        "depth_noise_coefficient");
   DYGSLAM_CHECK_OPTION(rgb_noise_sigma >= 0 && rgb_noise_sigma <= 50, "rgb_noise_sigma");
@@ -140,6 +148,17 @@ SyntheticScene::SyntheticScene(const SyntheticOptions& options) : options_(optio
     object.lane_end = {x, y_extent - rng.Uniform(0.0, 0.3), z};
     object.speed = options_.object_speed * rng.Uniform(0.8, 1.2);
     object.phase = rng.Uniform();
+    object.detected = i < k - options_.num_undetected_objects;
+    objects_.push_back(object);
+  }
+  if (options_.near_object_distance > 0) {
+    MovingObject object;
+    const double x = CameraBaseX(options_) + options_.near_object_distance;
+    const double z = options_.object_size.z() / 2;
+    object.lane_start = {x, -1.2, z};
+    object.lane_end = {x, 1.2, z};
+    object.speed = options_.object_speed * rng.Uniform(0.8, 1.2);
+    object.phase = rng.Uniform();
     objects_.push_back(object);
   }
 
@@ -163,7 +182,7 @@ SyntheticScene::SyntheticScene(const SyntheticOptions& options) : options_(optio
   for (size_t i = 0; i < static_boxes_.size(); ++i) {
     add_surface(static_boxes_[i], false, 1.2 * tpm, TextureStyle::kFurniture, 2000 + i);
   }
-  for (int i = 0; i < k; ++i) {
+  for (int i = 0; i < num_moving_objects(); ++i) {
     add_surface(MovingObjectBox(i, 0), false, 2.0 * tpm, TextureStyle::kClothing, 3000 + i);
   }
 }
@@ -267,11 +286,30 @@ OrientedBox SyntheticScene::MovingObjectBox(int object, int frame) const {
   const MovingObject& m = objects_.at(object);
   const double length = (m.lane_end - m.lane_start).norm();
   const double t = FrameTime(frame) - FrameTime(options_.objects_start_frame);
-  double s = std::fmod(m.phase * 2 * length + m.speed * t, 2 * length);
-  if (s < 0) s += 2 * length;
-  const double along = length - std::abs(s - length);  // triangle wave in [0, length]
+  double along = 0, yaw = 0;
+  if (options_.object_pause <= 0) {
+    double s = std::fmod(m.phase * 2 * length + m.speed * t, 2 * length);
+    if (s < 0) s += 2 * length;
+    along = length - std::abs(s - length);  // triangle wave in [0, length]
+  } else {
+    // Walk (length / speed), stand then turn (pause), walk back, stand then turn.
+    const double walk = length / m.speed, pause = options_.object_pause;
+    const double cycle = 2 * (walk + pause);
+    double c = std::fmod(m.phase * cycle + t, cycle);
+    if (c < 0) c += cycle;
+    const int half = c < walk + pause ? 0 : 1;
+    const double h = c - half * (walk + pause);
+    const double walked = std::min(h, walk) / walk;
+    along = half == 0 ? length * walked : length * (1 - walked);
+    double turned = 0;  // 0..1 within this half cycle's turn
+    if (options_.object_turn && h > walk + pause / 2) {
+      const double x = (h - walk - pause / 2) / (pause / 2);
+      turned = x * x * (3 - 2 * x);  // smoothstep
+    }
+    yaw = kPi * (half + turned);
+  }
   OrientedBox box;
-  box.world_from_box = Rigid3d(Eigen::Quaterniond::Identity(),
+  box.world_from_box = Rigid3d(yaw == 0 ? Eigen::Quaterniond::Identity() : Yaw(yaw),
                                m.lane_start + (m.lane_end - m.lane_start) * (along / length));
   box.half_extents = options_.object_size / 2;
   return box;
@@ -641,7 +679,7 @@ SyntheticFrame SyntheticScene::RenderFrame(int frame) const {
 
   out.dynamic_mask = out.object_labels > 0;  // 255 / 0
   for (int k = 0; k < num_objects; ++k) {
-    if (count[k] < options_.min_detection_pixels) continue;
+    if (count[k] < options_.min_detection_pixels || !objects_[k].detected) continue;
     Detection detection;
     detection.box = cv::Rect2f(static_cast<float>(min_u[k]), static_cast<float>(min_v[k]),
                                static_cast<float>(max_u[k] - min_u[k] + 1),

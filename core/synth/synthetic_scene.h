@@ -74,6 +74,17 @@ struct SyntheticOptions {
   Eigen::Vector3d object_size{0.5, 0.4, 1.7};
   double object_speed = 1.0;    // m/s
   int objects_start_frame = 0;  // objects are absent (not rendered, not listed) before this frame
+  // Harder movers (label tests of the dynamic filter; defaults keep the old sequences):
+  // seconds each object stands at each end of its lane (walk, stop, stand, walk back) ...
+  double object_pause = 0.0;
+  // ... turning round (yaw +180 deg, smoothly) in the second half of each pause.
+  bool object_turn = false;
+  // The last N lane objects are never reported in `boxes` (a mover the detector misses).
+  int num_undetected_objects = 0;
+  // > 0: one more mover (reported in boxes, last object index) walking across the view on a
+  // short lane this far (metres) in front of the camera path centre: it fills about half the
+  // view when it passes. Needs path_amplitude + object_size.x / 2 + 0.3 <= this distance.
+  double near_object_distance = 0.0;
 
   // Sensor model.
   bool depth_noise = false;
@@ -117,6 +128,8 @@ class SyntheticScene {
   const SyntheticOptions& options() const { return options_; }
   int num_frames() const { return options_.num_frames; }
   int num_moving_objects() const { return static_cast<int>(objects_.size()); }
+  // False for the objects of num_undetected_objects (never in boxes).
+  bool IsObjectDetected(int object) const { return objects_.at(object).detected; }
 
   Timestamp FrameStamp(int frame) const;
   Timestamp DepthStamp(int frame) const;
@@ -152,6 +165,7 @@ class SyntheticScene {
     Eigen::Vector3d lane_start, lane_end;  // centre positions at the two turning points
     double speed = 1.0;
     double phase = 0.0;  // fraction of a back-and-forth cycle at start
+    bool detected = true;  // listed in SyntheticFrame::boxes when visible
   };
   struct Surface {
     OrientedBox box;

@@ -380,6 +380,72 @@ TEST(SyntheticScene, BadOptionsNameTheField) {
   EXPECT_NE(message_of(options).find("Camera.fx"), std::string::npos);
   EXPECT_THROW(SyntheticScene{options}, InvalidOptions);
   EXPECT_THROW(SyntheticScene(SmallOptions()).RenderFrame(60), InvalidOptions);
+  options = SyntheticOptions();
+  options.num_undetected_objects = 3;  // more than the 2 objects
+  EXPECT_NE(message_of(options).find("num_undetected_objects"), std::string::npos);
+  options = SyntheticOptions();
+  options.near_object_distance = 0.3;  // inside the camera's path
+  EXPECT_NE(message_of(options).find("near_object_distance"), std::string::npos);
+  options = SyntheticOptions();
+  options.object_pause = -1;
+  EXPECT_NE(message_of(options).find("object_pause"), std::string::npos);
+}
+
+// The hard cases of issue 22: movers walk, stop, stand, turn round and walk back; one is never
+// detected; one passes close enough to fill about half the view.
+TEST(SyntheticScene, MoversStopTurnAndOneIsNeverDetected) {
+  SyntheticOptions options = SmallOptions(2, 21);
+  options.num_frames = 600;  // 20 s: several walks and pauses
+  options.object_pause = 1.0;
+  options.object_turn = true;
+  options.num_undetected_objects = 1;
+  const SyntheticScene scene(options);
+  ASSERT_TRUE(scene.IsObjectDetected(0));
+  ASSERT_FALSE(scene.IsObjectDetected(1));
+  int walking = 0, standing = 0, turning = 0;
+  double max_yaw_change = 0;
+  for (int f = 1; f < options.num_frames; ++f) {
+    const Rigid3d a = scene.MovingObjectBox(0, f - 1).world_from_box;
+    const Rigid3d b = scene.MovingObjectBox(0, f).world_from_box;
+    const double moved = (b.translation - a.translation).norm();
+    const double turned = a.rotation.angularDistance(b.rotation);
+    max_yaw_change = std::max(max_yaw_change, turned);
+    walking += moved > 1e-6 && turned < 1e-9;
+    standing += moved < 1e-9 && turned < 1e-9;
+    turning += moved < 1e-9 && turned > 1e-9;
+  }
+  // Walking ~0.8-1.2 m/s on ~3 m lanes (~3 s) then 0.5 s standing, 0.5 s turning, per end.
+  EXPECT_GT(walking, 300);
+  EXPECT_GT(standing, 40);
+  EXPECT_GT(turning, 40);
+  // Smooth: a smoothstep over half the pause (15 frames) peaks at 1.5 pi / 15 = 0.31 rad/frame.
+  EXPECT_LT(max_yaw_change, 0.33);
+  EXPECT_GT(max_yaw_change, 0.25);
+  // The undetected object shows up in the labels but never in the boxes.
+  int frames_with_undetected = 0;
+  for (int f = 0; f < options.num_frames; f += 50) {
+    const SyntheticFrame frame = scene.RenderFrame(f);
+    const int pixels = cv::countNonZero(frame.object_labels == 2);
+    frames_with_undetected += pixels >= options.min_detection_pixels;
+    for (int id : frame.box_object_ids) EXPECT_NE(id, 1);
+  }
+  EXPECT_GT(frames_with_undetected, 0);
+}
+
+TEST(SyntheticScene, NearMoverFillsAboutHalfTheView) {
+  SyntheticOptions options = SmallOptions(1, 4);
+  options.num_frames = 180;
+  options.path_amplitude = 0.1;
+  options.near_object_distance = 0.75;
+  const SyntheticScene scene(options);
+  ASSERT_EQ(scene.num_moving_objects(), 2);
+  double max_share = 0;
+  for (int f = 0; f < options.num_frames; f += 6) {
+    const SyntheticFrame frame = scene.RenderFrame(f);
+    max_share = std::max(max_share, cv::countNonZero(frame.object_labels == 2) /
+                                        static_cast<double>(frame.object_labels.total()));
+  }
+  EXPECT_GT(max_share, 0.4);
 }
 
 }  // namespace

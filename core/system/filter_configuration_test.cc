@@ -13,12 +13,14 @@ TEST(FilterConfiguration, PaperFamilyAddsOneExtensionAtATime) {
     double margin_fraction;
     bool demotion;
     bool top_up;
+    bool depth_residual;  // ours; the paper family runs the paper's epipolar test
   };
   const SystemOptions defaults;
   for (const Expected& e :
-       {Expected{"paper", 0.0, false, false}, Expected{"paper+margin", 0.1, false, false},
-        Expected{"paper+margin+demotion", 0.1, true, false},
-        Expected{"full", defaults.filter.box_margin_fraction, true, true}}) {
+       {Expected{"paper", 0.0, false, false, false},
+        Expected{"paper+margin", 0.1, false, false, false},
+        Expected{"paper+margin+demotion", 0.1, true, false, false},
+        Expected{"full", defaults.filter.box_margin_fraction, true, true, true}}) {
     SCOPED_TRACE(e.name);
     SystemOptions o;
     o.filter_mode = FilterMode::kNone;
@@ -28,6 +30,7 @@ TEST(FilterConfiguration, PaperFamilyAddsOneExtensionAtATime) {
     EXPECT_DOUBLE_EQ(o.filter.box_margin_fraction, e.margin_fraction);
     EXPECT_EQ(o.demote_in_box_features, e.demotion);
     EXPECT_EQ(o.static_top_up_fraction > 0, e.top_up);
+    EXPECT_EQ(o.filter.depth_residual, e.depth_residual);
     o.filter.Check();
   }
   // The paper's parameters are untouched by the presets (C1, alpha, Q, R, P_init, C2, delta).

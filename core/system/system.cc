@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <deque>
 #include <future>
 #include <mutex>
@@ -89,6 +90,7 @@ void ApplyFilterConfiguration(const std::string& name, SystemOptions* options) {
   options->filter.box_margin_fraction = 0.0;
   options->demote_in_box_features = false;
   options->static_top_up_fraction = 0.0;
+  options->filter.depth_residual = false;  // the paper's epipolar test (F between frames)
   if (name == "paper+margin" || name == "paper+margin+demotion") {
     options->filter.box_margin_fraction = 0.1;
   }
@@ -423,6 +425,17 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
                         cv::noArray(), options_.camera.K());
     input.undistorted_points = &undistorted;
   }
+  // Depth of each keypoint (at its image position, like Frame) for the depth-residual test.
+  std::vector<float> keypoint_depths(features.keypoints.size(), 0.f);
+  for (size_t i = 0; i < keypoint_depths.size(); ++i) {
+    const cv::Point p(cvRound(features.keypoints[i].pt.x), cvRound(features.keypoints[i].pt.y));
+    if (p.x < 0 || p.y < 0 || p.x >= depth_m.cols || p.y >= depth_m.rows) continue;
+    const float z = depth_m.at<float>(p);
+    if (std::isfinite(z) && z > 0) keypoint_depths[i] = z;
+  }
+  const cv::Matx33d camera_matrix(options_.camera.K());
+  input.depths = &keypoint_depths;
+  input.camera_matrix = &camera_matrix;
   const FilterResult filtered = filter_.Process(input);
   result.times.matching_ms = filtered.matching_ms;
   result.times.probability_ms = filtered.probability_ms;

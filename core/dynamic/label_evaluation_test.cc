@@ -1,0 +1,217 @@
+// Per-feature dynamic labels on generated sequences with the hard cases of real data (issue 22):
+// movers that walk, stop, stand and turn; static background inside their (padded) boxes at other
+// depths; a mover that is never detected; a mover filling half the view; a slowly moving camera.
+// Ground truth: a feature is dynamic when its pixel belongs to a mover (object_labels != 0).
+#include "core/dynamic/label_evaluation.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <map>
+#include <opencv2/imgproc.hpp>
+
+#include "core/base/error.h"
+#include "core/dynamic/dynamic_filter.h"
+#include "core/slam/orb_extractor.h"
+#include "core/synth/synthetic_scene.h"
+
+namespace dygslam {
+namespace {
+
+TEST(LabelEvaluation, CountsEveryCaseOnAHandmadeLabelImage) {
+  cv::Mat labels = cv::Mat::zeros(100, 100, CV_8UC1);
+  labels(cv::Rect(50, 0, 50, 100)).setTo(1);  // mover 0 on the right half
+  labels(cv::Rect(0, 80, 20, 20)).setTo(2);   // mover 1 (undetected) bottom left
+  std::vector<cv::KeyPoint> kps;
+  for (cv::Point2f p :
+       {cv::Point2f(10, 10), cv::Point2f(30, 10), cv::Point2f(60, 10), cv::Point2f(80, 50),
+        cv::Point2f(10, 90), cv::Point2f(48, 10), cv::Point2f(200, 5)})
+    kps.emplace_back(p, 7.f);
+  //                           static static mover mover undet. static(edge) outside
+  const std::vector<uint8_t> flags = {0, 1, 1, 0, 1, 0, 1};
+  const std::vector<uint8_t> region = {0, 1, 1, 1, 0, 1, 0};
+  const LabelCounts c = EvaluateLabels(kps, flags, region, labels, {2});
+  EXPECT_EQ(c.true_positives, 2);   // (60,10), (10,90)
+  EXPECT_EQ(c.false_positives, 1);  // (30,10)
+  EXPECT_EQ(c.false_negatives, 1);  // (80,50)
+  EXPECT_EQ(c.true_negatives, 2);   // (10,10), (48,10)
+  EXPECT_EQ(c.static_in_region, 2);
+  EXPECT_EQ(c.static_in_region_kept, 1);
+  EXPECT_EQ(c.undetected, 1);
+  EXPECT_EQ(c.undetected_flagged, 1);
+  EXPECT_EQ(c.ignored, 1);  // outside the image
+  EXPECT_DOUBLE_EQ(c.Precision(), 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(c.Recall(), 2.0 / 3.0);
+  // With a boundary band, the static feature 2 px from the mover is ambiguous.
+  LabelEvaluationOptions band;
+  band.boundary_px = 3;
+  EXPECT_EQ(EvaluateLabels(kps, flags, region, labels, {2}, band).ignored, 2);
+  EXPECT_THROW(EvaluateLabels(kps, {0, 1}, region, labels, {}), InvalidOptions);
+  EXPECT_THROW(EvaluateLabels(kps, flags, region, cv::Mat(), {}), InvalidOptions);
+}
+
+// One generated sequence, rendered and ORB-extracted once, then run through each configuration.
+struct PreparedFrame {
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;
+  std::vector<float> depths;
+  std::vector<Detection> boxes;
+  cv::Mat labels;
+};
+
+struct Prepared {
+  std::vector<PreparedFrame> frames;
+  std::vector<int> undetected_labels;
+  cv::Matx33d camera_matrix;
+};
+
+Prepared Prepare(const SyntheticOptions& options) {
+  const SyntheticScene scene(options);
+  Prepared out;
+  out.camera_matrix = cv::Matx33d(options.camera.K());
+  for (int k = 0; k < scene.num_moving_objects(); ++k)
+    if (!scene.IsObjectDetected(k)) out.undetected_labels.push_back(k + 1);
+  const OrbExtractor extractor{OrbExtractorOptions()};
+  for (int f = 0; f < options.num_frames; ++f) {
+    const SyntheticFrame frame = scene.RenderFrame(f);
+    cv::Mat gray;
+    cv::cvtColor(frame.rgb, gray, cv::COLOR_BGR2GRAY);
+    const OrbFeatures features = extractor.Extract(gray);
+    PreparedFrame p;
+    p.keypoints = features.keypoints;
+    p.descriptors = features.DescriptorMatrix();
+    for (const cv::KeyPoint& kp : p.keypoints) {
+      const uint16_t raw = frame.depth.at<uint16_t>(cvRound(kp.pt.y), cvRound(kp.pt.x));
+      p.depths.push_back(static_cast<float>(raw / options.sensor.depth_map_factor));
+    }
+    // Detector boxes are looser than the silhouettes: pad the ground-truth boxes by 20 px, so
+    // the dynamic region holds static background at other depths, as with a real detector.
+    constexpr float kPad = 20.f;
+    for (Detection d : frame.boxes) {
+      d.box =
+          cv::Rect2f(d.box.x - kPad, d.box.y - kPad, d.box.width + 2 * kPad,
+                     d.box.height + 2 * kPad) &
+          cv::Rect2f(0, 0, static_cast<float>(frame.rgb.cols), static_cast<float>(frame.rgb.rows));
+      p.boxes.push_back(d);
+    }
+    p.labels = frame.object_labels;
+    out.frames.push_back(std::move(p));
+  }
+  return out;
+}
+
+// The configurations of `--filter` as System sets them up (core/system ApplyFilterConfiguration).
+DynamicFilterOptions Configuration(const std::string& name) {
+  DynamicFilterOptions o;
+  if (name == "boxes") o.mode = DynamicFilterMode::kBoxes;
+  if (name == "geometry") o.mode = DynamicFilterMode::kGeometry;
+  if (name == "geometry-epipolar") {  // geometry mode with the paper's epipolar test
+    o.mode = DynamicFilterMode::kGeometry;
+    o.depth_residual = false;
+  }
+  if (name == "paper") {
+    o.box_margin_fraction = 0;
+    o.depth_residual = false;
+  }
+  return o;  // "full": the defaults
+}
+
+LabelCounts Run(const Prepared& data, const std::string& configuration) {
+  DynamicFilter filter(Configuration(configuration));
+  LabelCounts total;
+  for (size_t f = 0; f < data.frames.size(); ++f) {
+    const PreparedFrame& p = data.frames[f];
+    FilterInput input(p.keypoints, p.descriptors, p.boxes);
+    input.depths = &p.depths;
+    input.camera_matrix = &data.camera_matrix;
+    const FilterResult r = filter.Process(input);
+    if (f == 0) continue;  // no previous frame: the geometry cannot say anything yet
+    std::vector<uint8_t> region(r.features.size());
+    for (size_t i = 0; i < region.size(); ++i)
+      region[i] = r.features[i].in_dynamic_region && configuration.rfind("geometry", 0) != 0;
+    total +=
+        EvaluateLabels(p.keypoints, r.DynamicFlags(), region, p.labels, data.undetected_labels);
+  }
+  return total;
+}
+
+std::map<std::string, LabelCounts> RunAll(const Prepared& data, const char* scenario) {
+  std::map<std::string, LabelCounts> out;
+  for (const char* name : {"boxes", "geometry-epipolar", "geometry", "paper", "full"}) {
+    out[name] = Run(data, name);
+    std::printf("%s %-17s %s\n", scenario, name, out[name].ToString().c_str());
+  }
+  return out;
+}
+
+// Slow camera, three movers at 0.6 m/s that stop, stand and turn at the ends of their lanes,
+// the farthest never detected; depth noise.
+SyntheticOptions WalkersOptions() {
+  SyntheticOptions o;
+  o.num_frames = 60;
+  o.num_moving_objects = 3;
+  o.num_undetected_objects = 1;
+  o.object_speed = 0.6;
+  o.object_pause = 1.0;
+  o.object_turn = true;
+  o.supersampling = 1;
+  o.seed = 5;
+  o.depth_noise = true;
+  o.path_amplitude = 0.1;
+  o.yaw_amplitude_deg = 10;
+  o.pitch_amplitude_deg = 3;
+  o.roll_amplitude_deg = 1;
+  return o;
+}
+
+TEST(DynamicLabelsSynthetic, WalkersStopTurnAndOneIsNeverDetected) {
+  const Prepared data = Prepare(WalkersOptions());
+  const auto c = RunAll(data, "walkers");
+  ASSERT_GT(c.at("boxes").NumDynamic(), 300) << "too few features on movers to measure";
+  ASSERT_GT(c.at("boxes").undetected, 50) << "the undetected mover is hardly visible";
+  // Measured (seed 5, 59 frames scored; ORB of core/slam, deterministic):
+  //   boxes             precision 0.51 recall 0.71 undetected 0.21 (where it overlaps a box)
+  //   geometry-epipolar precision 0.63 recall 0.59 undetected 0.48   (the paper's test alone)
+  //   geometry          precision 0.36 recall 0.63 undetected 0.91   (depth-residual test)
+  //   paper             precision 0.88 recall 0.41 static-in-box kept 0.86 undetected 0.08
+  //   full              precision 0.92 recall 0.42 static-in-box kept 0.94 undetected 0.18
+  // (full with the depth-residual test, measured before it was limited to geometry mode:
+  // 0.78 / 0.82 / 0.88 / 0.51.) Standing movers are dynamic by label but still: no motion test
+  // sees them, hence the recalls.
+  const LabelCounts& full = c.at("full");
+  const LabelCounts& geometry = c.at("geometry");
+  EXPECT_EQ(c.at("boxes").static_in_region_kept, 0);
+  EXPECT_LT(c.at("boxes").UndetectedRecall(), 0.3);
+  EXPECT_GE(full.Precision(), 0.85);
+  EXPECT_GE(full.Recall(), 0.35);
+  EXPECT_GE(full.StaticInBoxKept(), 0.85);
+  EXPECT_GE(geometry.Recall(), 0.55);
+  EXPECT_GE(geometry.UndetectedRecall(), 0.8);
+  EXPECT_GT(geometry.UndetectedRecall(), c.at("geometry-epipolar").UndetectedRecall() + 0.3);
+}
+
+// A mover passing close in front of a slow camera: it fills about half the view.
+TEST(DynamicLabelsSynthetic, MoverFillingHalfTheView) {
+  SyntheticOptions o = WalkersOptions();
+  o.num_moving_objects = 1;
+  o.num_undetected_objects = 0;
+  o.near_object_distance = 0.75;
+  o.object_speed = 0.8;
+  o.object_pause = 0.5;
+  o.seed = 9;
+  const Prepared data = Prepare(o);
+  const auto c = RunAll(data, "near");
+  ASSERT_GT(c.at("boxes").NumDynamic(), 300) << "the near mover is hardly visible";
+  // Measured (seed 9): boxes precision 0.43 recall 1.00; geometry-epipolar 0.54 / 0.90;
+  // geometry 0.47 / 0.96; paper 0.63 / 0.72 (static-in-box kept 0.42); full 0.61 / 0.64
+  // (static-in-box kept 0.69; with the depth-residual test 0.65 / 1.00 / 0.77).
+  const LabelCounts& full = c.at("full");
+  EXPECT_GE(full.Precision(), 0.55);
+  EXPECT_GE(full.Recall(), 0.55);
+  EXPECT_GE(full.StaticInBoxKept(), 0.6);
+  EXPECT_GE(c.at("geometry").Recall(), 0.9);
+  EXPECT_GT(c.at("geometry").Recall(), c.at("geometry-epipolar").Recall() + 0.03);
+}
+
+}  // namespace
+}  // namespace dygslam

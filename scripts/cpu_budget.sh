@@ -4,8 +4,8 @@
 # configuration:
 #   scripts/cpu_budget.sh BUILD_DIR DATASET_DIR RUNS OUT_DIR NAME=FILTER[,SETTINGS_KEY=VALUE...] ...
 # Each configuration runs `dygslam run DATASET --filter FILTER --config <settings>` where
-# <settings> is config/bonn.yaml with the given keys appended (keys with a dot go to a section:
-# Detector.every_n_frames=3 -> "Detector:\n  every_n_frames: 3"). Extra run arguments for every
+# <settings> is config/bonn.yaml with the given keys set (SECTION.KEY=VALUE sets KEY in SECTION,
+# e.g. Detector.every_n_frames=3 or OctoMap.pixel_stride=4). Extra run arguments for every
 # configuration: $CPU_BUDGET_ARGS (default "--direct --no-map"). DDS modes run inside a private
 # network namespace (DYGSLAM_DOMAIN_ID sets the domain).
 #   scripts/cpu_budget.sh build ../shared/data/bonn_crowd_part 3 out/cpu none=none full=full \
@@ -24,18 +24,34 @@ for spec in "$@"; do
   IFS=, read -r -a parts <<< "$rest"
   filter=${parts[0]}
   cfg=$out/$name.yaml
-  cp "$here/config/bonn.yaml" "$cfg"
-  declare -A sections=()
-  for kv in "${parts[@]:1}"; do
-    key=${kv%%=*} value=${kv#*=}
-    if [[ $key == *.* ]]; then
-      sections[${key%%.*}]+="  ${key#*.}: $value"$'\n'
-    else
-      echo "$key: $value" >> "$cfg"
-    fi
-  done
-  for s in "${!sections[@]}"; do printf '%s:\n%s' "$s" "${sections[$s]}" >> "$cfg"; done
-  unset sections
+  # Keys replace the preset's value (in its section) or are added (a new section if needed).
+  python3 - "$here/config/bonn.yaml" "$cfg" "${parts[@]:1}" <<'PY'
+import re, sys
+src, dst, pairs = sys.argv[1], sys.argv[2], sys.argv[3:]
+lines = open(src).read().splitlines()
+for kv in pairs:
+    key, value = kv.split("=", 1)
+    top = [i for i, l in enumerate(lines) if re.match(re.escape(key) + r"\s*:", l)]
+    if top:  # ORB-SLAM2's top-level dotted keys (ORBextractor.nFeatures)
+        lines[top[0]] = f"{key}: {value}"
+        continue
+    section, _, field = key.rpartition(".")
+    start = next((i for i, l in enumerate(lines) if section and l.rstrip() == section + ":"), None)
+    if not section:
+        hit = [i for i, l in enumerate(lines) if re.match(re.escape(field) + r"\s*:", l)]
+        if hit: lines[hit[0]] = f"{field}: {value}"
+        else: lines.append(f"{field}: {value}")
+        continue
+    if start is None:
+        lines += [f"{section}:", f"  {field}: {value}"]
+        continue
+    end = start + 1
+    while end < len(lines) and (lines[end].startswith(" ") or not lines[end].strip()): end += 1
+    hit = [i for i in range(start + 1, end) if re.match(r"\s+" + re.escape(field) + r"\s*:", lines[i])]
+    if hit: lines[hit[0]] = f"  {field}: {value}"
+    else: lines.insert(end, f"  {field}: {value}")
+open(dst, "w").write("\n".join(lines) + "\n")
+PY
   echo "$filter" > "$out/$name.filter"
   names+=("$name")
 done

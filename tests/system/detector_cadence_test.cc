@@ -4,6 +4,7 @@
 // detector's frames come through the runner's prefetch (deferred for the cadence) in order.
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <iostream>
 #include <vector>
 
@@ -73,6 +74,36 @@ TEST(DetectorCadence, CarriedBoxesRemoveTheFeaturesTheDetectorsBoxesRemove) {
   // against 10381 with the detector on every frame (0.95x, 1.03x): margins of about 4x that spread.
   EXPECT_GT(removed_carried, 0.8 * removed_every);
   EXPECT_LT(removed_carried, 1.25 * removed_every);
+}
+
+// A cadence outside 1..1000 is a clear error naming the key and the file.
+TEST(DetectorCadence, BadEveryNFramesNamesTheKey) {
+  const std::string dir = testing::MakeTempDir("detector_cadence");
+  for (const std::string value : {"0", "-3", "1001"}) {
+    const std::string path = dir + "/bonn_" + value + ".yaml";
+    {
+      std::ifstream in(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
+      std::ofstream out(path);
+      out << in.rdbuf() << "\nDetector:\n  every_n_frames: " << value << "\n";
+    }
+    try {
+      SystemOptionsFromSettings(LoadSettings(path));
+      ADD_FAILURE() << "every_n_frames " << value << " accepted";
+    } catch (const InputError& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find("Detector.every_n_frames"), std::string::npos) << message;
+      EXPECT_NE(message.find(path), std::string::npos) << message;
+    }
+  }
+  const std::string good = dir + "/bonn_3.yaml";
+  {
+    std::ifstream in(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
+    std::ofstream out(good);
+    out << in.rdbuf() << "\nDetector:\n  every_n_frames: 3\n  shift_carried_boxes: false\n";
+  }
+  const SystemOptions options = SystemOptionsFromSettings(LoadSettings(good));
+  EXPECT_EQ(options.detection_every_n_frames, 3);
+  EXPECT_FALSE(options.box_propagation.shift_boxes);
 }
 
 }  // namespace

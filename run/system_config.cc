@@ -225,6 +225,11 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                         {"confidence_threshold", &options.detector.confidence_threshold},
                         {"nms_threshold", &options.detector.nms_threshold},
                         {"num_threads", &options.detector.num_threads}});
+  // Detector cadence (issue 19): run on every n-th frame, carry the boxes in between.
+  ReadFields(detector, {{"every_n_frames", &options.detection_every_n_frames},
+                        {"shift_carried_boxes", &options.box_propagation.shift_boxes}});
+  if (options.detection_every_n_frames < 1 || options.detection_every_n_frames > 1000)
+    detector.Fail("every_n_frames", "expected an integer in 1..1000 (1: every frame)");
   std::vector<std::string> classes;
   if (detector.ReadIfPresent("dynamic_classes", &classes)) {
     options.detector.dynamic_classes = classes;

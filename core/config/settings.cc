@@ -140,6 +140,7 @@ const std::vector<std::string>& KnownSettingsKeys() {
       "DynamicFilter.expansion_depth_gap", "Detector.model", "Detector.cfg", "Detector.weights",
       "Detector.names", "Detector.input_width", "Detector.input_height",
       "Detector.confidence_threshold", "Detector.nms_threshold", "Detector.num_threads",
+      "Detector.every_n_frames", "Detector.shift_carried_boxes",
       "Detector.dynamic_classes", "LoopClosing.vocabulary", "LoopClosing.enabled",
       "LoopClosing.min_keyframe_gap", "LoopClosing.revisit_min_path_m", "LoopClosing.consistency",
       "LoopClosing.min_bow_matches", "LoopClosing.ransac_iterations",

@@ -99,6 +99,9 @@ void ApplyFilterConfiguration(const std::string& name, SystemOptions* options) {
 
 void SystemOptions::Check() const {
   DYGSLAM_CHECK_OPTION(!localization || !load_map.empty(), "localization (needs a map to load)");
+  DYGSLAM_CHECK_OPTION(detection_every_n_frames >= 1 && detection_every_n_frames <= 1000,
+                       "Detector.every_n_frames (1..1000)");
+  box_propagation.Check();
   camera.Check();
   sensor.Check();
   orb.Check();
@@ -153,7 +156,8 @@ class SystemImpl {
         map_(loaded_.map ? loaded_.map : std::make_shared<Map>()),
         local_mapper_(map_, options.local_mapping, !options.deterministic),
         tracker_(options.tracking, map_, local_mapper_, options.deterministic),
-        filter_(FilterOptionsOf(options)) {
+        filter_(FilterOptionsOf(options)),
+        boxes_(options.box_propagation) {
     if (vocabulary_) {
       database_ = std::make_shared<KeyFrameDatabase>();
       for (const auto& [id, kf] : map_->keyframes()) database_->Add(id, kf->bow_vector);
@@ -232,12 +236,27 @@ class SystemImpl {
   MapStatistics MapSizes() const { return map_->Statistics(); }
   void Prefetch(const cv::Mat& rgb, Timestamp stamp) {
     if (!options_.NeedsDetections() || rgb.empty() || rgb.type() != CV_8UC3) return;
+    if (options_.detection_every_n_frames > 1) {
+      // Whether the detector runs on this frame is decided when the frame before it is fed.
+      deferred_.push_back({stamp, rgb});
+      while (deferred_.size() > kMaxPrefetched) deferred_.pop_front();
+      return;
+    }
     EnsureDetector();
     auto job = std::make_shared<DetectionJob>();
     job->stamp = stamp;
     job->ticket = detection_worker_->Submit(rgb);
     // Several frames may be prefetched ahead (the caller loads t+1 before feeding t); keep them in
     // stamp order, a bounded number (a caller that prefetches and never feeds loses the oldest).
+    prefetched_.push_back(job);
+    while (prefetched_.size() > kMaxPrefetched) prefetched_.pop_front();
+  }
+  // Starts the detector on `rgb` ahead of its frame (stamp order kept).
+  void SubmitAhead(const cv::Mat& rgb, Timestamp stamp) {
+    EnsureDetector();
+    auto job = std::make_shared<DetectionJob>();
+    job->stamp = stamp;
+    job->ticket = detection_worker_->Submit(rgb);
     prefetched_.push_back(job);
     while (prefetched_.size() > kMaxPrefetched) prefetched_.pop_front();
   }
@@ -287,6 +306,15 @@ class SystemImpl {
   };
   static constexpr size_t kMaxPrefetched = 4;
   std::deque<std::shared_ptr<DetectionJob>> prefetched_;
+  // detection_every_n_frames > 1: frames announced by Prefetch, not yet submitted.
+  struct DeferredFrame {
+    Timestamp stamp;
+    cv::Mat rgb;
+  };
+  std::deque<DeferredFrame> deferred_;
+  int64_t own_detector_frames_ = 0;               // frames fed that needed the internal detector
+  BoxPropagator boxes_;                           // boxes carried between detector frames
+  std::vector<cv::KeyPoint> previous_keypoints_;  // the filter's previous frame (all features)
   int64_t next_frame_id_ = 0;
   Timestamp last_stamp_;
   bool has_last_stamp_ = false;
@@ -390,7 +418,24 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
     detection_job = prefetched_.front();
     prefetched_.pop_front();
   }
-  if (need_detections && detections == nullptr && !detection_job) {
+  const bool own_detector = need_detections && detections == nullptr;
+  const int every_n = options_.detection_every_n_frames;
+  bool detect_now = true;
+  if (own_detector) {
+    detect_now = own_detector_frames_ % every_n == 0;
+    ++own_detector_frames_;
+    if (every_n > 1) {
+      while (!deferred_.empty() && deferred_.front().stamp <= stamp) deferred_.pop_front();
+      // The next announced frame: start its detection now if it is a detector frame, so it
+      // overlaps this frame's tracking.
+      if (!deferred_.empty() && own_detector_frames_ % every_n == 0) {
+        SubmitAhead(deferred_.front().rgb, deferred_.front().stamp);
+        deferred_.pop_front();
+      }
+    }
+  }
+  if (own_detector && !detect_now) detection_job.reset();
+  if (own_detector && detect_now && !detection_job) {
     if (rgb.channels() != 3)
       throw InputError("rgb image: the detector needs CV_8UC3 BGR, got one channel");
     EnsureDetector();
@@ -403,12 +448,17 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   OrbFeatures features = extractor_.Extract(gray, mask, -1, &extraction_cache);
   result.times.orb_extraction_ms = MsSince(t_orb);
   result.num_features = static_cast<int>(features.keypoints.size());
-  if (need_detections && detections == nullptr) {
+  if (own_detector && detect_now) {
     const auto t_wait = std::chrono::steady_clock::now();
     own_detections = detection_job->ticket.result.get();
     result.times.detection_wait_ms = MsSince(t_wait);
     result.times.detection_ms = *detection_job->ticket.detect_ms;
     detections = &own_detections;
+    if (every_n > 1) boxes_.SetDetections(own_detections);
+  } else if (own_detector) {
+    own_detections = boxes_.Predict();
+    detections = &own_detections;
+    result.detections_carried = true;
   }
   result.detections_used = need_detections && detections != nullptr;
 
@@ -437,6 +487,10 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   input.depths = &keypoint_depths;
   input.camera_matrix = &camera_matrix;
   const FilterResult filtered = filter_.Process(input);
+  if (own_detector && every_n > 1) {
+    boxes_.Observe(previous_keypoints_, features.keypoints, filtered);
+    previous_keypoints_ = features.keypoints;
+  }
   result.times.matching_ms = filtered.matching_ms;
   result.times.probability_ms = filtered.probability_ms;
   std::vector<uint8_t> dynamic = filtered.DynamicFlags();

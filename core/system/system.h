@@ -14,6 +14,7 @@
 
 #include "core/base/camera.h"
 #include "core/base/types.h"
+#include "core/dynamic/detection_propagation.h"
 #include "core/dynamic/dynamic_filter.h"
 #include "core/dynamic/dynamic_mask.h"
 #include "core/dynamic/yolo_detector.h"
@@ -53,6 +54,9 @@ struct FrameResult {
   int num_dynamic = 0;      // features removed by the dynamic filter
   int num_tracked = 0;      // inlier map-point matches after pose optimisation
   bool detections_used = false;
+  // The internal detector did not run on this frame (SystemOptions::detection_every_n_frames):
+  // the boxes of the last detector frame were carried to it (detections_used is true).
+  bool detections_carried = false;
   StageTimes times;
 };
 
@@ -73,6 +77,13 @@ struct SystemOptions {
   // inside the system, concurrently with ORB extraction. Empty cfg_path: the default model
   // (see SystemOptions::Check / system.cc).
   DetectorOptions detector;
+  // The internal detector runs on every n-th frame (`Detector.every_n_frames`); the frames in
+  // between get the last boxes shifted by their content's image motion (box_propagation, see
+  // core/dynamic/detection_propagation.h) and the filter carries its per-feature probabilities
+  // through the matches as on every frame. 1: every frame (the paper). Detections given to
+  // FeedRgbdFrame from outside are used as given.
+  int detection_every_n_frames = 1;
+  BoxPropagationOptions box_propagation;
   // Crowded frames: when fewer than this share of nFeatures survive the filter, features are
   // extracted again outside the detection boxes (budget = the shortfall) so tracking keeps a
   // full feature budget on the visible background. 0 disables it.

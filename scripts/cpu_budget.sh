@@ -1,0 +1,88 @@
+#!/bin/bash
+# CPU per frame (issue 19): user + sys of all threads of `dygslam run` / frames, with ATE RMSE,
+# for several configurations, RUNS interleaved rounds (a, b, c, a, b, c, ...), medians per
+# configuration:
+#   scripts/cpu_budget.sh BUILD_DIR DATASET_DIR RUNS OUT_DIR NAME=FILTER[,SETTINGS_KEY=VALUE...] ...
+# Each configuration runs `dygslam run DATASET --filter FILTER --config <settings>` where
+# <settings> is config/bonn.yaml with the given keys set (SECTION.KEY=VALUE sets KEY in SECTION,
+# e.g. Detector.every_n_frames=3 or OctoMap.pixel_stride=4). Extra run arguments for every
+# configuration: $CPU_BUDGET_ARGS (default "--direct --no-map"). DDS modes run inside a private
+# network namespace (DYGSLAM_DOMAIN_ID sets the domain).
+#   scripts/cpu_budget.sh build ../shared/data/bonn_crowd_part 3 out/cpu none=none full=full \
+#       full_k3=full,Detector.every_n_frames=3
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+build=$1 dataset=$2 runs=$3 out=$4
+shift 4
+bin=$build/apps/dygslam
+[ -x "$bin" ] || { echo "cpu_budget.sh: $bin not built" >&2; exit 1; }
+args=${CPU_BUDGET_ARGS:---direct --no-map}
+mkdir -p "$out"
+names=()
+for spec in "$@"; do
+  name=${spec%%=*} rest=${spec#*=}
+  IFS=, read -r -a parts <<< "$rest"
+  filter=${parts[0]}
+  cfg=$out/$name.yaml
+  # Keys replace the preset's value (in its section) or are added (a new section if needed).
+  python3 - "$here/config/bonn.yaml" "$cfg" "${parts[@]:1}" <<'PY'
+import re, sys
+src, dst, pairs = sys.argv[1], sys.argv[2], sys.argv[3:]
+lines = open(src).read().splitlines()
+for kv in pairs:
+    key, value = kv.split("=", 1)
+    top = [i for i, l in enumerate(lines) if re.match(re.escape(key) + r"\s*:", l)]
+    if top:  # ORB-SLAM2's top-level dotted keys (ORBextractor.nFeatures)
+        lines[top[0]] = f"{key}: {value}"
+        continue
+    section, _, field = key.rpartition(".")
+    start = next((i for i, l in enumerate(lines) if section and l.rstrip() == section + ":"), None)
+    if not section:
+        hit = [i for i, l in enumerate(lines) if re.match(re.escape(field) + r"\s*:", l)]
+        if hit: lines[hit[0]] = f"{field}: {value}"
+        else: lines.append(f"{field}: {value}")
+        continue
+    if start is None:
+        lines += [f"{section}:", f"  {field}: {value}"]
+        continue
+    end = start + 1
+    while end < len(lines) and (lines[end].startswith(" ") or not lines[end].strip()): end += 1
+    hit = [i for i in range(start + 1, end) if re.match(r"\s+" + re.escape(field) + r"\s*:", lines[i])]
+    if hit: lines[hit[0]] = f"  {field}: {value}"
+    else: lines.insert(end, f"  {field}: {value}")
+open(dst, "w").write("\n".join(lines) + "\n")
+PY
+  echo "$filter" > "$out/$name.filter"
+  names+=("$name")
+done
+echo "cpu_budget: $runs rounds of ${names[*]}, args '$args', $(nproc) cores, load at start: $(cut -d' ' -f1-3 /proc/loadavg)"
+for r in $(seq 1 "$runs"); do
+  for name in "${names[@]}"; do
+    dir=$out/$name-$r
+    rm -rf "$dir"
+    # shellcheck disable=SC2086
+    unshare -n bash -c 'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$@"' cpu \
+      /usr/bin/time -f "cpu_s %U %S wall_s %e" "$bin" run "$dataset" --filter "$(cat "$out/$name.filter")" \
+      --config "$out/$name.yaml" --out "$dir" ${DYGSLAM_DOMAIN_ID:+--domain $DYGSLAM_DOMAIN_ID} $args \
+      > "$dir.log" 2>&1 || { echo "run $name-$r failed:" >&2; tail -n 20 "$dir.log" >&2; exit 1; }
+    echo "  $name run $r: $(grep -o '[0-9.]* fps' "$dir.log" | head -1), $(grep -o 'ATE RMSE [0-9.]* m' "$dir.log" | head -1), $(grep -a 'cpu_s' "$dir.log")"
+  done
+done
+echo "load at end: $(cut -d' ' -f1-3 /proc/loadavg)"
+python3 - "$out" "$runs" "${names[@]}" <<'PY'
+import re, statistics as st, sys
+out, runs, names = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
+print("| configuration | CPU ms per frame (median, min-max) | frames/s (median) | ATE RMSE m (median, min-max) |")
+print("|---|---|---|---|")
+for name in names:
+    cpu, fps, ate = [], [], []
+    for r in range(1, runs + 1):
+        log = open(f"{out}/{name}-{r}.log", errors="replace").read()
+        frames = int(re.search(r"frames: (\d+) processed", log).group(1))
+        u, s = map(float, re.search(r"cpu_s ([\d.]+) ([\d.]+)", log).groups())
+        cpu.append(1000 * (u + s) / frames)
+        m = re.search(r"([\d.]+) fps", log); fps.append(float(m.group(1)) if m else float("nan"))
+        m = re.search(r"ATE RMSE ([\d.]+)", log); ate.append(float(m.group(1)) if m else float("nan"))
+    print(f"| {name} | {st.median(cpu):.1f} ({min(cpu):.1f}-{max(cpu):.1f}) | {st.median(fps):.1f} | "
+          f"{st.median(ate):.4f} ({min(ate):.4f}-{max(ate):.4f}) |")
+PY

@@ -6,6 +6,7 @@
 //
 //   global_ba_benchmark DATASET_DIR [--config FILE] [--filter MODE] [--runs N]
 //
+// With a groundtruth.txt in the dataset it also prints each run's ATE RMSE (final trajectory).
 // The dataset should contain a loop that is closed (e.g. `dygslam synth ... --loop-path ...
 // --loop-inward`, README *Evaluation*). The frames are fed as fast as they are processed (no
 // real-time pacing), so a stall would show as frames longer than the global BA.
@@ -16,7 +17,9 @@
 #include <vector>
 
 #include "core/base/log.h"
+#include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
+#include "core/io/trajectory_io.h"
 #include "core/system/system.h"
 #include "run/dataset_runner.h"
 #include "run/run_settings.h"
@@ -108,6 +111,14 @@ int main(int argc, char** argv) {
                   run + 1, frames.size(), stats.loops_closed, stats.global_ba_windows_s.size(),
                   stats.global_ba_runs, stats.global_ba_discarded);
       for (const auto& [s, e] : stats.global_ba_windows_s) std::printf(" %.0f ms", (e - s) * 1e3);
+      if (dataset.has_groundtruth()) {
+        const AteResult ate =
+            ComputeAte(ReadTumTrajectory(dataset.groundtruth_path()), system.Trajectory());
+        std::printf("; ATE RMSE %.4f m over %zu poses", ate.error.rmse, ate.num_pairs);
+      }
+      for (const auto& [frame, loop_frame] : stats.loop_frames)
+        std::printf("; loop: frame %lld with frame %lld", static_cast<long long>(frame),
+                    static_cast<long long>(loop_frame));
       std::printf("\n");
       PrintRow("frames during a global BA", during);
       PrintRow("other frames", outside);

@@ -160,10 +160,10 @@ TEST_F(LoopClosingTest, ReturnToStartIsClosedAndCorrectsTheDrift) {
   EXPECT_EQ(on.poses, n);
   EXPECT_EQ(off.poses, n);
   EXPECT_GE(on.loops.loops_closed, 1);
-  // The drift of one lap is corrected. Measured (2026-12-02): ATE on / off = see BENCHMARKS.md;
-  // on this short lap the drift is a few centimetres, so the bound is the measured ratio with
-  // a margin (the 60 m loop in BENCHMARKS.md gives the >= 3x figure).
-  EXPECT_LE(on.ate, off.ate / 1.5);
+  // The drift of the lap is corrected: issue 14's goal, ATE >= 3x lower with loop closing.
+  // Measured 2026-12-02 (deterministic): on 0.0388 m, off 0.1995 m (5.1x); the loop moved the
+  // camera 0.50 m / 9.4 deg at frame 315 (lap: 267 frames).
+  EXPECT_LE(3.0 * on.ate, off.ate);
   // The correction reached the map consumers: keyframes were re-sent as pose updates while the
   // loop's frame was processed, and every keyframe's last emitted pose is its final pose.
   ASSERT_GE(on.first_loop_frame, 0);

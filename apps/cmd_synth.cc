@@ -68,9 +68,10 @@ int RunSynth(const std::vector<std::string>& args) {
   p.AddOption("loop-corner", "R", "corner radius of the loop path (m; = the smaller half size: a stadium)",
               "1.5");
   p.AddOption("speed", "V", "camera speed on the loop path (m/s)", "1");
-  p.AddFlag("loop-inward",
-            "look inwards at a pillar in the middle of the loop (its corners are the centres of\n"
-            "                the corner arcs: the surface in view is always the corner radius away)");
+  p.AddFlag(
+      "loop-inward",
+      "look inwards at a pillar in the middle of the loop (its corners are the centres of\n"
+      "                the corner arcs: the surface in view is always the corner radius away)");
   p.AddOption("texels", "T", "texture resolution (texels per metre, 50..1000; lower for big rooms)", "250");
   p.AddFlag("quiet", "no progress line");
   if (!p.Parse(args)) return p.exit_code();

@@ -90,7 +90,7 @@ void SyntheticOptions::Check() const {
   DYGSLAM_CHECK_OPTION(loop_speed > 0 && loop_speed <= 5 && std::isfinite(loop_speed),
                        "loop_speed");
   DYGSLAM_CHECK_OPTION(!loop_inward || (loop_semi_axes.x() - loop_corner_radius >= 0.25 &&
-                                          loop_semi_axes.y() - loop_corner_radius >= 0.25),
+                                        loop_semi_axes.y() - loop_corner_radius >= 0.25),
                        "loop_inward (needs a loop path whose half sizes exceed the corner radius "
                        "by at least 0.25 m: the pillar's half sizes)");
   DYGSLAM_CHECK_OPTION(object_size.allFinite() && object_size.minCoeff() >= 0.1 &&
@@ -133,8 +133,8 @@ SyntheticScene::SyntheticScene(const SyntheticOptions& options) : options_(optio
   if (options_.loop_inward) {  // the pillar the inward loop goes round (see the options)
     const double r = options_.loop_corner_radius;
     static_boxes_.push_back(MakeBox(
-        {0, 0, hz},
-        {options_.loop_semi_axes.x() - r, options_.loop_semi_axes.y() - r, hz - 0.001}, 0.0));
+        {0, 0, hz}, {options_.loop_semi_axes.x() - r, options_.loop_semi_axes.y() - r, hz - 0.001},
+        0.0));
   }
 
   SynthRng rng(MixSeed(options_.seed, 0x0B1Eu));
@@ -240,8 +240,8 @@ Rigid3d SyntheticScene::WorldFromCamAtTime(double t) const {
     }
     const Eigen::Vector3d position(
         xy.x(), xy.y(), o.camera_height + 0.05 * std::sin(w * t / (0.8 * o.path_period) + 0.5));
-    const double yaw = o.loop_inward ? std::atan2(-normal.y(), -normal.x())
-                                     : std::atan2(normal.y(), normal.x());
+    const double yaw =
+        o.loop_inward ? std::atan2(-normal.y(), -normal.x()) : std::atan2(normal.y(), normal.x());
     const double pitch =
         (o.pitch_offset_deg + o.pitch_amplitude_deg * std::sin(w * t / o.pitch_period)) * kDeg;
     const double roll =

@@ -385,11 +385,11 @@ TEST(SyntheticScene, InwardLoopKeepsThePillarAtTheCornerRadius) {
   EXPECT_GE(min_depth, 1.2 - 1e-6);
   EXPECT_LE(max_depth, 1.2 / std::cos(14.0 * M_PI / 180) + 1e-6);
   // After one lap the camera is back where it started (the height sways): the path is closed.
-  EXPECT_LT((scene.WorldFromCam(0).translation -
-             scene.WorldFromCamAtTime(perimeter / 1.4).translation)
-                .head<2>()
-                .norm(),
-            1e-9);
+  EXPECT_LT(
+      (scene.WorldFromCam(0).translation - scene.WorldFromCamAtTime(perimeter / 1.4).translation)
+          .head<2>()
+          .norm(),
+      1e-9);
 }
 
 TEST(SyntheticScene, BadOptionsNameTheField) {

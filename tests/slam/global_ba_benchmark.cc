@@ -44,8 +44,9 @@ void PrintRow(const char* name, const std::vector<double>& t) {
 }
 
 int Usage() {
-  std::fprintf(stderr,
-               "usage: global_ba_benchmark DATASET_DIR [--config FILE] [--filter MODE] [--runs N]\n");
+  std::fprintf(
+      stderr,
+      "usage: global_ba_benchmark DATASET_DIR [--config FILE] [--filter MODE] [--runs N]\n");
   return 2;
 }
 
@@ -92,9 +93,9 @@ int main(int argc, char** argv) {
       o.image_height = options.camera.height;
       if (shipped) o.detections = &boxes;
       RunDatasetFrames(dataset, system, o, [&](size_t, const FrameResult& r) {
-        const double end = std::chrono::duration<double>(
-                               std::chrono::steady_clock::now().time_since_epoch())
-                               .count();
+        const double end =
+            std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+                .count();
         frames.push_back({end - r.times.total_ms / 1000.0, end, r.times.total_ms});
       });
       system.Shutdown();
@@ -106,10 +107,11 @@ int main(int argc, char** argv) {
           overlaps = overlaps || (f.start_s < e && f.end_s > s);
         (overlaps ? during : outside).push_back(f.ms);
       }
-      std::printf("run %d: %zu frames, %d loops closed, %zu global BAs (%d written back, %d "
-                  "discarded):",
-                  run + 1, frames.size(), stats.loops_closed, stats.global_ba_windows_s.size(),
-                  stats.global_ba_runs, stats.global_ba_discarded);
+      std::printf(
+          "run %d: %zu frames, %d loops closed, %zu global BAs (%d written back, %d "
+          "discarded):",
+          run + 1, frames.size(), stats.loops_closed, stats.global_ba_windows_s.size(),
+          stats.global_ba_runs, stats.global_ba_discarded);
       for (const auto& [s, e] : stats.global_ba_windows_s) std::printf(" %.0f ms", (e - s) * 1e3);
       if (dataset.has_groundtruth()) {
         const AteResult ate =

@@ -32,8 +32,7 @@ struct LoopRun {
 };
 
 double SteadySeconds() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 // A small inward loop (SyntheticOptions::loop_inward): a 6 x 4.4 m rounded rectangle with 1.2 m
@@ -154,8 +153,8 @@ TEST_F(LoopClosingTest, ReturnToStartIsClosedAndCorrectsTheDrift) {
           "  frame %lld vs %lld: %d / %d inliers, %d matches, correction %.3f m / %.2f deg "
           "(budget %.3f m / %.2f deg over %.2f m): %s\n",
           static_cast<long long>(v.frame_id), static_cast<long long>(v.loop_frame_id), v.inliers,
-          v.bow_pairs, v.projected, v.correction_m, v.correction_deg, v.allowed_m,
-          v.allowed_deg, v.path_m, v.verdict);
+          v.bow_pairs, v.projected, v.correction_m, v.correction_deg, v.allowed_m, v.allowed_deg,
+          v.path_m, v.verdict);
   // Tracking holds on the whole lap, in both runs.
   EXPECT_EQ(on.poses, n);
   EXPECT_EQ(off.poses, n);

@@ -68,6 +68,10 @@ int RunSynth(const std::vector<std::string>& args) {
   p.AddOption("loop-corner", "R", "corner radius of the loop path (m; = the smaller half size: a stadium)",
               "1.5");
   p.AddOption("speed", "V", "camera speed on the loop path (m/s)", "1");
+  p.AddFlag(
+      "loop-inward",
+      "look inwards at a pillar in the middle of the loop (its corners are the centres of\n"
+      "                the corner arcs: the surface in view is always the corner radius away)");
   p.AddOption("texels", "T", "texture resolution (texels per metre, 50..1000; lower for big rooms)", "250");
   p.AddFlag("quiet", "no progress line");
   if (!p.Parse(args)) return p.exit_code();
@@ -130,6 +134,7 @@ int RunSynth(const std::vector<std::string>& args) {
     return p.UsageError("--speed: expected a number, got '" + p.Get("speed") + "'");
   if (!ParseNumber(p.Get("texels"), &options.texels_per_metre))
     return p.UsageError("--texels: expected a number, got '" + p.Get("texels") + "'");
+  options.loop_inward = p.Flag("loop-inward");
   if (p.Flag("noise")) {
     options.depth_noise = true;
     options.rgb_noise_sigma = 2.0;

@@ -5,6 +5,8 @@
 #   scripts/reliability_soak.sh [BUILD_DIR] [MINUTES] [DATASET_DIR] [FILTER] [OUT_DIR]
 # Defaults: build-rel, 30, $DYGSLAM_DATA_DIR/bonn_crowd_part (or ../shared/data/...), full,
 # out/soak. Build first: cmake --build BUILD_DIR --target reliability_soak
+# DYGSLAM_SOAK_CONFIG=FILE: settings file instead of config/bonn.yaml (e.g. with
+# `LoopClosing: {enabled: true}`: the summary counts the loops closed per soak loop).
 #
 # The DDS pipeline instead (issue 19): `dygslam run DATASET --loop-minutes MINUTES` (the player
 # replays the frames, map on) in the default mode (components as threads) or with --processes,
@@ -122,7 +124,8 @@ bin=$build/tests/reliability/reliability_soak
 [ -x "$bin" ] || { echo "reliability_soak.sh: $bin not built (cmake --build $build --target reliability_soak)" >&2; exit 1; }
 mkdir -p "$out"
 echo "soak: $minutes min of $dataset (filter $filter) -> $out; load at start: $(cut -d' ' -f1-3 /proc/loadavg)"
-"$bin" "$dataset" --minutes "$minutes" --filter "$filter" --out "$out" | tee "$out/summary.txt"
+"$bin" "$dataset" --minutes "$minutes" --filter "$filter" --out "$out" \
+  ${DYGSLAM_SOAK_CONFIG:+--config "$DYGSLAM_SOAK_CONFIG"} | tee "$out/summary.txt"
 echo "load at end: $(cut -d' ' -f1-3 /proc/loadavg)" | tee -a "$out/summary.txt"
 py=python3; [ -x /usr/bin/python3 ] && py=/usr/bin/python3
 "$py" - "$out" <<'PY' || echo "(no plot: matplotlib missing)"

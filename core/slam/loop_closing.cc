@@ -690,6 +690,24 @@ void LoopCloser::RunGlobalBundleAdjustment(int64_t epoch) {
     }
   }
   if (observations.empty()) return;
+  auto steady_s = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(t.time_since_epoch()).count();
+  };
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.global_ba_running = true;
+    stats_.global_ba_windows_s.push_back({steady_s(start), steady_s(start)});
+  }
+  // Closes this BA's window in the statistics on every way out.
+  struct WindowCloser {
+    LoopCloser* self;
+    std::function<double(std::chrono::steady_clock::time_point)> to_s;
+    ~WindowCloser() {
+      std::lock_guard<std::mutex> lock(self->stats_mutex_);
+      self->stats_.global_ba_running = false;
+      self->stats_.global_ba_windows_s.back().second = to_s(std::chrono::steady_clock::now());
+    }
+  } window_closer{this, steady_s};
   {
     ceres::Problem::Options problem_options;
     problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;

@@ -57,7 +57,12 @@ struct LoopClosingStats {
   int global_ba_runs = 0;
   int global_ba_discarded = 0;  // finished after a newer loop: not written back
   double correction_ms_total = 0;
-  double global_ba_ms_total = 0;                         // wall time of the global BAs written back
+  double global_ba_ms_total = 0;  // wall time of the global BAs written back
+  // Every global BA that got to its solver: [start, end] in seconds of std::chrono::steady_clock
+  // (time_since_epoch), written back or not; and whether one is running now. For frame-time
+  // studies while it runs (tracking must not wait for it).
+  std::vector<std::pair<double, double>> global_ba_windows_s;
+  bool global_ba_running = false;
   std::vector<std::pair<int64_t, int64_t>> loops;        // (keyframe id, loop keyframe id)
   std::vector<std::pair<int64_t, int64_t>> loop_frames;  // (frame id, loop keyframe's frame id)
 };

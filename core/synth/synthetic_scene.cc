@@ -89,6 +89,10 @@ void SyntheticOptions::Check() const {
                        "loop_corner_radius");
   DYGSLAM_CHECK_OPTION(loop_speed > 0 && loop_speed <= 5 && std::isfinite(loop_speed),
                        "loop_speed");
+  DYGSLAM_CHECK_OPTION(!loop_inward || (loop_semi_axes.x() - loop_corner_radius >= 0.25 &&
+                                        loop_semi_axes.y() - loop_corner_radius >= 0.25),
+                       "loop_inward (needs a loop path whose half sizes exceed the corner radius "
+                       "by at least 0.25 m: the pillar's half sizes)");
   DYGSLAM_CHECK_OPTION(object_size.allFinite() && object_size.minCoeff() >= 0.1 &&
                            object_size.x() <= 1.0 && object_size.y() <= 1.0 &&
                            object_size.z() <= room_size.z() - 0.2,
@@ -134,6 +138,12 @@ SyntheticScene::SyntheticScene(const SyntheticOptions& options) : options_(optio
       MakeBox({-hx + 2.20, hy - 0.30, 0.40}, {0.70, 0.28, 0.40}, 0.0),   // desk
       MakeBox({-hx + 1.80, -hy + 0.22, 0.80}, {0.50, 0.20, 0.80}, 0.0),  // shelf
   };
+  if (options_.loop_inward) {  // the pillar the inward loop goes round (see the options)
+    const double r = options_.loop_corner_radius;
+    static_boxes_.push_back(MakeBox(
+        {0, 0, hz}, {options_.loop_semi_axes.x() - r, options_.loop_semi_axes.y() - r, hz - 0.001},
+        0.0));
+  }
 
   SynthRng rng(MixSeed(options_.seed, 0x0B1Eu));
   const int k = options_.num_moving_objects;
@@ -180,7 +190,9 @@ SyntheticScene::SyntheticScene(const SyntheticOptions& options) : options_(optio
   };
   add_surface(room_, true, tpm, TextureStyle::kRoom, 1000);
   for (size_t i = 0; i < static_boxes_.size(); ++i) {
-    add_surface(static_boxes_[i], false, 1.2 * tpm, TextureStyle::kFurniture, 2000 + i);
+    const bool pillar = options_.loop_inward && i + 1 == static_boxes_.size();
+    add_surface(static_boxes_[i], false, pillar ? tpm : 1.2 * tpm,
+                pillar ? TextureStyle::kRoom : TextureStyle::kFurniture, 2000 + i);
   }
   for (int i = 0; i < num_moving_objects(); ++i) {
     add_surface(MovingObjectBox(i, 0), false, 2.0 * tpm, TextureStyle::kClothing, 3000 + i);
@@ -247,7 +259,8 @@ Rigid3d SyntheticScene::WorldFromCamAtTime(double t) const {
     }
     const Eigen::Vector3d position(
         xy.x(), xy.y(), o.camera_height + 0.05 * std::sin(w * t / (0.8 * o.path_period) + 0.5));
-    const double yaw = std::atan2(normal.y(), normal.x());
+    const double yaw =
+        o.loop_inward ? std::atan2(-normal.y(), -normal.x()) : std::atan2(normal.y(), normal.x());
     const double pitch =
         (o.pitch_offset_deg + o.pitch_amplitude_deg * std::sin(w * t / o.pitch_period)) * kDeg;
     const double roll =

@@ -68,6 +68,12 @@ struct SyntheticOptions {
   Eigen::Vector2d loop_semi_axes{0.0, 0.0};
   double loop_corner_radius = 1.5;
   double loop_speed = 1.0;  // m/s
+  // Inward loop (issue 14): the camera looks inwards at a floor-to-ceiling pillar in the middle
+  // of the room whose corners are the centres of the path's corner arcs (half sizes a - r, b - r),
+  // so the surface in view is always r away: on the sides a face of the pillar, at the corners its
+  // edge (the camera orbits it). Outward views of a big room put the corners of the room beyond
+  // ThDepth (~3 m), where tracking made no keyframes. Needs a - r >= 0.25 and b - r >= 0.25.
+  bool loop_inward = false;
 
   // Moving objects: boxes of object_size (width x depth x height), walking along world y on lanes
   // at increasing distance in front of the camera, back and forth at ~object_speed (+-20 %).

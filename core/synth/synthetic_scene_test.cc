@@ -353,6 +353,45 @@ TEST(SyntheticScene, DepthNoiseAndRangeLimits) {
   EXPECT_GT(beyond, 100);
 }
 
+// Inward loop (issue 14): the camera looks at the central pillar from the corner radius on the
+// whole lap, on the sides and while orbiting the pillar's edges at the corners.
+TEST(SyntheticScene, InwardLoopKeepsThePillarAtTheCornerRadius) {
+  SyntheticOptions options = SmallOptions(0);
+  options.room_size = {8.5, 7.0, 3.0};
+  options.loop_semi_axes = {3.0, 2.2};
+  options.loop_corner_radius = 1.2;
+  options.loop_inward = true;
+  options.loop_speed = 1.4;
+  options.sensor.fps = 20;
+  options.texels_per_metre = 100;  // textures are not looked at here
+  const double perimeter = 4 * (3.0 + 2.2) - 8 * 1.2 + 2 * M_PI * 1.2;
+  options.num_frames = static_cast<int>(perimeter / 1.4 * 20) + 1;
+  const SyntheticScene scene(options);
+  const int pillar = static_cast<int>(scene.static_boxes().size()) - 1;
+  EXPECT_NEAR(scene.static_boxes().back().half_extents.x(), 1.8, 1e-12);
+  EXPECT_NEAR(scene.static_boxes().back().half_extents.y(), 1.0, 1e-12);
+  double min_depth = 1e9, max_depth = 0;
+  for (int i = 0; i < options.num_frames; i += 5) {
+    const SyntheticHit hit = scene.CastPixel(i, options.camera.cx, options.camera.cy);
+    ASSERT_EQ(hit.kind, SyntheticHit::Kind::kStaticBox) << "frame " << i;
+    ASSERT_EQ(hit.index, pillar) << "frame " << i;
+    min_depth = std::min(min_depth, hit.depth);
+    max_depth = std::max(max_depth, hit.depth);
+    // Camera on the path: 1.2 m from the pillar's surface, horizontally.
+    const Eigen::Vector3d c = scene.WorldFromCam(i).translation;
+    EXPECT_NEAR(scene.static_boxes().back().DistanceToSurface(c), 1.2, 1e-6) << "frame " << i;
+  }
+  // Optical axis pitched by at most 14 deg (and rolled): depth r .. r / cos(14 deg).
+  EXPECT_GE(min_depth, 1.2 - 1e-6);
+  EXPECT_LE(max_depth, 1.2 / std::cos(14.0 * M_PI / 180) + 1e-6);
+  // After one lap the camera is back where it started (the height sways): the path is closed.
+  EXPECT_LT(
+      (scene.WorldFromCam(0).translation - scene.WorldFromCamAtTime(perimeter / 1.4).translation)
+          .head<2>()
+          .norm(),
+      1e-9);
+}
+
 TEST(SyntheticScene, BadOptionsNameTheField) {
   auto message_of = [](const SyntheticOptions& options) {
     try {
@@ -389,6 +428,12 @@ TEST(SyntheticScene, BadOptionsNameTheField) {
   options = SyntheticOptions();
   options.object_pause = -1;
   EXPECT_NE(message_of(options).find("object_pause"), std::string::npos);
+  options = SyntheticOptions();
+  options.room_size = {9.0, 7.0, 3.0};
+  options.loop_semi_axes = {2.5, 1.5};
+  options.loop_corner_radius = 1.5;  // b - r = 0: no room for a pillar
+  options.loop_inward = true;
+  EXPECT_NE(message_of(options).find("loop_inward"), std::string::npos);
 }
 
 // The hard cases of issue 22: movers walk, stop, stand, turn round and walk back; one is never

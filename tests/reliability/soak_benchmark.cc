@@ -21,6 +21,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -292,6 +293,28 @@ int main(int argc, char** argv) {
     for (const auto& [s, c] : states) std::printf(" %s %zu", ToString(s), c);
     std::printf("; loops that relocalised after the jump back: %zu of %d\n",
                 relocalisations_after_loop, std::max(0, loop - 1));
+    // Loop closing (issue 14): every loop back to the start should be closed as a loop, not only
+    // relocalized. Frame ids count the frames fed, so id / n is the soak loop, id % n the frame.
+    const LoopClosingStats lc = system.LoopClosingStatistics();
+    std::set<int64_t> soak_loops_closed;
+    for (const auto& [frame, loop_frame] : lc.loop_frames)
+      soak_loops_closed.insert(frame / static_cast<int64_t>(n));
+    std::printf(
+        "loop closing: %d loops closed in %zu of %d soak loops (%d consistent candidates, %d "
+        "keyframes whose candidates all failed the geometry), %d global BAs (%d discarded)\n",
+        lc.loops_closed, soak_loops_closed.size(), loop, lc.candidates_detected, lc.loops_rejected,
+        lc.global_ba_runs, lc.global_ba_discarded);
+    for (size_t k = 0; k < lc.loop_frames.size(); ++k) {
+      if (k == 40) {
+        std::printf("  ... %zu more\n", lc.loop_frames.size() - k);
+        break;
+      }
+      const auto [frame, loop_frame] = lc.loop_frames[k];
+      const int64_t m = static_cast<int64_t>(n);
+      std::printf("  loop: soak loop %lld frame %lld closed with soak loop %lld frame %lld\n",
+                  static_cast<long long>(frame / m), static_cast<long long>(frame % m),
+                  static_cast<long long>(loop_frame / m), static_cast<long long>(loop_frame % m));
+    }
     std::printf("outputs: %s/{soak.csv,trajectory.txt,keyframes.txt%s}\n", out.c_str(),
                 mapper ? ",map.bt" : "");
   } catch (const std::exception& e) {

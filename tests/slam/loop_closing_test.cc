@@ -1,12 +1,16 @@
 // Loop closing end to end on a generated loop path (core/synth): a path that never comes back
 // must produce no loop (place recognition sees many similar views along the way; the
 // consistency and geometric checks must reject them all); a path that comes back must close the
-// loop, re-send the corrected keyframes to the map consumers and keep the per-frame poses apart
-// from the corrected trajectory. Figures in BENCHMARKS.md (*Place recognition and loop closing*).
+// loop, correct the drift, re-send the corrected keyframes to the map consumers and keep the
+// per-frame poses apart from the corrected trajectory; and tracking must go on while the global
+// bundle adjustment after the loop runs (threaded). Figures in BENCHMARKS.md (*Place recognition
+// and loop closing*).
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <map>
 #include <set>
+#include <thread>
 
 #include "core/eval/trajectory_eval.h"
 #include "core/synth/synthetic_scene.h"
@@ -27,8 +31,16 @@ struct LoopRun {
   std::vector<StampedPose> keyframes;      // KeyframeTrajectory() at the end
 };
 
-// A small loop: a 5 x 3 m rounded rectangle (13.4 m) in a 9 x 7 m room at 1.5 m/s, 20 frames/s,
-// with depth noise. 0.9 laps never reach the start again; 1.25 laps come back to it and go on.
+double SteadySeconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// A small inward loop (SyntheticOptions::loop_inward): a 6 x 4.4 m rounded rectangle with 1.2 m
+// corner radius (18.7 m) round a floor-to-ceiling pillar, the camera looking at the pillar from
+// 1.2 m, at 1.4 m/s and 20 frames/s, with depth and colour noise. Tracking holds all the way round
+// (the outward loops of the earlier rounds had walls beyond ThDepth at the corners and lost the
+// map), so the drift is still there when the camera comes back. 0.9 laps never reach the start
+// again; 1.3 laps come back to it and go on.
 class LoopClosingTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -36,37 +48,54 @@ class LoopClosingTest : public ::testing::Test {
     synth_->seed = 17;
     synth_->num_moving_objects = 0;
     synth_->supersampling = 1;
-    synth_->room_size = {9.0, 7.0, 3.0};
-    synth_->loop_semi_axes = {2.5, 1.5};
-    synth_->loop_speed = 1.5;
+    synth_->room_size = {8.5, 7.0, 3.0};
+    synth_->loop_semi_axes = {3.0, 2.2};
+    synth_->loop_corner_radius = 1.2;
+    synth_->loop_inward = true;
+    synth_->loop_speed = 1.4;
+    synth_->texels_per_metre = 200;
     synth_->sensor.fps = 20;
     synth_->depth_noise = true;
-    const double perimeter = 4 * (2.5 + 1.5) - 8 * 1.5 + 2 * M_PI * 1.5;  // 13.4 m
+    synth_->rgb_noise_sigma = 2.0;
+    const double a = 3.0, b = 2.2, r = 1.2;
+    const double perimeter = 4 * (a + b) - 8 * r + 2 * M_PI * r;  // 18.7 m
     lap_frames_ = static_cast<int>(perimeter / synth_->loop_speed * synth_->sensor.fps);
-    synth_->num_frames = static_cast<int>(1.25 * lap_frames_);
-    const SyntheticScene scene(*synth_);
+    synth_->num_frames = static_cast<int>(1.3 * lap_frames_);
     frames_ = new std::vector<SyntheticFrame>();
-    for (int i = 0; i < scene.num_frames(); ++i) frames_->push_back(scene.RenderFrame(i));
   }
   static void TearDownTestSuite() {
     delete frames_;
     delete synth_;
   }
-  // fx_scale != 1: the system is given a miscalibrated focal length (the camera's true one times
-  // fx_scale), a realistic source of drift: rotations are misjudged, so the heading drifts.
-  static LoopRun Run(size_t num_frames, bool loops_enabled = true, double fx_scale = 1.0) {
+  // Renders the first n frames (once per test process, on two threads).
+  static void Render(size_t n) {
+    if (frames_->size() >= n) return;
+    const SyntheticScene scene(*synth_);
+    const size_t first = frames_->size();
+    frames_->resize(n);
+    auto work = [&](size_t parity) {
+      for (size_t i = first + parity; i < n; i += 2)
+        (*frames_)[i] = scene.RenderFrame(static_cast<int>(i));
+    };
+    std::thread other(work, 1);
+    work(0);
+    other.join();
+  }
+  static SystemOptions Options(bool loops_enabled, bool deterministic) {
     SystemOptions options;
     options.camera = synth_->camera;
-    options.camera.fx *= fx_scale;
-    options.camera.fy *= fx_scale;
     options.sensor = synth_->sensor;
     options.filter_mode = FilterMode::kNone;
-    options.deterministic = true;
+    options.deterministic = deterministic;
     options.tracking.max_frames_between_keyframes = 20;
     options.loop_closing.vocabulary =
         std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/vocabulary.dygvoc";
     options.loop_closing.enabled = loops_enabled;
-    System system(options);
+    return options;
+  }
+  static LoopRun Run(size_t num_frames, bool loops_enabled = true) {
+    Render(num_frames);
+    System system(Options(loops_enabled, true));
     LoopRun run;
     system.SetKeyframeCallback([&](const KeyframeData& k) {
       if (!k.removed) run.last_update[k.stamp.nanoseconds()] = k.world_from_cam;
@@ -103,35 +132,37 @@ std::vector<SyntheticFrame>* LoopClosingTest::frames_ = nullptr;
 
 TEST_F(LoopClosingTest, PathThatNeverComesBackHasNoLoop) {
   const LoopRun open = Run(static_cast<size_t>(0.9 * lap_frames_));
-  std::printf("open path: %d loops closed, %d consistent candidates, ATE %.4f m\n",
-              open.loops.loops_closed, open.loops.candidates_detected, open.ate);
+  std::printf("open path: %d loops closed, %d consistent candidates, ATE %.4f m over %zu poses\n",
+              open.loops.loops_closed, open.loops.candidates_detected, open.ate, open.poses);
   EXPECT_EQ(open.loops.loops_closed, 0);
-  EXPECT_GT(open.loops.keyframes_checked, 5);  // the loop closer did look at the keyframes
+  EXPECT_GT(open.loops.keyframes_checked, 20);  // the loop closer did look at the keyframes
 }
 
-TEST_F(LoopClosingTest, ReturnToStartIsClosedAndReported) {
-  constexpr double kFxScale = 1.03;
-  const LoopRun on = Run(frames_->size(), true, kFxScale);
-  const LoopRun off = Run(frames_->size(), false, kFxScale);
+TEST_F(LoopClosingTest, ReturnToStartIsClosedAndCorrectsTheDrift) {
+  const size_t n = static_cast<size_t>(synth_->num_frames);
+  const LoopRun on = Run(n, true);
+  const LoopRun off = Run(n, false);
   std::printf(
-      "1.25 laps, fx 3 %% off: loop closing on: %d loops (%d consistent candidates, %d "
-      "rejected), ATE %.4f m over %zu poses; off: ATE %.4f m over %zu poses\n",
+      "1.3 laps: loop closing on: %d loops (%d consistent candidates, %d rejected), ATE %.4f m "
+      "over %zu poses; off: ATE %.4f m over %zu poses (%.2fx)\n",
       on.loops.loops_closed, on.loops.candidates_detected, on.loops.loops_rejected, on.ate,
-      on.poses, off.ate, off.poses);
+      on.poses, off.ate, off.poses, off.ate / on.ate);
   for (const LoopVerification& v : on.loops.verifications)
-    std::printf(
-        "  frame %lld vs %lld: %d / %d inliers, %d matches, correction %.3f m / %.2f deg "
-        "(budget %.3f m / %.2f deg over %.2f m): %s\n",
-        static_cast<long long>(v.frame_id), static_cast<long long>(v.loop_frame_id), v.inliers,
-        v.bow_pairs, v.projected, v.correction_m, v.correction_deg, v.allowed_m, v.allowed_deg,
-        v.path_m, v.verdict);
+    if (v.frame_id + 40 >= static_cast<int64_t>(lap_frames_))  // the return
+      std::printf(
+          "  frame %lld vs %lld: %d / %d inliers, %d matches, correction %.3f m / %.2f deg "
+          "(budget %.3f m / %.2f deg over %.2f m): %s\n",
+          static_cast<long long>(v.frame_id), static_cast<long long>(v.loop_frame_id), v.inliers,
+          v.bow_pairs, v.projected, v.correction_m, v.correction_deg, v.allowed_m, v.allowed_deg,
+          v.path_m, v.verdict);
+  // Tracking holds on the whole lap, in both runs.
+  EXPECT_EQ(on.poses, n);
+  EXPECT_EQ(off.poses, n);
   EXPECT_GE(on.loops.loops_closed, 1);
-  // Tracking on this small loop loses the map at the corners and relocalizes against it, so little
-  // drift is left for the loop to correct (measured 2026-12-01, fx x1.00 / 1.01 / 1.03: loop
-  // corrections 0.013 / 0.022 / 0.020 m, ATE on/off 0.0338/0.0322, 0.0319/0.0292, 0.0840/0.0845 m):
-  // closing must not make the trajectory clearly worse. The ">= 3x lower ATE" goal needs a loop
-  // with real drift (BENCHMARKS.md).
-  EXPECT_LE(on.ate, 1.25 * off.ate);
+  // The drift of the lap is corrected: issue 14's goal, ATE >= 3x lower with loop closing.
+  // Measured 2026-12-02 (deterministic): on 0.0388 m, off 0.1995 m (5.1x); the loop moved the
+  // camera 0.50 m / 9.4 deg at frame 315 (lap: 267 frames).
+  EXPECT_LE(3.0 * on.ate, off.ate);
   // The correction reached the map consumers: keyframes were re-sent as pose updates while the
   // loop's frame was processed, and every keyframe's last emitted pose is its final pose.
   ASSERT_GE(on.first_loop_frame, 0);
@@ -143,9 +174,7 @@ TEST_F(LoopClosingTest, ReturnToStartIsClosedAndReported) {
     EXPECT_LT((sent->second.translation - k.world_from_cam.translation).norm(), 1e-9);
   }
   // trajectory_online keeps what was known at each frame; the final trajectory is the corrected
-  // one (loop, global BA and local BA corrections). On this sequence the loop itself corrects
-  // < 1 mm (measured 0.4 mm: tracking had relocalized against the start), the global BA after it
-  // moves the earlier frames by ~0.1 m, so the two must differ by more than 1 cm.
+  // one: frames before the loop moved by about the loop correction.
   const double correction = on.loops.verifications.back().correction_m;
   double moved = 0;
   ASSERT_EQ(on.online.size(), on.trajectory.size());
@@ -162,7 +191,52 @@ TEST_F(LoopClosingTest, ReturnToStartIsClosedAndReported) {
       "online %.4f m, final %.4f m\n",
       static_cast<long long>(on.first_loop_frame), on.updated_at_loop.size(), moved, correction,
       on.ate_online, on.ate);
-  EXPECT_GT(moved, 0.01);
+  EXPECT_GT(moved, 0.5 * correction);
+  EXPECT_LT(on.ate, on.ate_online);
+}
+
+// Threaded (real threads, as a live run): the global BA after the loop runs on its own thread
+// and tracking goes on meanwhile. Frames are fed as fast as they are processed; a frame whose
+// whole processing (FeedRgbdFrame) lies inside a global BA window was tracked while the BA ran.
+// If tracking waited for the BA (a lock held by it), no frame could both start and end inside.
+TEST_F(LoopClosingTest, TrackingGoesOnWhileTheGlobalBundleAdjustmentRuns) {
+  Render(static_cast<size_t>(synth_->num_frames));
+  System system(Options(true, false));
+  struct Timed {
+    double start, end;
+  };
+  std::vector<Timed> times;
+  size_t fed = 0;
+  for (; fed < frames_->size(); ++fed) {
+    const SyntheticFrame& f = (*frames_)[fed];
+    const double start = SteadySeconds();
+    system.FeedRgbdFrame(f.rgb, f.depth, f.stamp);
+    times.push_back({start, SteadySeconds()});
+    const LoopClosingStats s = system.LoopClosingStatistics();
+    // Done once a global BA has ended and a few frames followed it.
+    if (!s.global_ba_windows_s.empty() && !s.global_ba_running &&
+        times.back().start > s.global_ba_windows_s.back().second)
+      break;
+  }
+  system.Shutdown();
+  const LoopClosingStats s = system.LoopClosingStatistics();
+  ASSERT_GE(s.loops_closed, 1) << "no loop closed in " << fed << " frames (threaded)";
+  ASSERT_FALSE(s.global_ba_windows_s.empty());
+  size_t inside = 0;
+  double longest_ms = 0, ba_ms = 0;
+  for (const auto& [ba_start, ba_end] : s.global_ba_windows_s) {
+    ba_ms = std::max(ba_ms, (ba_end - ba_start) * 1e3);
+    for (const Timed& t : times) {
+      if (t.start >= ba_start && t.end <= ba_end) ++inside;
+      if (t.start < ba_end && t.end > ba_start)
+        longest_ms = std::max(longest_ms, (t.end - t.start) * 1e3);
+    }
+  }
+  std::printf(
+      "threaded: %d loops closed, %zu global BAs (longest %.0f ms), %zu frames tracked entirely "
+      "inside one, longest frame overlapping one %.0f ms\n",
+      s.loops_closed, s.global_ba_windows_s.size(), ba_ms, inside, longest_ms);
+  EXPECT_GE(inside, 3u);
 }
 
 }  // namespace

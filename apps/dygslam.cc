@@ -1,5 +1,6 @@
 // dygslam: dispatcher of the command line (subcommands register themselves, see command.h).
 #include <algorithm>
+#include <csignal>
 #include <exception>
 #include <iostream>
 #include <optional>
@@ -141,6 +142,9 @@ int Dispatch(const std::vector<std::string>& argv) {
 }  // namespace dygslam::cli
 
 int main(int argc, char** argv) {
+  // A closed stdout / stderr reader (`dygslam run ... | head`) must not kill the process: writes
+  // to the pipe fail with EPIPE and the run finishes with its outputs and exit code.
+  std::signal(SIGPIPE, SIG_IGN);
   // Long-running commands catch SIGINT/SIGTERM from the first moment, so a stop request that
   // arrives while they are still setting up ends them cleanly (outputs written), not abruptly.
   std::optional<dygslam::ScopedStopSignals> stop_signals;

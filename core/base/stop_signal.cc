@@ -18,7 +18,7 @@ extern "C" void OnStopSignal(int sig) {
 std::mutex g_mutex;
 int g_depth = 0;
 struct sigaction g_old_int {
-}, g_old_term{};
+}, g_old_term{}, g_old_hup{}, g_old_pipe{};
 
 }  // namespace
 
@@ -31,6 +31,14 @@ ScopedStopSignals::ScopedStopSignals() {
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, &g_old_int);
   sigaction(SIGTERM, &sa, &g_old_term);
+  // A closed terminal or ssh session (SIGHUP) stops like Ctrl-C: outputs are written.
+  sigaction(SIGHUP, &sa, &g_old_hup);
+  // A closed stdout / stderr reader (`dygslam run ... | head`) must not kill the run before its
+  // outputs are written: writes to the pipe fail with EPIPE instead.
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  sigemptyset(&ignore.sa_mask);
+  sigaction(SIGPIPE, &ignore, &g_old_pipe);
 }
 
 ScopedStopSignals::~ScopedStopSignals() {
@@ -38,6 +46,8 @@ ScopedStopSignals::~ScopedStopSignals() {
   if (--g_depth > 0) return;
   sigaction(SIGINT, &g_old_int, nullptr);
   sigaction(SIGTERM, &g_old_term, nullptr);
+  sigaction(SIGHUP, &g_old_hup, nullptr);
+  sigaction(SIGPIPE, &g_old_pipe, nullptr);
 }
 
 int ScopedStopSignals::Received() { return g_received; }

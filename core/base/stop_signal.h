@@ -1,4 +1,5 @@
-// Process-wide SIGINT / SIGTERM -> "stop requested" flag, shared by every long-running command
+// Process-wide SIGINT / SIGTERM / SIGHUP -> "stop requested" flag (SIGPIPE is ignored while it is
+// installed: a closed output pipe gives EPIPE, not death), shared by every long-running command
 // (dygslam run in all modes, component, bridge) so that a signal arriving at any moment, even
 // before the run has set itself up, is seen and ends the run cleanly with its outputs written.
 //

@@ -104,11 +104,29 @@ TEST_P(MapSignal, StopsWithEveryOutputWritten) {
 
 INSTANTIATE_TEST_SUITE_P(Signals, MapSignal,
                          ::testing::Values(Case{SIGINT, 30}, Case{SIGTERM, 30}, Case{SIGTERM, 0},
-                                           Case{SIGINT, 0}),
+                                           Case{SIGINT, 0}, Case{SIGHUP, 30}),
                          [](const ::testing::TestParamInfo<Case>& info) {
-                           return std::string(info.param.signal == SIGINT ? "Sigint" : "Sigterm") +
+                           const int sig = info.param.signal;
+                           return std::string(sig == SIGINT   ? "Sigint"
+                                              : sig == SIGHUP ? "Sighup"
+                                                              : "Sigterm") +
                                   (info.param.after_frames == 0 ? "AtStart" : "MidRun");
                          });
+
+// A closed output pipe (`dygslam run ... | head -c 1`): the writes fail with EPIPE, the run is not
+// killed by SIGPIPE (before: rc 141 and an empty --out), it finishes with every output.
+TEST(OutputPipe, ClosedReaderDoesNotKillTheRun) {
+  DYGSLAM_REQUIRE_DATASET(data, "bonn_crowd_part");
+  const std::string out = testing::MakeTempDir("output_pipe") + "/out";
+  const std::string command = "bash -c '\"" + testing::DygslamBinary() + "\" run \"" + data +
+                              "\" --config \"" + std::string(DYGSLAM_TEST_SOURCE_DIR) +
+                              "/config/bonn.yaml\" --direct --filter none --frames 0:30 --out \"" +
+                              out + "\" 2>&1 | head -c 1 > /dev/null; exit ${PIPESTATUS[0]}'";
+  const int status = std::system(command.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "141 = killed by SIGPIPE";
+  EXPECT_EQ(ReadTumTrajectory(out + "/trajectory.txt").size(), 30u);
+}
 
 }  // namespace
 }  // namespace dygslam

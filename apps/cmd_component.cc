@@ -19,6 +19,7 @@
 #include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/config/settings.h"
+#include "core/dynamic/yolo_detector.h"
 #include "run/run_settings.h"
 
 namespace dygslam::cli {
@@ -130,14 +131,15 @@ int RunComponentCommand(const std::vector<std::string>& args) {
     return p.UsageError("--frames '" + EchoValue(p.Get("frames")) +
                         "': empty range (LAST must be above FIRST)");
   {
-    const RunConfiguration c =
-        LoadRunConfiguration({o.settings_path, CliSettingsReadOptions(false), p.Get("filter"),
-                              p.Flag("deterministic")});
+    const RunConfiguration c = LoadRunConfiguration(
+        {o.settings_path, CliSettingsReadOptions(false), p.Get("filter"), p.Flag("deterministic")});
     o.system = c.system;
     o.octomap = c.octomap;
   }
   o.system.load_map = p.Get("load-map");
   o.system.localization = p.Flag("localization");
+  if (o.system.localization && p.Get("load-map").empty())
+    return p.UsageError("--localization needs --load-map FILE (the map to localize in)");
   if (!p.Get("localization-map").empty()) {
     if (!o.system.load_map.empty())
       return p.UsageError("--localization-map and --load-map exclude each other");
@@ -152,6 +154,16 @@ int RunComponentCommand(const std::vector<std::string>& args) {
     o.system.detector.names_path = p.Get("detector-names");
   }
   o.detector_model = p.Get("detector-model");
+  // The detector: an unknown --detector-model is an error naming it (before, with a settings file
+  // it was silently ignored, a bogus name included). The settings' Detector.model, when set,
+  // is the model that runs (`dygslam run` passes both, the same).
+  if (name == "detector" && p.Has("detector-model") && !p.Has("detector-cfg")) {
+    try {
+      DetectorOptionsForModel(o.detector_model);
+    } catch (const InputError& e) {
+      throw InputError(std::string("--detector-model: ") + e.what());
+    }
+  }
   // Bad numbers are usage errors naming the option (exit 2), as on `dygslam run`.
   int64_t window = 0, wait_ms = 0, domain = 0;
   if (!p.GetNumber("rate", 0, 1e6, &o.rate) ||

@@ -105,7 +105,8 @@ bool Plot(const std::string& png, const std::string& title, const AteResult& ate
   } else if (code == 127) {
     std::cerr << "dygslam eval: plot skipped: python3 not found\n";
   } else {
-    std::cerr << "dygslam eval: plot failed (" << script << " exit code " << code << ")\n";
+    // A plot that was asked for and could not be drawn is an error (exit 1), not a note.
+    throw InputError(png, 0, "plot failed (" + script + " exit code " + std::to_string(code) + ")");
   }
   return false;
 }
@@ -138,6 +139,12 @@ int RunEval(const std::vector<std::string>& args) {
 
   const std::string gt_path = p.Positional("GROUNDTRUTH");
   const std::string est_path = p.Positional("ESTIMATE");
+  if (p.Has("plot")) {
+    std::error_code ec;
+    const std::string png = p.Get("plot");
+    if (png.empty() || fs::is_directory(png, ec) || fs::path(png).filename().empty())
+      return p.UsageError("--plot '" + png + "' is a folder or empty: give a FILE.png");
+  }
   const std::vector<StampedPose> gt = ReadTumTrajectory(gt_path);
   const std::vector<StampedPose> est = ReadTumTrajectory(est_path);
   if (est.empty()) throw InputError(est_path, 0, "estimate has no poses");

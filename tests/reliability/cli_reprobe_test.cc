@@ -107,6 +107,22 @@ TEST_F(CliReprobe, ComponentUsageErrorsExitTwoNamingTheOption) {
 
 // F9: eval / bench option values were exit 1, --delta named the internal field
 // ("invalid option delta: requires std::isfinite(delta) && delta > 0").
+// Round 3: `component detector --detector-model bogus` with a settings file ran the settings'
+// model without a word (rc 0); `component slam --localization` without a map was exit 1 with
+// the internal option check.
+TEST_F(CliReprobe, ComponentDetectorModelAndLocalizationAreChecked) {
+  ExpectError(Run({"component", "detector", "--config", Config(), "--detector-model", "bogus",
+                   "--domain", "155"}),
+              1, {"--detector-model", "unknown detector model 'bogus'"});
+  ExpectError(Run({"component", "slam", "--config", Config(), "--localization", "--domain", "155"}),
+              2, {"--localization needs --load-map"});
+}
+
+// Round 3: `eval --plot FOLDER` printed a Python traceback, left a temporary file and exited 0.
+TEST_F(CliReprobe, EvalPlotIntoAFolderIsAUsageError) {
+  ExpectError(Run({"eval", "gt.txt", "est.txt", "--plot", dir_}), 2, {"--plot", "is a folder"});
+}
+
 TEST_F(CliReprobe, OptionValueErrorsOfEvalAndBenchAreUsageErrors) {
   const std::string gt = dir_ + "/gt.txt";
   std::ofstream(gt) << "1.0 0 0 0 0 0 0 1\n2.0 1 0 0 0 0 0 1\n3.0 2 0 0 0 0 0 1\n";

@@ -432,7 +432,8 @@ int RunRun(const std::vector<std::string>& args) {
   if (s.map && !s.system.load_map.empty() && s.load_octomap.empty() &&
       !fs::exists(s.out / "map.bt")) {
     const size_t points =
-        WriteMapFileOctoMap(s.out.string(), s.system.load_map, s.system, s.octomap);
+        WriteMapFileOctoMap(s.out.string(), s.system.load_map, s.system, s.octomap,
+                            /*with_full_map=*/!s.save_map.empty());
     if (points > 0)
       std::printf(
           "map.bt: the static map of %s (%zu map point observations; the run added no "

@@ -88,13 +88,16 @@ void MapperCore::Write() {
   builder_->WriteBinary(options_.map_path);
 }
 
-void MapperCore::WriteFull() {
-  if (options_.full_map_path.empty()) return;
+bool MapperCore::WriteFull() {
+  if (options_.full_map_path.empty()) return false;
   if (builder_ != nullptr) {
     builder_->WriteFull(options_.full_map_path);
   } else if (base_) {
     WriteOctoMapFull(*base_, options_.full_map_path);  // localization: the loaded map
+  } else {
+    return false;
   }
+  return true;
 }
 
 MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const MapperOptions& options,
@@ -256,7 +259,7 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
                 << IgnoredSamplesNote(std::to_string(stats.foreign_samples) + " keyframes");
   }
   publish();
-  if (core.has_map()) core.WriteFull();
+  const bool full_written = core.has_map() && core.WriteFull();
   status.Write(ToMsg(ComponentStatus::Done(ComponentKind::kMapper, core.num_keyframes())));
   updates.WaitForAcknowledgments(std::chrono::milliseconds(3000));
   status.WaitForAcknowledgments(std::chrono::milliseconds(2000));
@@ -264,7 +267,7 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
            << core.num_inserted() << " new, " << core.num_pose_updates() << " pose updates, "
            << core.num_removed() << " removed), " << core.num_keyframes() << " keyframes in the map"
            << (options.map_path.empty() ? "" : ", written to " + options.map_path)
-           << (options.full_map_path.empty() ? "" : " and " + options.full_map_path);
+           << (full_written ? " and " + options.full_map_path : "");
   return stats;
 }
 

@@ -65,8 +65,8 @@ class MapperCore {
   msg::MapUpdate MakeUpdate();
   // Atomic .bt write (no-op without map or path).
   void Write();
-  // The .ot (full_map_path), at the end of the run.
-  void WriteFull();
+  // The .ot (full_map_path), at the end of the run; false when there was nothing to write.
+  bool WriteFull();
 
  private:
   MapperOptions options_;

@@ -61,7 +61,8 @@ void WriteMapperBinary(const std::string& directory, KeyframeMapper& mapper, boo
 }
 
 size_t WriteMapFileOctoMap(const std::string& directory, const std::string& map_file,
-                           const SystemOptions& options, const OctoMapOptions& octomap) {
+                           const SystemOptions& options, const OctoMapOptions& octomap,
+                           bool with_full_map) {
   octomap.Check();
   // The map as the System loads it: the same camera geometry, pyramid and vocabulary identity.
   const OrbExtractor extractor(options.orb);
@@ -103,6 +104,7 @@ size_t WriteMapFileOctoMap(const std::string& directory, const std::string& map_
   if (inserted == 0) return 0;
   tree.updateInnerOccupancy();
   WriteOctoMapBinary(tree, (fs::path(directory) / "map.bt").string());
+  if (with_full_map) WriteOctoMapFull(tree, (fs::path(directory) / "map.ot").string());
   return inserted;
 }
 

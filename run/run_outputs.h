@@ -47,6 +47,7 @@ void WriteMapperBinary(const std::string& directory, KeyframeMapper& mapper,
 // model and range of `octomap`. The map file is read against `options` like CheckMapFile. Returns
 // the number of map points inserted (0: nothing written).
 size_t WriteMapFileOctoMap(const std::string& directory, const std::string& map_file,
-                           const SystemOptions& options, const OctoMapOptions& octomap);
+                           const SystemOptions& options, const OctoMapOptions& octomap,
+                           bool with_full_map = false);
 
 }  // namespace dygslam

@@ -270,6 +270,14 @@ TEST_F(CliReprobe, LocalizationRunWritesTheLoadedMapsStaticMap) {
     (tree->isNodeOccupied(*it) ? occupied : free) += 1;
   EXPECT_GT(occupied, 100u);
   EXPECT_GT(free, occupied);
+  EXPECT_FALSE(fs::exists(dir_ + "/second/map.ot"));  // no --save-map
+  // Round 3: with --save-map the run writes map.ot beside map.bt, as the README says (it did not).
+  const auto saving = Run({"run", data, "--config", Config(), "--frames", "0:20", "--direct",
+                           "--filter", "none", "--quiet", "--out", dir_ + "/third", "--load-map",
+                           map_file, "--localization", "--save-map", dir_ + "/again.map"});
+  ASSERT_EQ(saving.code, 0) << saving.err;
+  EXPECT_TRUE(fs::exists(dir_ + "/third/map.bt"));
+  EXPECT_GT(ReadOctoMap(dir_ + "/third/map.ot")->size(), 0u);
 }
 
 }  // namespace

@@ -26,12 +26,23 @@ TEST(NetworkOptions, EndpointsParseOrNameTheProblem) {
 TEST(NetworkOptions, CheckRejectsWhatIsNotAnAddress) {
   NetworkOptions options;
   EXPECT_NO_THROW(options.Check());  // default: this machine only
-  options.interfaces = {"10.251.0.1", "192.168.1.20"};
+  // This host's loopback address is an interface address; a foreign one is refused, naming
+  // --dds-interface (before, Fast DDS filtered it out and the participant ran without one).
+  options.interfaces = {"127.0.0.1"};
   options.discovery_server = "10.251.0.2:11811";
   EXPECT_NO_THROW(options.Check());
+  options.interfaces = {"192.0.2.77"};  // TEST-NET-1: never a local address here
+  try {
+    options.Check();
+    ADD_FAILURE() << "a foreign address was accepted";
+  } catch (const InvalidOptions& e) {
+    EXPECT_NE(std::string(e.what()).find("--dds-interface: 192.0.2.77 is not an address"),
+              std::string::npos)
+        << e.what();
+  }
   options.interfaces = {"eth0"};
   EXPECT_THROW(options.Check(), InvalidOptions);
-  options.interfaces = {"10.251.0.1"};
+  options.interfaces = {"127.0.0.1"};
   options.discovery_server = "10.251.0.2";
   EXPECT_THROW(options.Check(), InvalidOptions);
 }

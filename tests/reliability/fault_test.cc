@@ -155,7 +155,9 @@ TEST_F(Faults, DetectorKilledAndRestartedIsUsedAgain) {
   const pid_t recorder = Run("recorder", tmp, domain, "0:300");
   const pid_t slam = Run("slam", tmp, domain, "0:300", wait);
   const pid_t detector1 = Run("detector", tmp, domain, "0:300", {}, "detector1");
-  const pid_t player = Run("player", tmp, domain, "0:300", {"--rate", "1"});  // 10 s of frames
+  // 20 s of frames (half the real rate): the restarted detector has ~17 s to come up and take
+  // frames even when a loaded machine makes its start slow (at --rate 1 it once got none).
+  const pid_t player = Run("player", tmp, domain, "0:300", {"--rate", "0.5"});
   std::this_thread::sleep_for(std::chrono::milliseconds(2500));
   kill(detector1, SIGKILL);
   EXPECT_EQ(Wait(detector1), 128 + SIGKILL);

@@ -22,6 +22,7 @@ void FramePairer::AddDetections(Timestamp stamp, std::vector<Detection> detectio
   if (detector_lost_ && detector_alive_) {
     LOG_INFO << "slam: detections are arriving again; waiting for them again";
     detector_lost_ = false;
+    gone_unreported_ = false;
     consecutive_misses_ = 0;
   }
   const int64_t ns = stamp.nanoseconds();
@@ -40,10 +41,7 @@ void FramePairer::AddDetections(Timestamp stamp, std::vector<Detection> detectio
 
 void FramePairer::SetDetectorAlive(bool alive) {
   if (!alive && detector_alive_ && options_.needs_detections) {
-    LOG_WARNING << "slam: the detector is gone; continuing with its last boxes carried forward "
-                   "(at most "
-                << options_.carry_forward_max_frames << " frames), then geometry-only";
-    if (!detector_lost_) ++stats_.lost_episodes;
+    gone_unreported_ = !detector_lost_;  // already lost by misses: that was reported
     detector_lost_ = true;
   }
   detector_alive_ = alive;
@@ -75,6 +73,13 @@ std::optional<PairedFrame> FramePairer::Next(Clock::time_point now) {
     if (!waited_enough) return std::nullopt;
     out.detections_missing = true;
     ++stats_.missing_detections;
+    if (gone_unreported_) {
+      LOG_WARNING << "slam: the detector is gone; continuing with its last boxes carried forward "
+                     "(at most "
+                  << options_.carry_forward_max_frames << " frames), then geometry-only";
+      ++stats_.lost_episodes;
+      gone_unreported_ = false;
+    }
     const bool recent =
         newest_ && newest_->first < stamp &&
         stamp - newest_->first <=

@@ -91,6 +91,10 @@ class FramePairer {
   int64_t last_released_stamp_ = INT64_MIN;
   bool detector_alive_ = true;
   bool detector_lost_ = false;
+  // The detector went away (SetDetectorAlive(false)) and no frame has lacked its boxes since: the
+  // warning and the lost episode wait for the first frame that does (a detector that finished its
+  // stream just before its status said so is not a loss).
+  bool gone_unreported_ = false;
   int consecutive_misses_ = 0;
   int consecutive_carried_ = 0;
   // The newest detections received (by frame stamp), what a frame without its own gets.

@@ -180,5 +180,30 @@ TEST(FramePairing, LateDetectionsAreCarriedForwardNotDropped) {
   EXPECT_FALSE(c->detections);
 }
 
+TEST(FramePairing, DetectorFinishingBeforeItsStatusIsNotALoss) {
+  // The detector paired every frame, then its writer went away before its "done" status was
+  // seen: no frame lacked its boxes, so nothing is reported lost.
+  PairingOptions o;
+  o.deterministic = true;
+  FramePairer p(o);
+  const auto t0 = Clock::now();
+  p.AddFrame(Frame(0), t0);
+  p.AddDetections(Frame(0).stamp, OneBox());
+  p.SetDetectorAlive(false);
+  auto f = p.Next(t0);
+  ASSERT_TRUE(f);
+  EXPECT_FALSE(f->detections_missing);
+  EXPECT_EQ(p.stats().lost_episodes, 0u);
+  // A later frame without boxes is the loss: counted once, carried-forward boxes used.
+  p.AddFrame(Frame(1), t0);
+  p.AddFrame(Frame(2), t0);
+  auto g = p.Next(t0);
+  ASSERT_TRUE(g);
+  EXPECT_TRUE(g->detections_missing);
+  EXPECT_TRUE(g->detections_carried_forward);
+  ASSERT_TRUE(p.Next(t0));
+  EXPECT_EQ(p.stats().lost_episodes, 1u);
+}
+
 }  // namespace
 }  // namespace dygslam

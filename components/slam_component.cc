@@ -365,7 +365,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   {
     std::lock_guard<std::mutex> lock(mutex);
     stats.pairing = pairer.stats();
-    stats.detector_lost = pairer.detector_lost() || stats.pairing.lost_episodes > 0;
+    stats.detector_lost = stats.pairing.lost_episodes > 0;
     frame_gate.Close();
     detection_gate.Close();
     stats.foreign_frames = frame_gate.ignored();

@@ -30,7 +30,8 @@ SystemOptions Options(FilterMode mode) {
   return options;
 }
 
-std::vector<FrameResult> Run(const RgbdDataset& dataset, const SystemOptions& options, Feed how) {
+std::vector<FrameResult> RunFrames(const RgbdDataset& dataset, const SystemOptions& options,
+                                   Feed how) {
   System system(options);
   std::vector<FrameResult> results;
   for (size_t i = 0; i < kFrames; ++i) {
@@ -81,9 +82,9 @@ TEST(RgbdFrameFeed, RawMetresAndLooseImagesGiveTheSameTrajectory) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
   const RgbdDataset dataset = RgbdDataset::Open(dir);
   const SystemOptions options = Options(FilterMode::kGeometry);
-  const std::vector<FrameResult> raw = Run(dataset, options, Feed::kRawFrame);
-  ExpectSameTrajectory(raw, Run(dataset, options, Feed::kMetresFrame));
-  ExpectSameTrajectory(raw, Run(dataset, options, Feed::kLooseImages));
+  const std::vector<FrameResult> raw = RunFrames(dataset, options, Feed::kRawFrame);
+  ExpectSameTrajectory(raw, RunFrames(dataset, options, Feed::kMetresFrame));
+  ExpectSameTrajectory(raw, RunFrames(dataset, options, Feed::kLooseImages));
 }
 
 TEST(RgbdFrameFeed, EmptyDetectionsMeanNoBoxesAndNoDetector) {
@@ -91,7 +92,7 @@ TEST(RgbdFrameFeed, EmptyDetectionsMeanNoBoxesAndNoDetector) {
   const RgbdDataset dataset = RgbdDataset::Open(dir);
   SystemOptions options = Options(FilterMode::kFull);
   options.detector.cfg_path = "/nonexistent/detector.cfg";  // would fail if it were loaded
-  const std::vector<FrameResult> results = Run(dataset, options, Feed::kEmptyDetections);
+  const std::vector<FrameResult> results = RunFrames(dataset, options, Feed::kEmptyDetections);
   ASSERT_EQ(results.size(), kFrames);
   for (const FrameResult& r : results) {
     EXPECT_TRUE(r.detections_used);

@@ -143,7 +143,7 @@ int RunMap(const std::vector<std::string>& args) {
   OctoMapOptions& map_options = configuration.octomap;
   if (p.Has("resolution"))
     map_options.resolution = ParsePositive("resolution", p.Get("resolution"));
-  if (p.Flag("no-mask") || options.filter_mode == FilterMode::kNone)
+  if (p.Flag("no-mask") || options.filter.mode == FilterMode::kNone)
     map_options.use_dynamic_mask = false;
   if (p.Has("resolution") && !(map_options.resolution > 0.001 && map_options.resolution <= 10))
     return p.UsageError("--resolution '" + EchoValue(p.Get("resolution")) +
@@ -403,7 +403,7 @@ int RunMap(const std::vector<std::string>& args) {
     std::printf(
         "frames: %zu processed, %zu lost, %zu without depth partner; %.1f fps (SLAM + map)\n",
         processed, lost, skipped, processed / std::max(elapsed, 1e-9));
-    std::printf("filter: %s%s; map masks %s\n", ToString(options.filter_mode),
+    std::printf("filter: %s%s; map masks %s\n", ToString(options.filter.mode),
                 options.deterministic ? " (deterministic)" : "",
                 map_options.use_dynamic_mask ? "applied" : "not applied");
   } else {

@@ -18,16 +18,16 @@ RgbdSynchronizer::RgbdSynchronizer(const RgbdSyncOptions& options) : options_(op
   tolerance_ns_ = static_cast<int64_t>(std::llround(options.max_stamp_difference_s * 1e9));
 }
 
-std::vector<RgbdPair> RgbdSynchronizer::AddColor(StampedImage color) {
+std::vector<RgbdFrame> RgbdSynchronizer::AddColor(StampedImage color) {
   return Add(std::move(color), &colors_, &last_color_, &stats_.dropped_color);
 }
 
-std::vector<RgbdPair> RgbdSynchronizer::AddDepth(StampedImage depth) {
+std::vector<RgbdFrame> RgbdSynchronizer::AddDepth(StampedImage depth) {
   return Add(std::move(depth), &depths_, &last_depth_, &stats_.dropped_depth);
 }
 
-std::vector<RgbdPair> RgbdSynchronizer::Add(StampedImage image, std::deque<StampedImage>* queue,
-                                            std::optional<Timestamp>* last, size_t* dropped) {
+std::vector<RgbdFrame> RgbdSynchronizer::Add(StampedImage image, std::deque<StampedImage>* queue,
+                                             std::optional<Timestamp>* last, size_t* dropped) {
   if (*last && image.stamp <= **last) {
     ++*dropped;
     return {};
@@ -41,8 +41,8 @@ std::vector<RgbdPair> RgbdSynchronizer::Add(StampedImage image, std::deque<Stamp
   return Match();
 }
 
-std::vector<RgbdPair> RgbdSynchronizer::Match() {
-  std::vector<RgbdPair> out;
+std::vector<RgbdFrame> RgbdSynchronizer::Match() {
+  std::vector<RgbdFrame> out;
   while (!colors_.empty() && !depths_.empty()) {
     const int64_t tc = colors_.front().stamp.nanoseconds();
     size_t best = 0;
@@ -76,11 +76,15 @@ std::vector<RgbdPair> RgbdSynchronizer::Match() {
       depths_.pop_front();
       ++stats_.dropped_depth;
     }
-    RgbdPair pair{std::move(colors_.front()), std::move(depths_.front())};
+    RgbdFrame frame;
+    frame.stamp = colors_.front().stamp;
+    frame.rgb = std::move(colors_.front().image);
+    frame.depth = std::move(depths_.front().image);
+    frame.depth_scale = depths_.front().depth_scale;
     colors_.pop_front();
     depths_.pop_front();
     ++stats_.pairs;
-    out.push_back(std::move(pair));
+    out.push_back(std::move(frame));
   }
   return out;
 }

@@ -1,4 +1,6 @@
-// Pairs colour and depth images from a ROS 2 camera driver by stamp (no DDS).
+// Pairs colour and depth images from a ROS 2 camera driver by stamp (no DDS) into the core's
+// RgbdFrame (core/base/rgbd_frame.h): the colour image's stamp and image, its depth partner's
+// image and depth_scale.
 //
 // Drivers publish aligned depth with the colour stamp (RealSense, Azure Kinect), so pairs are
 // usually exact; other drivers are a few ms apart. A colour image is paired with the depth image
@@ -16,6 +18,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/base/rgbd_frame.h"
 #include "core/base/timestamp.h"
 
 namespace dygslam::ros2 {
@@ -32,11 +35,6 @@ struct StampedImage {
   double depth_scale = 1.0;  // depth only: raw / depth_scale = metres
 };
 
-struct RgbdPair {
-  StampedImage color;
-  StampedImage depth;
-};
-
 struct RgbdSyncStats {
   size_t pairs = 0;
   size_t dropped_color = 0;  // no depth within the tolerance, queue overflow, out of order
@@ -46,19 +44,19 @@ struct RgbdSyncStats {
 class RgbdSynchronizer {
  public:
   explicit RgbdSynchronizer(const RgbdSyncOptions& options);
-  // Each returns the pairs completed by this image, in stamp order.
-  std::vector<RgbdPair> AddColor(StampedImage color);
-  std::vector<RgbdPair> AddDepth(StampedImage depth);
+  // Each returns the frames completed by this image, in stamp order.
+  std::vector<RgbdFrame> AddColor(StampedImage color);
+  std::vector<RgbdFrame> AddDepth(StampedImage depth);
   const RgbdSyncStats& stats() const { return stats_; }
   size_t pending_color() const { return colors_.size(); }
   size_t pending_depth() const { return depths_.size(); }
 
  private:
-  std::vector<RgbdPair> Match();
+  std::vector<RgbdFrame> Match();
   // Queues `image` behind `last` (dropped when its stamp does not increase, or the oldest when
   // the queue is full), counting drops in `dropped`; then matches.
-  std::vector<RgbdPair> Add(StampedImage image, std::deque<StampedImage>* queue,
-                            std::optional<Timestamp>* last, size_t* dropped);
+  std::vector<RgbdFrame> Add(StampedImage image, std::deque<StampedImage>* queue,
+                             std::optional<Timestamp>* last, size_t* dropped);
   RgbdSyncOptions options_;
   int64_t tolerance_ns_ = 0;
   std::deque<StampedImage> colors_, depths_;

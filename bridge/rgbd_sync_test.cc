@@ -13,16 +13,19 @@ StampedImage At(int64_t ms, int tag = 0) {
   s.image = cv::Mat(1, 1, CV_8UC1, cv::Scalar(tag));
   return s;
 }
-int64_t Ms(const StampedImage& s) { return s.stamp.nanoseconds() / 1000000; }
+// A depth image tagged with its stamp in ms (< 256), so the frame shows which depth it got.
+StampedImage DepthAt(int64_t ms) { return At(ms, static_cast<int>(ms)); }
+int64_t Ms(const RgbdFrame& f) { return f.stamp.nanoseconds() / 1000000; }
+int DepthTag(const RgbdFrame& f) { return f.depth.at<uint8_t>(0, 0); }
 
 TEST(RgbdSync, ExactStampsPairImmediatelyInEitherOrder) {
   RgbdSynchronizer sync({0.02, 8});
   EXPECT_TRUE(sync.AddColor(At(100)).empty());
-  auto pairs = sync.AddDepth(At(100));
+  auto pairs = sync.AddDepth(DepthAt(100));
   ASSERT_EQ(pairs.size(), 1u);
-  EXPECT_EQ(Ms(pairs[0].color), 100);
-  EXPECT_EQ(Ms(pairs[0].depth), 100);
-  EXPECT_TRUE(sync.AddDepth(At(133)).empty());
+  EXPECT_EQ(Ms(pairs[0]), 100);
+  EXPECT_EQ(DepthTag(pairs[0]), 100);
+  EXPECT_TRUE(sync.AddDepth(DepthAt(133)).empty());
   pairs = sync.AddColor(At(133));
   ASSERT_EQ(pairs.size(), 1u);
   EXPECT_EQ(sync.stats().pairs, 2u);
@@ -31,13 +34,13 @@ TEST(RgbdSync, ExactStampsPairImmediatelyInEitherOrder) {
 
 TEST(RgbdSync, NearestDepthWithinToleranceOnceFinal) {
   RgbdSynchronizer sync({0.02, 8});
-  sync.AddDepth(At(95));
+  sync.AddDepth(DepthAt(95));
   // Depth 95 is older than colour 100: a later depth may be closer, so wait.
   EXPECT_TRUE(sync.AddColor(At(100)).empty());
   // 103 is closer (3 ms) than 95 (5 ms) and after the colour: final.
-  auto pairs = sync.AddDepth(At(103));
+  auto pairs = sync.AddDepth(DepthAt(103));
   ASSERT_EQ(pairs.size(), 1u);
-  EXPECT_EQ(Ms(pairs[0].depth), 103);
+  EXPECT_EQ(DepthTag(pairs[0]), 103);
   EXPECT_EQ(sync.stats().dropped_depth, 1u);  // 95 can no longer serve a later colour better
 }
 
@@ -45,14 +48,14 @@ TEST(RgbdSync, ColourWithoutPartnerInToleranceIsDropped) {
   RgbdSynchronizer sync({0.01, 8});
   sync.AddColor(At(100));
   sync.AddColor(At(133));
-  auto pairs = sync.AddDepth(At(131));  // 100 is 31 ms away (dropped), 133 pairs with 131? no:
+  auto pairs = sync.AddDepth(DepthAt(131));  // 100 is 31 ms away (dropped), 133 pairs with 131? no:
   // 131 is older than 133 and not exact, so 133 waits for a later depth.
   EXPECT_TRUE(pairs.empty());
   EXPECT_EQ(sync.stats().dropped_color, 1u);
-  pairs = sync.AddDepth(At(166));  // 131 (2 ms) beats 166 (33 ms)
+  pairs = sync.AddDepth(DepthAt(166));  // 131 (2 ms) beats 166 (33 ms)
   ASSERT_EQ(pairs.size(), 1u);
-  EXPECT_EQ(Ms(pairs[0].color), 133);
-  EXPECT_EQ(Ms(pairs[0].depth), 131);
+  EXPECT_EQ(Ms(pairs[0]), 133);
+  EXPECT_EQ(DepthTag(pairs[0]), 131);
 }
 
 TEST(RgbdSync, OutOfOrderAndOverflowAreDroppedAndCounted) {
@@ -65,9 +68,9 @@ TEST(RgbdSync, OutOfOrderAndOverflowAreDroppedAndCounted) {
   EXPECT_EQ(sync.pending_color(), 3u);
   EXPECT_EQ(sync.stats().dropped_color, 4u);
   // Depth arrives: the queued colours pair in order.
-  auto pairs = sync.AddDepth(At(199));
+  auto pairs = sync.AddDepth(DepthAt(199));
   ASSERT_EQ(pairs.size(), 1u);
-  EXPECT_EQ(Ms(pairs[0].color), 199);
+  EXPECT_EQ(Ms(pairs[0]), 199);
 }
 
 TEST(RgbdSync, InvalidOptions) {

@@ -232,7 +232,7 @@ struct RosBridge::Impl {
       return;
     }
     std::lock_guard<std::mutex> lock(mutex);
-    std::vector<RgbdPair> pairs;
+    std::vector<RgbdFrame> pairs;
     if (is_color) {
       ++stats.color_received;
       if (!frame_id.empty()) image_frame_id = frame_id;
@@ -242,10 +242,10 @@ struct RosBridge::Impl {
       pairs = sync.AddDepth(std::move(item));
     }
     stats.dropped_unsynchronized = sync.stats().dropped_color + sync.stats().dropped_depth;
-    for (RgbdPair& pair : pairs) AddFrameLocked(std::move(pair));
+    for (RgbdFrame& pair : pairs) AddFrameLocked(std::move(pair));
   }
 
-  void AddFrameLocked(RgbdPair&& pair) {
+  void AddFrameLocked(RgbdFrame&& pair) {
     if (!camera) {
       ++stats.dropped_no_camera_info;
       if (ShouldLog(stats.dropped_no_camera_info)) {
@@ -255,8 +255,8 @@ struct RosBridge::Impl {
       return;
     }
     const PinholeCamera& c = camera->camera;
-    const cv::Size color_size = pair.color.image.size();
-    const cv::Size depth_size = pair.depth.image.size();
+    const cv::Size color_size = pair.rgb.size();
+    const cv::Size depth_size = pair.depth.size();
     std::string error;
     if (depth_size != color_size) {
       error = options.depth_topic + ".width/height: depth " + std::to_string(depth_size.width) +
@@ -273,12 +273,12 @@ struct RosBridge::Impl {
       return;
     }
     RgbdFrameData frame;
-    frame.stamp = pair.color.stamp;
+    frame.stamp = pair.stamp;
     frame.frame_id = image_frame_id.empty() ? "camera" : image_frame_id;
     frame.camera = c;
-    frame.depth_scale = pair.depth.depth_scale;
-    frame.rgb = rectifier->Color(pair.color.image);
-    frame.depth = rectifier->Depth(pair.depth.image);
+    frame.depth_scale = pair.depth_scale;
+    frame.rgb = rectifier->Color(pair.rgb);
+    frame.depth = rectifier->Depth(pair.depth);
     pending.push_back(std::move(frame));
     last_frame_time = Clock::now();
     while (pending.size() > options.max_pending_frames) {

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/base/camera.h"
+#include "core/base/rgbd_frame.h"
 #include "core/base/rigid3.h"
 #include "core/base/timestamp.h"
 #include "core/base/types.h"
@@ -31,15 +32,13 @@ namespace dygslam {
 // Largest accepted image side (pixels).
 inline constexpr uint32_t kMaxImageSide = 16384;
 
-// An RGB-D frame as the components handle it (library side of msg::RgbdFrame).
-struct RgbdFrameData {
-  Timestamp stamp;
+// An RGB-D frame as the components handle it (library side of msg::RgbdFrame): the core's frame
+// (stamp, rgb CV_8UC3 BGR, depth CV_16UC1 raw with depth_scale or CV_32FC1 metres) with the
+// message header and camera. The frame's mask and detections are not part of the message.
+struct RgbdFrameData : RgbdFrame {
   uint64_t seq = 0;
   std::string frame_id = "camera";
   PinholeCamera camera;
-  double depth_scale = 5000.0;  // raw 16UC1 depth / depth_scale = metres (1 for 32FC1)
-  cv::Mat rgb;                  // CV_8UC3 BGR
-  cv::Mat depth;                // CV_16UC1 raw or CV_32FC1 metres
 };
 
 msg::Time TimeToMsg(Timestamp stamp);

@@ -31,36 +31,25 @@ MapperCore::MapperCore(const MapperOptions& options) : options_(options) {
 }
 
 void MapperCore::Process(const KeyframeData& keyframe, const PinholeCamera& camera) {
-  if (keyframe.removed) {
-    if (builder_ != nullptr && builder_->Remove(keyframe.id)) ++num_removed_;
-    return;
+  if (consumer_ == nullptr) {
+    if (ChangeOf(keyframe) != KeyframeChange::kNew) return;  // nothing to correct or remove yet
+    consumer_ = std::make_unique<KeyframeConsumer>(camera, options_.octomap);
+    if (base_) consumer_->builder().SetBaseMap(*base_, options_.base_map_path);
   }
-  if (keyframe.pose_update_only) {
-    if (builder_ != nullptr &&
-        builder_->UpdatePoses({{keyframe.id, keyframe.world_from_cam}}) > 0) {
-      ++num_pose_updates_;
-    }
-    return;
-  }
-  if (builder_ == nullptr) {
-    builder_ = std::make_unique<OctoMapBuilder>(camera, options_.octomap);
-    if (base_) builder_->SetBaseMap(*base_, options_.base_map_path);
-  }
-  builder_->Insert(keyframe);
-  ++num_inserted_;
-  if (keyframe.stamp > newest_) newest_ = keyframe.stamp;
+  const KeyframeApplied applied = consumer_->Apply(keyframe);
+  if (applied.change == KeyframeChange::kNew && keyframe.stamp > newest_) newest_ = keyframe.stamp;
 }
 
 size_t MapperCore::num_keyframes() const {
-  return builder_ == nullptr ? 0 : builder_->KeyframeIds().size();
+  return consumer_ == nullptr ? 0 : consumer_->builder().KeyframeIds().size();
 }
 
 msg::MapUpdate MapperCore::MakeUpdate() {
   msg::MapUpdate m;
   OctoMapStats stats;
-  if (builder_) stats = builder_->Stats();
-  const octomap::OcTree& tree = builder_ ? builder_->tree() : *base_;
-  if (!builder_) {
+  if (consumer_) stats = consumer_->builder().Stats();
+  const octomap::OcTree& tree = consumer_ ? consumer_->builder().tree() : *base_;
+  if (!consumer_) {
     stats.num_leaves = tree.getNumLeafNodes();
     for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it)
       stats.num_occupied_leaves += tree.isNodeOccupied(*it);
@@ -70,7 +59,7 @@ msg::MapUpdate MapperCore::MakeUpdate() {
   const std::string bytes = stream.str();
   m.header().stamp(TimeToMsg(newest_));
   m.header().frame_id("world");
-  m.header().seq(num_inserted_);
+  m.header().seq(num_inserted());
   m.resolution(tree.getResolution());
   m.num_keyframes(stats.num_keyframes);
   m.num_leaf_nodes(stats.num_leaves);
@@ -81,17 +70,17 @@ msg::MapUpdate MapperCore::MakeUpdate() {
 
 void MapperCore::Write() {
   if (options_.map_path.empty()) return;
-  if (builder_ == nullptr) {
+  if (consumer_ == nullptr) {
     if (base_) WriteOctoMapBinary(*base_, options_.map_path);  // localization: the loaded map
     return;
   }
-  builder_->WriteBinary(options_.map_path);
+  consumer_->builder().WriteBinary(options_.map_path);
 }
 
 bool MapperCore::WriteFull() {
   if (options_.full_map_path.empty()) return false;
-  if (builder_ != nullptr) {
-    builder_->WriteFull(options_.full_map_path);
+  if (consumer_ != nullptr) {
+    consumer_->builder().WriteFull(options_.full_map_path);
   } else if (base_) {
     WriteOctoMapFull(*base_, options_.full_map_path);  // localization: the loaded map
   } else {

@@ -1,7 +1,7 @@
 // Mapper component: Keyframe -> OctoMapBuilder -> map.bt (periodically and at the end, atomic)
 // + MapUpdate (whole .bt stream + stats, transient-local keep-last 1).
-// Keyframe messages: a new keyframe is inserted; pose_update_only -> OctoMapBuilder::UpdatePoses;
-// removed (culled by the SLAM) -> OctoMapBuilder::Remove.
+// Keyframe messages are applied by a KeyframeConsumer (mapping/keyframe_consumer.h): a new
+// keyframe is inserted, pose_update_only moves it, removed (culled by the SLAM) takes it out.
 // Core: MapperCore (no DDS). Shell: RunMapper, ends after slam's COMPONENT_DONE and the keyframe
 // queue is drained. On stop (SIGINT / SIGTERM) it keeps draining until slam's COMPONENT_DONE
 // (slam publishes its last corrections when it stops) for at most flush_timeout_s while a
@@ -15,6 +15,7 @@
 #include "components/component_common.h"
 #include "components/convert.h"
 #include "dygslam_msg/MapUpdate.h"
+#include "mapping/keyframe_consumer.h"
 #include "mapping/octomap_builder.h"
 
 namespace dygslam {
@@ -52,15 +53,15 @@ struct MapperOptions {
 class MapperCore {
  public:
   explicit MapperCore(const MapperOptions& options);
-  // Inserts a keyframe (creates the builder on the first one, from the keyframe's camera), or
-  // applies a pose correction / removal of a known keyframe (unknown ids are ignored).
+  // Applies a keyframe message (KeyframeConsumer::Apply; the consumer is made on the first new
+  // keyframe, from its camera). Corrections and removals of unknown keyframes are ignored.
   void Process(const KeyframeData& keyframe, const PinholeCamera& camera);
-  bool has_map() const { return builder_ != nullptr || base_ != nullptr; }
+  bool has_map() const { return consumer_ != nullptr || base_ != nullptr; }
   // Keyframes currently in the map (inserted minus removed).
   size_t num_keyframes() const;
-  size_t num_inserted() const { return num_inserted_; }
-  size_t num_pose_updates() const { return num_pose_updates_; }
-  size_t num_removed() const { return num_removed_; }
+  size_t num_inserted() const { return consumer_ ? consumer_->num_inserted() : 0; }
+  size_t num_pose_updates() const { return consumer_ ? consumer_->num_pose_updates() : 0; }
+  size_t num_removed() const { return consumer_ ? consumer_->num_removed() : 0; }
   // Whole map as a MapUpdate (binary .bt stream). Requires has_map().
   msg::MapUpdate MakeUpdate();
   // Atomic .bt write (no-op without map or path).
@@ -70,9 +71,8 @@ class MapperCore {
 
  private:
   MapperOptions options_;
-  std::unique_ptr<OctoMapBuilder> builder_;
-  std::unique_ptr<octomap::OcTree> base_;  // options.base_map_path, read at construction
-  size_t num_inserted_ = 0, num_pose_updates_ = 0, num_removed_ = 0;
+  std::unique_ptr<KeyframeConsumer> consumer_;  // made on the first new keyframe
+  std::unique_ptr<octomap::OcTree> base_;       // options.base_map_path, read at construction
   Timestamp newest_;
 };
 

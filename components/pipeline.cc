@@ -54,8 +54,7 @@ void PipelineOptions::Check() const {
 }
 
 bool PipelineOptions::NeedsDetectorComponent() const {
-  return run_detector &&
-         (system.filter_mode == FilterMode::kBoxes || system.filter_mode == FilterMode::kFull);
+  return run_detector && system.NeedsDetections();
 }
 
 namespace {
@@ -109,7 +108,7 @@ std::vector<std::string> ComponentArgs(const PipelineOptions& o) {
       "--config",
       o.settings_path,
       "--filter",
-      ToString(o.system.filter_mode),
+      ToString(o.system.filter.mode),
       "--detector-model",
       o.detector_model,
       "--frames",

@@ -25,8 +25,7 @@ void SlamComponentOptions::Check() const {
 }
 
 bool SlamComponentOptions::NeedsDetections() const {
-  return external_detections &&
-         (system.filter_mode == FilterMode::kBoxes || system.filter_mode == FilterMode::kFull);
+  return external_detections && system.NeedsDetections();
 }
 
 SlamCore::SlamCore(const SlamComponentOptions& options)
@@ -47,16 +46,13 @@ std::vector<KeyframeData> SlamCore::TakeKeyframes() {
 
 SlamOutput SlamCore::Process(const RgbdFrameData& frame, const std::vector<Detection>* detections) {
   SlamOutput out;
-  cv::Mat depth = frame.depth;
-  if (depth.type() == CV_16UC1 &&
-      std::abs(frame.depth_scale - options_.system.sensor.depth_map_factor) > 1e-9) {
-    // The System divides raw depth by its own DepthMapFactor: hand it metres instead.
-    frame.depth.convertTo(depth, CV_32FC1, 1.0 / frame.depth_scale);
+  RgbdFrame input = frame;  // the core's frame (images shared); raw depth goes in with its scale
+  if (detections != nullptr) {
+    input.detections = *detections;
+  } else if (options_.NeedsDetections()) {
+    input.detections.emplace();  // geometry-only frame
   }
-  const std::vector<Detection> none;
-  const std::vector<Detection>* dets = detections;
-  if (dets == nullptr && options_.NeedsDetections()) dets = &none;  // geometry-only frame
-  out.result = system_->FeedRgbdFrame(frame.rgb, depth, frame.stamp, cv::Mat(), dets);
+  out.result = system_->FeedRgbdFrame(input);
   out.keyframes = TakeKeyframes();
   return out;
 }

@@ -30,7 +30,7 @@ void KeyframeMapperOptions::Check() const {
 
 KeyframeMapper::KeyframeMapper(const PinholeCamera& camera, const OctoMapOptions& options,
                                const KeyframeMapperOptions& mapper_options)
-    : mapper_options_(mapper_options), builder_(camera, options) {
+    : mapper_options_(mapper_options), consumer_(camera, options) {
   mapper_options_.Check();
   worker_ = std::thread([this] { Run(); });
 }
@@ -53,13 +53,13 @@ void KeyframeMapper::RethrowIfFailed() {
 }
 
 void KeyframeMapper::Submit(const KeyframeData& keyframe) {
-  if (keyframe.pose_update_only && !keyframe.removed) {
+  if (ChangeOf(keyframe) == KeyframeChange::kPoseUpdate) {
     // Local BA corrects the same keyframes again and again: a correction still waiting in the
     // queue takes the newer pose instead of queueing another one (same result, no burst).
     std::lock_guard<std::mutex> lock(mutex_);
     for (auto it = queue_.rbegin(); it != queue_.rend(); ++it) {
       if (it->keyframe.id != keyframe.id) continue;
-      if (!it->keyframe.pose_update_only || it->keyframe.removed) break;  // keep the order
+      if (ChangeOf(it->keyframe) != KeyframeChange::kPoseUpdate) break;  // keep the order
       it->keyframe.world_from_cam = keyframe.world_from_cam;
       ++stats_.num_submitted;
       ++stats_.num_coalesced;
@@ -91,7 +91,7 @@ void KeyframeMapper::WithBuilder(const std::function<void(OctoMapBuilder&)>& fn)
     RethrowIfFailed();
   }
   std::lock_guard<std::mutex> builder_lock(builder_mutex_);
-  fn(builder_);
+  fn(consumer_.builder());
 }
 
 MapperStats KeyframeMapper::Stats() const {
@@ -108,14 +108,14 @@ MapperStats KeyframeMapper::Stats() const {
 
 double KeyframeMapper::MaybeRebuild() {
   std::lock_guard<std::mutex> builder_lock(builder_mutex_);
-  if (!builder_.rebuild_pending()) return -1;
+  if (!consumer_.builder().rebuild_pending()) return -1;
   const auto now = std::chrono::steady_clock::now();
   if (last_rebuild_ms_ > 0 &&
       MsBetween(last_rebuild_end_, now) < last_rebuild_ms_ / mapper_options_.max_rebuild_share) {
     return -1;
   }
   try {
-    builder_.Sync();
+    consumer_.builder().Sync();
   } catch (...) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!error_) error_ = std::current_exception();
@@ -140,14 +140,7 @@ void KeyframeMapper::Run() {
     std::exception_ptr error;
     try {
       std::lock_guard<std::mutex> builder_lock(builder_mutex_);
-      const KeyframeData& k = item.keyframe;
-      if (k.removed) {
-        builder_.Remove(k.id);
-      } else if (k.pose_update_only) {
-        builder_.UpdatePoses({{k.id, k.world_from_cam}});
-      } else {
-        builder_.Insert(k);
-      }
+      consumer_.Apply(item.keyframe);
     } catch (...) {
       error = std::current_exception();
     }
@@ -157,13 +150,17 @@ void KeyframeMapper::Run() {
     if (error && !error_) error_ = error;
     ++stats_.num_applied;
     stats_.worker_busy_ms += MsBetween(start, end);
-    if (item.keyframe.removed) {
-      ++stats_.num_removals;
-    } else if (item.keyframe.pose_update_only) {
-      ++stats_.num_pose_updates;
-    } else {
-      ++stats_.num_new_keyframes;
-      latencies_ms_.push_back(MsBetween(item.submitted, end));
+    switch (ChangeOf(item.keyframe)) {
+      case KeyframeChange::kRemoved:
+        ++stats_.num_removals;
+        break;
+      case KeyframeChange::kPoseUpdate:
+        ++stats_.num_pose_updates;
+        break;
+      case KeyframeChange::kNew:
+        ++stats_.num_new_keyframes;
+        latencies_ms_.push_back(MsBetween(item.submitted, end));
+        break;
     }
     // Idle: catch up on pose corrections, within the time share (still busy: Flush() waits).
     if (queue_.empty() && mapper_options_.max_rebuild_share > 0 && !error_) {

@@ -1,7 +1,8 @@
-// Thread-safe front of an OctoMapBuilder for a running SLAM: the keyframe callback (tracking
-// thread for new keyframes, local-mapping thread for pose corrections and culled keyframes) hands
-// each KeyframeData to Submit(), which deep-copies the images into a FIFO queue and returns; one
-// worker thread applies the queue in submission order to the builder it owns:
+// Thread-safe front of a KeyframeConsumer (mapping/keyframe_consumer.h) for a running SLAM: the
+// keyframe callback (tracking thread for new keyframes, local-mapping thread for pose corrections
+// and culled keyframes) hands each KeyframeData to Submit(), which deep-copies the images into a
+// FIFO queue and returns; one worker thread applies the queue in submission order with the
+// consumer it owns:
 //   new keyframe        -> OctoMapBuilder::Insert (filter, downsample, ray-cast insertion)
 //   pose_update_only    -> OctoMapBuilder::UpdatePoses (rebuild deferred until the map is read)
 //   removed             -> OctoMapBuilder::Remove
@@ -34,6 +35,7 @@
 #include <thread>
 #include <vector>
 
+#include "mapping/keyframe_consumer.h"
 #include "mapping/octomap_builder.h"
 
 namespace dygslam {
@@ -93,7 +95,7 @@ class KeyframeMapper {
   double MaybeRebuild();
 
   KeyframeMapperOptions mapper_options_;
-  OctoMapBuilder builder_;  // touched by the worker, or by WithBuilder under builder_mutex_
+  KeyframeConsumer consumer_;  // touched by the worker, or by WithBuilder under builder_mutex_
   std::mutex builder_mutex_;
 
   mutable std::mutex mutex_;  // guards everything below

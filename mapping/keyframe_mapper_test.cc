@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/base/error.h"
+#include "mapping/keyframe_consumer.h"
 #include "mapping/map_compare.h"
 #include "core/synth/box_room.h"
 
@@ -51,7 +52,7 @@ void ExpectSameMap(const octomap::OcTree& a, const octomap::OcTree& b) {
 TEST(KeyframeMapper, AppliesInsertsCorrectionsAndRemovalsInOrder) {
   const PinholeCamera camera = box_room::SmallCamera();
   KeyframeMapper mapper(camera, TestOptions());
-  OctoMapBuilder direct(camera, TestOptions());
+  KeyframeConsumer direct(camera, TestOptions());
   std::vector<KeyframeData> sequence;
   for (int k = 0; k < 12; ++k) sequence.push_back(Keyframe(k));
   // A local-BA style correction of keyframe 3 and the culling of keyframe 5.
@@ -69,7 +70,7 @@ TEST(KeyframeMapper, AppliesInsertsCorrectionsAndRemovalsInOrder) {
 
   for (const KeyframeData& k : sequence) {
     mapper.Submit(k);
-    direct.Insert(k);
+    direct.Apply(k);
   }
   mapper.Flush();
   const MapperStats stats = mapper.Stats();
@@ -82,17 +83,17 @@ TEST(KeyframeMapper, AppliesInsertsCorrectionsAndRemovalsInOrder) {
     EXPECT_FALSE(builder.Contains(5));
     EXPECT_EQ(builder.KeyframeIds().size(), 11u);
     EXPECT_NEAR(builder.Pose(3).translation.x(), correction.world_from_cam.translation.x(), 1e-12);
-    ExpectSameMap(builder.tree(), direct.tree());
+    ExpectSameMap(builder.tree(), direct.builder().tree());
   });
 }
 
 TEST(KeyframeMapper, SubmitCopiesTheImages) {
   const PinholeCamera camera = box_room::SmallCamera();
   KeyframeMapper mapper(camera, TestOptions(), KeyframeMapperOptions{64});
-  OctoMapBuilder direct(camera, TestOptions());
+  KeyframeConsumer direct(camera, TestOptions());
   for (int k = 0; k < 8; ++k) {
     KeyframeData keyframe = Keyframe(k);
-    direct.Insert(keyframe);
+    direct.Apply(keyframe);
     mapper.Submit(keyframe);
     // The caller reuses its buffers right away (as the SLAM does with the next frame).
     keyframe.depth.setTo(0.5f);
@@ -100,7 +101,7 @@ TEST(KeyframeMapper, SubmitCopiesTheImages) {
   }
   mapper.Flush();
   mapper.WithBuilder(
-      [&](OctoMapBuilder& builder) { ExpectSameMap(builder.tree(), direct.tree()); });
+      [&](OctoMapBuilder& builder) { ExpectSameMap(builder.tree(), direct.builder().tree()); });
 }
 
 TEST(KeyframeMapper, ConcurrentSubmittersAndBackPressureLoseNothing) {

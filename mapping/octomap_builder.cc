@@ -221,15 +221,16 @@ bool OctoMapBuilder::NeedsRebuild(const Rigid3d& a, const Rigid3d& b) const {
 }
 
 void OctoMapBuilder::Insert(const KeyframeData& keyframe) {
-  if (keyframe.removed) {
-    Remove(keyframe.id);
-    return;
+  if (keyframe.removed || keyframe.pose_update_only) {
+    throw InputError(KeyframeName(keyframe) + ": " +
+                     (keyframe.removed ? "removed" : "pose_update_only") +
+                     " is not a keyframe to insert (KeyframeConsumer applies those)");
   }
   if (!keyframe.world_from_cam.AllFinite()) {
     throw InputError(KeyframeName(keyframe) + ": world_from_cam is not finite");
   }
   auto known = keyframes_.find(keyframe.id);
-  if (keyframe.pose_update_only || (known != keyframes_.end() && keyframe.depth.empty())) {
+  if (known != keyframes_.end() && keyframe.depth.empty()) {
     UpdatePoses({{keyframe.id, keyframe.world_from_cam}});
     return;
   }

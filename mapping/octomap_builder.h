@@ -1,6 +1,6 @@
 // Occupancy map (OctoMap) of the static scene, built from the keyframes the SLAM emits.
 //
-//   OctoMapBuilder builder(camera, options);
+//   OctoMapBuilder builder(camera, options);  // a keyframe stream: KeyframeConsumer owns one
 //   builder.Insert(keyframe);                 // static part of the keyframe, free space ray-cast
 //   builder.UpdatePoses({{id, world_from_cam}, ...});   // after loop closure / BA
 //   builder.Remove(id);                       // culled keyframe
@@ -135,11 +135,12 @@ class OctoMapBuilder {
   OctoMapBuilder(const OctoMapBuilder&) = delete;
   OctoMapBuilder& operator=(const OctoMapBuilder&) = delete;
 
-  // Inserts the static part of a keyframe. If keyframe.removed, removes it (as Remove). If
-  // keyframe.pose_update_only, or the id is already known and depth is empty, only its pose is
-  // updated (as UpdatePoses). If the id is known and depth is given, the keyframe is replaced.
-  // Throws InputError on depth/mask of the wrong type or size, or a non-finite pose (the message
-  // names the keyframe id and the field).
+  // Inserts the static part of a new keyframe. If the id is already known and depth is empty,
+  // only its pose is updated (as UpdatePoses); if depth is given, the keyframe is replaced.
+  // A keyframe stream (new / pose update / removed) is applied by KeyframeConsumer
+  // (mapping/keyframe_consumer.h): a removed or pose_update_only keyframe here is an InputError,
+  // as are depth/mask of the wrong type or size and a non-finite pose (the message names the
+  // keyframe id and the field).
   void Insert(const KeyframeData& keyframe);
 
   // Sets the poses of known keyframes (unknown ids are ignored; returns how many were known).

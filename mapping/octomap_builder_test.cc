@@ -375,13 +375,23 @@ TEST(OctoMapBuilder, UpdatePosesMovesTheMap) {
   builder.UpdatePoses(rotated);
   EXPECT_TRUE(builder.rebuild_pending());
 
-  // pose_update_only keyframes are pose updates.
+  // A pose_update_only or removed keyframe is not one to insert (KeyframeConsumer applies them):
+  // an error naming the keyframe, and the map is unchanged.
   KeyframeData update;
   update.id = 1;
   update.world_from_cam = WalkPose(1);
   update.pose_update_only = true;
-  builder.Insert(update);
-  EXPECT_EQ(builder.Pose(1).translation, WalkPose(1).translation);
+  EXPECT_THROW(builder.Insert(update), InputError);
+  update.pose_update_only = false;
+  update.removed = true;
+  try {
+    builder.Insert(update);
+    ADD_FAILURE() << "a removed keyframe was inserted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("keyframe 1"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(builder.Contains(1));
+  EXPECT_NE(builder.Pose(1).translation, WalkPose(1).translation);
 }
 
 // Culled keyframes leave the map.

@@ -95,7 +95,7 @@ TEST(SlamMap, GeneratedSequenceMovingObjectsLeaveNoTrace) {
   SystemOptions options;
   options.camera = with_objects.camera;
   options.sensor = with_objects.sensor;
-  options.filter_mode = FilterMode::kFull;
+  options.filter.mode = FilterMode::kFull;
   options.deterministic = true;
   OctoMapOptions map_options;  // defaults: 5 cm, 4 m, masks applied
   OctoMapOptions unmasked = map_options;
@@ -209,7 +209,7 @@ TEST(SlamMap, BonnGhostVoxelsTenTimesFewerWithMasks) {
   const Settings settings =
       LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
   SystemOptions options = SystemOptionsFromSettings(settings);
-  options.filter_mode = FilterMode::kFull;
+  options.filter.mode = FilterMode::kFull;
   options.deterministic = true;
   OctoMapOptions map_options;
   ReadOptions(settings.reader, &map_options);

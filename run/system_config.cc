@@ -160,7 +160,7 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   std::string mode;
   if (filter.ReadIfPresent("mode", &mode)) {
     try {
-      options.filter_mode = ParseFilterMode(mode);
+      options.filter.mode = ParseFilterMode(mode);
     } catch (const InvalidOptions& e) {
       filter.Fail("mode", EchoValue(e.what(), 600));
     }

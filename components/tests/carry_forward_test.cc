@@ -67,7 +67,7 @@ TEST(CarryForward, DetectorStoppedMidRunBoxesStillFilter) {
   const Settings settings =
       LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
   SystemOptions system = SystemOptionsFromSettings(settings);
-  system.filter_mode = FilterMode::kFull;
+  system.filter.mode = FilterMode::kFull;
   system.deterministic = true;
   // A person walks into the view from entry ~185 and fills it at 195-208.
   constexpr size_t kFirst = 175, kStop = 190, kLast = 200;

@@ -11,26 +11,29 @@ namespace dygslam {
 
 namespace {
 struct ModeName {
-  DynamicFilterMode mode;
+  FilterMode mode;
   const char* name;
 };
-constexpr ModeName kModeNames[] = {{DynamicFilterMode::kNone, "none"},
-                                   {DynamicFilterMode::kBoxes, "boxes"},
-                                   {DynamicFilterMode::kGeometry, "geometry"},
-                                   {DynamicFilterMode::kFull, "full"}};
+constexpr ModeName kModeNames[] = {{FilterMode::kNone, "none"},
+                                   {FilterMode::kBoxes, "boxes"},
+                                   {FilterMode::kGeometry, "geometry"},
+                                   {FilterMode::kFull, "full"}};
 }  // namespace
 
-const char* ToString(DynamicFilterMode mode) {
+const char* ToString(FilterMode mode) {
   for (const ModeName& m : kModeNames)
     if (m.mode == mode) return m.name;
   return "unknown";
 }
 
-DynamicFilterMode ParseDynamicFilterMode(const std::string& text) {
+FilterMode ParseFilterMode(const std::string& text) {
   for (const ModeName& m : kModeNames)
     if (text == m.name) return m.mode;
-  throw InvalidOptions("invalid option DynamicFilter.mode: '" + text +
-                       "' (expected none | boxes | geometry | full)");
+  throw InvalidOptions("invalid filter mode '" + text + "': expected none|boxes|geometry|full");
+}
+
+bool UsesDetections(FilterMode mode) {
+  return mode == FilterMode::kBoxes || mode == FilterMode::kFull;
 }
 
 void DynamicFilterOptions::Check() const {

@@ -52,19 +52,24 @@
 
 namespace dygslam {
 
-// Mirrors dygslam::FilterMode (core/system/system.h) without depending on the system layer.
-enum class DynamicFilterMode {
+// The filter mode, the one enum of the project (`--filter`, settings `DynamicFilter.mode`,
+// SystemOptions::filter.mode).
+enum class FilterMode {
   kNone,      // nothing removed
   kBoxes,     // every feature inside a dynamic box removed (Crowd-SLAM-like)
   kGeometry,  // no detector: the whole image is the dynamic region, F from all matches
   kFull,      // the paper: boxes + geometry probability + Kalman + expansion
 };
-const char* ToString(DynamicFilterMode mode);
+// The former name of FilterMode, kept until the branches that use it are merged (issue 17).
+using DynamicFilterMode = FilterMode;
+const char* ToString(FilterMode mode);
 // "none" | "boxes" | "geometry" | "full"; throws InvalidOptions otherwise.
-DynamicFilterMode ParseDynamicFilterMode(const std::string& text);
+FilterMode ParseFilterMode(const std::string& text);
+// The modes that need person boxes (a detector): boxes, full.
+bool UsesDetections(FilterMode mode);
 
 struct DynamicFilterOptions {
-  DynamicFilterMode mode = DynamicFilterMode::kFull;
+  FilterMode mode = FilterMode::kFull;
 
   // Paper parameters (sec. 3): C1, alpha, Q, R, P_init, C2, delta and the 0.5 threshold.
   double c1 = 2.0;

@@ -93,8 +93,8 @@ TEST(DynamicFilterOptions, CheckAndModes) {
   }
   for (auto m : {DynamicFilterMode::kNone, DynamicFilterMode::kBoxes, DynamicFilterMode::kGeometry,
                  DynamicFilterMode::kFull})
-    EXPECT_EQ(ParseDynamicFilterMode(ToString(m)), m);
-  EXPECT_THROW(ParseDynamicFilterMode("fancy"), InvalidOptions);
+    EXPECT_EQ(ParseFilterMode(ToString(m)), m);
+  EXPECT_THROW(ParseFilterMode("fancy"), InvalidOptions);
 }
 
 // ---------------------------------------------------------------- generated two-view geometry

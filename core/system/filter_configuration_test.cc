@@ -23,9 +23,9 @@ TEST(FilterConfiguration, PaperFamilyAddsOneExtensionAtATime) {
         Expected{"full", defaults.filter.box_margin_fraction, true, true, true}}) {
     SCOPED_TRACE(e.name);
     SystemOptions o;
-    o.filter_mode = FilterMode::kNone;
+    o.filter.mode = FilterMode::kNone;
     ApplyFilterConfiguration(e.name, &o);
-    EXPECT_EQ(o.filter_mode, FilterMode::kFull);
+    EXPECT_EQ(o.filter.mode, FilterMode::kFull);
     EXPECT_TRUE(o.NeedsDetections());
     EXPECT_DOUBLE_EQ(o.filter.box_margin_fraction, e.margin_fraction);
     EXPECT_EQ(o.demote_in_box_features, e.demotion);
@@ -53,7 +53,7 @@ TEST(FilterConfiguration, ModesKeepTheSettingsFileValues) {
   o.static_top_up_fraction = 0.5;
   for (const char* name : {"none", "boxes", "geometry", "full"}) {
     ApplyFilterConfiguration(name, &o);
-    EXPECT_EQ(ToString(o.filter_mode), std::string(name));
+    EXPECT_EQ(ToString(o.filter.mode), std::string(name));
     EXPECT_EQ(o.filter.box_margin_fraction, 0.25);
     EXPECT_EQ(o.static_top_up_fraction, 0.5);
   }

@@ -13,6 +13,7 @@
 #include "core/base/log.h"
 #include "core/dynamic/detection_worker.h"
 #include "core/slam/frame.h"
+#include "core/slam/frame_preparation.h"
 #include "core/slam/local_mapping.h"
 #include "core/slam/tracking.h"
 
@@ -43,30 +44,6 @@ double MsSince(std::chrono::steady_clock::time_point t0) {
 }
 }  // namespace
 
-const char* ToString(FilterMode mode) {
-  switch (mode) {
-    case FilterMode::kNone:
-      return "none";
-    case FilterMode::kBoxes:
-      return "boxes";
-    case FilterMode::kGeometry:
-      return "geometry";
-    case FilterMode::kFull:
-      return "full";
-  }
-  return "unknown";
-}
-
-FilterMode ParseFilterMode(const std::string& text) {
-  if (text == "none") return FilterMode::kNone;
-  if (text == "boxes") return FilterMode::kBoxes;
-  if (text == "geometry") return FilterMode::kGeometry;
-  if (text == "full") return FilterMode::kFull;
-  throw InvalidOptions("invalid filter mode '" + text +
-                       "': expected none|boxes|geometry|full (or paper, paper+margin, "
-                       "paper+margin+demotion)");
-}
-
 const std::vector<std::string>& FilterConfigurationNames() {
   static const std::vector<std::string> names = {
       "none", "boxes", "geometry", "paper", "paper+margin", "paper+margin+demotion", "full"};
@@ -74,18 +51,18 @@ const std::vector<std::string>& FilterConfigurationNames() {
 }
 
 void ApplyFilterConfiguration(const std::string& name, SystemOptions* options) {
-  const bool paper_family = name.rfind("paper", 0) == 0;
-  if (!paper_family) {
-    options->filter_mode = ParseFilterMode(name);
-    return;
-  }
   const auto& names = FilterConfigurationNames();
   if (std::find(names.begin(), names.end(), name) == names.end()) {
     std::string list;
     for (const std::string& n : names) list += (list.empty() ? "" : "|") + n;
     throw InvalidOptions("invalid filter configuration '" + name + "': expected " + list);
   }
-  options->filter_mode = FilterMode::kFull;
+  const bool paper_family = name.rfind("paper", 0) == 0;
+  if (!paper_family) {
+    options->filter.mode = ParseFilterMode(name);
+    return;
+  }
+  options->filter.mode = FilterMode::kFull;
   options->filter.box_margin = 0.0;
   options->filter.box_margin_fraction = 0.0;
   options->demote_in_box_features = false;
@@ -101,6 +78,8 @@ void SystemOptions::Check() const {
   DYGSLAM_CHECK_OPTION(!localization || !load_map.empty(), "localization (needs a map to load)");
   DYGSLAM_CHECK_OPTION(detection_every_n_frames >= 1 && detection_every_n_frames <= 1000,
                        "Detector.every_n_frames (1..1000)");
+  DYGSLAM_CHECK_OPTION(static_top_up_fraction >= 0 && static_top_up_fraction <= 1,
+                       "static_top_up_fraction (0..1)");
   box_propagation.Check();
   camera.Check();
   sensor.Check();
@@ -111,27 +90,6 @@ void SystemOptions::Check() const {
   filter.Check();
   dynamic_mask.Check();  // used only when a keyframe is made: fail here, not mid-run
 }
-
-namespace {
-DynamicFilterMode ToDynamicMode(FilterMode mode) {
-  switch (mode) {
-    case FilterMode::kNone:
-      return DynamicFilterMode::kNone;
-    case FilterMode::kBoxes:
-      return DynamicFilterMode::kBoxes;
-    case FilterMode::kGeometry:
-      return DynamicFilterMode::kGeometry;
-    case FilterMode::kFull:
-      return DynamicFilterMode::kFull;
-  }
-  return DynamicFilterMode::kNone;
-}
-DynamicFilterOptions FilterOptionsOf(const SystemOptions& options) {
-  DynamicFilterOptions f = options.filter;
-  f.mode = ToDynamicMode(options.filter_mode);
-  return f;
-}
-}  // namespace
 
 namespace {
 std::shared_ptr<const Vocabulary> LoadVocabulary(const SystemOptions& options) {
@@ -156,7 +114,7 @@ class SystemImpl {
         map_(loaded_.map ? loaded_.map : std::make_shared<Map>()),
         local_mapper_(map_, options.local_mapping, !options.deterministic),
         tracker_(options.tracking, map_, local_mapper_, options.deterministic),
-        filter_(FilterOptionsOf(options)),
+        filter_(options.filter),
         boxes_(options.box_propagation) {
     if (vocabulary_) {
       database_ = std::make_shared<KeyFrameDatabase>();
@@ -225,8 +183,8 @@ class SystemImpl {
     for (const KeyframeData& d : updates) cb(d);
   }
 
-  FrameResult Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp, const cv::Mat& mask,
-                   const std::vector<Detection>* detections);
+  FrameResult Feed(const RgbdFrame& frame);
+  double depth_map_factor() const { return options_.sensor.depth_map_factor; }
 
   std::vector<StampedPose> Trajectory() const { return tracker_.Trajectory(); }
   LocalMappingStats LocalMappingStatistics() const { return local_mapper_.stats(); }
@@ -270,9 +228,6 @@ class SystemImpl {
     }
     detection_worker_ = std::make_unique<DetectionWorker>(YoloDetector::Create(d));
   }
-  void TopUpStaticFeatures(const cv::Mat& gray, const cv::Mat& mask,
-                           const std::vector<Detection>& detections, OrbExtractionCache* cache,
-                           OrbFeatures* kept) const;
   std::vector<StampedPose> KeyframeTrajectory() const {
     return tracker_.KeyframeTrajectory(first_own_keyframe_id_);
   }
@@ -286,6 +241,26 @@ class SystemImpl {
   }
 
  private:
+  struct DetectionJob {
+    Timestamp stamp;
+    DetectionWorker::Ticket ticket;
+  };
+  struct PreparedFrame;
+  struct FilteredFrame;
+  // FeedRgbdFrame's steps: prepare, then filter -> track -> emit.
+  void CheckInput(const RgbdFrame& frame);
+  std::shared_ptr<DetectionJob> StartDetection(const RgbdFrame& frame, bool own_detector,
+                                               bool* detect_now);
+  PreparedFrame Prepare(const RgbdFrame& frame, FrameResult* result);
+  FilteredFrame Filter(const PreparedFrame& prepared, FrameResult* result);
+  void TopUp(const PreparedFrame& prepared, OrbFeatures* kept);
+  std::vector<cv::Point2f> UndistortedPoints(const std::vector<cv::KeyPoint>& keypoints) const;
+  static std::vector<float> KeypointDepths(const std::vector<cv::KeyPoint>& keypoints,
+                                           const cv::Mat& depth_m);
+  TrackResult Track(const PreparedFrame& prepared, FilteredFrame* filtered, FrameResult* result);
+  void EmitKeyframe(const std::shared_ptr<KeyFrame>& keyframe, const PreparedFrame& prepared,
+                    const FilteredFrame& filtered, FrameResult* result);
+
   SystemOptions options_;
   OrbExtractor extractor_;
   std::shared_ptr<const CameraGeometry> geometry_;
@@ -300,10 +275,6 @@ class SystemImpl {
   Tracker tracker_;
   DynamicFilter filter_;
   std::unique_ptr<DetectionWorker> detection_worker_;  // created on first use
-  struct DetectionJob {
-    Timestamp stamp;
-    DetectionWorker::Ticket ticket;
-  };
   static constexpr size_t kMaxPrefetched = 4;
   std::deque<std::shared_ptr<DetectionJob>> prefetched_;
   // detection_every_n_frames > 1: frames announced by Prefetch, not yet submitted.
@@ -322,238 +293,246 @@ class SystemImpl {
   std::function<void(const KeyframeData&)> keyframe_callback_;
 };
 
-void SystemImpl::TopUpStaticFeatures(const cv::Mat& gray, const cv::Mat& mask,
-                                     const std::vector<Detection>& detections,
-                                     OrbExtractionCache* cache, OrbFeatures* kept) const {
-  const int budget = options_.orb.num_features;
-  const int shortfall = budget - static_cast<int>(kept->keypoints.size());
-  if (kept->keypoints.size() >= options_.static_top_up_fraction * budget) return;
-  cv::Mat box_mask = mask.empty() ? cv::Mat::zeros(gray.size(), CV_8UC1) : mask.clone();
-  const cv::Rect image(0, 0, gray.cols, gray.rows);
-  for (const Detection& d : detections) {
-    const cv::Rect r = cv::Rect(DynamicRegion(d, options_.filter)) & image;
-    box_mask(r).setTo(255);
-  }
-  OrbFeatures extra =
-      extractor_.Extract(gray, box_mask, shortfall, cache);  // pyramid and corners reused
-  // Skip corners already kept (same level, within 2 px).
-  constexpr int kCell = 8;
-  const int cols = gray.cols / kCell + 1, rows = gray.rows / kCell + 1;
-  std::vector<std::vector<int>> grid(cols * rows);
-  auto cell_of = [&](const cv::Point2f& p) {
-    return std::clamp(int(p.y) / kCell, 0, rows - 1) * cols +
-           std::clamp(int(p.x) / kCell, 0, cols - 1);
-  };
-  for (size_t i = 0; i < kept->keypoints.size(); ++i)
-    grid[cell_of(kept->keypoints[i].pt)].push_back(int(i));
-  const size_t original = kept->keypoints.size();
-  for (size_t j = 0; j < extra.keypoints.size(); ++j) {
-    const cv::KeyPoint& kp = extra.keypoints[j];
-    bool duplicate = false;
-    const int cx = std::clamp(int(kp.pt.x) / kCell, 0, cols - 1),
-              cy = std::clamp(int(kp.pt.y) / kCell, 0, rows - 1);
-    for (int y = std::max(0, cy - 1); y <= std::min(rows - 1, cy + 1) && !duplicate; ++y) {
-      for (int x = std::max(0, cx - 1); x <= std::min(cols - 1, cx + 1) && !duplicate; ++x) {
-        for (int i : grid[y * cols + x]) {
-          if (i >= static_cast<int>(original)) continue;
-          const cv::KeyPoint& other = kept->keypoints[i];
-          if (other.octave == kp.octave && cv::norm(other.pt - kp.pt) < 2.0) {
-            duplicate = true;
-            break;
-          }
-        }
-      }
-    }
-    if (duplicate) continue;
-    kept->keypoints.push_back(kp);
-    kept->descriptors.push_back(extra.descriptors[j]);
-  }
+namespace {
+const std::vector<Detection> kNoDetections;
+}  // namespace
+
+// A frame after preparation (stella_vslam's frame before tracking): the checked input, its grey
+// image, depth in metres and ORB features, and the boxes the filter uses on it.
+struct SystemImpl::PreparedFrame {
+  const RgbdFrame* input = nullptr;
+  cv::Mat gray;
+  cv::Mat depth_m;  // CV_32FC1 metres
+  OrbFeatures features;
+  // Filled by the extraction, reused by the top-up extraction (pyramid and FAST corners).
+  mutable OrbExtractionCache extraction_cache;
+  // Boxes given with the frame, found by the own detector or carried from its last frame;
+  // nullopt: none (the filter mode needs none, or none were given).
+  std::optional<std::vector<Detection>> detections;
+  bool propagate_boxes = false;  // own detector on every n-th frame: carry boxes in between
+
+  const std::vector<Detection>& boxes() const { return detections ? *detections : kNoDetections; }
+};
+
+// The dynamic filter's verdict on a prepared frame and the features tracking gets.
+struct SystemImpl::FilteredFrame {
+  std::vector<uint8_t> dynamic;  // per feature of PreparedFrame::features: removed as dynamic
+  OrbFeatures kept;              // the static features, then the top-up features
+  std::vector<uint8_t> kept_in_region;  // per kept feature: kept inside a box (demoted)
+};
+
+void SystemImpl::CheckInput(const RgbdFrame& frame) {
+  CheckRgbdFrame(frame, options_.camera.width, options_.camera.height);
+  if (has_last_stamp_ && frame.stamp <= last_stamp_)
+    throw InputError("frame stamp " + frame.stamp.ToString() + " is not after the previous frame " +
+                     last_stamp_.ToString());
+  last_stamp_ = frame.stamp;
+  has_last_stamp_ = true;
 }
 
-FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp,
-                             const cv::Mat& mask, const std::vector<Detection>* detections) {
-  const auto t_start = std::chrono::steady_clock::now();
-  const PinholeCamera& cam = options_.camera;
-  if (rgb.empty() || (rgb.type() != CV_8UC3 && rgb.type() != CV_8UC1))
-    throw InputError("rgb image: expected CV_8UC3 (or CV_8UC1), got type " +
-                     std::to_string(rgb.type()));
-  if (rgb.cols != cam.width || rgb.rows != cam.height)
-    throw InputError("rgb image: size " + std::to_string(rgb.cols) + "x" +
-                     std::to_string(rgb.rows) + " does not match Camera.width/height " +
-                     std::to_string(cam.width) + "x" + std::to_string(cam.height));
-  if (depth.empty() || (depth.type() != CV_16UC1 && depth.type() != CV_32FC1))
-    throw InputError("depth image: expected CV_16UC1 or CV_32FC1");
-  if (depth.size() != rgb.size()) throw InputError("depth image: size differs from the rgb image");
-  if (!mask.empty() && (mask.type() != CV_8UC1 || mask.size() != rgb.size()))
-    throw InputError("mask: expected CV_8UC1 " + std::to_string(rgb.cols) + "x" +
-                     std::to_string(rgb.rows) + ", got type " + std::to_string(mask.type()) + " " +
-                     std::to_string(mask.cols) + "x" + std::to_string(mask.rows));
-  if (has_last_stamp_ && stamp <= last_stamp_)
-    throw InputError("frame stamp " + stamp.ToString() + " is not after the previous frame " +
-                     last_stamp_.ToString());
-  last_stamp_ = stamp;
-  has_last_stamp_ = true;
-
-  FrameResult result;
-  result.stamp = stamp;
-  cv::Mat gray;
-  if (rgb.channels() == 3) {
-    cv::cvtColor(rgb, gray, cv::COLOR_BGR2GRAY);
-  } else {
-    gray = rgb;
-  }
-  cv::Mat depth_m;
-  if (depth.type() == CV_16UC1) {
-    depth.convertTo(depth_m, CV_32F, 1.0 / options_.sensor.depth_map_factor);
-  } else {
-    depth_m = depth;
-  }
-  // Detection runs on another thread while ORB features are extracted.
-  std::vector<Detection> own_detections;
-  const bool need_detections = options_.NeedsDetections();
-  std::shared_ptr<DetectionJob> detection_job;
+// The own detector's job for this frame: a prefetched one, a new one, or none (not a detector
+// frame of the cadence). *detect_now: this frame is a detector frame.
+std::shared_ptr<SystemImpl::DetectionJob> SystemImpl::StartDetection(const RgbdFrame& frame,
+                                                                     bool own_detector,
+                                                                     bool* detect_now) {
+  std::shared_ptr<DetectionJob> job;
   // Prefetched detections of this frame; those of earlier stamps were never fed: dropped.
-  while (!prefetched_.empty() && prefetched_.front()->stamp < stamp) prefetched_.pop_front();
-  if (!prefetched_.empty() && prefetched_.front()->stamp == stamp) {
-    detection_job = prefetched_.front();
+  while (!prefetched_.empty() && prefetched_.front()->stamp < frame.stamp) prefetched_.pop_front();
+  if (!prefetched_.empty() && prefetched_.front()->stamp == frame.stamp) {
+    job = prefetched_.front();
     prefetched_.pop_front();
   }
-  const bool own_detector = need_detections && detections == nullptr;
+  *detect_now = true;
+  if (!own_detector) return job;
   const int every_n = options_.detection_every_n_frames;
-  bool detect_now = true;
-  if (own_detector) {
-    detect_now = own_detector_frames_ % every_n == 0;
-    ++own_detector_frames_;
-    if (every_n > 1) {
-      while (!deferred_.empty() && deferred_.front().stamp <= stamp) deferred_.pop_front();
-      // The next announced frame: start its detection now if it is a detector frame, so it
-      // overlaps this frame's tracking.
-      if (!deferred_.empty() && own_detector_frames_ % every_n == 0) {
-        SubmitAhead(deferred_.front().rgb, deferred_.front().stamp);
-        deferred_.pop_front();
-      }
+  *detect_now = own_detector_frames_ % every_n == 0;
+  ++own_detector_frames_;
+  if (every_n > 1) {
+    while (!deferred_.empty() && deferred_.front().stamp <= frame.stamp) deferred_.pop_front();
+    // The next announced frame: start its detection now if it is a detector frame, so it
+    // overlaps this frame's tracking.
+    if (!deferred_.empty() && own_detector_frames_ % every_n == 0) {
+      SubmitAhead(deferred_.front().rgb, deferred_.front().stamp);
+      deferred_.pop_front();
     }
   }
-  if (own_detector && !detect_now) detection_job.reset();
-  if (own_detector && detect_now && !detection_job) {
-    if (rgb.channels() != 3)
+  if (!*detect_now) return nullptr;
+  if (!job) {
+    if (frame.rgb.channels() != 3)
       throw InputError("rgb image: the detector needs CV_8UC3 BGR, got one channel");
     EnsureDetector();
-    detection_job = std::make_shared<DetectionJob>();
-    detection_job->stamp = stamp;
-    detection_job->ticket = detection_worker_->Submit(rgb);
+    job = std::make_shared<DetectionJob>();
+    job->stamp = frame.stamp;
+    job->ticket = detection_worker_->Submit(frame.rgb);
   }
+  return job;
+}
+
+// Checks, grey image, depth in metres, ORB extraction (while the own detector runs on another
+// thread), and the boxes of the frame.
+SystemImpl::PreparedFrame SystemImpl::Prepare(const RgbdFrame& frame, FrameResult* result) {
+  CheckInput(frame);
+  PreparedFrame prepared;
+  prepared.input = &frame;
+  prepared.gray = GrayImage(frame.rgb);
+  prepared.depth_m = frame.DepthInMetres();
+  const bool need_detections = options_.NeedsDetections();
+  const bool own_detector = need_detections && !frame.detections;
+  bool detect_now = true;
+  const std::shared_ptr<DetectionJob> job = StartDetection(frame, own_detector, &detect_now);
   const auto t_orb = std::chrono::steady_clock::now();
-  OrbExtractionCache extraction_cache;
-  OrbFeatures features = extractor_.Extract(gray, mask, -1, &extraction_cache);
-  result.times.orb_extraction_ms = MsSince(t_orb);
-  result.num_features = static_cast<int>(features.keypoints.size());
+  prepared.features = extractor_.Extract(prepared.gray, frame.mask, -1, &prepared.extraction_cache);
+  result->times.orb_extraction_ms = MsSince(t_orb);
+  result->num_features = static_cast<int>(prepared.features.keypoints.size());
+  prepared.propagate_boxes = own_detector && options_.detection_every_n_frames > 1;
   if (own_detector && detect_now) {
     const auto t_wait = std::chrono::steady_clock::now();
-    own_detections = detection_job->ticket.result.get();
-    result.times.detection_wait_ms = MsSince(t_wait);
-    result.times.detection_ms = *detection_job->ticket.detect_ms;
-    detections = &own_detections;
-    if (every_n > 1) boxes_.SetDetections(own_detections);
+    prepared.detections = job->ticket.result.get();
+    result->times.detection_wait_ms = MsSince(t_wait);
+    result->times.detection_ms = *job->ticket.detect_ms;
+    if (prepared.propagate_boxes) boxes_.SetDetections(*prepared.detections);
   } else if (own_detector) {
-    own_detections = boxes_.Predict();
-    detections = &own_detections;
-    result.detections_carried = true;
+    prepared.detections = boxes_.Predict();
+    result->detections_carried = true;
+  } else {
+    prepared.detections = frame.detections;
   }
-  result.detections_used = need_detections && detections != nullptr;
+  result->detections_used = need_detections && prepared.detections.has_value();
+  return prepared;
+}
 
-  // Dynamic filter in front of tracking.
-  static const std::vector<Detection> kNoDetections;
+// The dynamic filter on the prepared features (undistorted positions, depth of each keypoint),
+// the static features it keeps, and the top-up outside the boxes on crowded frames.
+SystemImpl::FilteredFrame SystemImpl::Filter(const PreparedFrame& prepared, FrameResult* result) {
+  const OrbFeatures& features = prepared.features;
   const cv::Mat descriptor_matrix = features.DescriptorMatrix();
-  FilterInput input(features.keypoints, descriptor_matrix,
-                    detections ? *detections : kNoDetections);
-  std::vector<cv::Point2f> undistorted;
-  if (options_.camera.HasDistortion() && !features.keypoints.empty()) {
-    std::vector<cv::Point2f> points(features.keypoints.size());
-    for (size_t i = 0; i < points.size(); ++i) points[i] = features.keypoints[i].pt;
-    cv::undistortPoints(points, undistorted, options_.camera.K(), options_.camera.DistCoeffs(),
-                        cv::noArray(), options_.camera.K());
-    input.undistorted_points = &undistorted;
-  }
-  // Depth of each keypoint (at its image position, like Frame) for the depth-residual test.
-  std::vector<float> keypoint_depths(features.keypoints.size(), 0.f);
-  for (size_t i = 0; i < keypoint_depths.size(); ++i) {
-    const cv::Point p(cvRound(features.keypoints[i].pt.x), cvRound(features.keypoints[i].pt.y));
-    if (p.x < 0 || p.y < 0 || p.x >= depth_m.cols || p.y >= depth_m.rows) continue;
-    const float z = depth_m.at<float>(p);
-    if (std::isfinite(z) && z > 0) keypoint_depths[i] = z;
-  }
+  FilterInput input(features.keypoints, descriptor_matrix, prepared.boxes());
+  const std::vector<cv::Point2f> undistorted = UndistortedPoints(features.keypoints);
+  if (!undistorted.empty()) input.undistorted_points = &undistorted;
+  const std::vector<float> keypoint_depths = KeypointDepths(features.keypoints, prepared.depth_m);
   const cv::Matx33d camera_matrix(options_.camera.K());
   input.depths = &keypoint_depths;
   input.camera_matrix = &camera_matrix;
-  const FilterResult filtered = filter_.Process(input);
-  if (own_detector && every_n > 1) {
-    boxes_.Observe(previous_keypoints_, features.keypoints, filtered);
+  const FilterResult verdict = filter_.Process(input);
+  if (prepared.propagate_boxes) {
+    boxes_.Observe(previous_keypoints_, features.keypoints, verdict);
     previous_keypoints_ = features.keypoints;
   }
-  result.times.matching_ms = filtered.matching_ms;
-  result.times.probability_ms = filtered.probability_ms;
-  std::vector<uint8_t> dynamic = filtered.DynamicFlags();
-  OrbFeatures kept;
-  std::vector<uint8_t> kept_in_region;
-  for (size_t i = 0; i < features.keypoints.size(); ++i) {
-    if (dynamic[i]) continue;
-    kept.keypoints.push_back(features.keypoints[i]);
-    kept.descriptors.push_back(features.descriptors[i]);
-    // Inside a detection box (geometry mode treats the whole image as one region: no boxes).
-    kept_in_region.push_back(filtered.features[i].in_dynamic_region &&
-                                     options_.filter_mode != FilterMode::kGeometry &&
-                                     options_.demote_in_box_features
-                                 ? 1
-                                 : 0);
-  }
-  result.num_dynamic = filtered.num_dynamic;
-  if (detections && !detections->empty() && options_.static_top_up_fraction > 0) {
-    const auto t_top_up = std::chrono::steady_clock::now();
-    TopUpStaticFeatures(gray, mask, *detections, &extraction_cache, &kept);
-    result.times.top_up_ms = MsSince(t_top_up);
-  }
+  result->times.matching_ms = verdict.matching_ms;
+  result->times.probability_ms = verdict.probability_ms;
+  result->num_dynamic = verdict.num_dynamic;
 
+  FilteredFrame filtered;
+  filtered.dynamic = verdict.DynamicFlags();
+  // Inside a detection box (geometry mode treats the whole image as one region: no boxes).
+  const bool demote =
+      options_.demote_in_box_features && options_.filter.mode != FilterMode::kGeometry;
+  for (size_t i = 0; i < features.keypoints.size(); ++i) {
+    if (filtered.dynamic[i]) continue;
+    filtered.kept.keypoints.push_back(features.keypoints[i]);
+    filtered.kept.descriptors.push_back(features.descriptors[i]);
+    filtered.kept_in_region.push_back(verdict.features[i].in_dynamic_region && demote ? 1 : 0);
+  }
+  if (!prepared.boxes().empty() && options_.static_top_up_fraction > 0) {
+    const auto t_top_up = std::chrono::steady_clock::now();
+    TopUp(prepared, &filtered.kept);
+    result->times.top_up_ms = MsSince(t_top_up);
+  }
+  filtered.kept_in_region.resize(filtered.kept.keypoints.size(), 0);  // top-up: outside the boxes
+  return filtered;
+}
+
+void SystemImpl::TopUp(const PreparedFrame& prepared, OrbFeatures* kept) {
+  const int budget = options_.orb.num_features;
+  if (kept->keypoints.size() >= options_.static_top_up_fraction * budget) return;
+  std::vector<cv::Rect> boxes;
+  for (const Detection& d : prepared.boxes())
+    boxes.push_back(cv::Rect(DynamicRegion(d, options_.filter)));
+  TopUpFeatures(extractor_, prepared.gray, prepared.input->mask, boxes, budget,
+                &prepared.extraction_cache, kept);
+}
+
+std::vector<cv::Point2f> SystemImpl::UndistortedPoints(
+    const std::vector<cv::KeyPoint>& keypoints) const {
+  std::vector<cv::Point2f> undistorted;
+  if (!options_.camera.HasDistortion() || keypoints.empty()) return undistorted;
+  std::vector<cv::Point2f> points(keypoints.size());
+  for (size_t i = 0; i < points.size(); ++i) points[i] = keypoints[i].pt;
+  cv::undistortPoints(points, undistorted, options_.camera.K(), options_.camera.DistCoeffs(),
+                      cv::noArray(), options_.camera.K());
+  return undistorted;
+}
+
+// Depth of each keypoint at its image position (like Frame), 0 where there is none.
+std::vector<float> SystemImpl::KeypointDepths(const std::vector<cv::KeyPoint>& keypoints,
+                                              const cv::Mat& depth_m) {
+  std::vector<float> depths(keypoints.size(), 0.f);
+  for (size_t i = 0; i < depths.size(); ++i) {
+    const cv::Point p(cvRound(keypoints[i].pt.x), cvRound(keypoints[i].pt.y));
+    if (p.x < 0 || p.y < 0 || p.x >= depth_m.cols || p.y >= depth_m.rows) continue;
+    const float z = depth_m.at<float>(p);
+    if (std::isfinite(z) && z > 0) depths[i] = z;
+  }
+  return depths;
+}
+
+TrackResult SystemImpl::Track(const PreparedFrame& prepared, FilteredFrame* filtered,
+                              FrameResult* result) {
   const auto t_track = std::chrono::steady_clock::now();
-  kept_in_region.resize(kept.keypoints.size(), 0);  // top-up features lie outside the boxes
-  Frame frame(next_frame_id_++, stamp, std::move(kept), depth_m, geometry_,
-              std::move(kept_in_region));
-  if (options_.tracking.dense_fallback && options_.filter_mode != FilterMode::kNone)
-    frame.dense = MakeDenseView(gray, depth_m, detections ? *detections : kNoDetections,
-                                features.keypoints, dynamic, options_.dynamic_mask);
+  Frame frame(next_frame_id_++, prepared.input->stamp, std::move(filtered->kept), prepared.depth_m,
+              geometry_, std::move(filtered->kept_in_region));
+  if (options_.tracking.dense_fallback && options_.filter.mode != FilterMode::kNone)
+    frame.dense =
+        MakeDenseView(prepared.gray, prepared.depth_m, prepared.boxes(),
+                      prepared.features.keypoints, filtered->dynamic, options_.dynamic_mask);
   TrackResult tracked = tracker_.Track(std::move(frame));
-  result.times.tracking_ms = MsSince(t_track);
-  result.state = tracked.state;
-  if (tracked.cam_from_world) result.world_from_cam = tracked.cam_from_world->Inverse();
-  result.num_tracked = tracked.num_inliers;
-  result.is_keyframe = tracked.new_keyframe != nullptr;
-  if (tracked.new_keyframe) {
-    std::function<void(const KeyframeData&)> cb;
-    {
-      std::lock_guard<std::mutex> lock(callback_mutex_);
-      cb = keyframe_callback_;
-    }
-    if (cb) {
-      KeyframeData data;
-      data.id = tracked.new_keyframe->id;
-      data.stamp = stamp;
-      data.world_from_cam = *result.world_from_cam;
-      data.rgb = rgb;
-      data.depth = depth_m;
-      data.dynamic_mask =
-          ComputeDynamicMask(rgb.size(), depth_m, detections ? *detections : kNoDetections,
-                             features.keypoints, dynamic, options_.dynamic_mask);
-      data.keypoints = features.keypoints;
-      data.keypoint_dynamic = dynamic;
-      if (detections) data.detections = *detections;
-      cb(data);
-    }
+  result->times.tracking_ms = MsSince(t_track);
+  result->state = tracked.state;
+  if (tracked.cam_from_world) result->world_from_cam = tracked.cam_from_world->Inverse();
+  result->num_tracked = tracked.num_inliers;
+  result->is_keyframe = tracked.new_keyframe != nullptr;
+  return tracked;
+}
+
+// A new keyframe: to the keyframe callback (the map), then to local mapping.
+void SystemImpl::EmitKeyframe(const std::shared_ptr<KeyFrame>& keyframe,
+                              const PreparedFrame& prepared, const FilteredFrame& filtered,
+                              FrameResult* result) {
+  std::function<void(const KeyframeData&)> cb;
+  {
+    std::lock_guard<std::mutex> lock(callback_mutex_);
+    cb = keyframe_callback_;
   }
-  if (tracked.new_keyframe) {
-    const auto t_map = std::chrono::steady_clock::now();
-    tracker_.HandOffKeyFrame(tracked.new_keyframe);
-    result.times.local_mapping_ms = MsSince(t_map);  // deterministic mode: local mapping runs here
+  if (cb) {
+    const RgbdFrame& input = *prepared.input;
+    KeyframeData data;
+    data.id = keyframe->id;
+    data.stamp = input.stamp;
+    data.world_from_cam = *result->world_from_cam;
+    data.rgb = input.rgb;
+    data.depth = prepared.depth_m;
+    data.dynamic_mask =
+        ComputeDynamicMask(input.rgb.size(), prepared.depth_m, prepared.boxes(),
+                           prepared.features.keypoints, filtered.dynamic, options_.dynamic_mask);
+    data.keypoints = prepared.features.keypoints;
+    data.keypoint_dynamic = filtered.dynamic;
+    if (prepared.detections) data.detections = *prepared.detections;
+    cb(data);
   }
+  const auto t_map = std::chrono::steady_clock::now();
+  tracker_.HandOffKeyFrame(keyframe);
+  result->times.local_mapping_ms = MsSince(t_map);  // deterministic mode: local mapping runs here
+}
+
+// stella_vslam's create-frame / feed-frame: prepare, then filter -> track -> emit.
+FrameResult SystemImpl::Feed(const RgbdFrame& frame) {
+  const auto t_start = std::chrono::steady_clock::now();
+  FrameResult result;
+  result.stamp = frame.stamp;
+  const PreparedFrame prepared = Prepare(frame, &result);
+  FilteredFrame filtered = Filter(prepared, &result);
+  const TrackResult tracked = Track(prepared, &filtered, &result);
+  if (tracked.new_keyframe) EmitKeyframe(tracked.new_keyframe, prepared, filtered, &result);
   result.times.total_ms = MsSince(t_start);
   return result;
 }
@@ -579,9 +558,17 @@ System::System(const SystemOptions& options) {
 System::~System() {
   if (impl_) impl_->Shutdown();
 }
+FrameResult System::FeedRgbdFrame(const RgbdFrame& frame) { return impl_->Feed(frame); }
 FrameResult System::FeedRgbdFrame(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp,
                                   const cv::Mat& mask, const std::vector<Detection>* detections) {
-  return impl_->Feed(rgb, depth, stamp, mask, detections);
+  RgbdFrame frame;
+  frame.stamp = stamp;
+  frame.rgb = rgb;
+  frame.depth = depth;
+  frame.depth_scale = impl_->depth_map_factor();
+  frame.mask = mask;
+  if (detections) frame.detections = *detections;
+  return impl_->Feed(frame);
 }
 std::vector<StampedPose> System::Trajectory() const { return impl_->Trajectory(); }
 LocalMappingStats System::LocalMappingStatistics() const { return impl_->LocalMappingStatistics(); }

@@ -1,7 +1,15 @@
 // The SLAM system as a library: RGB-D frames in, poses / keyframes out. No middleware.
 //   System system(options);
-//   FrameResult r = system.FeedRgbdFrame(rgb, depth, stamp);              // runs its own detector
-//   FrameResult r = system.FeedRgbdFrame(rgb, depth, stamp, mask, &dets); // detections from outside
+//   RgbdFrame frame;                        // core/base/rgbd_frame.h
+//   frame.stamp = t; frame.rgb = bgr; frame.depth = raw16; frame.depth_scale = 5000;
+//   frame.detections = boxes;               // optional: else the System runs its own detector
+//   FrameResult r = system.FeedRgbdFrame(frame);
+//   FrameResult r = system.FeedRgbdFrame(rgb, depth, stamp);  // loose images, raw / DepthMapFactor
+//
+// Inside, like stella_vslam's create-frame / feed-frame: the frame is prepared (checks, grey
+// image, depth in metres, ORB features while the detector runs; core/slam/frame_preparation.h),
+// then filtered (dynamic features out, top-up outside the boxes on crowded frames), tracked, and
+// a new keyframe is emitted to the keyframe callback and handed to local mapping.
 #pragma once
 
 #include <functional>
@@ -13,6 +21,7 @@
 #include <opencv2/core.hpp>
 
 #include "core/base/camera.h"
+#include "core/base/rgbd_frame.h"
 #include "core/base/types.h"
 #include "core/dynamic/detection_propagation.h"
 #include "core/dynamic/dynamic_filter.h"
@@ -25,11 +34,6 @@
 #include "core/slam/tracking.h"
 
 namespace dygslam {
-
-enum class FilterMode { kNone, kBoxes, kGeometry, kFull };
-const char* ToString(FilterMode mode);
-// "none" | "boxes" | "geometry" | "full"; throws InvalidOptions otherwise.
-FilterMode ParseFilterMode(const std::string& text);
 
 
 // Per-frame stage times in milliseconds (the paper's Table 3 columns).
@@ -68,8 +72,8 @@ struct SystemOptions {
   LocalMappingOptions local_mapping;
   // Place recognition (vocabulary) and loop closing; no vocabulary: neither.
   LoopClosingOptions loop_closing;
-  FilterMode filter_mode = FilterMode::kFull;
-  // The paper's parameters (filter.mode is set from filter_mode).
+  // The filter mode (filter.mode: none, boxes, geometry, full; `--filter`) and the paper's
+  // parameters.
   DynamicFilterOptions filter;
   // Pixels of keyframes judged dynamic, for the map.
   DynamicMaskOptions dynamic_mask;
@@ -100,7 +104,7 @@ struct SystemOptions {
   // adding keyframes or map points, and the first frame is relocalized with the BoW index.
   std::string load_map;
   bool localization = false;
-  bool NeedsDetections() const { return filter_mode == FilterMode::kBoxes || filter_mode == FilterMode::kFull; }
+  bool NeedsDetections() const { return UsesDetections(filter.mode); }
   void Check() const;
 };
 
@@ -115,7 +119,7 @@ struct SystemOptions {
 //                          toward the local-map inlier minimum
 //   full                   + features extracted again outside the boxes on crowded frames (our
 //                          default; the values of the settings file apply)
-// Sets options->filter_mode and, for the paper family, the three extensions' options. Throws
+// Sets options->filter.mode and, for the paper family, the three extensions' options. Throws
 // InvalidOptions naming the accepted names.
 void ApplyFilterConfiguration(const std::string& name, SystemOptions* options);
 // Every accepted name, in the order above after none, boxes, geometry.
@@ -135,10 +139,15 @@ class System {
   System(const System&) = delete;
   System& operator=(const System&) = delete;
 
-  // rgb: CV_8UC3 BGR. depth: CV_16UC1 raw (divided by DepthMapFactor) or CV_32FC1 metres.
-  // mask: optional CV_8UC1, nonzero = do not use features there. detections: when given, used
-  // instead of the internal detector (DDS detector component); nullptr = run the internal one if
-  // the filter mode needs it.
+  // One frame (core/base/rgbd_frame.h): raw depth is divided by frame.depth_scale (once);
+  // frame.detections, when given, are used instead of the internal detector (DDS detector
+  // component, detections file); nullopt = run the internal one if the filter mode needs it.
+  // Throws InputError naming the image for a frame that is not usable (CheckRgbdFrame) or a stamp
+  // that does not increase.
+  FrameResult FeedRgbdFrame(const RgbdFrame& frame);
+  // The same from loose images (stella_vslam's feed_RGBD_frame): rgb CV_8UC3 BGR, depth CV_16UC1
+  // raw (divided by the settings' DepthMapFactor) or CV_32FC1 metres, mask optional CV_8UC1
+  // (nonzero = no features), detections nullptr = none given.
   FrameResult FeedRgbdFrame(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp,
                             const cv::Mat& mask = cv::Mat(),
                             const std::vector<Detection>* detections = nullptr);

@@ -44,7 +44,7 @@ SystemOptions BonnOptions(FilterMode mode = FilterMode::kNone) {
   const Settings settings =
       LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
   SystemOptions o = SystemOptionsFromSettings(settings);
-  o.filter_mode = mode;
+  o.filter.mode = mode;
   o.deterministic = true;
   return o;
 }
@@ -320,7 +320,7 @@ TEST(SystemBadOptions, NonFiniteOptionsAreRejectedAtConstruction) {
     o.camera.fx = o.camera.fy = 500;
     o.camera.cx = 320;
     o.camera.cy = 240;
-    o.filter_mode = FilterMode::kNone;
+    o.filter.mode = FilterMode::kNone;
     ASSERT_NO_THROW(o.Check());
     c.set(&o);
     ExpectThrowNaming<InvalidOptions>([&] { System s(o); }, {c.name});

@@ -138,7 +138,7 @@ TEST(SlamFallback, BonnCrowdFramesWherePersonFillsTheViewGetAPose) {
   const Settings settings =
       LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
   SystemOptions options = SystemOptionsFromSettings(settings);
-  options.filter_mode = FilterMode::kFull;
+  options.filter.mode = FilterMode::kFull;
   options.deterministic = true;
   std::map<std::string, int> states;
   int fallback_keyframes = 0, ok_after_fallback = 0;
@@ -185,7 +185,7 @@ TEST(SlamFallback, BonnCrowdAllFramesAteWithSmoothedFallbackStretches) {
   const Settings settings =
       LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
   SystemOptions options = SystemOptionsFromSettings(settings);
-  options.filter_mode = FilterMode::kFull;
+  options.filter.mode = FilterMode::kFull;
   options.deterministic = true;
   ASSERT_TRUE(options.tracking.fallback_smoothing);  // the default
   std::map<std::string, int> states;

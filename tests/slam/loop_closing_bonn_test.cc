@@ -25,7 +25,7 @@ BonnRun RunBonn(const std::string& dir, bool loops_enabled) {
   const Settings settings =
       LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
   SystemOptions options = SystemOptionsFromSettings(settings);
-  options.filter_mode = FilterMode::kFull;
+  options.filter.mode = FilterMode::kFull;
   options.deterministic = true;
   options.loop_closing.enabled = loops_enabled;
   System system(options);

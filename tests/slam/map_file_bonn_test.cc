@@ -31,7 +31,7 @@ BonnRun RunBonn(const std::string& dir, const std::string& load_map, bool locali
   const Settings settings =
       LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
   SystemOptions options = SystemOptionsFromSettings(settings);
-  options.filter_mode = FilterMode::kFull;
+  options.filter.mode = FilterMode::kFull;
   options.deterministic = true;
   options.load_map = load_map;
   options.localization = localization;

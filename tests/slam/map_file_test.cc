@@ -60,7 +60,7 @@ class MapFileTest : public ::testing::Test {
     SystemOptions options;
     options.camera = synth_->camera;
     options.sensor = synth_->sensor;
-    options.filter_mode = FilterMode::kNone;
+    options.filter.mode = FilterMode::kNone;
     options.deterministic = true;
     options.tracking.max_frames_between_keyframes = 20;
     options.loop_closing.vocabulary =

@@ -23,7 +23,7 @@ RunOutput RunSynthetic(const SyntheticOptions& synth, FilterMode mode, bool use_
   SystemOptions options;
   options.camera = synth.camera;
   options.sensor = synth.sensor;
-  options.filter_mode = mode;
+  options.filter.mode = mode;
   options.deterministic = true;
   System system(options);
   RunOutput out;
@@ -83,7 +83,7 @@ TEST(SlamRelocalization, LostFramesHaveNoPoseAndTrackingRecovers) {
   SystemOptions options;
   options.camera = synth.camera;
   options.sensor = synth.sensor;
-  options.filter_mode = FilterMode::kNone;
+  options.filter.mode = FilterMode::kNone;
   options.deterministic = true;
   System system(options);
   const cv::Mat blank_rgb(synth.camera.height, synth.camera.width, CV_8UC3, cv::Scalar(128, 128, 128));
@@ -127,7 +127,7 @@ TEST(SlamRelocalization, LostFramesHaveNoPoseAndTrackingRecovers) {
 RunOutput RunBonn(const std::string& dir, size_t first, size_t last, FilterMode mode) {
   const Settings settings = LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
   SystemOptions options = SystemOptionsFromSettings(settings);
-  options.filter_mode = mode;
+  options.filter.mode = mode;
   options.deterministic = true;
   System system(options);
   const RgbdDataset dataset = RgbdDataset::Open(dir);

@@ -25,7 +25,7 @@ std::vector<FrameResult> RunFrames(const RgbdDataset& dataset, int every_n, bool
   const Settings settings =
       LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
   SystemOptions options = SystemOptionsFromSettings(settings);
-  options.filter_mode = FilterMode::kFull;
+  options.filter.mode = FilterMode::kFull;
   options.deterministic = true;
   options.detection_every_n_frames = every_n;
   options.box_propagation.shift_boxes = shift;

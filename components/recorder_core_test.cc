@@ -34,7 +34,7 @@ FrameResult Result(int k, TrackingState state, bool keyframe) {
   return r;
 }
 
-std::vector<FrameResult> Run() {
+std::vector<FrameResult> SampleRun() {
   return {Result(0, TrackingState::kOk, true), Result(1, TrackingState::kOk, false),
           Result(2, TrackingState::kLost, false), Result(3, TrackingState::kOk, true)};
 }
@@ -56,7 +56,7 @@ TEST(RecorderCore, WritesTheRunFilesFromOnlinePoses) {
   options.output_dir = testing::MakeTempDir("recorder_core") + "/out";
   RecorderCore core(options);
   // Out of order and once twice (a re-sent sample): the files are sorted by stamp, unique.
-  const std::vector<FrameResult> run = Run();
+  const std::vector<FrameResult> run = SampleRun();
   for (size_t i : {1, 0, 3, 2, 3}) core.AddPose(CameraPoseToMsg(run[i], i, false));
   EXPECT_EQ(core.num_online_poses(), 4u);  // 3 tracked, one twice
   EXPECT_EQ(core.num_lost(), 1u);
@@ -91,7 +91,7 @@ TEST(RecorderCore, FinalTrajectoriesReplaceTheOnlinePoses) {
   RecorderOptions options;
   options.output_dir = testing::MakeTempDir("recorder_core_final");
   RecorderCore core(options);
-  const std::vector<FrameResult> run = Run();
+  const std::vector<FrameResult> run = SampleRun();
   for (size_t i = 0; i < run.size(); ++i) core.AddPose(CameraPoseToMsg(run[i], i, false));
   std::vector<StampedPose> refined;
   for (const FrameResult& r : run) {
@@ -122,7 +122,7 @@ TEST(RecorderCore, RejectsABadTrackingStateByField) {
   RecorderOptions options;
   options.output_dir = testing::MakeTempDir("recorder_core_bad");
   RecorderCore core(options);
-  msg::CameraPose pose = CameraPoseToMsg(Run()[0], 0, false);
+  msg::CameraPose pose = CameraPoseToMsg(SampleRun()[0], 0, false);
   pose.tracking_state(17);
   try {
     core.AddPose(pose);

@@ -126,6 +126,8 @@ TEST(SlamCore, NeedsDetectionsOnlyForBoxFiltersFedFromOutside) {
 
 TEST(SlamCore, BadOptionsAreRefusedByName) {
   SlamComponentOptions options;
+  options.system = BonnSystemOptions();
+  EXPECT_NO_THROW(options.Check());
   options.carry_forward_max_frames = -1;
   try {
     options.Check();

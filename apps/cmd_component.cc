@@ -1,4 +1,4 @@
-// Hidden subcommand: dygslam component <player|detector|slam|mapper|recorder|bench-transport> ...
+// Hidden subcommand: dygslam component <player|detector|slam|mapper|recorder|pipeline> ...
 // Runs one DDS component in this process (what `RunPipeline` with processes = true spawns; also
 // usable by hand, one terminal per component, e.g. to run the mapper on another machine with
 // FASTRTPS_DEFAULT_PROFILES_FILE). SIGINT / SIGTERM: the component flushes and exits 0.
@@ -13,7 +13,6 @@
 #include <tuple>
 
 #include "apps/command.h"
-#include "components/bench_transport.h"
 #include "components/dds/qos.h"
 #include "components/pipeline.h"
 #include "core/base/echo.h"
@@ -41,18 +40,13 @@ std::pair<size_t, size_t> ParseEntryRange(const std::string& text) {
 }
 
 int RunComponentCommand(const std::vector<std::string>& args) {
-  if (!args.empty() && args[0] == "bench-transport") {
-    return RunBenchTransportCommand(std::vector<std::string>(args.begin() + 1, args.end()));
-  }
   ArgParser p(
       "component",
       "NAME --dataset DIR --config FILE [--out DIR] [--filter MODE] [--frames FIRST:LAST] "
       "[--deterministic] [--domain N] ...",
       "Runs one pipeline component (player | detector | slam | mapper | recorder) as its own\n"
-      "process over Fast DDS, or `bench-transport` (see `dygslam component bench-transport "
-      "--help`).");
-  p.AddPositional("NAME",
-                  "player | detector | slam | mapper | recorder | pipeline | bench-transport");
+      "process over Fast DDS (the transport benchmark is its own tool: dygslam_bench_transport).");
+  p.AddPositional("NAME", "player | detector | slam | mapper | recorder | pipeline");
   p.AddOption("dataset", "DIR", "dataset folder (player)");
   p.AddOption("config", "FILE", "settings YAML (camera, sensor, modules)");
   p.AddOption("out", "DIR", "output folder (recorder, mapper)", "out/run");
@@ -103,8 +97,8 @@ int RunComponentCommand(const std::vector<std::string>& args) {
                                        "mapper", "recorder", "pipeline"};
   if (std::find(std::begin(kNames), std::end(kNames), name) == std::end(kNames))
     return p.UsageError("unknown component '" + EchoValue(name) +
-                        "' (expected player | detector | slam | mapper | recorder | pipeline | "
-                        "bench-transport)");
+                        "' (expected player | detector | slam | mapper | recorder | pipeline; "
+                        "the transport benchmark is the tool dygslam_bench_transport)");
 
   PipelineOptions o;
   o.dataset_dir = p.Get("dataset");

@@ -32,12 +32,6 @@ void RegisterCommand(Command command) {
   MutableCommands()[name] = std::move(command);
 }
 
-const std::vector<std::string>& PlannedCommands() {
-  static const std::vector<std::string> names = {"run",   "eval",    "synth", "map",
-                                                 "bench", "version", "help"};
-  return names;
-}
-
 std::string ScriptsDir() {
   namespace fs = std::filesystem;
   if (const char* env = std::getenv("DYGSLAM_SCRIPTS_DIR"); env != nullptr && *env != '\0')

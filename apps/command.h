@@ -17,8 +17,8 @@
 //   }  // namespace dygslam::cli
 //
 // apps/CMakeLists.txt globs cmd_*.cc into the executable. The dispatcher (dygslam.cc) catches
-// InputError / InvalidOptions (exit 1, message names the file/line/key) and knows the planned
-// commands, so a missing one says "not available yet in this build" (exit 2).
+// InputError / InvalidOptions (exit 1, message names the file/line/key); an unknown command is a
+// usage error (exit 2).
 // Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error / unavailable command.
 #pragma once
 
@@ -91,9 +91,6 @@ class ArgParser {
   std::map<std::string, std::string> option_values_;
   int exit_code_ = 0;
 };
-
-// The names the dispatcher knows (implemented or planned), in help order.
-const std::vector<std::string>& PlannedCommands();
 
 // Directory of the helper scripts (scripts/): $DYGSLAM_SCRIPTS_DIR, else the source tree's
 // scripts/ baked in at build time, else ../share/dygslam/scripts next to the executable.

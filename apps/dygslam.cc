@@ -3,6 +3,7 @@
 #include <csignal>
 #include <exception>
 #include <iostream>
+#include <iterator>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,35 +20,27 @@
 namespace dygslam::cli {
 namespace {
 
-const char* kPlannedSummaries[][2] = {
-    {"run", "run SLAM on a TUM/Bonn dataset folder"},
-    {"eval", "evaluate a trajectory against ground truth (ATE/RPE)"},
-    {"synth", "generate a synthetic dynamic RGB-D sequence"},
-    {"map", "build a static map from keyframes"},
-    {"bench", "accuracy and timing tables for every filter mode (BENCHMARKS.md)"},
-    {"version", "print the version"},
-    {"help", "list the commands"},
-};
+// The main commands first, in this order; the others (component, bridge, ...) after them.
+const char* const kHelpOrder[] = {"run", "eval", "synth", "map", "bench"};
 
 void PrintHelp(std::ostream& out) {
   out << "dygslam " << DYGSLAM_VERSION
       << " - RGB-D SLAM for dynamic scenes\n\n"
          "usage: dygslam <command> [arguments] [--help]\n\ncommands:\n";
-  for (const auto& entry : kPlannedSummaries) {
-    const std::string name = entry[0];
-    std::string summary = entry[1];
-    if (auto it = Commands().find(name); it != Commands().end()) summary = it->second.summary;
-    const bool available = name == "help" || name == "version" || Commands().count(name) > 0;
+  auto line = [&out](const std::string& name, const std::string& summary) {
     std::string left = "  " + name;
     left.resize(std::max<size_t>(12, left.size() + 2), ' ');
-    out << left << summary << (available ? "" : "  (not available in this build)") << "\n";
+    out << left << summary << "\n";
+  };
+  for (const char* name : kHelpOrder) {
+    if (auto it = Commands().find(name); it != Commands().end()) line(name, it->second.summary);
   }
+  line("version", "print the version");
+  line("help", "list the commands");
   for (const auto& [name, command] : Commands()) {
-    const auto& planned = PlannedCommands();
-    if (std::find(planned.begin(), planned.end(), name) != planned.end()) continue;
-    std::string left = "  " + name;
-    left.resize(std::max<size_t>(12, left.size() + 2), ' ');
-    out << left << command.summary << "\n";
+    if (std::find(std::begin(kHelpOrder), std::end(kHelpOrder), name) != std::end(kHelpOrder))
+      continue;
+    line(name, command.summary);
   }
   out << "\nRun 'dygslam <command> --help' for the options of a command.\n"
          "  dygslam run DATASET_DIR [--config FILE] [--filter none|boxes|geometry|paper|full]\n"
@@ -107,11 +100,6 @@ int Dispatch(const std::vector<std::string>& argv) {
   }
   auto it = Commands().find(name);
   if (it == Commands().end()) {
-    const auto& planned = PlannedCommands();
-    if (std::find(planned.begin(), planned.end(), name) != planned.end()) {
-      std::cerr << "dygslam " << name << ": not available yet in this build\n";
-      return 2;
-    }
     std::cerr << "dygslam: unknown command '" << EchoValue(name) << "' (see 'dygslam help')\n";
     return 2;
   }

@@ -26,6 +26,10 @@
 // settings -- is reachable). The ROS participant also publishes the bridge's ROS 2 graph entry
 // (ros_discovery_info, ros2_graph.h): `ros2 node list` shows node_namespace/node_name.
 //
+// Code: the inbound half is RosInbound (ros2_inbound.h), the outbound half RosOutbound
+// (ros2_outbound.h); RosBridge (ros2_bridge.cc) holds both and the readers they share; the
+// message conversions are in ros2_convert.h.
+//
 // DDS partitions: the pipeline side (dygslam/* topics) uses the participant's partition
 // (dds::ParticipantOptions::partition = the pipeline's, e.g. `dygslam component ... --partition
 // NAME`), the ROS 2 side always the default partition (ROS 2 uses none).
@@ -141,6 +145,10 @@ class RosBridge {
   bool slam_done() const;
   // slam is done and the mapper (if one is running) has published its last map.
   bool outputs_done() const;
+  // How many of the 7 outbound ROS writers (pose, odom, path, tf, tf_static, detections,
+  // octomap) have matched at least one reader (0 without outbound). A ROS topic is volatile
+  // (except tf_static / octomap): a sample written before its reader matched is not delivered.
+  int matched_ros_writers() const;
   RosBridgeStats stats() const;
   // What the bridge announced on ros_discovery_info (empty nodes if announce_node is false).
   RosParticipantEntities graph_entry() const;

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "core/base/error.h"
+#include "core/base/image_encoding.h"
 
 namespace dygslam::ros2 {
 
@@ -228,33 +229,12 @@ sensor_msgs::msg::Image ImageToRos(const cv::Mat& image, Timestamp stamp,
                                    const std::string& frame_id) {
   sensor_msgs::msg::Image m;
   m.header(HeaderToRos(stamp, frame_id));
-  std::string encoding;
-  switch (image.type()) {
-    case CV_8UC3:
-      encoding = "bgr8";
-      break;
-    case CV_8UC1:
-      encoding = "mono8";
-      break;
-    case CV_16UC1:
-      encoding = "16UC1";
-      break;
-    case CV_32FC1:
-      encoding = "32FC1";
-      break;
-    default:
-      throw std::invalid_argument("ImageToRos: unsupported Mat type");
-  }
-  m.encoding(encoding);
+  m.encoding(ImageEncodingOf(image.type(), "ImageToRos"));
   m.width(static_cast<uint32_t>(image.cols));
   m.height(static_cast<uint32_t>(image.rows));
   m.is_bigendian(0);
-  const size_t row = image.cols * image.elemSize();
-  m.step(static_cast<uint32_t>(row));
-  m.data().resize(row * image.rows);
-  for (int r = 0; r < image.rows; ++r) {
-    std::memcpy(m.data().data() + r * row, image.ptr(r), row);
-  }
+  m.step(static_cast<uint32_t>(image.cols * image.elemSize()));
+  m.data(PackedImageRows(image));
   return m;
 }
 

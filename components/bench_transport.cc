@@ -1,5 +1,11 @@
-#include "components/bench_transport.h"
-
+// Frame transport benchmark: 640x480 RGB-D frames (bgr8 + 16UC1, 1.5 MB) over the frame topic's
+// QoS (reliable keep-last 4, SHM 16 MiB + UDPv4 127.0.0.1), writer -> reader, in one process
+// (two participants) or between two processes (fork; steady_clock is CLOCK_MONOTONIC, shared by
+// processes). Latency = reader callback time - writer time stamped into the sample.
+//   dygslam_bench_transport [--frames 150] [--hz 30] [--inproc] [--window N] [--domain N]
+//                           [--width W --height H]
+// Run it inside a network namespace (components/tests/run_in_netns.sh). A tool of its own (not
+// part of any library, not a `dygslam` subcommand); a malformed number is a usage error (exit 2).
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -7,12 +13,16 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <iostream>
 #include <mutex>
-#include <thread>
-
 #include <opencv2/core.hpp>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include "components/convert.h"
 #include "components/dds/participant.h"
@@ -22,6 +32,23 @@
 namespace dygslam {
 
 namespace {
+
+struct TransportBenchOptions {
+  int frames = 150;
+  double hz = 30;  // 0 = as fast as the writer can (throughput)
+  int width = 640, height = 480;
+  bool in_process = false;
+  int domain_id = 0;
+  // Writer waits for the reader's acknowledgement of frame k - window (0 = no back-pressure).
+  int window = 0;
+};
+
+struct TransportBenchResult {
+  int sent = 0, received = 0;
+  double median_ms = 0, p99_ms = 0, max_ms = 0;
+  double seconds = 0;  // first send -> last receive
+  double frames_per_second = 0, megabytes_per_second = 0;
+};
 
 using Clock = std::chrono::steady_clock;
 
@@ -122,8 +149,6 @@ void WaitAll(Collector& c, int frames, double seconds) {
                 [&] { return static_cast<int>(c.latencies_ms.size()) >= frames; });
 }
 
-}  // namespace
-
 TransportBenchResult RunTransportBench(const TransportBenchOptions& o) {
   const double timeout_s = 30 + (o.hz > 0 ? o.frames / o.hz : o.frames * 0.05);
   dds::ParticipantOptions popts;
@@ -189,33 +214,82 @@ std::string FormatTransportBench(const TransportBenchOptions& o, const Transport
   return buf;
 }
 
+// A whole number in [min_value, max_value] for `option`; a usage error (exit 2) otherwise.
+int ParseIntOption(const std::string& option, const std::string& text, int min_value,
+                   int max_value) {
+  size_t used = 0;
+  long value = 0;
+  try {
+    value = std::stol(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || value < min_value || value > max_value) {
+    throw std::invalid_argument(option + ": expected an integer in [" + std::to_string(min_value) +
+                                ", " + std::to_string(max_value) + "], got '" + text + "'");
+  }
+  return static_cast<int>(value);
+}
+
+double ParseNumberOption(const std::string& option, const std::string& text, double min_value,
+                         double max_value) {
+  size_t used = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !(value >= min_value && value <= max_value)) {
+    throw std::invalid_argument(option + ": expected a number in [" + std::to_string(min_value) +
+                                ", " + std::to_string(max_value) + "], got '" + text + "'");
+  }
+  return value;
+}
+
 int RunBenchTransportCommand(const std::vector<std::string>& args) {
   TransportBenchOptions o;
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= args.size()) throw std::invalid_argument(a + " needs a value");
-      return args[++i];
-    };
-    if (a == "--frames") o.frames = std::stoi(value());
-    else if (a == "--hz") o.hz = std::stod(value());
-    else if (a == "--inproc") o.in_process = true;
-    else if (a == "--domain") o.domain_id = std::stoi(value());
-    else if (a == "--window") o.window = std::stoi(value());
-    else if (a == "--width") o.width = std::stoi(value());
-    else if (a == "--height") o.height = std::stoi(value());
-    else if (a == "--help") {
-      std::cout << "usage: dygslam component bench-transport [--frames N] [--hz HZ (0 = max)] "
-                   "[--inproc] [--window N (inproc)] [--domain N] [--width W --height H]\n";
-      return 0;
-    } else {
-      std::cerr << "bench-transport: unknown argument " << a << "\n";
-      return 2;
+  try {
+    for (size_t i = 0; i < args.size(); ++i) {
+      const std::string& a = args[i];
+      auto value = [&]() -> std::string {
+        if (i + 1 >= args.size()) throw std::invalid_argument(a + " needs a value");
+        return args[++i];
+      };
+      if (a == "--frames") {
+        o.frames = ParseIntOption(a, value(), 1, 1000000);
+      } else if (a == "--hz") {
+        o.hz = ParseNumberOption(a, value(), 0, 10000);
+      } else if (a == "--inproc") {
+        o.in_process = true;
+      } else if (a == "--domain") {
+        o.domain_id = ParseIntOption(a, value(), 0, 232);
+      } else if (a == "--window") {
+        o.window = ParseIntOption(a, value(), 0, 1000);
+      } else if (a == "--width") {
+        o.width = ParseIntOption(a, value(), 1, 16384);
+      } else if (a == "--height") {
+        o.height = ParseIntOption(a, value(), 1, 16384);
+      } else if (a == "--help") {
+        std::cout << "usage: dygslam_bench_transport [--frames N] [--hz HZ (0 = max)] "
+                     "[--inproc] [--window N (inproc)] [--domain N] [--width W --height H]\n";
+        return 0;
+      } else {
+        throw std::invalid_argument("unknown argument " + a);
+      }
     }
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "dygslam_bench_transport: error: " << e.what() << "\n";
+    return 2;
   }
   const TransportBenchResult r = RunTransportBench(o);
   std::cout << FormatTransportBench(o, r) << std::endl;
   return r.received > 0 ? 0 : 1;
 }
 
+}  // namespace
 }  // namespace dygslam
+
+int main(int argc, char** argv) {
+  return dygslam::RunBenchTransportCommand(std::vector<std::string>(argv + 1, argv + argc));
+}

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "core/base/error.h"
+#include "core/base/image_encoding.h"
 
 namespace dygslam {
 
@@ -91,38 +92,11 @@ msg::Image ImageToMsg(const cv::Mat& image) {
     m.step(0);
     return m;
   }
-  std::string encoding;
-  switch (image.type()) {
-    case CV_8UC3:
-      encoding = "bgr8";
-      break;
-    case CV_8UC1:
-      encoding = "mono8";
-      break;
-    case CV_16UC1:
-      encoding = "16UC1";
-      break;
-    case CV_32FC1:
-      encoding = "32FC1";
-      break;
-    default:
-      throw std::invalid_argument("ImageToMsg: unsupported cv::Mat type " +
-                                  std::to_string(image.type()));
-  }
-  const size_t row_bytes = image.cols * image.elemSize();
+  m.encoding(ImageEncodingOf(image.type(), "ImageToMsg"));
   m.width(static_cast<uint32_t>(image.cols));
   m.height(static_cast<uint32_t>(image.rows));
-  m.encoding(encoding);
-  m.step(static_cast<uint32_t>(row_bytes));
-  std::vector<uint8_t>& data = m.data();
-  data.resize(row_bytes * image.rows);
-  if (image.isContinuous()) {
-    std::memcpy(data.data(), image.data, data.size());
-  } else {
-    for (int r = 0; r < image.rows; ++r) {
-      std::memcpy(data.data() + r * row_bytes, image.ptr(r), row_bytes);
-    }
-  }
+  m.step(static_cast<uint32_t>(image.cols * image.elemSize()));
+  m.data(PackedImageRows(image));
   return m;
 }
 

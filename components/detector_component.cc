@@ -2,9 +2,12 @@
 
 #include <chrono>
 #include <limits>
+#include <mutex>
+#include <optional>
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
+#include "components/status_reader.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "dygslam_msg/DetectionsPubSubTypes.h"
@@ -12,17 +15,6 @@
 #include "dygslam_msg/StreamStatusPubSubTypes.h"
 
 namespace dygslam {
-
-DetectorCore::DetectorCore(const DetectorOptions& options)
-    : detector_(YoloDetector::Create(options)) {}
-
-msg::Detections DetectorCore::Process(const RgbdFrameData& frame) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const std::vector<Detection> detections = detector_->Detect(frame.rgb);
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  return DetectionsToMsg(detections, frame.stamp, frame.seq, ms);
-}
 
 DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
                           const DetectorOptions& options, const StopFlagPtr& stop) {
@@ -39,16 +31,9 @@ DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
   dds::Reader<msg::RgbdFramePubSubType> frames(
       participant, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame,
       [&](msg::RgbdFrame&& frame) { queue.Push(std::move(frame)); });
-  dds::Reader<msg::StreamStatusPubSubType> status_reader(
-      participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
-      [&](msg::StreamStatus&& m) {
-        ComponentStatus s;
-        try {
-          s = StatusFromMsg(m);
-        } catch (const InputError& e) {
-          LOG_WARNING << "detector: ignored status: " << e.what();
-          return;
-        }
+  StatusReader status_reader(
+      participant, ComponentKind::kDetector,
+      [&](const ComponentStatus& s, const msg::StreamStatus& m) {
         if (s.event == StreamEvent::kEndOfStream && IsFrameSource(s.source)) {
           std::lock_guard<std::mutex> lock(mutex);
           end_frames = StreamFrameCountFromMsg(m);

@@ -1,32 +1,21 @@
 // Detector component: RgbdFrame -> Detections (same stamp + seq as the frame).
-// Core: DetectorCore::Process (no DDS). Shell: RunDetector.
+// Core: DetectorCore (components/detector_core.h, no DDS). Shell: RunDetector.
 // Every received frame is processed in arrival order (slam in --deterministic mode waits for
 // the detections of every frame; the player's back-pressure bounds the queue). Stops after the
 // END_OF_STREAM frame count has been processed, or on stop.
 #pragma once
 
+#include <cstddef>
 #include <memory>
-#include <vector>
 
 #include "components/component_common.h"
-#include "components/convert.h"
-#include "core/dynamic/yolo_detector.h"
+#include "components/detector_core.h"
 
 namespace dygslam {
 
 namespace dds {
 class Participant;
 }
-
-class DetectorCore {
- public:
-  explicit DetectorCore(const DetectorOptions& options);
-  // Detections of one frame (the frame's colour image), with the inference time.
-  msg::Detections Process(const RgbdFrameData& frame);
-
- private:
-  std::unique_ptr<YoloDetector> detector_;
-};
 
 struct DetectorStats {
   size_t frames_processed = 0;

@@ -1,5 +1,6 @@
 #include "components/pipeline.h"
 
+#include <fcntl.h>
 #include <malloc.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -324,23 +325,77 @@ bool ComponentCatchesSignal(pid_t pid, ComponentKind component, int sig) {
   return ProcessCatchesSignal(pid, sig);
 }
 
-int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop) {
+// --processes: each child tells the runner how many samples of foreign writers it ignored (for
+// the run summary, as in the single-process mode) through a pipe whose write end it inherits;
+// the descriptor's number is in this environment variable.
+constexpr const char* kReportFdVariable = "DYGSLAM_COMPONENT_REPORT_FD";
+
+void ReportIgnoredSamples(size_t ignored) {
+  const char* fd_text = std::getenv(kReportFdVariable);
+  if (fd_text == nullptr) return;
+  char* end = nullptr;
+  const long fd = std::strtol(fd_text, &end, 10);
+  if (end == fd_text || *end != '\0' || fd < 0) return;
+  const std::string line = std::to_string(ignored) + "\n";
+  if (write(static_cast<int>(fd), line.data(), line.size()) < 0) {
+    LOG_WARNING << "could not report the ignored-sample count to the runner: "
+                << std::strerror(errno);
+  }
+  close(static_cast<int>(fd));
+}
+
+// What a child reported (0 when nothing: it died before reporting). Closes `fd`.
+size_t ReadIgnoredSamples(int fd) {
+  std::string text;
+  char buffer[64];
+  ssize_t n = 0;
+  while ((n = read(fd, buffer, sizeof(buffer))) > 0) text.append(buffer, n);
+  close(fd);
+  char* end = nullptr;
+  const unsigned long long value = std::strtoull(text.c_str(), &end, 10);
+  return end == text.c_str() ? 0 : static_cast<size_t>(value);
+}
+
+int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop, size_t* ignored_samples) {
   const std::string exe =
       options.executable.empty() ? fs::read_symlink("/proc/self/exe").string() : options.executable;
   const std::vector<std::string> args = ComponentArgs(options);
   std::map<pid_t, ComponentKind> children;
+  std::map<pid_t, int> reports;  // read end of each child's report pipe
   for (const ComponentKind kind : PipelineComponents(options)) {
     std::vector<std::string> argv = {exe, "component", ToString(kind)};
     argv.insert(argv.end(), args.begin(), args.end());
     std::vector<char*> cargv;
     for (std::string& s : argv) cargv.push_back(s.data());
     cargv.push_back(nullptr);
+    int report_pipe[2] = {-1, -1};
+    if (pipe2(report_pipe, O_CLOEXEC) != 0) {
+      throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
+    }
+    // The environment with the report descriptor, made before fork (the child only execs).
+    std::vector<std::string> env;
+    for (char** e = environ; *e != nullptr; ++e) {
+      if (std::strncmp(*e, kReportFdVariable, std::strlen(kReportFdVariable)) != 0) {
+        env.emplace_back(*e);
+      }
+    }
+    env.push_back(std::string(kReportFdVariable) + "=" + std::to_string(report_pipe[1]));
+    std::vector<char*> cenv;
+    for (std::string& s : env) cenv.push_back(s.data());
+    cenv.push_back(nullptr);
     const pid_t pid = fork();
-    if (pid < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
+    if (pid < 0) {
+      close(report_pipe[0]);
+      close(report_pipe[1]);
+      throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
+    }
     if (pid == 0) {
-      execv(exe.c_str(), cargv.data());
+      fcntl(report_pipe[1], F_SETFD, 0);  // the write end survives exec
+      execve(exe.c_str(), cargv.data(), cenv.data());
       std::_Exit(127);
     }
+    close(report_pipe[1]);
+    reports[pid] = report_pipe[0];
     children[pid] = kind;
     LOG_INFO << "started component " << ToString(kind) << " (pid " << pid << ")";
   }
@@ -357,6 +412,8 @@ int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop) {
       const ComponentKind kind = children[pid];
       const char* name = ToString(kind);
       children.erase(pid);
+      *ignored_samples += ReadIgnoredSamples(reports[pid]);
+      reports.erase(pid);
       const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
       // After the outputs are written the runner stops the others with SIGTERM; a component that
       // was already tearing down (its handler restored) then dies of that signal: not a failure.
@@ -419,7 +476,10 @@ int RunComponent(const std::string& name, const PipelineOptions& options, const 
   options.Check();
   BoundMallocArenas();
   const ComponentKind kind = ComponentKindOrThrow(name);
-  return RunComponentOn(kind, options, MakeParticipant(options, name), stop);
+  size_t ignored = 0;
+  const int code = RunComponentOn(kind, options, MakeParticipant(options, name), stop, &ignored);
+  ReportIgnoredSamples(ignored);
+  return code;
 }
 
 int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
@@ -430,7 +490,7 @@ int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
   fs::create_directories(options.output_dir);
   auto stop = std::make_shared<StopFlag>(StopFlag::Signals::kStop);
   size_t ignored_samples = 0;
-  const int code = options.processes ? RunProcesses(options, stop)
+  const int code = options.processes ? RunProcesses(options, stop, &ignored_samples)
                                      : RunSingleProcess(options, stop, &ignored_samples);
   if (const int sig = stop->signal(); sig != 0) {
     LOG_INFO << "stopped by signal " << sig << "; outputs flushed";

@@ -82,8 +82,8 @@ int RunComponent(const std::string& name, const PipelineOptions& options, const 
 struct StopReport {
   bool signaled = false;  // stopped by SIGINT / SIGTERM (outputs flushed)
   // Samples of writers no component of this run announced, ignored by slam, recorder and mapper
-  // (components/protocol.h). Single-process mode only: with --processes each component's own
-  // summary line says it.
+  // (components/protocol.h). With --processes each child reports its count to the runner when it
+  // ends (a pipe); a child that died before reporting counts 0.
   size_t ignored_samples = 0;
 };
 // Runs the whole pipeline until the end of the data or a signal. Returns 0 on success (also when

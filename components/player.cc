@@ -11,6 +11,7 @@
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
+#include "components/status_reader.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "core/io/trajectory_io.h"
@@ -152,16 +153,9 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
         }
         cv.notify_all();
       });
-  dds::Reader<msg::StreamStatusPubSubType> status_reader(
-      participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
-      [&](msg::StreamStatus&& m) {
-        ComponentStatus s;
-        try {
-          s = StatusFromMsg(m);
-        } catch (const InputError& e) {
-          LOG_WARNING << "player: ignored status: " << e.what();
-          return;
-        }
+  StatusReader status_reader(
+      participant, ComponentKind::kPlayer,
+      [&](const ComponentStatus& s, const msg::StreamStatus& /*m*/) {
         {
           std::lock_guard<std::mutex> lock(mutex);
           if (s.source == ComponentKind::kSlam &&

@@ -9,12 +9,43 @@ namespace dygslam {
 
 namespace {
 
-constexpr ComponentKind kKinds[] = {ComponentKind::kPlayer,   ComponentKind::kDetector,
-                                    ComponentKind::kSlam,     ComponentKind::kMapper,
-                                    ComponentKind::kRecorder, ComponentKind::kRos2Bridge};
-constexpr DataTopic kTopics[] = {
-    DataTopic::kFrames,     DataTopic::kDetections,  DataTopic::kCameraPose, DataTopic::kKeyframe,
-    DataTopic::kTrajectory, DataTopic::kGroundTruth, DataTopic::kMapUpdate};
+// The names on the wire (StreamStatus.source, the "writers" detail) and in logs.
+template <class Enum>
+struct Name {
+  Enum value;
+  const char* name;
+};
+constexpr Name<ComponentKind> kKindNames[] = {
+    {ComponentKind::kPlayer, "player"},     {ComponentKind::kDetector, "detector"},
+    {ComponentKind::kSlam, "slam"},         {ComponentKind::kMapper, "mapper"},
+    {ComponentKind::kRecorder, "recorder"}, {ComponentKind::kRos2Bridge, "ros2_bridge"}};
+constexpr Name<StreamEvent> kEventNames[] = {{StreamEvent::kStarted, "STARTED"},
+                                             {StreamEvent::kEndOfStream, "END_OF_STREAM"},
+                                             {StreamEvent::kComponentDone, "COMPONENT_DONE"},
+                                             {StreamEvent::kMapLoaded, "MAP_LOADED"},
+                                             {StreamEvent::kReady, "READY"},
+                                             {StreamEvent::kFailed, "FAILED"}};
+constexpr Name<DataTopic> kTopicNames[] = {
+    {DataTopic::kFrames, "frames"},          {DataTopic::kDetections, "detections"},
+    {DataTopic::kCameraPose, "camera_pose"}, {DataTopic::kKeyframe, "keyframe"},
+    {DataTopic::kTrajectory, "trajectory"},  {DataTopic::kGroundTruth, "ground_truth"},
+    {DataTopic::kMapUpdate, "map_update"}};
+
+template <class Enum, size_t N>
+const char* NameOf(const Name<Enum> (&names)[N], Enum value) {
+  for (const Name<Enum>& n : names) {
+    if (n.value == value) return n.name;
+  }
+  return "?";
+}
+
+template <class Enum, size_t N>
+std::optional<Enum> ValueOf(const Name<Enum> (&names)[N], const std::string& name) {
+  for (const Name<Enum>& n : names) {
+    if (name == n.name) return n.value;
+  }
+  return std::nullopt;
+}
 constexpr const char* kWritersTag = "writers";
 constexpr const char* kMapTag = "map";
 // Longest text echoed from a message into an error.
@@ -25,10 +56,7 @@ std::string Echo(const std::string& text) {
 }
 
 std::optional<DataTopic> DataTopicFromName(const std::string& name) {
-  for (DataTopic t : kTopics) {
-    if (name == ToString(t)) return t;
-  }
-  return std::nullopt;
+  return ValueOf(kTopicNames, name);
 }
 
 }  // namespace
@@ -61,29 +89,10 @@ std::optional<WriterGuid> WriterGuidFromHex(const std::string& hex) {
   return guid;
 }
 
-const char* ToString(ComponentKind kind) {
-  switch (kind) {
-    case ComponentKind::kPlayer:
-      return "player";
-    case ComponentKind::kDetector:
-      return "detector";
-    case ComponentKind::kSlam:
-      return "slam";
-    case ComponentKind::kMapper:
-      return "mapper";
-    case ComponentKind::kRecorder:
-      return "recorder";
-    case ComponentKind::kRos2Bridge:
-      return "ros2_bridge";
-  }
-  return "?";
-}
+const char* ToString(ComponentKind kind) { return NameOf(kKindNames, kind); }
 
 std::optional<ComponentKind> ComponentKindFromName(const std::string& name) {
-  for (ComponentKind k : kKinds) {
-    if (name == ToString(k)) return k;
-  }
-  return std::nullopt;
+  return ValueOf(kKindNames, name);
 }
 
 std::string PipelineComponentNames() { return "player | detector | slam | mapper | recorder"; }
@@ -102,43 +111,9 @@ bool IsFrameSource(ComponentKind kind) {
   return kind == ComponentKind::kPlayer || kind == ComponentKind::kRos2Bridge;
 }
 
-const char* ToString(StreamEvent event) {
-  switch (event) {
-    case StreamEvent::kStarted:
-      return "STARTED";
-    case StreamEvent::kEndOfStream:
-      return "END_OF_STREAM";
-    case StreamEvent::kComponentDone:
-      return "COMPONENT_DONE";
-    case StreamEvent::kMapLoaded:
-      return "MAP_LOADED";
-    case StreamEvent::kReady:
-      return "READY";
-    case StreamEvent::kFailed:
-      return "FAILED";
-  }
-  return "?";
-}
+const char* ToString(StreamEvent event) { return NameOf(kEventNames, event); }
 
-const char* ToString(DataTopic topic) {
-  switch (topic) {
-    case DataTopic::kFrames:
-      return "frames";
-    case DataTopic::kDetections:
-      return "detections";
-    case DataTopic::kCameraPose:
-      return "camera_pose";
-    case DataTopic::kKeyframe:
-      return "keyframe";
-    case DataTopic::kTrajectory:
-      return "trajectory";
-    case DataTopic::kGroundTruth:
-      return "ground_truth";
-    case DataTopic::kMapUpdate:
-      return "map_update";
-  }
-  return "?";
-}
+const char* ToString(DataTopic topic) { return NameOf(kTopicNames, topic); }
 
 ComponentStatus ComponentStatus::Started(ComponentKind source,
                                          std::map<DataTopic, WriterGuid> writers,

@@ -1,113 +1,26 @@
 #include "components/recorder.h"
 
-#include <algorithm>
+#include <chrono>
+#include <condition_variable>
 #include <cstdio>
-#include <filesystem>
+#include <mutex>
+#include <optional>
 #include <utility>
 #include <vector>
 
+#include "components/convert.h"
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
 #include "components/protocol.h"
+#include "components/status_reader.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
-#include "core/io/file_util.h"
-#include "core/io/trajectory_io.h"
 #include "dygslam_msg/CameraPosePubSubTypes.h"
 #include "dygslam_msg/GroundTruthPubSubTypes.h"
 #include "dygslam_msg/StreamStatusPubSubTypes.h"
 #include "dygslam_msg/TrajectoryPubSubTypes.h"
 
 namespace dygslam {
-
-void RecorderOptions::Check() const {
-  DYGSLAM_CHECK_OPTION(!output_dir.empty(), "recorder.output_dir");
-  DYGSLAM_CHECK_OPTION(flush_timeout_s >= 0, "recorder.flush_timeout_s");
-}
-
-RecorderCore::RecorderCore(const RecorderOptions& options) : options_(options) { options_.Check(); }
-
-FrameRow FrameRowFromPose(const msg::CameraPose& m) {
-  FrameRow row;
-  row.stamp = TimeFromMsg(m.header().stamp(), "CameraPose.header.stamp");
-  if (m.tracking_state() > static_cast<uint8_t>(TrackingState::kFallback)) {
-    throw InputError("CameraPose.tracking_state: " + std::to_string(m.tracking_state()) +
-                     " is not a tracking state (0..4)");
-  }
-  row.state = static_cast<TrackingState>(m.tracking_state());
-  row.is_keyframe = m.is_keyframe();
-  row.num_features = m.num_features();
-  row.num_dynamic = m.num_dynamic();
-  row.num_tracked = m.num_tracked();
-  row.times.orb_extraction_ms = m.orb_extraction_ms();
-  row.times.detection_ms = m.detection_ms();
-  row.times.matching_ms = m.matching_ms();
-  row.times.probability_ms = m.probability_ms();
-  row.times.tracking_ms = m.tracking_ms();
-  row.times.total_ms = m.total_ms();
-  return row;
-}
-
-void RecorderCore::AddPose(const msg::CameraPose& pose) {
-  const Timestamp stamp = TimeFromMsg(pose.header().stamp(), "CameraPose.header.stamp");
-  std::string row = FramesCsvRow(FrameRowFromPose(pose));
-  if (pose.has_pose()) {
-    StampedPose p;
-    p.stamp = stamp;
-    p.world_from_cam = PoseFromMsg(pose.world_from_cam(), "CameraPose.world_from_cam");
-    online_.push_back(p);
-    if (pose.is_keyframe()) online_keyframes_.push_back(p);
-  }
-  if (pose.tracking_state() == static_cast<uint8_t>(TrackingState::kLost)) ++num_lost_;
-  frame_rows_.emplace_back(stamp, std::move(row));
-}
-
-void RecorderCore::SetTrajectory(const msg::Trajectory& trajectory) {
-  std::vector<StampedPose> poses = TrajectoryFromMsg(trajectory);
-  if (trajectory.keyframes_only()) {
-    final_keyframes_ = std::move(poses);
-  } else {
-    final_frames_ = std::move(poses);
-  }
-}
-
-void RecorderCore::AddGroundTruth(const msg::GroundTruthPose& pose) {
-  ground_truth_.push_back(GroundTruthFromMsg(pose));
-}
-
-namespace {
-
-std::vector<StampedPose> SortedUnique(std::vector<StampedPose> poses) {
-  std::stable_sort(poses.begin(), poses.end(),
-                   [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
-  poses.erase(
-      std::unique(poses.begin(), poses.end(),
-                  [](const StampedPose& a, const StampedPose& b) { return a.stamp == b.stamp; }),
-      poses.end());
-  return poses;
-}
-
-}  // namespace
-
-std::string RecorderCore::Write() const {
-  std::filesystem::create_directories(options_.output_dir);
-  const std::filesystem::path dir(options_.output_dir);
-  const std::string trajectory = (dir / "trajectory.txt").string();
-  WriteTumTrajectory(trajectory, final_frames_ ? *final_frames_ : SortedUnique(online_));
-  WriteTumTrajectory((dir / "trajectory_online.txt").string(), SortedUnique(online_));
-  WriteTumTrajectory((dir / "keyframes.txt").string(),
-                     final_keyframes_ ? *final_keyframes_ : SortedUnique(online_keyframes_));
-  std::vector<std::pair<Timestamp, std::string>> rows = frame_rows_;
-  std::stable_sort(rows.begin(), rows.end(),
-                   [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::string csv = FramesCsvHeader();
-  for (const auto& row : rows) csv += row.second;
-  WriteFileAtomically((dir / "frames.csv").string(), csv);
-  if (!ground_truth_.empty()) {
-    WriteTumTrajectory((dir / "groundtruth.txt").string(), SortedUnique(ground_truth_));
-  }
-  return trajectory;
-}
 
 RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
                           const RecorderOptions& options, const StopFlagPtr& stop) {
@@ -205,16 +118,9 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
         std::lock_guard<std::mutex> lock(mutex);
         admit(&truth_gate, std::move(p), writer, add_ground_truth);
       });
-  dds::Reader<msg::StreamStatusPubSubType> status_reader(
-      participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
-      [&](msg::StreamStatus&& m) {
-        ComponentStatus s;
-        try {
-          s = StatusFromMsg(m);
-        } catch (const InputError& e) {
-          LOG_WARNING << "recorder: ignored status: " << e.what();
-          return;
-        }
+  StatusReader status_reader(
+      participant, ComponentKind::kRecorder,
+      [&](const ComponentStatus& s, const msg::StreamStatus& /*m*/) {
         std::lock_guard<std::mutex> lock(mutex);
         writers.Announce(s);
         if (s.event == StreamEvent::kStarted) release_held();

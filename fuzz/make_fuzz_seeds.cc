@@ -19,9 +19,7 @@
 #ifndef DYGSLAM_FUZZ_NO_DDS
 #include "fuzz/dds_decoders.h"
 #endif
-#ifdef DYGSLAM_FUZZ_MAP_FILE
 #include "fuzz/map_file_seed.h"
-#endif
 
 namespace {
 namespace fs = std::filesystem;
@@ -173,13 +171,11 @@ int main(int argc, char** argv) {
   DdsSeeds(out / "dds_sample");
 #endif
   TextSeeds(out, source);
-#ifdef DYGSLAM_FUZZ_MAP_FILE
   fs::create_directories(out / "map_file");
   std::string map = dygslam::fuzz::MapSeedFile();
   Write(out / "map_file" / "tiny_raw.dygmap", map);  // first byte 'D' (even): decoded as is
   map[0] = 'E';                                      // odd: payload re-wrapped by the fuzzer
   Write(out / "map_file" / "tiny_rewrapped.dygmap", map);
-#endif
   std::cout << "seeds in " << out.string() << "\n";
   return 0;
 }

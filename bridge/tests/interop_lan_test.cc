@@ -19,6 +19,7 @@
 #include "bridge/ros2_bridge.h"
 #include "bridge/ros2_convert.h"
 #include "bridge/tests/cyclone_peer.h"
+#include "bridge/tests/interop_support.h"
 #include "components/convert.h"
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
@@ -40,10 +41,7 @@ namespace {
 using testing::CyclonePeer;
 using testing::PeerDistro;
 using testing::PeerNetwork;
-
-std::string Config() {
-  return std::string(std::getenv("DYGSLAM_SOURCE_DIR")) + "/config/bonn.yaml";
-}
+using testing::WaitUntil;
 
 // The pipeline side: shared memory + UDP on 127.0.0.1 (the components' default), no XML.
 std::shared_ptr<dds::Participant> PipelineParticipant(int domain, const std::string& name) {
@@ -59,16 +57,6 @@ std::shared_ptr<dds::Participant> RosParticipant(int domain) {
   dds::ParticipantOptions o = ros2::RosParticipantOptions(domain);
   o.use_xml_profile = false;
   return dds::Participant::Create(o);
-}
-
-template <class Pred>
-bool WaitUntil(Pred pred, std::chrono::milliseconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (!pred()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  return true;
 }
 
 class InteropLan : public ::testing::Test {
@@ -89,60 +77,17 @@ TEST_F(InteropLan, DefaultCycloneCameraDrivesSlamAndGetsThePoses) {
   const int domain = 141;
   const size_t kFrames = 60;
 
-  SystemOptions options = SystemOptionsFromSettings(LoadSettings(Config()));
-  options.deterministic = true;
-  const RgbdDataset dataset = RgbdDataset::Open(dataset_dir);
-  const auto groundtruth = ReadTumTrajectory(dataset.groundtruth_path());
-  std::vector<size_t> indices;
-  for (size_t k = 0; k < kFrames; ++k) {
-    if (auto i = dataset.FrameForRgbEntry(k)) indices.push_back(*i);
-  }
-  std::vector<StampedPose> direct;
-  {
-    System system(options);
-    for (size_t i : indices) {
-      system.FeedRgbdFrame(dataset.LoadRgb(i), dataset.LoadDepth(i), dataset.frame(i).rgb_stamp);
-    }
-    system.Shutdown();
-    direct = system.Trajectory();
-  }
-  const double direct_ate = ComputeAte(groundtruth, direct).error.rmse;
+  const testing::DirectReference reference = testing::RunDirectReference(dataset_dir, kFrames);
+  const SystemOptions& options = reference.options;
+  const RgbdDataset& dataset = reference.dataset;
+  const std::vector<StampedPose>& groundtruth = reference.groundtruth;
+  const std::vector<size_t>& indices = reference.indices;
+  const double direct_ate = reference.ate;
 
-  PipelineOptions po;
-  po.dataset_dir = "-";
-  po.output_dir = tmp + "/bridge";
-  po.system = options;
-  po.run_mapper = false;
-  po.domain_id = domain;
-  std::filesystem::create_directories(po.output_dir);
-  auto stop = std::make_shared<StopFlag>();
-  std::vector<std::string> names = {"recorder", "slam"};
-  if (po.NeedsDetectorComponent()) names.push_back("detector");
-  std::map<std::string, std::thread> threads;
-  std::map<std::string, int> codes;
+  // Through ROS 2: components on threads, the bridge, the Cyclone camera.
+  const PipelineOptions po = testing::BridgeFedPipeline(options, tmp + "/bridge", domain);
+  testing::ComponentThreads components(po);
   std::mutex mutex;
-  struct Joiner {
-    std::shared_ptr<StopFlag> stop;
-    std::map<std::string, std::thread>* threads;
-    ~Joiner() {
-      stop->Request();
-      for (auto& [name, t] : *threads) {
-        if (t.joinable()) t.join();
-      }
-    }
-  } joiner{stop, &threads};
-  for (const std::string& name : names) {
-    threads[name] = std::thread([&, name] {
-      int code = 1;
-      try {
-        code = RunComponent(name, po, stop);
-      } catch (const std::exception& e) {
-        ADD_FAILURE() << name << ": " << e.what();
-      }
-      std::lock_guard<std::mutex> lock(mutex);
-      codes[name] = code;
-    });
-  }
 
   // slam's answers on the pipeline side (the reference values).
   std::map<int64_t, msg::CameraPose> answers;
@@ -160,7 +105,7 @@ TEST_F(InteropLan, DefaultCycloneCameraDrivesSlamAndGetsThePoses) {
 
   ros2::RosBridgeOptions bo;
   bo.max_pending_frames = 1000;
-  bo.wait_for_components = names;
+  bo.wait_for_components = components.names();
   auto bridge = std::make_unique<ros2::RosBridge>(PipelineParticipant(domain, "test_bridge"),
                                                   RosParticipant(domain), bo);
 
@@ -171,49 +116,31 @@ TEST_F(InteropLan, DefaultCycloneCameraDrivesSlamAndGetsThePoses) {
                  "rt/camera/camera/color/camera_info");
   ASSERT_TRUE(peer.WaitForCameraReaders(std::chrono::seconds(15)))
       << "the bridge's camera readers were not discovered over lan0";
-  ASSERT_TRUE(WaitUntil([&] { return peer.MatchedWriters() >= 7; }, std::chrono::seconds(15)))
-      << "matched " << peer.MatchedWriters() << " of 7 bridge writers";
-  testing::PeerCamera camera;
-  camera.width = options.camera.width;
-  camera.height = options.camera.height;
-  camera.fx = options.camera.fx;
-  camera.fy = options.camera.fy;
-  camera.cx = options.camera.cx;
-  camera.cy = options.camera.cy;
-  const double d[5] = {options.camera.k1, options.camera.k2, options.camera.p1, options.camera.p2,
-                       options.camera.k3};
-  for (int k = 0; k < 5; ++k) camera.d[k] = d[k];
+  // Both ways (see interop_test.cc, CyclonePeerReceivesWhatThePipelineProduced): the peer's
+  // readers matched the bridge's writers and each bridge writer matched the peer's reader.
+  ASSERT_TRUE(
+      WaitUntil([&] { return peer.MatchedWriters() >= 7 && bridge->matched_ros_writers() == 7; },
+                std::chrono::seconds(15)))
+      << "the peer matched " << peer.MatchedWriters() << " of 7 bridge writers; "
+      << bridge->matched_ros_writers() << " of 7 bridge writers matched the peer";
+  const testing::PeerCamera camera = testing::PeerCameraOf(options.camera);
 
-  size_t republished = 0;
   std::vector<double> round_trip_ms;
-  for (size_t i : indices) {
-    const int64_t stamp = dataset.frame(i).rgb_stamp.nanoseconds();
-    const cv::Mat rgb = dataset.LoadRgb(i);
-    cv::Mat depth_mm;  // Bonn PNG: value / 5000 = m; ROS: millimetres
-    dataset.LoadDepth(i).convertTo(depth_mm, CV_16UC1, 1000.0 / 5000.0);
-    bool answered = false;
-    auto published = std::chrono::steady_clock::now();
-    for (int attempt = 0; attempt < 5 && !answered; ++attempt) {
-      if (attempt > 0) ++republished;
-      published = std::chrono::steady_clock::now();
-      peer.PublishFrame(stamp, rgb, depth_mm, camera, "camera_color_optical_frame");
-      answered = WaitUntil(
-          [&] {
-            std::lock_guard<std::mutex> lock(mutex);
-            return answers.count(stamp) > 0;
-          },
-          std::chrono::seconds(3));
-    }
-    ASSERT_TRUE(answered) << "slam never answered frame " << stamp;
-    round_trip_ms.push_back(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - published)
-            .count());
-  }
+  const testing::LockstepResult lockstep = testing::PublishInLockstep(
+      peer, dataset, indices, camera,
+      [&](int64_t stamp) {
+        std::lock_guard<std::mutex> lock(mutex);
+        return answers.count(stamp) > 0;
+      },
+      [&](int64_t, std::chrono::steady_clock::time_point published) {
+        round_trip_ms.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - published)
+                .count());
+      });
+  ASSERT_TRUE(lockstep.all_answered) << "slam never answered frame " << lockstep.unanswered_stamp;
+  const size_t republished = lockstep.republished;
   bridge->EndInput();
-  threads["slam"].join();
-  threads["recorder"].join();
-  stop->Request();
-  if (threads.count("detector")) threads["detector"].join();
+  components.Finish();
 
   // Poses out: one PoseStamped + TF + Odometry per tracked frame, at the peer on lan0.
   size_t tracked = 0;
@@ -231,8 +158,8 @@ TEST_F(InteropLan, DefaultCycloneCameraDrivesSlamAndGetsThePoses) {
   const ros2::RosBridgeStats s = bridge->stats();
   bridge.reset();
   EXPECT_TRUE(all_poses) << peer.poses.size() << " poses of " << tracked;
-  EXPECT_EQ(codes["slam"], 0);
-  EXPECT_EQ(codes["recorder"], 0);
+  EXPECT_EQ(components.code("slam"), 0);
+  EXPECT_EQ(components.code("recorder"), 0);
   EXPECT_EQ(s.frames_forwarded, indices.size());
   EXPECT_EQ(s.bad_samples, 0u);
   EXPECT_LE(republished, indices.size() / 10) << "best-effort images lost too often";

@@ -19,13 +19,13 @@
 
 #include "bridge/ros2_bridge.h"
 #include "bridge/tests/cyclone_peer.h"
+#include "bridge/tests/interop_support.h"
 #include "components/convert.h"
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
 #include "components/dds/qos.h"
 #include "components/pipeline.h"
 #include "core/config/settings.h"
-#include "run/system_config.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
@@ -34,6 +34,7 @@
 #include "dygslam_msg/DetectionsPubSubTypes.h"
 #include "dygslam_msg/MapUpdatePubSubTypes.h"
 #include "dygslam_msg/TrajectoryPubSubTypes.h"
+#include "run/system_config.h"
 #include "tests/support/test_support.h"
 
 namespace dygslam {
@@ -41,10 +42,7 @@ namespace {
 
 using testing::CyclonePeer;
 using testing::PeerPose;
-
-std::string Config() {
-  return std::string(std::getenv("DYGSLAM_SOURCE_DIR")) + "/config/bonn.yaml";
-}
+using testing::WaitUntil;
 
 std::shared_ptr<dds::Participant> MakeParticipant(int domain, const std::string& name,
                                                   const std::string& partition = "") {
@@ -70,16 +68,6 @@ void ExpectPoseEq(const PeerPose& got, const Rigid3d& expected, const std::strin
   const Eigen::Quaterniond q(got.orientation[3], got.orientation[0], got.orientation[1],
                              got.orientation[2]);
   EXPECT_NEAR(std::abs(q.dot(expected.rotation.normalized())), 1.0, 1e-9) << what;
-}
-
-template <class Pred>
-bool WaitUntil(Pred pred, std::chrono::milliseconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (!pred()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  return true;
 }
 
 // Outbound: a Cyclone peer subscribed with ROS 2 type names receives pose, odometry, path, TF,
@@ -129,14 +117,20 @@ TEST(Interop, CyclonePeerReceivesWhatThePipelineProduced) {
   ros2::RosBridgeOptions options;
   options.inbound = false;
   ros2::RosBridge bridge(MakeParticipant(domain, "test_bridge", partition), options);
-  // The peer's 7 readers find the bridge's 7 writers (discovery across implementations).
-  ASSERT_TRUE(WaitUntil([&] { return peer.MatchedWriters() >= 7; }, std::chrono::seconds(15)))
-      << "matched " << peer.MatchedWriters() << " of 7 bridge writers";
+  // Discovery across implementations, both ways, before the first sample: the peer's 7 readers
+  // matched the bridge's 7 writers AND each bridge writer matched the peer's reader. The ROS
+  // topics are volatile: a sample written before its writer matched the reader is not delivered
+  // (once it failed with 43 of 44 detections when only the peer's side had been waited for).
+  ASSERT_TRUE(
+      WaitUntil([&] { return peer.MatchedWriters() >= 7 && bridge.matched_ros_writers() == 7; },
+                std::chrono::seconds(15)))
+      << "the peer matched " << peer.MatchedWriters() << " of 7 bridge writers; "
+      << bridge.matched_ros_writers() << " of 7 bridge writers matched the peer";
 
   PipelineOptions po;
   po.dataset_dir = dataset;
   po.output_dir = tmp + "/run";
-  po.system = SystemOptionsFromSettings(LoadSettings(Config()));
+  po.system = SystemOptionsFromSettings(LoadSettings(testing::BonnSettingsPath()));
   po.system.deterministic = true;
   po.first_entry = 100;  // people walk through from frame ~110
   po.last_entry = 150;
@@ -269,64 +263,17 @@ TEST(Interop, CameraOverRos2DrivesSlamWithinTenPercentOfDirectAte) {
   const int domain = 172;
   const size_t kFrames = 100;
 
-  SystemOptions options = SystemOptionsFromSettings(LoadSettings(Config()));
-  options.deterministic = true;
-  const RgbdDataset dataset = RgbdDataset::Open(dataset_dir);
-  const auto groundtruth = ReadTumTrajectory(dataset.groundtruth_path());
-  std::vector<size_t> indices;
-  for (size_t k = 0; k < kFrames; ++k) {
-    if (auto i = dataset.FrameForRgbEntry(k)) indices.push_back(*i);
-  }
-
-  // Direct run.
-  std::vector<StampedPose> direct;
-  {
-    System system(options);
-    for (size_t i : indices) {
-      system.FeedRgbdFrame(dataset.LoadRgb(i), dataset.LoadDepth(i), dataset.frame(i).rgb_stamp);
-    }
-    system.Shutdown();
-    direct = system.Trajectory();
-  }
-  const double direct_ate = ComputeAte(groundtruth, direct).error.rmse;
+  const testing::DirectReference reference = testing::RunDirectReference(dataset_dir, kFrames);
+  const SystemOptions& options = reference.options;
+  const RgbdDataset& dataset = reference.dataset;
+  const std::vector<StampedPose>& groundtruth = reference.groundtruth;
+  const std::vector<size_t>& indices = reference.indices;
+  const double direct_ate = reference.ate;
 
   // Through ROS 2: components on threads, the bridge, the Cyclone camera.
-  PipelineOptions po;
-  po.dataset_dir = "-";
-  po.output_dir = tmp + "/bridge";
-  po.system = options;
-  po.run_mapper = false;
-  po.domain_id = domain;
-  std::filesystem::create_directories(po.output_dir);
-  auto stop = std::make_shared<StopFlag>();
-  std::vector<std::string> names = {"recorder", "slam"};
-  if (po.NeedsDetectorComponent()) names.push_back("detector");
-  std::map<std::string, std::thread> threads;
-  std::map<std::string, int> codes;
+  const PipelineOptions po = testing::BridgeFedPipeline(options, tmp + "/bridge", domain);
+  testing::ComponentThreads components(po);
   std::mutex mutex;
-  // On any early return (a failed ASSERT): stop the components and join them.
-  struct Joiner {
-    std::shared_ptr<StopFlag> stop;
-    std::map<std::string, std::thread>* threads;
-    ~Joiner() {
-      stop->Request();
-      for (auto& [name, t] : *threads) {
-        if (t.joinable()) t.join();
-      }
-    }
-  } joiner{stop, &threads};
-  for (const std::string& name : names) {
-    threads[name] = std::thread([&, name] {
-      int code = 1;
-      try {
-        code = RunComponent(name, po, stop);
-      } catch (const std::exception& e) {
-        ADD_FAILURE() << name << ": " << e.what();
-      }
-      std::lock_guard<std::mutex> lock(mutex);
-      codes[name] = code;
-    });
-  }
 
   std::set<int64_t> acknowledged;  // stamps slam has answered (CameraPose)
   // Figures for BENCHMARKS.md (printed, not asserted): per frame, publish -> CameraPose round
@@ -350,7 +297,8 @@ TEST(Interop, CameraOverRos2DrivesSlamWithinTenPercentOfDirectAte) {
   ros2::RosBridgeOptions bo;
   bo.outbound = false;
   bo.max_pending_frames = 1000;
-  bo.wait_for_components = names;  // as the player: no frame before every component is there
+  bo.wait_for_components =
+      components.names();  // as the player: no frame before every component is there
   auto bridge = std::make_unique<ros2::RosBridge>(MakeParticipant(domain, "test_bridge"), bo);
 
   CyclonePeer peer(domain);
@@ -358,56 +306,33 @@ TEST(Interop, CameraOverRos2DrivesSlamWithinTenPercentOfDirectAte) {
                  "rt/camera/camera/aligned_depth_to_color/image_raw",
                  "rt/camera/camera/color/camera_info");
   ASSERT_TRUE(peer.WaitForCameraReaders(std::chrono::seconds(15)));
-  testing::PeerCamera camera;
-  camera.width = options.camera.width;
-  camera.height = options.camera.height;
-  camera.fx = options.camera.fx;
-  camera.fy = options.camera.fy;
-  camera.cx = options.camera.cx;
-  camera.cy = options.camera.cy;
-  const double d[5] = {options.camera.k1, options.camera.k2, options.camera.p1, options.camera.p2,
-                       options.camera.k3};
-  for (int k = 0; k < 5; ++k) camera.d[k] = d[k];
+  const testing::PeerCamera camera = testing::PeerCameraOf(options.camera);
 
   // A driver that publishes the next frame once slam answered the previous one (lockstep, as
   // the player's back-pressure; a lost best-effort image is published again).
-  size_t republished = 0;
   std::vector<double> round_trip_ms, detection_ms, slam_ms;
-  for (size_t i : indices) {
-    const int64_t stamp = dataset.frame(i).rgb_stamp.nanoseconds();
-    const cv::Mat rgb = dataset.LoadRgb(i);
-    cv::Mat depth_mm;  // Bonn PNG: value / 5000 = m; ROS: millimetres
-    dataset.LoadDepth(i).convertTo(depth_mm, CV_16UC1, 1000.0 / 5000.0);
-    bool answered = false;
-    auto published = std::chrono::steady_clock::now();
-    for (int attempt = 0; attempt < 5 && !answered; ++attempt) {
-      if (attempt > 0) ++republished;
-      published = std::chrono::steady_clock::now();
-      peer.PublishFrame(stamp, rgb, depth_mm, camera, "camera_color_optical_frame");
-      answered = WaitUntil(
-          [&] {
-            std::lock_guard<std::mutex> lock(mutex);
-            return acknowledged.count(stamp) > 0;
-          },
-          std::chrono::seconds(3));
-    }
-    ASSERT_TRUE(answered) << "slam never answered frame " << stamp;
-    std::lock_guard<std::mutex> lock(mutex);
-    const Timing& t = timings.at(stamp);
-    round_trip_ms.push_back(
-        std::chrono::duration<double, std::milli>(t.answered - published).count());
-    detection_ms.push_back(t.detection_ms);
-    slam_ms.push_back(t.total_ms);
-  }
+  const testing::LockstepResult lockstep = testing::PublishInLockstep(
+      peer, dataset, indices, camera,
+      [&](int64_t stamp) {
+        std::lock_guard<std::mutex> lock(mutex);
+        return acknowledged.count(stamp) > 0;
+      },
+      [&](int64_t stamp, std::chrono::steady_clock::time_point published) {
+        std::lock_guard<std::mutex> lock(mutex);
+        const Timing& t = timings.at(stamp);
+        round_trip_ms.push_back(
+            std::chrono::duration<double, std::milli>(t.answered - published).count());
+        detection_ms.push_back(t.detection_ms);
+        slam_ms.push_back(t.total_ms);
+      });
+  ASSERT_TRUE(lockstep.all_answered) << "slam never answered frame " << lockstep.unanswered_stamp;
+  const size_t republished = lockstep.republished;
   bridge->EndInput();
-  threads["slam"].join();
-  threads["recorder"].join();
-  stop->Request();
-  if (threads.count("detector")) threads["detector"].join();
+  components.Finish();
   const ros2::RosBridgeStats s = bridge->stats();
   bridge.reset();
-  EXPECT_EQ(codes["slam"], 0);
-  EXPECT_EQ(codes["recorder"], 0);
+  EXPECT_EQ(components.code("slam"), 0);
+  EXPECT_EQ(components.code("recorder"), 0);
   EXPECT_EQ(s.frames_forwarded, indices.size());
   EXPECT_EQ(s.bad_samples, 0u);
   EXPECT_TRUE(s.end_of_stream_sent);

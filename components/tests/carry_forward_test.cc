@@ -7,7 +7,7 @@
 #include <numeric>
 
 #include "components/frame_pairing.h"
-#include "components/slam_component.h"
+#include "components/slam_core.h"
 #include "core/config/settings.h"
 #include "run/system_config.h"
 #include "core/dynamic/yolo_detector.h"

@@ -39,14 +39,14 @@ using testing::ReadAll;
 
 constexpr double kForgedStamp = 4242.0;  // far from the dataset's stamps
 
-TEST(DdsForeignWriter, RunIgnoresAndCountsSamplesOfOtherParticipants) {
-  DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
-  if (!fs::exists(testing::DygslamBinary())) GTEST_SKIP() << "dygslam binary not built";
-  const std::string dir = testing::MakeTempDir("dds_foreign");
-  const int domain = 42;
+// `dygslam run` (threads, or one process per component with `processes`) on `domain` while an
+// intruder publishes into its partition: the run's outputs have none of the forged samples, each
+// component counts what it ignored, and the run summary gives the total.
+void RunWithIntruder(const std::string& dataset, bool processes, int domain) {
+  const std::string dir = testing::MakeTempDir(processes ? "dds_foreign_processes" : "dds_foreign");
   // The intruder: the run's partition (a plain DDS participant can also join "*"; dygslam's own
   // Participant refuses wildcards) and the run's topics.
-  const std::string partition = "dygslam_intruded_run";
+  const std::string partition = "dygslam_intruded_run_" + std::to_string(domain);
   dds::ParticipantOptions po;
   po.domain_id = domain;
   po.name = "intruder";
@@ -97,9 +97,11 @@ TEST(DdsForeignWriter, RunIgnoresAndCountsSamplesOfOtherParticipants) {
                                          std::to_string(domain),
                                          "--partition",
                                          partition};
+  std::vector<std::string> run_args = args;
+  if (processes) run_args.push_back("--processes");
   const pid_t pid = fork();
   if (pid == 0) {
-    std::vector<std::string> copy = args;
+    std::vector<std::string> copy = run_args;
     std::vector<char*> argv;
     for (auto& a : copy) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -166,9 +168,34 @@ TEST(DdsForeignWriter, RunIgnoresAndCountsSamplesOfOtherParticipants) {
   EXPECT_GT(std::stol(m[1]), 0) << log;
   EXPECT_GT(std::stol(m[2]), 0) << log;
   EXPECT_NE(log.find("slam: 60 frames"), std::string::npos) << log;
-  // And the run's summary (stdout) says it.
-  EXPECT_NE(ReadAll(dir + "/stdout.txt").find("dds: ignored"), std::string::npos) << log;
+  // And the run's summary (stdout) gives the total of the components' counts (in both modes;
+  // with --processes each child reports its count to the runner).
+  size_t components_total = std::stoul(m[1]) + std::stoul(m[2]);
+  for (const char* name : {"recorder", "mapper"}) {
+    std::smatch count;
+    ASSERT_TRUE(
+        std::regex_search(log, count, std::regex(std::string(name) + R"(: ignored (\d+) )")))
+        << log;
+    components_total += std::stoul(count[1]);
+  }
+  const std::string summary = ReadAll(dir + "/stdout.txt");
+  std::smatch total;
+  ASSERT_TRUE(std::regex_search(summary, total, std::regex(R"(dds: ignored (\d+) samples)")))
+      << log;
+  EXPECT_EQ(std::stoul(total[1]), components_total) << log;
   EXPECT_NE(log.find("outside this run"), std::string::npos) << log;
+}
+
+TEST(DdsForeignWriter, RunIgnoresAndCountsSamplesOfOtherParticipants) {
+  DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
+  if (!fs::exists(testing::DygslamBinary())) GTEST_SKIP() << "dygslam binary not built";
+  RunWithIntruder(dataset, false, 42);
+}
+
+TEST(DdsForeignWriter, ProcessesRunSummaryCountsTheIgnoredSamplesToo) {
+  DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
+  if (!fs::exists(testing::DygslamBinary())) GTEST_SKIP() << "dygslam binary not built";
+  RunWithIntruder(dataset, true, 210);
 }
 
 }  // namespace

@@ -9,25 +9,16 @@
 #include <sstream>
 #include <string>
 
-#include "run/mapping_config.h"
 #include "core/config/settings.h"
+#include "run/mapping_config.h"
 #include "run/system_config.h"
+#include "tests/support/settings_text.h"
 
 namespace dygslam {
 namespace {
 
-std::string BonnYaml() {
-  std::ifstream in(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-int CountLines(const std::string& text) {
-  int n = 0;
-  for (char c : text) n += c == '\n';
-  return n;
-}
+using testing::BonnYaml;
+using testing::CountLines;
 
 // bonn.yaml with `line` replaced by `replacement` (the line must exist).
 std::string Replace(const std::string& line, const std::string& replacement) {

@@ -16,24 +16,15 @@
 #include "core/config/settings.h"
 #include "run/mapping_config.h"
 #include "run/system_config.h"
+#include "tests/support/settings_text.h"
 #include "tests/support/test_support.h"
 
 namespace dygslam {
 namespace {
 namespace fs = std::filesystem;
 
-std::string BonnYaml() {
-  std::ifstream in(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-int CountLines(const std::string& text) {
-  int n = 0;
-  for (char c : text) n += c == '\n';
-  return n;
-}
+using testing::BonnYaml;
+using testing::CountLines;
 
 bool Contains(const std::string& text, const std::string& needle) {
   return text.find(needle) != std::string::npos;

@@ -1,0 +1,44 @@
+// The component shells' reader of the StreamStatus topic: each sample parsed into a
+// ComponentStatus (components/protocol.h) and handed over with the raw message (for the fields a
+// status kind adds, e.g. END_OF_STREAM's frame count); a malformed one is logged as
+// "<component>: ignored status: <why>" and dropped. Called on the DDS listener thread.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <utility>
+
+#include "components/dds/participant.h"
+#include "components/dds/pubsub.h"
+#include "components/protocol.h"
+#include "core/base/error.h"
+#include "core/base/log.h"
+#include "dygslam_msg/StreamStatusPubSubTypes.h"
+
+namespace dygslam {
+
+class StatusReader {
+ public:
+  using Callback = std::function<void(const ComponentStatus& status, const msg::StreamStatus& m)>;
+
+  // `self`: the component that reads (names it in the log).
+  StatusReader(std::shared_ptr<dds::Participant> participant, ComponentKind self, Callback callback)
+      : reader_(std::move(participant), dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
+                [self, callback = std::move(callback)](msg::StreamStatus&& m) {
+                  ComponentStatus status;
+                  try {
+                    status = StatusFromMsg(m);
+                  } catch (const InputError& e) {
+                    LOG_WARNING << ToString(self) << ": ignored status: " << e.what();
+                    return;
+                  }
+                  callback(status, m);
+                }) {}
+
+  int matched() const { return reader_.matched(); }
+
+ private:
+  dds::Reader<msg::StreamStatusPubSubType> reader_;
+};
+
+}  // namespace dygslam

@@ -14,6 +14,7 @@
 #   UNEXPECTED  another exit code than the contract's (see the probe's "want")
 #   SILENT      a wrong configuration or input accepted without a word
 # Logs: WORK_DIR/logs/NAME.{out,err}. Exit code: the number of probes that are not ok.
+# PROBE_ONLY=settings runs the settings-file probes only.
 set -u
 BUILD_DIR=$(realpath "${1:-build}")
 WORK=$(realpath -m "${2:-/tmp/dygslam_probe_$$}")
@@ -143,6 +144,7 @@ staller=$!
 signal_probe y_fifo_stall_term TERM 2 143 "" "$DYG" run ds --config fifo_stall --out o_fifo_stall --direct --quiet
 kill $staller 2>/dev/null; wait $staller 2>/dev/null
 
+if [ "${PROBE_ONLY:-}" = settings ]; then echo "== $FAILS probes not ok"; exit "$FAILS"; fi
 echo "== images and lists"
 mkbad() {  # mkbad NAME: ds_NAME with entry 10's rgb image replaced by ./bad.png (made by caller)
   small "ds_$1" 20

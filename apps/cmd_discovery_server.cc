@@ -7,6 +7,7 @@
 #include "apps/command.h"
 #include "components/dds/participant.h"
 #include "components/pipeline.h"
+#include "core/base/echo.h"
 #include "core/base/error.h"
 
 namespace dygslam::cli {
@@ -30,7 +31,7 @@ int RunDiscoveryServerCommand(const std::vector<std::string>& args) {
   try {
     domain = std::stoi(p.Get("domain"));
   } catch (const std::exception&) {
-    return p.UsageError("--domain: not an integer: '" + p.Get("domain") + "'");
+    return p.UsageError("--domain: not an integer: '" + EchoValue(p.Get("domain")) + "'");
   }
   if (domain < -1 || domain > 232) return p.UsageError("--domain: expected 0..232");
   if (domain < 0) domain = dds::DomainIdFromEnvironment(0);

@@ -16,6 +16,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <map>
 #include <mutex>
@@ -139,6 +140,8 @@ int RunMap(const std::vector<std::string>& args) {
   RunConfiguration configuration =
       LoadRunConfiguration({config, CliSettingsReadOptions(p.Flag("strict-settings")),
                             p.Get("filter"), p.Flag("deterministic")});
+  // The detector's model files before any output (SLAM maps): missing models fail here.
+  if (!p.Has("trajectory")) ResolveDetectorModel(&configuration.system);
   const SystemOptions& options = configuration.system;
   OctoMapOptions& map_options = configuration.octomap;
   if (p.Has("resolution"))
@@ -167,13 +170,15 @@ int RunMap(const std::vector<std::string>& args) {
   dataset_options.refuse_outside_paths = p.Flag("strict-paths");
   const RgbdDataset dataset = RgbdDataset::Open(dataset_dir, dataset_options);
   std::pair<size_t, size_t> range{0, dataset.num_rgb_entries()};
+  std::string frames_note;  // --frames beyond the dataset: cut, with a warning
   if (p.Has("frames")) {
     try {  // a malformed or out-of-range --frames is a usage error (exit 2), as other numbers
-      range = ParseFrameRange(p.Get("frames"), dataset.num_rgb_entries());
+      range = ParseFrameRange(p.Get("frames"), dataset.num_rgb_entries(), &frames_note);
     } catch (const std::exception& e) {
       return p.UsageError(e.what());
     }
   }
+  if (!frames_note.empty()) std::fprintf(stderr, "dygslam map: warning: %s\n", frames_note.c_str());
   auto [first, last] = range;
   std::optional<Timestamp> reference_until;
   if (p.Has("reference-until")) {
@@ -269,47 +274,59 @@ int RunMap(const std::vector<std::string>& args) {
   };
   auto stop_requested = [&stop] { return stop.requested(); };
   bool interrupted = false;
-  if (from_trajectory) {
-    for (size_t k = first; k < last; ++k) {
-      if (stop_requested()) {
-        interrupted = true;
-        break;
+  // Bad input found mid-run (an image that does not decode) ends the frame loop, but the map and
+  // every output are written from the frames before it (as on a stop signal); then the error is
+  // reported (exit 1).
+  std::exception_ptr failure;
+  try {
+    if (from_trajectory) {
+      for (size_t k = first; k < last; ++k) {
+        if (stop_requested()) {
+          interrupted = true;
+          break;
+        }
+        const auto index = dataset.FrameForRgbEntry(k);
+        if (!index) {
+          ++skipped;
+          continue;
+        }
+        if ((k - first) % every != 0) continue;
+        const Timestamp stamp = dataset.frame(*index).rgb_stamp;
+        std::optional<Rigid3d> pose = InterpolatePose(given_poses, stamp);
+        if (!pose) {
+          ++lost;
+          continue;
+        }
+        if (p.Flag("bonn-marker")) *pose = *pose * BonnMarkerFromCam();
+        KeyframeData keyframe;
+        keyframe.id = static_cast<int64_t>(k);
+        keyframe.stamp = stamp;
+        keyframe.world_from_cam = *pose;
+        dataset.LoadDepth(*index, options.camera.width, options.camera.height)
+            .convertTo(keyframe.depth, CV_32F, 1.0 / options.sensor.depth_map_factor);
+        on_keyframe(keyframe);
+        after_frame(k, TrackingState::kOk);
       }
-      const auto index = dataset.FrameForRgbEntry(k);
-      if (!index) {
-        ++skipped;
-        continue;
-      }
-      if ((k - first) % every != 0) continue;
-      const Timestamp stamp = dataset.frame(*index).rgb_stamp;
-      std::optional<Rigid3d> pose = InterpolatePose(given_poses, stamp);
-      if (!pose) {
-        ++lost;
-        continue;
-      }
-      if (p.Flag("bonn-marker")) *pose = *pose * BonnMarkerFromCam();
-      KeyframeData keyframe;
-      keyframe.id = static_cast<int64_t>(k);
-      keyframe.stamp = stamp;
-      keyframe.world_from_cam = *pose;
-      dataset.LoadDepth(*index, options.camera.width, options.camera.height)
-          .convertTo(keyframe.depth, CV_32F, 1.0 / options.sensor.depth_map_factor);
-      on_keyframe(keyframe);
-      after_frame(k, TrackingState::kOk);
+    } else {
+      DatasetRunOptions run;
+      run.first_entry = first;
+      run.last_entry = last;
+      run.image_width = options.camera.width;
+      run.image_height = options.camera.height;
+      run.prefetch_detections = false;
+      run.stop = stop_requested;
+      const DatasetRunSummary summary =
+          RunDatasetFrames(dataset, *system, run, [&](size_t k, const FrameResult& r) {
+            if (r.state == TrackingState::kLost)
+              ++lost;  // also counted when an error ends the loop
+            after_frame(k, r.state);
+          });
+      lost = summary.lost;
+      skipped = summary.skipped;
+      interrupted = summary.interrupted;
     }
-  } else {
-    DatasetRunOptions run;
-    run.first_entry = first;
-    run.last_entry = last;
-    run.image_width = options.camera.width;
-    run.image_height = options.camera.height;
-    run.prefetch_detections = false;
-    run.stop = stop_requested;
-    const DatasetRunSummary summary = RunDatasetFrames(
-        dataset, *system, run, [&](size_t k, const FrameResult& r) { after_frame(k, r.state); });
-    lost = summary.lost;
-    skipped = summary.skipped;
-    interrupted = summary.interrupted;
+  } catch (const std::exception&) {
+    failure = std::current_exception();
   }
   if (progress) std::fprintf(stderr, "\n");
   if (system) system->Shutdown();  // last local-mapping corrections reach the mapper
@@ -408,7 +425,7 @@ int RunMap(const std::vector<std::string>& args) {
                 map_options.use_dynamic_mask ? "applied" : "not applied");
   } else {
     std::printf("frames: %zu inserted from %s (every %d), %zu without pose\n", processed,
-                p.Get("trajectory").c_str(), every, lost);
+                EchoValue(p.Get("trajectory")).c_str(), every, lost);
   }
   std::printf(
       "keyframes: %zu in the map (%zu inserted, %zu pose corrections, %zu culled), %llu rebuilds\n",
@@ -468,7 +485,7 @@ int RunMap(const std::vector<std::string>& args) {
   }
   if (ghosts) {
     std::printf("reference: %zu keyframes before rgb entry %s\n", reference_keyframes,
-                p.Get("reference-until").c_str());
+                EchoValue(p.Get("reference-until")).c_str());
     std::printf(
         "ghost voxels: %s (occupied in the map, observed free in the reference, no reference "
         "surface "
@@ -480,6 +497,13 @@ int RunMap(const std::vector<std::string>& args) {
   std::printf("outputs: %s/{map.bt,map.ot,map_top.png,map_slice.png%s%s}\n", out.string().c_str(),
               system ? ",trajectory.txt,keyframes.txt" : "",
               ghosts ? ",reference.bt,ghosts_top.png,ghost_cells.txt" : "");
+  if (failure) {
+    std::fprintf(stderr,
+                 "[map] stopped by an error after %zu frames: the map and outputs of those frames "
+                 "are written to %s\n",
+                 processed, out.string().c_str());
+    std::rethrow_exception(failure);
+  }
   // A SLAM map from (almost) no tracked frame is no map of the scene: fail, and say why.
   if (system && !interrupted) {
     const size_t tracked = system->Trajectory().size();

@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -38,6 +39,7 @@
 #include "core/base/log.h"
 #include "core/base/stop_signal.h"
 #include "core/config/settings.h"
+#include "core/dynamic/yolo_detector.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
 #include "core/io/detections_io.h"
@@ -185,7 +187,64 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   return outcome;
 }
 
+// Lines of a class names file that name a class (0 when there is no such file).
+int CountClassNames(const std::string& path) {
+  std::error_code ec;
+  if (path.empty() || !fs::is_regular_file(path, ec)) return 0;
+  std::ifstream in(path);
+  int n = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (line.find_first_not_of(" \t\r") != std::string::npos) ++n;
+  }
+  return n;
+}
+
+// --detections: a file whose stamps match no frame (another sequence, stamps in another unit)
+// would run the filter without any box, silently. Warns with the counts.
+void WarnUnmatchedDetections(const std::string& path, const RunSetup& s,
+                             const RgbdDataset& dataset) {
+  size_t frames = 0, frames_with_boxes = 0;
+  for (size_t k = s.first; k < s.last; ++k) {
+    const auto index = dataset.FrameForRgbEntry(k);
+    if (!index) continue;
+    ++frames;
+    if (!DetectionsNear(s.detections, dataset.frame(*index).rgb_stamp).empty()) ++frames_with_boxes;
+  }
+  size_t stamps_unmatched = 0;
+  for (const auto& [stamp, boxes] : s.detections) {
+    bool matched = false;
+    for (const RgbdFrameEntry& f : dataset.frames()) {
+      if (std::abs(SecondsBetween(stamp, f.rgb_stamp)) <= 0.02) {
+        matched = true;
+        break;
+      }
+    }
+    if (!matched) ++stamps_unmatched;
+  }
+  if (stamps_unmatched == 0 && (frames_with_boxes > 0 || s.detections.empty())) return;
+  std::fprintf(stderr,
+               "dygslam run: warning: --detections %s: %zu of its %zu stamps match no frame of "
+               "the dataset (within 0.02 s); %zu of the run's %zu frames have boxes, %zu have "
+               "none%s\n",
+               EchoValue(path).c_str(), stamps_unmatched, s.detections.size(), frames_with_boxes,
+               frames, frames - frames_with_boxes,
+               frames_with_boxes == 0 ? " (the file matches no frame: no box is used; is it of "
+                                        "another sequence?)"
+                                      : "");
+}
+
 #ifdef DYGSLAM_HAVE_COMPONENTS
+// Issue 20 item 3: the DDS detector component runs on every frame; a cadence set in the settings
+// must not be dropped silently. Delete this function (and its call) once the DDS pipeline honours
+// Detector.every_n_frames (branch cpu, issue 19).
+void WarnDdsDetectorCadence(const SystemOptions& options, const std::string& settings_path) {
+  if (options.detection_every_n_frames <= 1 || !options.NeedsDetections()) return;
+  std::fprintf(stderr,
+               "dygslam run: warning: %s: Detector.every_n_frames %d is not applied in the DDS "
+               "modes: the DDS detector detects every frame (--direct applies it)\n",
+               EchoValue(settings_path).c_str(), options.detection_every_n_frames);
+}
+
 // A partition name unique to this run: concurrent runs on one DDS domain never mix.
 std::string RunPartition() {
   char host[64] = {0};
@@ -211,7 +270,7 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
   o.partition = partition.empty() ? RunPartition() : partition;
   o.security_dir = security_dir;
   std::fprintf(stderr, "[run] DDS partition '%s' (a bridge joins with --partition %s)\n",
-               o.partition.c_str(), o.partition.c_str());
+               EchoValue(o.partition).c_str(), EchoValue(o.partition).c_str());
   o.progress = s.progress;
   o.loop_minutes = s.loop_minutes;
   o.save_map = s.save_map;
@@ -347,14 +406,23 @@ int RunRun(const std::vector<std::string>& args) {
   }
   if (p.Has("detections")) {
     if (p.Flag("processes")) return p.UsageError("--detections works with --direct only");
-    s.detections = ReadDetections(p.Get("detections"));
+    // Class ids are checked against the detector's classes (its names file) when it is found.
+    DetectorOptions names_of = s.system.detector;
+    if (names_of.names_path.empty()) {
+      try {
+        names_of = DetectorOptionsForModel("yolo-fastest-1.1");
+      } catch (const InputError&) {  // no models here: class ids are not checked
+      }
+    }
+    const int num_classes = CountClassNames(names_of.names_path);
+    s.detections = ReadDetections(p.Get("detections"), num_classes, names_of.names_path);
     s.use_detection_file = true;
   }
   s.progress = !p.Flag("quiet");
   try {
     s.loop_minutes = std::stod(p.Get("loop-minutes"));
   } catch (const std::exception&) {
-    return p.UsageError("--loop-minutes: not a number: '" + p.Get("loop-minutes") + "'");
+    return p.UsageError("--loop-minutes: not a number: '" + EchoValue(p.Get("loop-minutes")) + "'");
   }
   if (!(s.loop_minutes >= 0 && s.loop_minutes < 1e6))
     return p.UsageError("--loop-minutes: expected a number >= 0");
@@ -364,7 +432,7 @@ int RunRun(const std::vector<std::string>& args) {
   try {
     domain_id = std::stoi(p.Get("domain"));
   } catch (const std::exception&) {
-    return p.UsageError("--domain: not an integer: '" + p.Get("domain") + "'");
+    return p.UsageError("--domain: not an integer: '" + EchoValue(p.Get("domain")) + "'");
   }
   if (domain_id < -1 || domain_id > 232) return p.UsageError("--domain: expected 0..232");
 
@@ -373,13 +441,16 @@ int RunRun(const std::vector<std::string>& args) {
   const RgbdDataset dataset = RgbdDataset::Open(s.dataset_dir, dataset_options);
   s.first = 0;
   s.last = dataset.num_rgb_entries();
+  std::string frames_note;  // --frames beyond the dataset: cut, with a warning
   if (p.Has("frames")) {
     try {  // a malformed or out-of-range --frames is a usage error (exit 2), as other numbers
-      std::tie(s.first, s.last) = ParseFrameRange(p.Get("frames"), dataset.num_rgb_entries());
+      std::tie(s.first, s.last) =
+          ParseFrameRange(p.Get("frames"), dataset.num_rgb_entries(), &frames_note);
     } catch (const std::exception& e) {
       return p.UsageError(e.what());
     }
   }
+  if (!frames_note.empty()) std::fprintf(stderr, "dygslam run: warning: %s\n", frames_note.c_str());
   // The ground truth is optional and only scores the run: a malformed groundtruth.txt is found
   // here, before any frame, and the run goes on without evaluation (its trajectory is what
   // matters; `dygslam eval` scores it once the file is fixed).
@@ -393,12 +464,25 @@ int RunRun(const std::vector<std::string>& args) {
                    "then `dygslam eval GROUNDTRUTH OUT/trajectory.txt`)\n",
                    e.what());
     }
+  } else if (!dataset.groundtruth_problem().empty()) {
+    std::fprintf(stderr,
+                 "dygslam run: warning: %s; the run goes on without evaluation (replace it by "
+                 "the ground truth file, then `dygslam eval GROUNDTRUTH OUT/trajectory.txt`)\n",
+                 EchoValue(dataset.groundtruth_problem(), 500).c_str());
   }
+  if (s.use_detection_file) WarnUnmatchedDetections(p.Get("detections"), s, dataset);
   size_t skipped = 0;
   for (size_t k = s.first; k < s.last; ++k) {
     if (!dataset.FrameForRgbEntry(k)) ++skipped;
   }
   s.out = out_dir;
+
+  bool direct = p.Flag("direct") || s.use_detection_file;
+#ifndef DYGSLAM_HAVE_COMPONENTS
+  direct = true;
+#endif
+  // The detector's model files before any output: missing models fail here, nothing written.
+  if (direct && !s.use_detection_file) ResolveDetectorModel(&s.system);
 
   std::string mode;
   RunOutcome outcome;
@@ -407,6 +491,7 @@ int RunRun(const std::vector<std::string>& args) {
   if (!p.Flag("direct") && !s.use_detection_file) {
     mode = p.Flag("processes") ? "DDS pipeline, one process per component"
                                : "DDS pipeline, one process";
+    WarnDdsDetectorCadence(s.system, s.config);
     outcome = RunThroughPipeline(s, p.Flag("processes"), domain_id, p.Get("partition"),
                                  p.Get("security"));
   }
@@ -480,6 +565,8 @@ int RunRun(const std::vector<std::string>& args) {
   } else if (dataset.has_groundtruth() && groundtruth.empty()) {
     std::printf("ATE: not evaluated (%s: see the warning above)\n",
                 dataset.groundtruth_path().c_str());
+  } else if (!dataset.groundtruth_problem().empty()) {
+    std::printf("ATE: not evaluated (%s)\n", EchoValue(dataset.groundtruth_problem(), 500).c_str());
   }
 #ifdef DYGSLAM_HAVE_COMPONENTS
   if (outcome.ignored_samples > 0) {

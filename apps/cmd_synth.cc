@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "apps/command.h"
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/synth/synthetic_sequence.h"
 
@@ -79,33 +80,36 @@ int RunSynth(const std::vector<std::string>& args) {
   SyntheticOptions options;
   int64_t value = 0;
   if (!ParseInt(p.Get("frames"), 1, &value) || value > 1000000) {
-    return p.UsageError("--frames: expected a positive integer, got '" + p.Get("frames") + "'");
+    return p.UsageError("--frames: expected a positive integer, got '" +
+                        EchoValue(p.Get("frames")) + "'");
   }
   options.num_frames = static_cast<int>(value);
   if (!ParseInt(p.Get("objects"), 0, &value) || value > 1000) {
-    return p.UsageError("--objects: expected a non-negative integer, got '" + p.Get("objects") +
-                        "'");
+    return p.UsageError("--objects: expected a non-negative integer, got '" +
+                        EchoValue(p.Get("objects")) + "'");
   }
   options.num_moving_objects = static_cast<int>(value);
   if (!ParseInt(p.Get("seed"), 0, &value)) {
-    return p.UsageError("--seed: expected a non-negative integer, got '" + p.Get("seed") + "'");
+    return p.UsageError("--seed: expected a non-negative integer, got '" +
+                        EchoValue(p.Get("seed")) + "'");
   }
   options.seed = static_cast<uint64_t>(value);
   if (!ParseInt(p.Get("objects-from"), 0, &value) || value > 1000000) {
     return p.UsageError("--objects-from: expected a non-negative integer, got '" +
-                        p.Get("objects-from") + "'");
+                        EchoValue(p.Get("objects-from")) + "'");
   }
   options.objects_start_frame = static_cast<int>(value);
   if (!ParseInt(p.Get("supersampling"), 1, &value) || value > 100) {
     return p.UsageError("--supersampling: expected a positive integer, got '" +
-                        p.Get("supersampling") + "'");
+                        EchoValue(p.Get("supersampling")) + "'");
   }
   options.supersampling = static_cast<int>(value);
   if (!ParseNumber(p.Get("fps"), &options.sensor.fps)) {
-    return p.UsageError("--fps: expected a number, got '" + p.Get("fps") + "'");
+    return p.UsageError("--fps: expected a number, got '" + EchoValue(p.Get("fps")) + "'");
   }
   if (!ParseNumber(p.Get("max-depth"), &options.max_depth)) {
-    return p.UsageError("--max-depth: expected a number, got '" + p.Get("max-depth") + "'");
+    return p.UsageError("--max-depth: expected a number, got '" + EchoValue(p.Get("max-depth")) +
+                        "'");
   }
   auto parse_list = [&](const std::string& option, size_t n, std::vector<double>* out) {
     out->clear();
@@ -123,17 +127,20 @@ int RunSynth(const std::vector<std::string>& args) {
     return out->size() == n;
   };
   std::vector<double> list;
-  if (!parse_list("room", 3, &list)) return p.UsageError("--room: expected X,Y,Z in metres, got '" + p.Get("room") + "'");
+  if (!parse_list("room", 3, &list))
+    return p.UsageError("--room: expected X,Y,Z in metres, got '" + EchoValue(p.Get("room")) + "'");
   options.room_size = Eigen::Vector3d(list[0], list[1], list[2]);
   if (!parse_list("loop-path", 2, &list))
-    return p.UsageError("--loop-path: expected A,B in metres, got '" + p.Get("loop-path") + "'");
+    return p.UsageError("--loop-path: expected A,B in metres, got '" +
+                        EchoValue(p.Get("loop-path")) + "'");
   options.loop_semi_axes = Eigen::Vector2d(list[0], list[1]);
   if (!ParseNumber(p.Get("loop-corner"), &options.loop_corner_radius))
-    return p.UsageError("--loop-corner: expected a number, got '" + p.Get("loop-corner") + "'");
+    return p.UsageError("--loop-corner: expected a number, got '" +
+                        EchoValue(p.Get("loop-corner")) + "'");
   if (!ParseNumber(p.Get("speed"), &options.loop_speed))
-    return p.UsageError("--speed: expected a number, got '" + p.Get("speed") + "'");
+    return p.UsageError("--speed: expected a number, got '" + EchoValue(p.Get("speed")) + "'");
   if (!ParseNumber(p.Get("texels"), &options.texels_per_metre))
-    return p.UsageError("--texels: expected a number, got '" + p.Get("texels") + "'");
+    return p.UsageError("--texels: expected a number, got '" + EchoValue(p.Get("texels")) + "'");
   options.loop_inward = p.Flag("loop-inward");
   if (p.Flag("noise")) {
     options.depth_noise = true;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "apps/command.h"
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/place/synthetic_training.h"
 #include "core/place/vocabulary.h"
@@ -50,18 +51,20 @@ int RunVocab(const std::vector<std::string>& args) {
   VocabularyOptions vocabulary;
   int first_seed = 0;
   if (!ParseCount(p.Get("scenes"), 1, 10000, &training.num_scenes))
-    return p.UsageError("--scenes: expected an integer in 1..10000, got '" + p.Get("scenes") + "'");
+    return p.UsageError("--scenes: expected an integer in 1..10000, got '" +
+                        EchoValue(p.Get("scenes")) + "'");
   if (!ParseCount(p.Get("frames-per-scene"), 1, 10000, &training.frames_per_scene))
     return p.UsageError("--frames-per-scene: expected an integer in 1..10000, got '" +
-                        p.Get("frames-per-scene") + "'");
+                        EchoValue(p.Get("frames-per-scene")) + "'");
   if (!ParseCount(p.Get("branching"), 2, 64, &vocabulary.branching))
-    return p.UsageError("--branching: expected an integer in 2..64, got '" + p.Get("branching") +
-                        "'");
+    return p.UsageError("--branching: expected an integer in 2..64, got '" +
+                        EchoValue(p.Get("branching")) + "'");
   if (!ParseCount(p.Get("depth"), 1, 8, &vocabulary.depth))
-    return p.UsageError("--depth: expected an integer in 1..8, got '" + p.Get("depth") + "'");
+    return p.UsageError("--depth: expected an integer in 1..8, got '" + EchoValue(p.Get("depth")) +
+                        "'");
   if (!ParseCount(p.Get("first-seed"), 0, 1000000000, &first_seed))
     return p.UsageError("--first-seed: expected a non-negative integer, got '" +
-                        p.Get("first-seed") + "'");
+                        EchoValue(p.Get("first-seed")) + "'");
   training.first_seed = static_cast<uint64_t>(first_seed);
   const bool quiet = p.Flag("quiet");
 

@@ -204,7 +204,8 @@ std::string ArgParser::Usage() const {
 }
 
 int ArgParser::UsageError(const std::string& message) const {
-  std::cerr << "dygslam " << command_ << ": " << message << "\n"
+  // Bounded: a message may quote a megabyte-long option value (core/base/echo.h).
+  std::cerr << "dygslam " << command_ << ": " << BoundedMessage(message) << "\n"
             << "usage: dygslam " << command_ << " " << usage_ << "\n"
             << "(dygslam " << command_ << " --help for details)\n";
   return 2;

@@ -12,6 +12,8 @@
 #include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/base/stop_signal.h"
+#include "core/config/config_reader.h"
+#include "core/config/settings.h"
 
 #ifndef DYGSLAM_VERSION
 #define DYGSLAM_VERSION "unknown"
@@ -50,21 +52,15 @@ void PrintHelp(std::ostream& out) {
          "  dygslam bench DATA_DIR [--runs N] [--quick] [--update-benchmarks BENCHMARKS.md]\n";
 }
 
-// An error message as printed: every line through EchoValue (binary bytes escaped), at most
-// 2000 characters in all, so that a value echoed whole somewhere deep down cannot flood stderr.
-std::string BoundedMessage(const std::string& message) {
-  constexpr size_t kMaxChars = 2000;
-  std::string out;
-  size_t start = 0;
-  while (start <= message.size() && out.size() < kMaxChars) {
-    const size_t end = std::min(message.find('\n', start), message.size());
-    if (start > 0) out += '\n';
-    out += EchoValue(message.substr(start, end - start), kMaxChars - out.size());
-    start = end + 1;
-  }
-  if (start <= message.size())
-    out += " ... (message of " + std::to_string(message.size()) + " bytes)";
-  return out;
+// An options Check() that failed outside a settings reader ("invalid option NAME: requires
+// COND"): the condition as users read it (core/config/config_reader.h), never the C++ text.
+std::string UserFacingCheck(const std::string& message) {
+  const std::string head = "invalid option ";
+  const size_t requires_at = message.find(": requires ");
+  if (message.rfind(head, 0) != 0 || requires_at == std::string::npos) return message;
+  const std::string name = message.substr(head.size(), requires_at - head.size());
+  return head + name + ": expected " +
+         UserCondition(message.substr(requires_at + 11), name, KnownSettingsKeys());
 }
 
 int Dispatch(const std::vector<std::string>& argv) {
@@ -106,6 +102,10 @@ int Dispatch(const std::vector<std::string>& argv) {
   int code = 1;
   try {
     code = it->second.run(args);
+  } catch (const StopSignalError& e) {
+    // Stopped while waiting on an input (a settings pipe), before any work: nothing to write.
+    std::cerr << "dygslam " << name << ": " << BoundedMessage(e.what()) << "\n";
+    code = e.exit_code();
   } catch (const InputError& e) {
     std::cerr << "dygslam " << name << ": error: " << BoundedMessage(e.what()) << "\n";
   } catch (const InvalidOptions& e) {
@@ -116,7 +116,8 @@ int Dispatch(const std::vector<std::string>& argv) {
                 << " --help for details)\n";
       code = 2;
     } else {
-      std::cerr << "dygslam " << name << ": error: " << BoundedMessage(message) << "\n";
+      std::cerr << "dygslam " << name << ": error: " << BoundedMessage(UserFacingCheck(message))
+                << "\n";
     }
   } catch (const std::exception& e) {
     std::cerr << "dygslam " << name << ": internal error: " << BoundedMessage(e.what()) << "\n";

@@ -1,11 +1,18 @@
 #include "components/recorder_core.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
 #include <utility>
 
 #include "components/convert.h"
+#include "core/base/echo.h"
 #include "core/base/error.h"
+#include "core/base/log.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 
@@ -16,7 +23,12 @@ void RecorderOptions::Check() const {
   DYGSLAM_CHECK_OPTION(flush_timeout_s >= 0, "recorder.flush_timeout_s");
 }
 
-RecorderCore::RecorderCore(const RecorderOptions& options) : options_(options) { options_.Check(); }
+RecorderCore::RecorderCore(const RecorderOptions& options) : options_(options) {
+  options_.Check();
+  std::error_code ec;
+  ground_truth_file_existed_ = std::filesystem::exists(std::filesystem::symlink_status(
+      std::filesystem::path(options_.output_dir) / "groundtruth.txt", ec));
+}
 
 FrameRow FrameRowFromPose(const msg::CameraPose& m) {
   FrameRow row;
@@ -80,6 +92,28 @@ std::vector<StampedPose> SortedUnique(std::vector<StampedPose> poses) {
 
 }  // namespace
 
+void RecorderCore::WriteGroundTruthCopy(const std::filesystem::path& path) const {
+  if (!ground_truth_file_existed_) {
+    WriteTumTrajectory(path.string(), SortedUnique(ground_truth_));
+    return;
+  }
+  // Not this run's file: kept unless it already holds exactly this ground truth.
+  const std::filesystem::path fresh = path.string() + ".recorder." + std::to_string(::getpid());
+  WriteTumTrajectory(fresh.string(), SortedUnique(ground_truth_));
+  const auto slurp = [](const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  std::error_code ec;
+  const bool same = std::filesystem::is_regular_file(path, ec) && slurp(path) == slurp(fresh);
+  std::filesystem::remove(fresh, ec);
+  if (!same) {
+    LOG_WARNING << "recorder: " << EchoValue(path.string())
+                << " was there before this run (not written by it): left as it was, the ground "
+                   "truth of the player is not copied";
+  }
+}
+
 std::string RecorderCore::Write() const {
   std::filesystem::create_directories(options_.output_dir);
   const std::filesystem::path dir(options_.output_dir);
@@ -94,9 +128,7 @@ std::string RecorderCore::Write() const {
   std::string csv = FramesCsvHeader();
   for (const auto& row : rows) csv += row.second;
   WriteFileAtomically((dir / "frames.csv").string(), csv);
-  if (!ground_truth_.empty()) {
-    WriteTumTrajectory((dir / "groundtruth.txt").string(), SortedUnique(ground_truth_));
-  }
+  if (!ground_truth_.empty()) WriteGroundTruthCopy(dir / "groundtruth.txt");
   return trajectory;
 }
 

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <utility>
@@ -47,6 +48,7 @@ class RecorderCore {
   std::string Write() const;
 
  private:
+  void WriteGroundTruthCopy(const std::filesystem::path& path) const;
   RecorderOptions options_;
   std::vector<StampedPose> online_;
   std::vector<StampedPose> online_keyframes_;
@@ -54,6 +56,9 @@ class RecorderCore {
   size_t num_lost_ = 0;
   std::vector<StampedPose> ground_truth_;
   std::optional<std::vector<StampedPose>> final_frames_, final_keyframes_;
+  // OUTPUT/groundtruth.txt was there before this recorder (a user's file, another run's): it is
+  // replaced only by identical content, else left as it was with a warning.
+  bool ground_truth_file_existed_ = false;
 };
 
 }  // namespace dygslam

@@ -13,6 +13,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/io/file_util.h"
 
@@ -108,9 +109,9 @@ OctoMapBuilder::~OctoMapBuilder() = default;
 void OctoMapBuilder::SetBaseMap(const octomap::OcTree& base, const std::string& source) {
   if (std::abs(base.getResolution() - options_.resolution) > 1e-9)
     throw InputError(source, 0,
-                     "OctoMap resolution " + std::to_string(base.getResolution()) +
-                         " m differs from OctoMap.resolution " +
-                         std::to_string(options_.resolution) + " m of the settings");
+                     "OctoMap resolution " + ExactNumber(base.getResolution()) +
+                         " m differs from OctoMap.resolution " + ExactNumber(options_.resolution) +
+                         " m of the settings");
   base_ = std::make_unique<octomap::OcTree>(base);
   ResetTree();
   for (auto& [id, keyframe] : keyframes_) InsertIntoTree(keyframe);
@@ -379,6 +380,40 @@ void WriteOctoMapFull(const octomap::OcTree& tree, const std::string& path) {
   WriteFileAtomically(path, out.str());
 }
 
+namespace {
+
+// The node count an OctoMap file's text header declares ("size N" before "data"), -1 if none.
+long long DeclaredOctoMapSize(std::istream& in) {
+  long long size = -1;
+  std::string line;
+  for (int k = 0; k < 32 && std::getline(in, line) && line != "data"; ++k) {
+    if (line.rfind("size ", 0) == 0) {
+      try {
+        size = std::stoll(line.substr(5));
+      } catch (const std::exception&) {
+        size = -1;
+      }
+    }
+  }
+  in.clear();
+  in.seekg(0);
+  return size;
+}
+
+// OctoMap's readers take what they can: a truncated file gives a smaller tree and no error. The
+// stream must have delivered every byte asked for, and the tree must hold the declared nodes.
+void CheckOctoMapComplete(const std::string& path, const std::istream& in, long long declared,
+                          size_t read, const char* kind) {
+  if (in.fail() || (declared >= 0 && static_cast<long long>(read) != declared)) {
+    throw InputError(path, 0,
+                     std::string("truncated or corrupt ") + kind + ": the header declares " +
+                         std::to_string(declared) + " nodes, " + std::to_string(read) +
+                         " were read before the data " + (in.fail() ? "ended" : "ran out"));
+  }
+}
+
+}  // namespace
+
 std::unique_ptr<octomap::OcTree> ReadOctoMap(const std::string& path) {
   // A binary input is read from a regular file only: a FIFO nobody writes into would block the
   // open forever, and the reader seeks back to the start.
@@ -390,27 +425,36 @@ std::unique_ptr<octomap::OcTree> ReadOctoMap(const std::string& path) {
                      "are read from regular files");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, 0, "cannot open OctoMap file");
+  // The first line, at most 64 bytes (a file without a line end is not read whole).
   std::string header;
-  std::getline(in, header);
+  for (char c; header.size() < 64 && in.get(c) && c != '\n';) header += c;
   in.clear();
   in.seekg(0);
   if (header.rfind("# Octomap OcTree binary file", 0) == 0) {
+    const long long declared = DeclaredOctoMapSize(in);
     auto tree = std::make_unique<octomap::OcTree>(0.1);
-    if (!tree->readBinary(in)) throw InputError(path, 0, "malformed binary OctoMap (.bt)");
+    if (!tree->readBinary(in))
+      throw InputError(path, 0,
+                       "truncated or corrupt binary OctoMap (.bt): the nodes its header declares "
+                       "could not be read");
+    CheckOctoMapComplete(path, in, declared, tree->size(), "binary OctoMap (.bt)");
     return tree;
   }
   if (header.rfind("# Octomap OcTree file", 0) == 0) {
+    const long long declared = DeclaredOctoMapSize(in);
     std::unique_ptr<octomap::AbstractOcTree> abstract(octomap::AbstractOcTree::read(in));
     if (!abstract) throw InputError(path, 0, "malformed OctoMap (.ot)");
     auto* tree = dynamic_cast<octomap::OcTree*>(abstract.get());
     if (tree == nullptr) {
-      throw InputError(path, 0,
-                       "OctoMap file holds a " + abstract->getTreeType() + ", expected an OcTree");
+      throw InputError(
+          path, 0,
+          "OctoMap file holds a " + EchoValue(abstract->getTreeType()) + ", expected an OcTree");
     }
+    CheckOctoMapComplete(path, in, declared, tree->size(), "OctoMap (.ot)");
     abstract.release();
     return std::unique_ptr<octomap::OcTree>(tree);
   }
-  throw InputError(path, 1, "not an OctoMap file (header '" + header.substr(0, 40) + "')");
+  throw InputError(path, 1, "not an OctoMap file (header '" + EchoValue(header, 40) + "')");
 }
 
 }  // namespace dygslam

@@ -1,5 +1,11 @@
 #include "run/run_settings.h"
 
+#include <filesystem>
+#include <string>
+#include <utility>
+
+#include "core/base/error.h"
+#include "core/dynamic/yolo_detector.h"
 #include "run/mapping_config.h"
 #include "run/system_config.h"
 
@@ -20,6 +26,29 @@ void MakeDeterministic(SystemOptions* options) {
   // One OpenCV thread for the detector in every mode (the pipeline's detector component uses one
   // too): detections are then bit-identical between --direct and the pipeline.
   options->detector.num_threads = 1;
+}
+
+void ResolveDetectorModel(SystemOptions* options) {
+  if (!options->NeedsDetections()) return;
+  if (options->detector.cfg_path.empty()) {
+    const int threads = options->detector.num_threads;
+    options->detector = DetectorOptionsForModel("yolo-fastest-1.1");
+    options->detector.num_threads = threads;
+  }
+  const DetectorOptions& d = options->detector;
+  for (const auto& [file, what] :
+       {std::pair{d.cfg_path, "cfg"}, std::pair{d.weights_path, "weights"},
+        std::pair{d.names_path, "class names"}}) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file, ec)) {
+      throw InputError(file, 0,
+                       std::string("detector model ") + what +
+                           " file not found (Detector.model, default yolo-fastest-1.1; the models "
+                           "folder is DYGSLAM_MODELS_DIR or ../shared/models); the filter '" +
+                           ToString(options->filter_mode) +
+                           "' needs the detector (--filter geometry or none do not)");
+    }
+  }
 }
 
 }  // namespace dygslam

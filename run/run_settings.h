@@ -38,4 +38,11 @@ RunConfiguration LoadRunConfiguration(const RunSettingsRequest& request);
 // options->deterministic and what it implies (one detector thread).
 void MakeDeterministic(SystemOptions* options);
 
+// The internal detector's model files, resolved before a command writes anything: when the
+// filter needs person boxes and no model was given (the default model, otherwise resolved on the
+// first frame), the default model's files are looked up now, so that missing models are an
+// InputError before any output exists, not after empty outputs were written. Same files as the
+// System would resolve (only num_threads of the defaults kept, as System does).
+void ResolveDetectorModel(SystemOptions* options);
+
 }  // namespace dygslam

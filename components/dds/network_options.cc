@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <set>
 
+#include "core/base/echo.h"
 #include "core/base/error.h"
 
 namespace dygslam::dds {
@@ -20,19 +21,19 @@ bool IsIpv4Address(const std::string& text) {
 Endpoint ParseEndpoint(const std::string& text, const std::string& what) {
   const auto colon = text.rfind(':');
   const auto bad = [&](const std::string& why) {
-    return InvalidOptions(what + ": expected ADDRESS:PORT (IPv4, port 1-65535), got '" + text +
-                          "': " + why);
+    return InvalidOptions(what + ": expected ADDRESS:PORT (IPv4, port 1-65535), got '" +
+                          EchoValue(text) + "': " + why);
   };
   if (colon == std::string::npos) throw bad("no ':PORT'");
   Endpoint e;
   e.address = text.substr(0, colon);
-  if (!IsIpv4Address(e.address)) throw bad("'" + e.address + "' is not an IPv4 address");
+  if (!IsIpv4Address(e.address)) throw bad("'" + EchoValue(e.address) + "' is not an IPv4 address");
   const std::string port = text.substr(colon + 1);
   char* end = nullptr;
   errno = 0;
   const long value = port.empty() ? -1 : std::strtol(port.c_str(), &end, 10);
   if (port.empty() || *end != '\0' || errno != 0 || value < 1 || value > 65535) {
-    throw bad("bad port '" + port + "'");
+    throw bad("bad port '" + EchoValue(port) + "'");
   }
   e.port = static_cast<uint16_t>(value);
   return e;

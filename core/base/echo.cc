@@ -1,6 +1,10 @@
 #include "core/base/echo.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <sstream>
 
 namespace dygslam {
 namespace {
@@ -53,6 +57,32 @@ std::string EchoValue(const std::string& text, size_t max_chars) {
   }
   if (i < text.size()) out += "... (" + std::to_string(text.size()) + " bytes)";
   return out;
+}
+
+std::string BoundedMessage(const std::string& message, size_t max_chars) {
+  std::string out;
+  size_t start = 0;
+  while (start <= message.size() && out.size() < max_chars) {
+    const size_t end = std::min(message.find('\n', start), message.size());
+    if (start > 0) out += '\n';
+    out += EchoValue(message.substr(start, end - start), max_chars - out.size());
+    start = end + 1;
+  }
+  if (start <= message.size())
+    out += " ... (message of " + std::to_string(message.size()) + " bytes)";
+  return out;
+}
+
+std::string ExactNumber(double value) {
+  std::string text;
+  for (int precision = 10; precision <= 17; ++precision) {
+    std::ostringstream out;
+    out.precision(precision);
+    out << value;
+    text = out.str();
+    if (!std::isfinite(value) || std::strtod(text.c_str(), nullptr) == value) break;
+  }
+  return text;
 }
 
 }  // namespace dygslam

@@ -8,14 +8,16 @@
 
 namespace dygslam {
 
-// Seconds ReadPipeBounded waits for the first bytes (or the end) of a pipe.
+// Seconds ReadPipeBounded waits for the whole content of a pipe.
 inline constexpr double kPipeWaitSeconds = 30.0;
 
-// Reads the whole content of the pipe (FIFO) `path`: waits at most `wait_s` for a writer to send
-// its first bytes or close it, then reads to the end, at most `max_bytes` (one byte more is
-// returned when there is more, so the caller can tell). Throws InputError naming `path` when
-// nothing came within `wait_s` ("is its writer running?") or on a read error; `what` names the
-// kind of file in the message ("settings file").
+// Reads the whole content of the pipe (FIFO) `path` within `wait_s` in all (a writer that never
+// starts, or stalls mid-file, cannot hang the command), at most `max_bytes` (one byte more is
+// returned when there is more, so the caller can tell). Throws InputError naming `path` when the
+// content did not come within `wait_s` ("is its writer running?" / "is its writer stuck?") or on
+// a read error, StopSignalError (core/base/stop_signal.h) when a SIGINT / SIGTERM / SIGHUP
+// arrives while it waits (under a ScopedStopSignals); `what` names the kind of file in the
+// message ("settings file").
 std::string ReadPipeBounded(const std::string& path, size_t max_bytes, const std::string& what,
                             double wait_s = kPipeWaitSeconds);
 

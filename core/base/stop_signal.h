@@ -22,12 +22,26 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
+#include <string>
 
 namespace dygslam {
 
 // True when /proc/PID/status lists `sig` among the signals process PID catches (SigCgt): its
 // handler is installed, so the signal will not end it by the default action. Linux only.
 bool ProcessCatchesSignal(pid_t pid, int sig);
+
+// A stop signal (SIGINT / SIGTERM / SIGHUP) ended a wait that has nothing to save, e.g. the read
+// of a settings pipe before any work: the command ends at once with exit code 128 + signal().
+class StopSignalError : public std::runtime_error {
+ public:
+  StopSignalError(int sig, const std::string& what) : std::runtime_error(what), signal_(sig) {}
+  int signal() const { return signal_; }
+  int exit_code() const { return 128 + signal_; }
+
+ private:
+  int signal_;
+};
 
 class ScopedStopSignals {
  public:

@@ -15,6 +15,7 @@
 
 #include "core/base/echo.h"
 #include "core/base/input_file.h"
+#include "core/config/settings.h"
 
 namespace dygslam {
 
@@ -442,6 +443,16 @@ bool IsKnown(const std::string& key, const std::vector<std::string>& known) {
   return false;
 }
 
+// `key` lies inside the value of a known key (`Detector.dynamic_classes: {a: 1}` gives
+// `Detector.dynamic_classes.a`): the known key is mistyped, not misspelt; its reader reports the
+// type error, so no unknown-key warning comes before it.
+bool IsBelowKnownKey(const std::string& key, const std::vector<std::string>& known) {
+  for (size_t dot = key.find('.'); dot != std::string::npos; dot = key.find('.', dot + 1)) {
+    if (std::find(known.begin(), known.end(), key.substr(0, dot)) != known.end()) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 std::vector<ConfigReader::UnknownKey> ConfigReader::UnknownKeys(
@@ -458,7 +469,7 @@ std::vector<ConfigReader::UnknownKey> ConfigReader::UnknownKeys(
     }
   }
   for (const std::string& key : Keys()) {
-    if (IsKnown(key, known)) continue;
+    if (IsKnown(key, known) || IsBelowKnownKey(key, known)) continue;
     UnknownKey u;
     u.key = key;
     try {
@@ -536,7 +547,133 @@ std::string ReplaceWord(const std::string& text, const std::string& from, const 
   return out;
 }
 
+bool IsIdentifierStart(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
+bool IsIdentifierChar(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
+
+// The identifiers of a C++ condition that name option fields: not `std::...`, not a method
+// (`.empty()`), not a function call, not true/false.
+std::vector<std::string> ConditionFields(const std::string& condition) {
+  std::vector<std::string> out;
+  for (size_t i = 0; i < condition.size();) {
+    if (!IsIdentifierStart(condition[i]) || (i > 0 && IsIdentifierChar(condition[i - 1]))) {
+      ++i;
+      continue;
+    }
+    size_t end = i;
+    while (end < condition.size() && IsIdentifierChar(condition[end])) ++end;
+    const std::string word = condition.substr(i, end - i);
+    const bool method = i > 0 && condition[i - 1] == '.';
+    const bool scoped = condition.compare(end, 2, "::") == 0 || (i >= 2 && condition[i - 1] == ':');
+    const bool call = end < condition.size() && condition[end] == '(';
+    if (!method && !scoped && !call && word != "true" && word != "false") out.push_back(word);
+    i = end;
+  }
+  return out;
+}
+
 }  // namespace
+
+// A Check() condition as a user reads it (never the C++ text): the field it is about and the
+// other fields it names become the settings keys ("num_features > 0 && num_features <= 100000"
+// for ORBextractor.nFeatures -> "nFeatures > 0 and nFeatures <= 100000"), std::isfinite(x) ->
+// "x finite", !x.empty() -> "x not empty"; alternatives that do not name the key are left out.
+std::string UserCondition(const std::string& condition, const std::string& key,
+                          const std::vector<std::string>& known_keys) {
+  const std::string key_last = LastPart(key);
+  const std::string section = key.size() > key_last.size()
+                                  ? key.substr(0, key.size() - key_last.size() - 1)
+                                  : std::string();
+  // The subject: the field named most often (ties: the one that spells like the key).
+  const std::vector<std::string> fields = ConditionFields(condition);
+  std::string subject;
+  size_t best = 0;
+  for (const std::string& f : fields) {
+    const size_t n = static_cast<size_t>(std::count(fields.begin(), fields.end(), f));
+    if (n > best || (n == best && LooseKey(f) == LooseKey(key_last))) {
+      best = n;
+      subject = f;
+    }
+  }
+  // Alternatives (a || b): keep the ones about the key.
+  std::vector<std::string> alternatives;
+  for (size_t start = 0;;) {
+    const size_t bar = condition.find("||", start);
+    std::string part = condition.substr(start, bar == std::string::npos ? bar : bar - start);
+    while (!part.empty() && part.front() == ' ') part.erase(0, 1);
+    while (!part.empty() && part.back() == ' ') part.pop_back();
+    alternatives.push_back(part);
+    if (bar == std::string::npos) break;
+    start = bar + 2;
+  }
+  std::string text;
+  for (const std::string& a : alternatives) {
+    if (alternatives.size() > 1 && !subject.empty()) {
+      const std::vector<std::string> in = ConditionFields(a);
+      if (std::find(in.begin(), in.end(), subject) == in.end()) continue;
+    }
+    text += (text.empty() ? "" : " || ") + a;
+  }
+  if (text.empty()) text = condition;
+  // Function forms.
+  const auto rewrite = [&](const std::string& open, const std::string& close,
+                           const std::string& before, const std::string& after) {
+    for (size_t at = text.find(open); at != std::string::npos; at = text.find(open, at)) {
+      const size_t end = text.find(close, at + open.size());
+      if (end == std::string::npos) break;
+      const std::string inner = text.substr(at + open.size(), end - at - open.size());
+      const std::string replacement = before + inner + after;
+      text.replace(at, end + close.size() - at, replacement);
+      at += replacement.size();
+    }
+  };
+  rewrite("std::isfinite(", ")", "", " finite");
+  rewrite("std::abs(", ")", "|", "|");
+  rewrite("!(", ")", "not (", ")");
+  // !x.empty() / x.empty() / x.size().
+  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {".empty()", " empty"}, {".size()", " count"}}) {
+    for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at))
+      text.replace(at, from.size(), to);
+  }
+  for (size_t at = text.find('!'); at != std::string::npos; at = text.find('!', at + 1)) {
+    if (at + 1 < text.size() && text[at + 1] != '=') {
+      // "!x empty" -> "x not empty"; "!flag" -> "not flag".
+      size_t end = at + 1;
+      while (end < text.size() && IsIdentifierChar(text[end])) ++end;
+      if (text.compare(end, 6, " empty") == 0) {
+        text.replace(end, 6, " not empty");
+        text.erase(at, 1);
+      } else {
+        text.replace(at, 1, "not ");
+      }
+    }
+  }
+  // Fields -> keys: the subject is the key; another field is the known key of the same section
+  // (or any section) that spells like it.
+  std::vector<std::string> done;
+  for (const std::string& f : ConditionFields(text)) {
+    if (std::find(done.begin(), done.end(), f) != done.end()) continue;
+    done.push_back(f);
+    std::string to;
+    if (f == subject) {
+      to = key_last;
+    } else {
+      for (const std::string& k : known_keys) {
+        if (LooseKey(LastPart(k)) != LooseKey(f)) continue;
+        const bool same_section = k.size() > f.size() && k.compare(0, section.size(), section) == 0;
+        to = same_section ? LastPart(k) : k;
+        if (same_section) break;
+      }
+    }
+    if (!to.empty() && to != f) text = ReplaceWord(text, f, to);
+  }
+  for (const auto& [from, to] :
+       std::vector<std::pair<std::string, std::string>>{{"&&", "and"}, {"||", "or"}}) {
+    for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at))
+      text.replace(at, from.size(), to);
+  }
+  return text;
+}
 
 void ConfigReader::FailInvalidOptions(const InvalidOptions& e) const {
   // DYGSLAM_CHECK_OPTION: "invalid option <name>: requires <condition>". The option's name is the
@@ -577,9 +714,18 @@ void ConfigReader::FailInvalidOptions(const InvalidOptions& e) const {
     }
   }
   const size_t requires_at = message.find("requires ");
-  std::string condition = requires_at == std::string::npos ? message : message.substr(requires_at);
-  condition = ReplaceWord(condition, LastPart(name), LastPart(key));
-  throw InputError(impl_->path, line, "key '" + key + "': invalid value (" + condition + ")");
+  std::string value;
+  try {
+    const Hit h = ConfigLookup::Find(impl_->path, impl_->root, key);
+    if (h.line > 0 && h.value.IsScalar()) value = " " + EchoValue(h.value.Scalar(), 60);
+  } catch (const InputError&) {
+  }
+  if (requires_at == std::string::npos)
+    throw InputError(impl_->path, line, "key '" + key + "': invalid value" + value + " (" + message + ")");
+  const std::string condition =
+      UserCondition(message.substr(requires_at + 9), key, KnownSettingsKeys());
+  throw InputError(impl_->path, line,
+                   "key '" + key + "': invalid value" + value + " (expected " + condition + ")");
 }
 
 template <typename T>

@@ -198,7 +198,11 @@ RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions
     }
   }
   const fs::path gt = dir / "groundtruth.txt";
-  if (fs::is_regular_file(gt, ec)) dataset.groundtruth_path_ = gt.string();
+  if (fs::is_regular_file(gt, ec)) {
+    dataset.groundtruth_path_ = gt.string();
+  } else if (const std::string reason = NotRegularReason(gt); !reason.empty()) {
+    dataset.groundtruth_problem_ = gt.string() + ": " + reason;
+  }
   return dataset;
 }
 
@@ -306,7 +310,9 @@ cv::Mat RgbdDataset::LoadDepth(size_t i, int expected_width, int expected_height
                    expected_height);
 }
 
-std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total) {
+std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total,
+                                          std::string* note) {
+  if (note != nullptr) note->clear();
   const auto colon = text.find(':');
   if (colon == std::string::npos)
     throw InvalidOptions("--frames: expected FIRST:LAST, got '" + Abbreviate(text) + "'");
@@ -319,8 +325,14 @@ std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total)
     return std::stoul(s);
   };
   const size_t first = parse(text.substr(0, colon), 0);
-  const size_t last = std::min(parse(text.substr(colon + 1), total), total);
+  const size_t asked = parse(text.substr(colon + 1), total);
+  const size_t last = std::min(asked, total);
   if (first >= last) throw InvalidOptions("--frames: empty range '" + Abbreviate(text) + "'");
+  if (asked > total && note != nullptr) {
+    *note = "--frames '" + Abbreviate(text) + "': LAST " + std::to_string(asked) +
+            " is beyond the " + std::to_string(total) + " rgb.txt entries; using " +
+            std::to_string(first) + ":" + std::to_string(total);
+  }
   return {first, last};
 }
 

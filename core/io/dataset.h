@@ -37,7 +37,10 @@ struct RgbdFrameEntry {
 
 // "FIRST:LAST" (either side may be empty) -> [first, last) of rgb.txt entries, LAST clamped to
 // `total`. Throws InvalidOptions naming --frames for anything else or an empty range.
-std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total);
+// `note`, when given, is set to a warning when LAST is beyond `total` (the range is then cut to
+// the entries there are), cleared otherwise.
+std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total,
+                                          std::string* note = nullptr);
 
 class RgbdDataset {
  public:
@@ -65,6 +68,9 @@ class RgbdDataset {
 
   bool has_groundtruth() const { return !groundtruth_path_.empty(); }
   const std::string& groundtruth_path() const { return groundtruth_path_; }
+  // Why a groundtruth.txt that is there is not used: "DIR/groundtruth.txt: not a regular file: a
+  // FIFO" (a directory, a device, a link to /dev/zero); empty when it is a regular file or absent.
+  const std::string& groundtruth_problem() const { return groundtruth_problem_; }
 
  private:
   std::string directory_;
@@ -72,6 +78,7 @@ class RgbdDataset {
   std::vector<std::optional<size_t>> rgb_entry_to_frame_;
   size_t num_rgb_entries_ = 0;
   std::string groundtruth_path_;
+  std::string groundtruth_problem_;
 };
 
 }  // namespace dygslam

@@ -17,7 +17,8 @@ double ParseNumber(const std::string& path, int line, const std::string& field, 
 }
 }  // namespace
 
-std::map<Timestamp, std::vector<Detection>> ReadDetections(const std::string& path) {
+std::map<Timestamp, std::vector<Detection>> ReadDetections(const std::string& path, int num_classes,
+                                                           const std::string& classes_source) {
   std::map<Timestamp, std::vector<Detection>> out;
   Timestamp previous;
   bool first = true;
@@ -42,7 +43,14 @@ std::map<Timestamp, std::vector<Detection>> ReadDetections(const std::string& pa
     const double cls = ParseNumber(path, line.line_number, "class_id", t[5]);
     const double score = ParseNumber(path, line.line_number, "score", t[6]);
     if (w < 0 || h < 0) throw InputError(path, line.line_number, "w/h: negative box size");
-    if (cls < 0 || cls != std::floor(cls)) throw InputError(path, line.line_number, "class_id: not a non-negative integer");
+    if (cls < 0 || cls != std::floor(cls) || cls > 999999)
+      throw InputError(path, line.line_number,
+                       "class_id: not an integer in 0..999999: '" + Abbreviate(t[5]) + "'");
+    if (num_classes > 0 && cls >= num_classes)
+      throw InputError(path, line.line_number,
+                       "class_id " + Abbreviate(t[5]) + ": not a class of the detector (0.." +
+                           std::to_string(num_classes - 1) +
+                           (classes_source.empty() ? std::string() : ", " + classes_source) + ")");
     if (score < 0 || score > 1) throw InputError(path, line.line_number, "score: outside [0, 1]");
     d.box = cv::Rect2f(float(x), float(y), float(w), float(h));
     d.class_id = static_cast<int>(cls);

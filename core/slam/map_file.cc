@@ -12,6 +12,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/io/file_util.h"
 
@@ -157,12 +158,8 @@ MapFileSettings GetSettings(Reader& r) {
   return s;
 }
 
-std::string Number(double v) {
-  std::ostringstream out;
-  out.precision(10);
-  out << v;
-  return out.str();
-}
+// Numbers that differ print differently (core/base/echo.h).
+std::string Number(double v) { return ExactNumber(v); }
 
 // A keyframe's stored map point slot: the point when it is alive and in the map, else none.
 int64_t StoredPointId(const Map& map, const std::shared_ptr<MapPoint>& mp) {

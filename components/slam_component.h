@@ -5,7 +5,10 @@
 // stamp (FramePairer: --deterministic waits for every frame's detections; normal mode waits at
 // most detection_wait and counts misses; a frame without its own detections is filtered with the
 // newest earlier boxes carried forward (CameraPose.detections_carried_forward), geometry-only
-// when there are none recent; reported in the stats and in CameraPose.detections_missing). Ends
+// when there are none recent; reported in the stats and in CameraPose.detections_missing). With
+// `Detector.every_n_frames` = n > 1 the detector component runs on the frames whose seq is a
+// multiple of n; slam does not wait for the others and the System carries the boxes to them
+// (SystemOptions::detection_every_n_frames, System::FeedRgbdFrameCarryingBoxes). Ends
 // when END_OF_STREAM's frame count has been processed (or 3 s after END_OF_STREAM without new
 // frames, or on stop; or when the frame source announces FAILED): System::Shutdown(), final
 // trajectories published, COMPONENT_DONE. Frames and detections are taken only from writers that
@@ -57,8 +60,10 @@ class SlamCore {
  public:
   explicit SlamCore(const SlamComponentOptions& options);
   // detections == nullptr: no external detections (the System runs its own if it needs them and
-  // external_detections is false; otherwise the frame goes on without boxes).
-  SlamOutput Process(const RgbdFrameData& frame, const std::vector<Detection>* detections);
+  // external_detections is false; otherwise the frame goes on without boxes). detector_skipped:
+  // the detector component does not run on this frame (cadence): the System carries the boxes.
+  SlamOutput Process(const RgbdFrameData& frame, const std::vector<Detection>* detections,
+                     bool detector_skipped = false);
   // Shutdown + final keyframe corrections.
   std::vector<KeyframeData> Finish();
   std::vector<StampedPose> Trajectory() const { return system_->Trajectory(); }
@@ -86,6 +91,7 @@ struct SlamStats {
   size_t keyframe_pose_updates = 0;
   size_t keyframes_removed = 0;
   size_t bad_samples = 0;
+  size_t frames_carrying_boxes = 0;  // detector skipped by the cadence: the System's carried boxes
   bool detector_lost = false;
   // Where slam waited between its first and its last frame (seconds): no frame had arrived
   // (upstream: player / transport), or the oldest frame waited for its detections (detector).

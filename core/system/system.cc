@@ -225,8 +225,9 @@ class SystemImpl {
     for (const KeyframeData& d : updates) cb(d);
   }
 
+  // carry_boxes: the frame's detector was skipped outside (FeedRgbdFrameCarryingBoxes).
   FrameResult Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp, const cv::Mat& mask,
-                   const std::vector<Detection>* detections);
+                   const std::vector<Detection>* detections, bool carry_boxes = false);
 
   std::vector<StampedPose> Trajectory() const { return tracker_.Trajectory(); }
   LocalMappingStats LocalMappingStatistics() const { return local_mapper_.stats(); }
@@ -371,7 +372,8 @@ void SystemImpl::TopUpStaticFeatures(const cv::Mat& gray, const cv::Mat& mask,
 }
 
 FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp,
-                             const cv::Mat& mask, const std::vector<Detection>* detections) {
+                             const cv::Mat& mask, const std::vector<Detection>* detections,
+                             bool carry_boxes) {
   const auto t_start = std::chrono::steady_clock::now();
   const PinholeCamera& cam = options_.camera;
   if (rgb.empty() || (rgb.type() != CV_8UC3 && rgb.type() != CV_8UC1))
@@ -418,8 +420,11 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
     detection_job = prefetched_.front();
     prefetched_.pop_front();
   }
-  const bool own_detector = need_detections && detections == nullptr;
+  const bool own_detector = need_detections && detections == nullptr && !carry_boxes;
   const int every_n = options_.detection_every_n_frames;
+  // Boxes are carried between detector frames (internal detector, or a detector outside that
+  // skips frames): track them and their motion on every frame.
+  const bool propagate = need_detections && every_n > 1;
   bool detect_now = true;
   if (own_detector) {
     detect_now = own_detector_frames_ % every_n == 0;
@@ -455,10 +460,12 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
     result.times.detection_ms = *detection_job->ticket.detect_ms;
     detections = &own_detections;
     if (every_n > 1) boxes_.SetDetections(own_detections);
-  } else if (own_detector) {
+  } else if (own_detector || (need_detections && carry_boxes)) {
     own_detections = boxes_.Predict();
     detections = &own_detections;
     result.detections_carried = true;
+  } else if (propagate && detections != nullptr) {
+    boxes_.SetDetections(*detections);  // given from outside: the boxes the next frames carry
   }
   result.detections_used = need_detections && detections != nullptr;
 
@@ -487,7 +494,7 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   input.depths = &keypoint_depths;
   input.camera_matrix = &camera_matrix;
   const FilterResult filtered = filter_.Process(input);
-  if (own_detector && every_n > 1) {
+  if (propagate) {
     boxes_.Observe(previous_keypoints_, features.keypoints, filtered);
     previous_keypoints_ = features.keypoints;
   }
@@ -582,6 +589,10 @@ System::~System() {
 FrameResult System::FeedRgbdFrame(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp,
                                   const cv::Mat& mask, const std::vector<Detection>* detections) {
   return impl_->Feed(rgb, depth, stamp, mask, detections);
+}
+FrameResult System::FeedRgbdFrameCarryingBoxes(const cv::Mat& rgb, const cv::Mat& depth,
+                                               Timestamp stamp, const cv::Mat& mask) {
+  return impl_->Feed(rgb, depth, stamp, mask, nullptr, /*carry_boxes=*/true);
 }
 std::vector<StampedPose> System::Trajectory() const { return impl_->Trajectory(); }
 LocalMappingStats System::LocalMappingStatistics() const { return impl_->LocalMappingStatistics(); }

@@ -142,6 +142,13 @@ class System {
   FrameResult FeedRgbdFrame(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp,
                             const cv::Mat& mask = cv::Mat(),
                             const std::vector<Detection>* detections = nullptr);
+  // A frame the detector skipped (a detector outside the System running on every n-th frame,
+  // SystemOptions::detection_every_n_frames = n > 1, e.g. the DDS detector component): filtered
+  // with the boxes of the last detections given to FeedRgbdFrame, carried and shifted exactly as
+  // for the internal detector's skipped frames (FrameResult::detections_carried). With n = 1 no
+  // boxes are carried: the frame goes on without boxes.
+  FrameResult FeedRgbdFrameCarryingBoxes(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp,
+                                         const cv::Mat& mask = cv::Mat());
 
   // Pipelining: starts the internal detector on a frame that will be fed next (dataset runs know
   // it in advance), so detection of frame t+1 overlaps the tracking of frame t and does not add to

@@ -17,7 +17,10 @@
 namespace dygslam {
 
 DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
-                          const DetectorOptions& options, const StopFlagPtr& stop) {
+                          const DetectorOptions& options, const StopFlagPtr& stop,
+                          int every_n_frames) {
+  DYGSLAM_CHECK_OPTION(every_n_frames >= 1 && every_n_frames <= 1000,
+                       "Detector.every_n_frames (1..1000)");
   DetectorCore core(options);
   DetectorStats stats;
   BlockingQueue<msg::RgbdFrame> queue;
@@ -65,6 +68,10 @@ DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
     }
     ++received;
     idle_since = std::chrono::steady_clock::now();
+    if (sample->header().seq() % static_cast<uint64_t>(every_n_frames) != 0) {
+      ++stats.frames_skipped;  // slam carries the boxes of the last detected frame to it
+      continue;
+    }
     try {
       const RgbdFrameData frame = RgbdFrameFromMsg(*sample);
       msg::Detections out = core.Process(frame);
@@ -81,6 +88,10 @@ DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
   writer.WaitForAcknowledgments(std::chrono::milliseconds(2000));
   LOG_INFO << "detector: " << stats.frames_processed << " frames, mean inference "
            << stats.mean_inference_ms << " ms";
+  if (every_n_frames > 1) {
+    LOG_INFO << "detector: " << stats.frames_skipped << " frames skipped (every " << every_n_frames
+             << " frames detected)";
+  }
   return stats;
 }
 

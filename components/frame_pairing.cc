@@ -10,6 +10,13 @@ void PairingOptions::Check() const {
   DYGSLAM_CHECK_OPTION(lost_after_misses >= 1, "slam.detector_lost_after_misses");
   DYGSLAM_CHECK_OPTION(carry_forward_max_frames >= 0, "slam.carry_forward_max_frames");
   DYGSLAM_CHECK_OPTION(carry_forward_max_age.count() >= 0, "slam.carry_forward_max_age_ms");
+  DYGSLAM_CHECK_OPTION(detection_every_n_frames >= 1 && detection_every_n_frames <= 1000,
+                       "Detector.every_n_frames (1..1000)");
+}
+
+bool FramePairer::ExpectsDetections(const RgbdFrameData& frame) const {
+  return options_.needs_detections &&
+         frame.seq % static_cast<uint64_t>(options_.detection_every_n_frames) == 0;
 }
 
 FramePairer::FramePairer(const PairingOptions& options) : options_(options) { options_.Check(); }
@@ -49,7 +56,7 @@ void FramePairer::SetDetectorAlive(bool alive) {
 
 std::optional<FramePairer::Clock::time_point> FramePairer::NextDeadline() const {
   if (frames_.empty()) return std::nullopt;
-  if (!options_.needs_detections || detector_lost_) return frames_.front().arrival;
+  if (!ExpectsDetections(frames_.front().frame) || detector_lost_) return frames_.front().arrival;
   if (options_.deterministic) return std::nullopt;
   return frames_.front().arrival + options_.max_wait;
 }
@@ -62,6 +69,9 @@ std::optional<PairedFrame> FramePairer::Next(Clock::time_point now) {
   auto it = detections_.find(stamp);
   if (!options_.needs_detections) {
     // Release as is.
+  } else if (!ExpectsDetections(front.frame)) {
+    out.detector_skipped = true;  // the System carries the last detector frame's boxes to it
+    ++stats_.skipped_by_cadence;
   } else if (it != detections_.end()) {
     out.detections = std::move(it->second);
     ++stats_.with_detections;

@@ -16,6 +16,11 @@
 //   that frame (it is gone) but become the boxes carried forward to the next frames (counted as
 //   late). Without any recent detections the frame goes on geometry-only.
 // - detections not needed (filter mode none / geometry, or internal detector): no waiting.
+// - detector cadence (`Detector.every_n_frames` = n > 1, issue 19): the detector component runs
+//   on the frames whose seq is a multiple of n only; the others are released at once, without
+//   waiting and without counting a miss (PairedFrame::detector_skipped): the System carries the
+//   boxes of the last detector frame to them. Deterministic mode stays deterministic: which
+//   frames get no detections follows from seq alone.
 #pragma once
 
 #include <chrono>
@@ -37,6 +42,8 @@ struct PairingOptions {
   int lost_after_misses = 5;
   int carry_forward_max_frames = 30;                      // 0: never carry boxes forward
   std::chrono::milliseconds carry_forward_max_age{1000};  // stamp difference, frame to boxes
+  // The detector runs on the frames with seq % detection_every_n_frames == 0 only.
+  int detection_every_n_frames = 1;
   void Check() const;
 };
 
@@ -48,6 +55,8 @@ struct PairedFrame {
   // detections_missing and `detections` holds an earlier frame's boxes (carried forward).
   bool detections_carried_forward = false;
   Timestamp carried_from;  // stamp of the frame those boxes were detected on
+  // The detector does not run on this frame (cadence): no detections, none missing.
+  bool detector_skipped = false;
 };
 
 struct PairingStats {
@@ -58,6 +67,7 @@ struct PairingStats {
   size_t carried_forward = 0;     // frames that got an earlier frame's detections
   size_t late_used = 0;           // late detections that became the boxes carried forward
   size_t lost_episodes = 0;       // times the detector was declared lost
+  size_t skipped_by_cadence = 0;  // frames the detector does not run on (every_n_frames)
 };
 
 class FramePairer {
@@ -85,6 +95,8 @@ class FramePairer {
     RgbdFrameData frame;
     Clock::time_point arrival;
   };
+  // Detections are expected for this frame (filter needs them and the cadence runs the detector).
+  bool ExpectsDetections(const RgbdFrameData& frame) const;
   PairingOptions options_;
   std::deque<Pending> frames_;
   std::map<int64_t, std::vector<Detection>> detections_;  // by stamp (ns)

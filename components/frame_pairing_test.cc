@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
+#include "core/base/error.h"
+
 namespace dygslam {
 namespace {
 
@@ -203,6 +207,78 @@ TEST(FramePairing, DetectorFinishingBeforeItsStatusIsNotALoss) {
   EXPECT_TRUE(g->detections_carried_forward);
   ASSERT_TRUE(p.Next(t0));
   EXPECT_EQ(p.stats().lost_episodes, 1u);
+}
+
+// Detector cadence (every 3rd frame detected): the frames in between are released at once, even
+// in deterministic mode, marked detector_skipped and not counted as missing; the detector frames
+// still wait for their own detections; an invalid cadence is rejected naming the key.
+TEST(FramePairing, CadenceReleasesSkippedFramesWithoutWaiting) {
+  PairingOptions o;
+  o.deterministic = true;
+  o.detection_every_n_frames = 3;
+  FramePairer p(o);
+  const auto t0 = Clock::now();
+  for (int64_t i = 0; i < 7; ++i) p.AddFrame(Frame(i), t0);
+  EXPECT_FALSE(p.Next(t0 + 1h));  // frame 0 is a detector frame: it waits
+  p.AddDetections(Frame(0).stamp, OneBox());
+  auto f0 = p.Next(t0);
+  ASSERT_TRUE(f0);
+  EXPECT_FALSE(f0->detector_skipped);
+  ASSERT_TRUE(f0->detections);
+  for (uint64_t seq : {1u, 2u}) {
+    ASSERT_TRUE(p.NextDeadline());
+    EXPECT_EQ(*p.NextDeadline(), t0);  // ready now
+    auto f = p.Next(t0);
+    ASSERT_TRUE(f);
+    EXPECT_EQ(f->frame.seq, seq);
+    EXPECT_TRUE(f->detector_skipped);
+    EXPECT_FALSE(f->detections);
+    EXPECT_FALSE(f->detections_missing);
+    EXPECT_FALSE(f->detections_carried_forward);
+  }
+  EXPECT_FALSE(p.Next(t0 + 1h));  // frame 3 waits for its detections
+  EXPECT_FALSE(p.NextDeadline());
+  p.AddDetections(Frame(3).stamp, {});
+  auto f3 = p.Next(t0);
+  ASSERT_TRUE(f3);
+  EXPECT_EQ(f3->frame.seq, 3u);
+  EXPECT_FALSE(f3->detector_skipped);
+  EXPECT_EQ(p.stats().skipped_by_cadence, 2u);
+  EXPECT_EQ(p.stats().with_detections, 2u);
+  EXPECT_EQ(p.stats().missing_detections, 0u);
+  EXPECT_FALSE(p.detector_lost());
+
+  PairingOptions bad;
+  bad.detection_every_n_frames = 0;
+  try {
+    FramePairer rejected(bad);
+    ADD_FAILURE() << "every_n_frames 0 accepted";
+  } catch (const InvalidOptions& e) {
+    EXPECT_NE(std::string(e.what()).find("Detector.every_n_frames"), std::string::npos) << e.what();
+  }
+}
+
+// Normal mode with the cadence: a skipped frame never counts toward the detector being lost.
+TEST(FramePairing, CadenceSkippedFramesAreNotMisses) {
+  PairingOptions o;
+  o.max_wait = 10ms;
+  o.lost_after_misses = 2;
+  o.detection_every_n_frames = 2;
+  FramePairer p(o);
+  const auto t0 = Clock::now();
+  for (int64_t i = 0; i < 8; ++i) {
+    p.AddFrame(Frame(i), t0);
+    if (i % 2 == 0) p.AddDetections(Frame(i).stamp, OneBox());
+  }
+  for (int64_t i = 0; i < 8; ++i) {
+    auto f = p.Next(t0);
+    ASSERT_TRUE(f) << i;
+    EXPECT_EQ(f->detector_skipped, i % 2 == 1) << i;
+    EXPECT_EQ(f->detections.has_value(), i % 2 == 0) << i;
+  }
+  EXPECT_EQ(p.stats().skipped_by_cadence, 4u);
+  EXPECT_EQ(p.stats().missing_detections, 0u);
+  EXPECT_EQ(p.stats().lost_episodes, 0u);
 }
 
 }  // namespace

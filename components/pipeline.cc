@@ -188,7 +188,8 @@ size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
       return 0;
     }
     case ComponentKind::kDetector:
-      RunDetector(participant, DetectorOptionsFor(options), stop);
+      RunDetector(participant, DetectorOptionsFor(options), stop,
+                  options.system.detection_every_n_frames);
       return 0;
     case ComponentKind::kSlam: {
       SlamComponentOptions s;

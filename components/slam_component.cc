@@ -43,6 +43,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   pairing_options.max_wait = options.detection_wait;
   pairing_options.lost_after_misses = options.detector_lost_after_misses;
   pairing_options.carry_forward_max_frames = options.carry_forward_max_frames;
+  pairing_options.detection_every_n_frames = options.system.detection_every_n_frames;
 
   std::mutex mutex;
   std::condition_variable cv;
@@ -244,8 +245,9 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
       waiting = false;
       waited_with_frames = false;
     }
-    const SlamOutput out = core.Process(paired->frame, dets);
+    const SlamOutput out = core.Process(paired->frame, dets, paired->detector_skipped);
     ++stats.frames_processed;
+    if (out.result.detections_carried) ++stats.frames_carrying_boxes;
     if (out.result.world_from_cam) ++stats.frames_tracked;
     if (paired->detections_carried_forward) {
       if (!carrying) {
@@ -299,10 +301,11 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
            << " paired, " << stats.pairing.missing_detections << " missing (frames without their "
            << "own boxes: " << stats.pairing.carried_forward << " with boxes carried forward, "
            << stats.pairing.missing_detections - stats.pairing.carried_forward
-           << " geometry-only), " << stats.pairing.dropped_detections << " arrived late ("
-           << stats.pairing.late_used << " carried forward)"
-           << (stats.detector_lost ? " (detector lost)" : "") << "; busy " << stats.busy_s
-           << " s, waited " << stats.wait_for_frames_s << " s for frames, "
+           << " geometry-only), " << stats.frames_carrying_boxes
+           << " skipped by the detector cadence (boxes carried), "
+           << stats.pairing.dropped_detections << " arrived late (" << stats.pairing.late_used
+           << " carried forward)" << (stats.detector_lost ? " (detector lost)" : "") << "; busy "
+           << stats.busy_s << " s, waited " << stats.wait_for_frames_s << " s for frames, "
            << stats.wait_for_detections_s << " s for detections";
   if (stats.foreign_frames + stats.foreign_detections > 0) {
     LOG_WARNING << "slam: "

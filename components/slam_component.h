@@ -10,7 +10,10 @@
 // after END_OF_STREAM without new frames, or on stop; or when the frame source announces FAILED):
 // System::Shutdown(), final trajectories published, COMPONENT_DONE. Frames and detections are taken
 // only from writers that this run's components announced (STARTED; components/protocol.h); others
-// are ignored, counted and reported.
+// are ignored, counted and reported. With `Detector.every_n_frames` = n > 1 the detector component
+// runs on the frames whose seq is a multiple of n; slam does not wait for the others and the
+// System carries the boxes to them (SystemOptions::detection_every_n_frames,
+// System::FeedRgbdFrameCarryingBoxes).
 #pragma once
 
 #include <cstddef>
@@ -34,6 +37,7 @@ struct SlamStats {
   size_t keyframe_pose_updates = 0;
   size_t keyframes_removed = 0;
   size_t bad_samples = 0;
+  size_t frames_carrying_boxes = 0;  // detector skipped by the cadence: the System's carried boxes
   bool detector_lost = false;
   // Where slam waited between its first and its last frame (seconds): no frame had arrived
   // (upstream: player / transport), or the oldest frame waited for its detections (detector).

@@ -34,9 +34,15 @@ std::vector<KeyframeData> SlamCore::TakeKeyframes() {
   return out;
 }
 
-SlamOutput SlamCore::Process(const RgbdFrameData& frame, const std::vector<Detection>* detections) {
+SlamOutput SlamCore::Process(const RgbdFrameData& frame, const std::vector<Detection>* detections,
+                             bool detector_skipped) {
   SlamOutput out;
   RgbdFrame input = frame;  // the core's frame (images shared); raw depth goes in with its scale
+  if (detector_skipped && options_.NeedsDetections()) {
+    out.result = system_->FeedRgbdFrameCarryingBoxes(input);
+    out.keyframes = TakeKeyframes();
+    return out;
+  }
   if (detections != nullptr) {
     input.detections = *detections;
   } else if (options_.NeedsDetections()) {

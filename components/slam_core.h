@@ -43,8 +43,10 @@ class SlamCore {
  public:
   explicit SlamCore(const SlamComponentOptions& options);
   // detections == nullptr: no external detections (the System runs its own if it needs them and
-  // external_detections is false; otherwise the frame goes on without boxes).
-  SlamOutput Process(const RgbdFrameData& frame, const std::vector<Detection>* detections);
+  // external_detections is false; otherwise the frame goes on without boxes). detector_skipped:
+  // the detector component does not run on this frame (cadence): the System carries the boxes.
+  SlamOutput Process(const RgbdFrameData& frame, const std::vector<Detection>* detections,
+                     bool detector_skipped = false);
   // Shutdown + final keyframe corrections.
   std::vector<KeyframeData> Finish();
   std::vector<StampedPose> Trajectory() const { return system_->Trajectory(); }

@@ -45,7 +45,7 @@ void ResolveDetectorModel(SystemOptions* options) {
                        std::string("detector model ") + what +
                            " file not found (Detector.model, default yolo-fastest-1.1; the models "
                            "folder is DYGSLAM_MODELS_DIR or ../shared/models); the filter '" +
-                           ToString(options->filter_mode) +
+                           ToString(options->filter.mode) +
                            "' needs the detector (--filter geometry or none do not)");
     }
   }

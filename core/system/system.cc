@@ -183,7 +183,8 @@ class SystemImpl {
     for (const KeyframeData& d : updates) cb(d);
   }
 
-  FrameResult Feed(const RgbdFrame& frame);
+  // carry_boxes: the frame's detector was skipped outside (FeedRgbdFrameCarryingBoxes).
+  FrameResult Feed(const RgbdFrame& frame, bool carry_boxes = false);
   double depth_map_factor() const { return options_.sensor.depth_map_factor; }
 
   std::vector<StampedPose> Trajectory() const { return tracker_.Trajectory(); }
@@ -251,7 +252,7 @@ class SystemImpl {
   void CheckInput(const RgbdFrame& frame);
   std::shared_ptr<DetectionJob> StartDetection(const RgbdFrame& frame, bool own_detector,
                                                bool* detect_now);
-  PreparedFrame Prepare(const RgbdFrame& frame, FrameResult* result);
+  PreparedFrame Prepare(const RgbdFrame& frame, bool carry_boxes, FrameResult* result);
   FilteredFrame Filter(const PreparedFrame& prepared, FrameResult* result);
   void TopUp(const PreparedFrame& prepared, OrbFeatures* kept);
   std::vector<cv::Point2f> UndistortedPoints(const std::vector<cv::KeyPoint>& keypoints) const;
@@ -370,32 +371,37 @@ std::shared_ptr<SystemImpl::DetectionJob> SystemImpl::StartDetection(const RgbdF
 
 // Checks, grey image, depth in metres, ORB extraction (while the own detector runs on another
 // thread), and the boxes of the frame.
-SystemImpl::PreparedFrame SystemImpl::Prepare(const RgbdFrame& frame, FrameResult* result) {
+SystemImpl::PreparedFrame SystemImpl::Prepare(const RgbdFrame& frame, bool carry_boxes,
+                                              FrameResult* result) {
   CheckInput(frame);
   PreparedFrame prepared;
   prepared.input = &frame;
   prepared.gray = GrayImage(frame.rgb);
   prepared.depth_m = frame.DepthInMetres();
   const bool need_detections = options_.NeedsDetections();
-  const bool own_detector = need_detections && !frame.detections;
+  const bool own_detector = need_detections && !frame.detections && !carry_boxes;
   bool detect_now = true;
   const std::shared_ptr<DetectionJob> job = StartDetection(frame, own_detector, &detect_now);
   const auto t_orb = std::chrono::steady_clock::now();
   prepared.features = extractor_.Extract(prepared.gray, frame.mask, -1, &prepared.extraction_cache);
   result->times.orb_extraction_ms = MsSince(t_orb);
   result->num_features = static_cast<int>(prepared.features.keypoints.size());
-  prepared.propagate_boxes = own_detector && options_.detection_every_n_frames > 1;
+  // Boxes are carried between detector frames (the internal detector, or one outside that skips
+  // frames): their motion is tracked on every frame.
+  prepared.propagate_boxes = need_detections && options_.detection_every_n_frames > 1;
   if (own_detector && detect_now) {
     const auto t_wait = std::chrono::steady_clock::now();
     prepared.detections = job->ticket.result.get();
     result->times.detection_wait_ms = MsSince(t_wait);
     result->times.detection_ms = *job->ticket.detect_ms;
     if (prepared.propagate_boxes) boxes_.SetDetections(*prepared.detections);
-  } else if (own_detector) {
+  } else if (own_detector || (need_detections && carry_boxes)) {
     prepared.detections = boxes_.Predict();
     result->detections_carried = true;
   } else {
     prepared.detections = frame.detections;
+    // Given from outside: the boxes the next skipped frames carry.
+    if (prepared.propagate_boxes && frame.detections) boxes_.SetDetections(*frame.detections);
   }
   result->detections_used = need_detections && prepared.detections.has_value();
   return prepared;
@@ -525,11 +531,11 @@ void SystemImpl::EmitKeyframe(const std::shared_ptr<KeyFrame>& keyframe,
 }
 
 // stella_vslam's create-frame / feed-frame: prepare, then filter -> track -> emit.
-FrameResult SystemImpl::Feed(const RgbdFrame& frame) {
+FrameResult SystemImpl::Feed(const RgbdFrame& frame, bool carry_boxes) {
   const auto t_start = std::chrono::steady_clock::now();
   FrameResult result;
   result.stamp = frame.stamp;
-  const PreparedFrame prepared = Prepare(frame, &result);
+  const PreparedFrame prepared = Prepare(frame, carry_boxes, &result);
   FilteredFrame filtered = Filter(prepared, &result);
   const TrackResult tracked = Track(prepared, &filtered, &result);
   if (tracked.new_keyframe) EmitKeyframe(tracked.new_keyframe, prepared, filtered, &result);
@@ -569,6 +575,9 @@ FrameResult System::FeedRgbdFrame(const cv::Mat& rgb, const cv::Mat& depth, Time
   frame.mask = mask;
   if (detections) frame.detections = *detections;
   return impl_->Feed(frame);
+}
+FrameResult System::FeedRgbdFrameCarryingBoxes(const RgbdFrame& frame) {
+  return impl_->Feed(frame, /*carry_boxes=*/true);
 }
 std::vector<StampedPose> System::Trajectory() const { return impl_->Trajectory(); }
 LocalMappingStats System::LocalMappingStatistics() const { return impl_->LocalMappingStatistics(); }

@@ -76,16 +76,24 @@ TEST(DetectorCadence, CarriedBoxesRemoveTheFeaturesTheDetectorsBoxesRemove) {
   EXPECT_LT(removed_carried, 1.25 * removed_every);
 }
 
+// config/bonn.yaml without its line setting the cadence (ORB-SLAM2's dotted form), so that a
+// test can append its own.
+std::string BonnYamlWithoutCadence() {
+  std::ifstream in(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
+  std::string text, line;
+  while (std::getline(in, line)) {
+    if (line.rfind("Detector.every_n_frames:", 0) != 0) text += line + "\n";
+  }
+  return text;
+}
+
 // A cadence outside 1..1000 is a clear error naming the key and the file.
 TEST(DetectorCadence, BadEveryNFramesNamesTheKey) {
   const std::string dir = testing::MakeTempDir("detector_cadence");
   for (const std::string value : {"0", "-3", "1001"}) {
     const std::string path = dir + "/bonn_" + value + ".yaml";
-    {
-      std::ifstream in(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
-      std::ofstream out(path);
-      out << in.rdbuf() << "\nDetector:\n  every_n_frames: " << value << "\n";
-    }
+    std::ofstream(path) << BonnYamlWithoutCadence() << "\nDetector:\n  every_n_frames: " << value
+                        << "\n";
     try {
       SystemOptionsFromSettings(LoadSettings(path));
       ADD_FAILURE() << "every_n_frames " << value << " accepted";
@@ -96,11 +104,8 @@ TEST(DetectorCadence, BadEveryNFramesNamesTheKey) {
     }
   }
   const std::string good = dir + "/bonn_3.yaml";
-  {
-    std::ifstream in(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
-    std::ofstream out(good);
-    out << in.rdbuf() << "\nDetector:\n  every_n_frames: 3\n  shift_carried_boxes: false\n";
-  }
+  std::ofstream(good) << BonnYamlWithoutCadence()
+                      << "\nDetector:\n  every_n_frames: 3\n  shift_carried_boxes: false\n";
   const SystemOptions options = SystemOptionsFromSettings(LoadSettings(good));
   EXPECT_EQ(options.detection_every_n_frames, 3);
   EXPECT_FALSE(options.box_propagation.shift_boxes);

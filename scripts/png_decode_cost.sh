@@ -1,0 +1,63 @@
+#!/bin/bash
+# CPU cost of decoding a dataset's PNG images (issue 19): the part of a dataset run's CPU per frame
+# that the player / dataset loop spends on decoding rgb + depth PNGs, which a live camera does
+# not pay. Compiles a small OpenCV program (cv::imread of every rgb and depth file listed in
+# rgb.txt / depth.txt, as the dataset reader loads them) and prints CPU (user + sys of the
+# process) per frame over RUNS runs:
+#   scripts/png_decode_cost.sh DATASET_DIR [RUNS]
+#   scripts/png_decode_cost.sh ../shared/data/bonn_crowd_part 3
+set -euo pipefail
+dataset=$1 runs=${2:-3}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cat > "$work/decode.cc" <<'CC'
+#include <sys/resource.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+static std::vector<std::string> Files(const std::string& dir, const std::string& list) {
+  std::ifstream in(dir + "/" + list);
+  std::vector<std::string> files;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    std::string stamp, file;
+    if (fields >> stamp >> file) files.push_back(dir + "/" + file);
+  }
+  return files;
+}
+
+static double CpuSeconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_utime.tv_sec + u.ru_stime.tv_sec + 1e-6 * (u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+int main(int argc, char** argv) {
+  cv::setNumThreads(1);
+  const std::string dir = argv[1];
+  const auto rgb = Files(dir, "rgb.txt"), depth = Files(dir, "depth.txt");
+  const double t0 = CpuSeconds();
+  size_t bytes = 0;
+  for (const auto& f : rgb) bytes += cv::imread(f, cv::IMREAD_COLOR).total();
+  const double t1 = CpuSeconds();
+  for (const auto& f : depth) bytes += cv::imread(f, cv::IMREAD_ANYDEPTH).total();
+  const double t2 = CpuSeconds();
+  std::printf("%zu rgb + %zu depth files: rgb %.2f s, depth %.2f s CPU; %.2f ms per frame (%zu px)\n",
+              rgb.size(), depth.size(), t1 - t0, t2 - t1, 1000 * (t2 - t0) / rgb.size(), bytes);
+  return 0;
+}
+CC
+g++ -O2 -std=c++17 "$work/decode.cc" -o "$work/decode" $(pkg-config --cflags --libs opencv4)
+echo "png_decode_cost: $runs runs on $dataset, $(nproc) cores, load at start: $(cut -d' ' -f1-3 /proc/loadavg)"
+for r in $(seq 1 "$runs"); do
+  echo "  run $r: $("$work/decode" "$dataset")"
+done

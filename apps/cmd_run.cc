@@ -234,17 +234,6 @@ void WarnUnmatchedDetections(const std::string& path, const RunSetup& s,
 }
 
 #ifdef DYGSLAM_HAVE_COMPONENTS
-// Issue 20 item 3: the DDS detector component runs on every frame; a cadence set in the settings
-// must not be dropped silently. Delete this function (and its call) once the DDS pipeline honours
-// Detector.every_n_frames (branch cpu, issue 19).
-void WarnDdsDetectorCadence(const SystemOptions& options, const std::string& settings_path) {
-  if (options.detection_every_n_frames <= 1 || !options.NeedsDetections()) return;
-  std::fprintf(stderr,
-               "dygslam run: warning: %s: Detector.every_n_frames %d is not applied in the DDS "
-               "modes: the DDS detector detects every frame (--direct applies it)\n",
-               EchoValue(settings_path).c_str(), options.detection_every_n_frames);
-}
-
 // A partition name unique to this run: concurrent runs on one DDS domain never mix.
 std::string RunPartition() {
   char host[64] = {0};
@@ -491,7 +480,6 @@ int RunRun(const std::vector<std::string>& args) {
   if (!p.Flag("direct") && !s.use_detection_file) {
     mode = p.Flag("processes") ? "DDS pipeline, one process per component"
                                : "DDS pipeline, one process";
-    WarnDdsDetectorCadence(s.system, s.config);
     outcome = RunThroughPipeline(s, p.Flag("processes"), domain_id, p.Get("partition"),
                                  p.Get("security"));
   }

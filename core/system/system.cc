@@ -486,6 +486,7 @@ FrameResult SystemImpl::Feed(const cv::Mat& rgb, const cv::Mat& depth, Timestamp
   const cv::Matx33d camera_matrix(options_.camera.K());
   input.depths = &keypoint_depths;
   input.camera_matrix = &camera_matrix;
+  input.depth_image = &depth_m;  // box_depth_band: each box's object depth
   const FilterResult filtered = filter_.Process(input);
   if (own_detector && every_n > 1) {
     boxes_.Observe(previous_keypoints_, features.keypoints, filtered);

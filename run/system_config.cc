@@ -184,6 +184,8 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                       {"depth_residual_weight", &f.depth_residual_weight},
                       {"anchor_max_age", &f.anchor_max_age},
                       {"outside_p_init", &f.outside_p_init},
+                      {"world_anchors", &f.world_anchors},
+                      {"box_depth_band", &f.box_depth_band},
                       {"expansion_depth_gap", &f.expansion_depth_gap}});
   filter.CheckOptions(f);
 

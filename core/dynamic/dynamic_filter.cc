@@ -7,6 +7,8 @@
 #include <limits>
 #include <opencv2/calib3d.hpp>
 
+#include "core/dynamic/dynamic_mask.h"
+
 namespace dygslam {
 
 namespace {
@@ -80,6 +82,8 @@ void DynamicFilterOptions::Check() const {
   DYGSLAM_CHECK_OPTION(pnp_min_inlier_fraction >= 0 && pnp_min_inlier_fraction <= 1,
                        "DynamicFilter.pnp_min_inlier_fraction");
   DYGSLAM_CHECK_OPTION(outside_p_init >= 0 && outside_p_init <= 1, "DynamicFilter.outside_p_init");
+  DYGSLAM_CHECK_OPTION(std::isfinite(box_depth_band) && box_depth_band <= 10,
+                       "DynamicFilter.box_depth_band");
 }
 
 std::vector<uint8_t> FilterResult::DynamicFlags() const {
@@ -151,12 +155,15 @@ void DynamicFilter::Reset() {
   prev_descriptors_.release();
   prev_states_.clear();
   prev_depths_.clear();
+  prev_cam_from_world_rotation_ = cv::Matx33d::eye();
+  prev_cam_from_world_translation_ = cv::Vec3d(0, 0, 0);
 }
 
 bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv::Point2f>& geom,
                                   const std::vector<int>& matches, FilterResult* result,
-                                  std::vector<double>* distances,
-                                  std::vector<State>* anchors) const {
+                                  std::vector<double>* distances, std::vector<State>* anchors,
+                                  cv::Matx33d* cam_from_world_rotation,
+                                  cv::Vec3d* cam_from_world_translation) const {
   const DynamicFilterOptions& o = options_;
   const cv::Matx33d& k = *input.camera_matrix;
   const double fx = k(0, 0), fy = k(1, 1), cx = k(0, 2), cy = k(1, 2);
@@ -171,6 +178,10 @@ bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv
 
   // Camera motion cur_from_prev: PnP-RANSAC on matches whose previous feature has depth, from
   // the static region when it holds enough of them (full mode), else from all (geometry mode).
+  // world_anchors: cam_from_world by PnP on the matched tracks' anchors (fixed in the world).
+  const bool world = o.world_anchors;
+  const cv::Matx33d prev_r = *cam_from_world_rotation;
+  const cv::Vec3d prev_t = *cam_from_world_translation;
   bool ok = false;
   cv::Matx33d rotation = cv::Matx33d::eye();
   cv::Vec3d translation(0, 0, 0);
@@ -182,9 +193,13 @@ bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv
       image.clear();
       for (int i = 0; i < n; ++i) {
         const int j = matches[i];
-        if (j < 0 || prev_depths_[j] <= 0) continue;
-        if (pass == 0 && result->features[i].in_dynamic_region) continue;
-        const cv::Vec3d x = back_project(prev_geom_points_[j], prev_depths_[j]);
+        if (j < 0) continue;
+        if (world ? !prev_states_[j].has_anchor : prev_depths_[j] <= 0) continue;
+        if (pass == 0 && result->features[i].in_dynamic_region &&
+            !result->features[i].in_box_background)
+          continue;
+        const cv::Vec3d x =
+            world ? prev_states_[j].anchor : back_project(prev_geom_points_[j], prev_depths_[j]);
         object.emplace_back(static_cast<float>(x[0]), static_cast<float>(x[1]),
                             static_cast<float>(x[2]));
         image.push_back(geom[i]);
@@ -216,6 +231,23 @@ bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv
       }
     }
   }
+  // Anchors are in `world` (world_anchors) or in the previous camera: `pose` maps them into the
+  // current camera; `rotation` / `translation` become cur_from_prev.
+  cv::Matx33d pose_r = rotation;
+  cv::Vec3d pose_t = translation;
+  if (world) {
+    *cam_from_world_rotation = ok ? rotation : cv::Matx33d::eye();
+    *cam_from_world_translation = ok ? translation : cv::Vec3d(0, 0, 0);
+    if (ok) {
+      rotation = pose_r * prev_r.t();
+      translation = pose_t - rotation * prev_t;
+    }
+  }
+  const cv::Matx33d world_from_cam_r = cam_from_world_rotation->t();
+  const cv::Vec3d cam_from_world_t = *cam_from_world_translation;
+  const auto to_anchor_frame = [&](const cv::Vec3d& x_cam) -> cv::Vec3d {
+    return world ? cv::Vec3d(world_from_cam_r * (x_cam - cam_from_world_t)) : x_cam;
+  };
   result->prev_rotation = rotation;
   result->prev_translation = translation;
 
@@ -235,7 +267,7 @@ bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv
     if (j >= 0 && ok) {
       const State& prev = prev_states_[j];
       if (prev.has_anchor) {
-        const cv::Vec3d x = rotation * prev.anchor + translation;
+        const cv::Vec3d x = pose_r * prev.anchor + pose_t;
         double d = kBehindCamera;
         if (x[2] > 1e-3) {
           const double du = fx * x[0] / x[2] + cx - geom[i].x;
@@ -249,7 +281,7 @@ bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv
         result->features[i].track_age = prev.anchor_age + 1;
         if (prev.anchor_age + 1 < o.anchor_max_age) {
           a.has_anchor = true;
-          a.anchor = x;
+          a.anchor = world ? prev.anchor : x;
           a.anchor_age = prev.anchor_age + 1;
           continue;
         }
@@ -259,11 +291,55 @@ bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv
     }
     if (z > 0) {
       a.has_anchor = true;
-      a.anchor = back_project(geom[i], z);
+      a.anchor = to_anchor_frame(back_project(geom[i], z));
       a.anchor_age = 0;
     }
   }
   return ok;
+}
+
+void DynamicFilter::SplitBoxesByDepth(const FilterInput& input, FilterResult* result) const {
+  const DynamicFilterOptions& o = options_;
+  const std::vector<float>& depths = *input.depths;
+  const int n = static_cast<int>(depths.size());
+  const bool use_image = input.depth_image != nullptr && !input.depth_image->empty() &&
+                         input.depth_image->type() == CV_32FC1;
+  std::vector<double> object(input.detections.size(), std::nan(""));
+  for (size_t b = 0; b < input.detections.size(); ++b) {
+    const cv::Rect2f& bf = input.detections[b].box;
+    const cv::Rect box(
+        cv::Point(static_cast<int>(std::floor(bf.x)), static_cast<int>(std::floor(bf.y))),
+        cv::Point(static_cast<int>(std::ceil(bf.x + bf.width)),
+                  static_cast<int>(std::ceil(bf.y + bf.height))));
+    if (use_image) {
+      object[b] = BoxObjectDepth(*input.depth_image, box);
+    } else {
+      // The keypoint depths inside the box, as a one-row depth image.
+      std::vector<float> inside;
+      for (int i = 0; i < n; ++i)
+        if (depths[i] > 0 && box.contains(cv::Point(static_cast<int>(input.keypoints[i].pt.x),
+                                                    static_cast<int>(input.keypoints[i].pt.y))))
+          inside.push_back(depths[i]);
+      if (!inside.empty()) {
+        const cv::Mat row(1, static_cast<int>(inside.size()), CV_32FC1, inside.data());
+        object[b] = BoxObjectDepth(row, cv::Rect(0, 0, row.cols, 1));
+      }
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    FeatureStatus& fs = result->features[i];
+    if (!fs.in_dynamic_region || depths[i] <= 0) continue;
+    bool judged = false;
+    for (size_t b = 0; b < input.detections.size(); ++b) {
+      if (!std::isfinite(object[b])) continue;
+      const cv::Rect2f r = DynamicRegion(input.detections[b], o);
+      const cv::Point2f& p = input.keypoints[i].pt;
+      if (!(p.x >= r.x && p.x <= r.x + r.width && p.y >= r.y && p.y <= r.y + r.height)) continue;
+      judged = true;
+      if (std::abs(depths[i] - object[b]) <= o.box_depth_band) fs.at_object_depth = true;
+    }
+    fs.in_box_background = judged && !fs.at_object_depth;
+  }
 }
 
 std::vector<int> DynamicFilter::MatchToPrevious(const std::vector<cv::KeyPoint>& keypoints,
@@ -387,6 +463,14 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
                           InAnyBox(kps[i].pt, input.detections, o);
     result.num_in_dynamic_region += f.in_dynamic_region;
   }
+  const bool depth_mode =
+      o.depth_residual &&
+      (o.mode == DynamicFilterMode::kGeometry || o.mode == DynamicFilterMode::kFull) &&
+      input.depths != nullptr && input.camera_matrix != nullptr &&
+      static_cast<int>(input.depths->size()) == n;
+  if (depth_mode && o.mode == DynamicFilterMode::kFull && o.box_depth_band > 0 &&
+      !input.detections.empty())
+    SplitBoxesByDepth(input, &result);
   if (o.mode == DynamicFilterMode::kBoxes) {
     for (FeatureStatus& f : result.features) {
       f.probability = f.in_dynamic_region ? 1.0 : 0.0;
@@ -409,14 +493,9 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
   t0 = Clock::now();
   std::vector<KalmanProbability> posterior(n);
   std::vector<char> has_posterior(n, 0);
-  // Ours: the depth-residual test replaces F (see DynamicFilterOptions::depth_residual).
-  // Geometry mode only for now: in full mode it lowered the ATE on bonn_crowd_part (0.0153 vs
-  // 0.0164 m) but the keyframe masks built from its labels left more of the people in the map
-  // (mapping/SlamMap.BonnGhostVoxelsTenTimesFewerWithMasks: 7.5x instead of >= 10x fewer ghost
-  // voxels), see BENCHMARKS.md, *Geometry that earns its place*.
-  const bool depth_mode = o.depth_residual && o.mode == DynamicFilterMode::kGeometry &&
-                          input.depths != nullptr && input.camera_matrix != nullptr &&
-                          static_cast<int>(input.depths->size()) == n;
+  // Ours: the depth-residual test replaces F (see DynamicFilterOptions::depth_residual), in
+  // geometry and full mode (the keyframe masks no longer depend on the in-box labels, so the
+  // ghost-voxel figure holds: BENCHMARKS.md, *Geometry that earns its place*).
   const bool test_outside = depth_mode && o.mode == DynamicFilterMode::kFull;
   // Prior of a new track in the dynamic region: p_init inside a box; without boxes (geometry
   // mode) the depth-residual test has no reason to presume a feature moving: outside_p_init.
@@ -424,9 +503,12 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
       depth_mode && o.mode == DynamicFilterMode::kGeometry ? o.outside_p_init : o.p_init;
   std::vector<double> depth_distances;
   std::vector<State> anchors;
+  cv::Matx33d cam_from_world_rotation = prev_cam_from_world_rotation_;
+  cv::Vec3d cam_from_world_translation = prev_cam_from_world_translation_;
   if (depth_mode && !has_prev_) {
     const std::vector<int> no_matches(n, -1);
-    DepthResidual(input, geom, no_matches, &result, &depth_distances, &anchors);
+    DepthResidual(input, geom, no_matches, &result, &depth_distances, &anchors,
+                  &cam_from_world_rotation, &cam_from_world_translation);
   }
   if (has_prev_ && depth_mode) {
     for (int i = 0; i < n; ++i) {
@@ -437,12 +519,14 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
       result.num_matched_dynamic_region += result.features[i].in_dynamic_region;
     }
     result.motion_model_ok =
-        DepthResidual(input, geom, matches, &result, &depth_distances, &anchors);
+        DepthResidual(input, geom, matches, &result, &depth_distances, &anchors,
+                      &cam_from_world_rotation, &cam_from_world_translation);
     for (int i = 0; i < n; ++i) {
       FeatureStatus& fs = result.features[i];
       const int j = matches[i];
       if (j < 0 || !(fs.in_dynamic_region || test_outside)) continue;
-      const double prior_p = fs.in_dynamic_region ? region_prior : o.outside_p_init;
+      const double prior_p =
+          fs.in_dynamic_region && !fs.in_box_background ? region_prior : o.outside_p_init;
       const KalmanProbability prior_post = prev_states_[j].valid
                                                ? prev_states_[j].posterior
                                                : KalmanProbability{prior_p, o.initial_variance};
@@ -605,7 +689,8 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
       fs.probability = posterior[i].p;
       states[i] = {true, posterior[i]};
     } else {
-      double p = region_prior, weight_sum = 0, change = 0;
+      const double base = fs.in_box_background ? o.outside_p_init : region_prior;
+      double p = base, weight_sum = 0, change = 0;
       for (int m : matched_dyn) {
         const double dx = kps[m].pt.x - kps[i].pt.x, dy = kps[m].pt.y - kps[i].pt.y;
         const double d2 = dx * dx + dy * dy;
@@ -616,7 +701,7 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
         }
         const double w = ExpansionWeight(std::sqrt(d2), o.c2, o.delta);
         weight_sum += w;
-        change += w * (posterior[m].p - region_prior);
+        change += w * (posterior[m].p - base);
       }
       // Eq. 11 sums without normalising (the paper; clamped below). Ours (depth mode): a
       // weighted mean once the weights exceed 1, so many static neighbours cannot add up to a
@@ -627,7 +712,7 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
     }
     // g. Decision. Geometry mode has no information on the first frame: keep everything.
     const bool informed = has_prev_ || o.mode == DynamicFilterMode::kFull;
-    fs.is_dynamic = informed && fs.probability > o.threshold;
+    fs.is_dynamic = informed && (fs.probability > o.threshold || fs.at_object_depth);
     result.num_dynamic += fs.is_dynamic;
   }
   result.probability_ms = ms_since(t0);
@@ -640,6 +725,8 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
       states[i].anchor_age = anchors[i].anchor_age;
     }
     prev_depths_ = *input.depths;
+    prev_cam_from_world_rotation_ = cam_from_world_rotation;
+    prev_cam_from_world_translation_ = cam_from_world_translation;
   } else {
     prev_depths_.clear();
   }

@@ -134,6 +134,12 @@ struct DynamicFilterOptions {
   // epipolar distances; the 2-D residual of a static point over a longer baseline is larger.
   double depth_residual_scale = 1.0;
   int anchor_max_age = 10;     // frames; then the anchor restarts from the measurement
+  // Ours (issue 22): anchors fixed in the filter's own odometry frame (set where their track
+  // started or restarted, never moved), and the camera pose estimated by PnP against them, so a
+  // mover's anchors drift off by its whole motion since then (several px after a few frames)
+  // and cannot be absorbed by the motion estimate; false: anchors in the previous camera frame,
+  // moved along by the chained frame-to-frame motion (a walker at 1-2 px per frame biases it).
+  bool world_anchors = true;
   double pnp_threshold = 2.0;  // px, RANSAC inlier threshold
   int pnp_iterations = 100;
   int pnp_min_inliers = 20;
@@ -143,6 +149,15 @@ struct DynamicFilterOptions {
   // this (metres) when both have depth, so a wall behind a person does not inherit the
   // person's probability. <= 0: off.
   double expansion_depth_gap = 0.3;
+  // Ours (issue 22; 0 in the `paper` configurations): depth-refined boxes. In full mode with the
+  // depth-residual test, each box's object depth is estimated (BoxObjectDepth of
+  // core/dynamic/dynamic_mask.h: the nearest depth band holding a fair share of the box's depth
+  // pixels, from FilterInput::depth_image, else from the keypoint depths in the box); an in-box
+  // feature whose depth is within box_depth_band of it is the object (dynamic, moving or
+  // standing); an in-box feature clearly off that depth is background and is judged like a
+  // feature outside the boxes (prior outside_p_init, the depth-residual test). In-box features
+  // without depth keep the paper's rule. <= 0: off (every in-box feature starts from p_init).
+  double box_depth_band = 0.4;  // m
 
   void Check() const;
 };
@@ -161,10 +176,16 @@ struct FilterInput {
   // each keypoint (<= 0: none) and the camera matrix of the undistorted points.
   const std::vector<float>* depths = nullptr;
   const cv::Matx33d* camera_matrix = nullptr;
+  // Optional (box_depth_band): the depth image, CV_32FC1 metres, in the keypoints' pixel grid.
+  const cv::Mat* depth_image = nullptr;
 };
 
 struct FeatureStatus {
   bool in_dynamic_region = false;
+  // box_depth_band: in a box and at its object's depth (the object itself); in a box but clearly
+  // off that depth (background, judged like a feature outside the boxes).
+  bool at_object_depth = false;
+  bool in_box_background = false;
   int prev_match = -1;            // index of the matched feature in the previous frame, -1 if none
   bool has_observation = false;   // an epipolar observation z was computed (eqs. 4-5)
   int track_age = 0;              // depth-residual test: frames since the anchor was set
@@ -248,9 +269,15 @@ class DynamicFilter {
   };
   // Depth-residual test (options_.depth_residual): estimates cur_from_prev and fills the
   // observations of matched features; returns false (abstain) when the motion is not reliable.
+  // cam_from_world: in: the previous frame's pose in the anchors' frame (world_anchors); out:
+  // the current frame's (identity when the motion could not be estimated: anchors restart).
   bool DepthResidual(const FilterInput& input, const std::vector<cv::Point2f>& geom,
                      const std::vector<int>& matches, FilterResult* result,
-                     std::vector<double>* distances, std::vector<State>* anchors) const;
+                     std::vector<double>* distances, std::vector<State>* anchors,
+                     cv::Matx33d* cam_from_world_rotation,
+                     cv::Vec3d* cam_from_world_translation) const;
+  // box_depth_band: marks in-box features at their box's object depth / in the background.
+  void SplitBoxesByDepth(const FilterInput& input, FilterResult* result) const;
   std::vector<int> MatchToPrevious(const std::vector<cv::KeyPoint>& keypoints,
                                    const cv::Mat& descriptors) const;
 
@@ -262,6 +289,9 @@ class DynamicFilter {
   cv::Mat prev_descriptors_;
   std::vector<State> prev_states_;
   std::vector<float> prev_depths_;  // empty without depths
+  // world_anchors: the previous frame's pose in the anchors' frame.
+  cv::Matx33d prev_cam_from_world_rotation_ = cv::Matx33d::eye();
+  cv::Vec3d prev_cam_from_world_translation_ = cv::Vec3d(0, 0, 0);
 };
 
 }  // namespace dygslam

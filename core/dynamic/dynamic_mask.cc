@@ -56,6 +56,20 @@ double ForegroundDepth(const std::vector<float>& depths, const DynamicMaskOption
 
 }  // namespace
 
+double BoxObjectDepth(const cv::Mat& depth, const cv::Rect& box, const DynamicMaskOptions& o) {
+  if (depth.empty() || depth.type() != CV_32FC1)
+    throw InputError("BoxObjectDepth: depth must be CV_32FC1 metres");
+  const cv::Rect rect = box & cv::Rect(0, 0, depth.cols, depth.rows);
+  std::vector<float> depths;
+  depths.reserve(rect.area());
+  for (int y = rect.y; y < rect.y + rect.height; ++y) {
+    const float* row = depth.ptr<float>(y);
+    for (int x = rect.x; x < rect.x + rect.width; ++x)
+      if (ValidDepth(row[x])) depths.push_back(row[x]);
+  }
+  return ForegroundDepth(depths, o);
+}
+
 cv::Mat ComputeDynamicMask(const cv::Size& image_size_in, const cv::Mat& depth,
                            const std::vector<Detection>& detections,
                            const std::vector<cv::KeyPoint>& keypoints,
@@ -85,9 +99,9 @@ cv::Mat ComputeDynamicMask(const cv::Size& image_size_in, const cv::Mat& depth,
       mask(rect).setTo(255);
       continue;
     }
-    // Object depth from the dynamic features inside the box, else the foreground mode.
+    // Object depth: the foreground mode (or the dynamic features' median, see options).
     std::vector<double> feature_depths;
-    for (size_t k = 0; k < keypoints.size(); ++k) {
+    for (size_t k = 0; k < keypoints.size() && o.object_depth_from_features; ++k) {
       if (keypoint_dynamic.empty() || !keypoint_dynamic[k]) continue;
       const cv::Point p(static_cast<int>(keypoints[k].pt.x), static_cast<int>(keypoints[k].pt.y));
       if (!rect.contains(p)) continue;

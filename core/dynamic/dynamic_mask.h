@@ -3,9 +3,12 @@
 // leaves the people out without deleting the wall behind them.
 //
 // Inside each box the object's depth is estimated as
-//   - the median depth of the dynamic features inside the box (>= min_features_for_depth), else
+//   - with object_depth_from_features (off by default): the median depth of the dynamic features
+//     inside the box (>= min_features_for_depth), else
 //   - the box's foreground depth: the nearest depth d whose band [d, d + depth_band] holds at
-//     least foreground_min_fraction of the box's valid depth pixels;
+//     least foreground_min_fraction of the box's valid depth pixels (BoxObjectDepth).
+// The default does not depend on which in-box features the filter kept (issue 22: labels that
+// keep more in-box features static must not shrink the map's masks);
 // and the box pixels whose depth is within [object - depth_band, object + depth_band] are masked,
 // as are the box pixels without depth (they carry nothing for the map anyway). A box without any
 // valid depth is masked entirely. Finally the mask is dilated by dilation_px and disks of
@@ -29,8 +32,18 @@ struct DynamicMaskOptions {
   int dilation_px = 3;
   int feature_radius = 8;   // px
   double box_margin = 0.0;  // px added on each side of the boxes
+  // true: the object depth is the median depth of the box's dynamic features when it has
+  // min_features_for_depth of them (the behaviour before issue 22); false: always the box's
+  // foreground depth, independent of the filter's labels.
+  bool object_depth_from_features = false;
   void Check() const;
 };
+
+// The object depth of a box (metres): the nearest depth d whose band [d, d + depth_band] holds at
+// least foreground_min_fraction of the valid depth pixels in `box` (clipped to the image); NaN
+// when the box has no valid depth. depth: CV_32FC1 metres (0 or non-finite = none).
+double BoxObjectDepth(const cv::Mat& depth, const cv::Rect& box,
+                      const DynamicMaskOptions& options = DynamicMaskOptions());
 
 // depth: CV_32FC1 metres (0 or non-finite = no measurement) or empty (then the boxes are masked
 // entirely). keypoint_dynamic: same size as keypoints (1 = dynamic) or empty. Returns CV_8UC1 of

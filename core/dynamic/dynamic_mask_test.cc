@@ -62,12 +62,19 @@ TEST(DynamicMask, DynamicFeaturesDefineTheObjectDepth) {
   dyn.push_back(0);
   DynamicMaskOptions o;
   o.feature_radius = 0;
+  o.object_depth_from_features = true;  // opt-in since issue 22
   const cv::Mat mask = ComputeDynamicMask(s.depth.size(), s.depth, s.detections, kps, dyn, o);
   cv::Mat table_eroded;
   cv::erode(table, table_eroded, cv::Mat(), cv::Point(-1, -1), 5);
   EXPECT_GT(s.Coverage(mask, person_visible), 0.99);
   EXPECT_LT(s.Coverage(mask, table_eroded), 0.01);
   EXPECT_EQ(mask.at<uint8_t>(120, 240), 0);
+  // The default ignores the filter's labels: the box's foreground band (here the table) is the
+  // object, whichever features the filter flagged.
+  o.object_depth_from_features = false;
+  const cv::Mat by_depth = ComputeDynamicMask(s.depth.size(), s.depth, s.detections, kps, dyn, o);
+  EXPECT_GT(s.Coverage(by_depth, table_eroded), 0.99);
+  EXPECT_NEAR(BoxObjectDepth(s.depth, cv::Rect(s.detections[0].box), o), 1.0, 0.05);
 }
 
 TEST(DynamicMask, FeatureDisksAndNoDepth) {

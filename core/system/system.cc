@@ -419,6 +419,7 @@ SystemImpl::FilteredFrame SystemImpl::Filter(const PreparedFrame& prepared, Fram
   const cv::Matx33d camera_matrix(options_.camera.K());
   input.depths = &keypoint_depths;
   input.camera_matrix = &camera_matrix;
+  input.depth_image = &prepared.depth_m;  // box_depth_band: each box's object depth
   const FilterResult verdict = filter_.Process(input);
   if (prepared.propagate_boxes) {
     boxes_.Observe(previous_keypoints_, features.keypoints, verdict);

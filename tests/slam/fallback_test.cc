@@ -212,11 +212,13 @@ TEST(SlamFallback, BonnCrowdAllFramesAteWithSmoothedFallbackStretches) {
   EXPECT_GE(with_pose, static_cast<int>(0.995 * dataset.size()));
   EXPECT_EQ(trajectory.size(), static_cast<size_t>(with_pose));
   EXPECT_GT(states["fallback"], 10);  // the two crowded stretches (~196-208, ~324-331)
-  // Measured (deterministic, 2-core machine): 0.0160 m smoothed, 0.0204 m online (ratio 0.78);
-  // with real threading 0.0156-0.0188 m over 6 direct runs (BENCHMARKS.md). Margins: above the
-  // worst threaded run, and a ratio halfway between the measured 0.78 and no gain.
-  EXPECT_LT(ate.error.rmse, 0.020);
-  EXPECT_LT(ate.error.rmse, 0.9 * ate_online.error.rmse);
+  // Measured (deterministic, 2-core machine): 0.0160 m smoothed, 0.0204 m online (ratio 0.78)
+  // before issue 22's round 2; since (fixed anchors, depth-refined boxes, depth-residual test in
+  // full) 0.0146 m smoothed, 0.0151 m online (ratio 0.97: the online poses before the stretches
+  // are better, so the smoothing has less to correct). Margins: 0.018 m is above the threaded
+  // runs (BENCHMARKS.md, *Round 2*); the smoothing must not make the trajectory worse.
+  EXPECT_LT(ate.error.rmse, 0.018);
+  EXPECT_LE(ate.error.rmse, ate_online.error.rmse);
 }
 
 }  // namespace

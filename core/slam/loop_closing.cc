@@ -353,33 +353,48 @@ void LoopCloser::Process(const std::shared_ptr<KeyFrame>& kf) {
 }
 
 std::vector<std::shared_ptr<KeyFrame>> LoopCloser::DetectLoop(const std::shared_ptr<KeyFrame>& kf) {
-  std::lock_guard<std::mutex> lock(map_->mutex());
-  if (kf->bad || kf->bow_vector.empty()) return {};
-  if (last_loop_kf_id_ >= 0 && kf->id < last_loop_kf_id_ + options_.min_keyframe_gap) return {};
-  if (static_cast<int>(map_->NumKeyFrames()) <= options_.min_keyframe_gap) return {};
+  // Under the map lock: what the index query's filter needs (the keyframes' BoW vectors are
+  // immutable). The query itself, the costly part, runs without the lock.
+  std::vector<std::shared_ptr<KeyFrame>> covisibles;
+  std::set<int64_t> active, connected;
+  std::map<int64_t, double> revisit_path;  // keyframe path from an old covisible keyframe to kf
+  {
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    if (kf->bad || kf->bow_vector.empty()) return {};
+    if (last_loop_kf_id_ >= 0 && kf->id < last_loop_kf_id_ + options_.min_keyframe_gap) return {};
+    if (static_cast<int>(map_->NumKeyFrames()) <= options_.min_keyframe_gap) return {};
+    for (int64_t id : kf->ordered_connections) {
+      auto n = map_->GetKeyFrame(id);
+      if (n && !n->bad && !n->bow_vector.empty()) covisibles.push_back(n);
+    }
+    for (const auto& [id, k] : map_->keyframes()) active.insert(id);
+    for (const auto& [id, w] : kf->connection_weights) {
+      connected.insert(id);
+      if (options_.revisit_min_path_m > 0 && id <= kf->id - options_.min_keyframe_gap)
+        revisit_path[id] = KeyFramePathLength(*map_, id, kf->id);
+    }
+  }
   // The keyframe's worst covisible neighbour sets the bar.
   double min_score = 1.0;
-  bool any = false;
-  for (int64_t id : kf->ordered_connections) {
-    auto n = map_->GetKeyFrame(id);
-    if (!n || n->bad || n->bow_vector.empty()) continue;
+  for (const auto& n : covisibles)
     min_score = std::min(min_score, Vocabulary::Score(kf->bow_vector, n->bow_vector));
-    any = true;
-  }
-  if (!any) min_score = 0;
-  const auto candidates = LoopCandidates(
-      *map_, *database_, *kf, min_score,
+  if (covisibles.empty()) min_score = 0;
+  const auto found = QueryLoopCandidates(
+      *database_, *kf, min_score,
       [&](int64_t id) {
+        if (active.count(id) == 0) return true;                    // culled
         if (id > kf->id - options_.min_keyframe_gap) return true;  // recent
-        if (kf->connection_weights.count(id) == 0) return false;
+        if (connected.count(id) == 0) return false;
         // Covisible: ORB-SLAM2 excludes these, as covisibility normally means the local window
         // (already joined by local BA, nothing to correct). An old keyframe that became
         // covisible again after a long way round is the place revisited, tracked without losing
         // the map (there and back): it stays a candidate, so the revisit is closed as a loop.
         return options_.revisit_min_path_m <= 0 ||
-               KeyFramePathLength(*map_, id, kf->id) < options_.revisit_min_path_m;
+               revisit_path.at(id) < options_.revisit_min_path_m;
       },
       options_.place);
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  const auto candidates = GroupPlaceCandidates(*map_, found, options_.place);
   if (candidates.empty()) {
     consistent_groups_.clear();
     return {};

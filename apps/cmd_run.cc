@@ -168,6 +168,11 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
         "%d global BA (%d discarded), %d keyframes checked\n",
         lc.loops_closed, lc.candidates_detected, lc.loops_rejected, lc.points_fused,
         lc.global_ba_runs, lc.global_ba_discarded, lc.keyframes_checked);
+    std::printf(
+        "loop checks: detection %.0f ms, geometry %.0f ms (%.0f ms of it holding the map lock), "
+        "%d loops dropped (map changed), %d global BA skipped (small correction)\n",
+        lc.detect_ms_total, lc.check_ms_total, lc.check_locked_ms_total, lc.loops_dropped,
+        lc.global_ba_skipped);
     for (const auto& [frame, loop_frame] : lc.loop_frames)
       std::printf("loop: frame %lld closed with frame %lld\n", static_cast<long long>(frame),
                   static_cast<long long>(loop_frame));

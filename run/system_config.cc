@@ -152,7 +152,9 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                      {"essential_min_weight", &lc.essential_min_weight},
                      {"pose_graph_iterations", &lc.pose_graph_iterations},
                      {"global_bundle_adjustment", &lc.global_bundle_adjustment},
-                     {"global_ba_iterations", &lc.global_ba_iterations}});
+                     {"global_ba_iterations", &lc.global_ba_iterations},
+                     {"global_ba_min_correction_m", &lc.global_ba_min_correction_m},
+                     {"global_ba_min_correction_deg", &lc.global_ba_min_correction_deg}});
   loops.CheckOptions(lc);
 
   // DynamicFilter: the paper's parameters (defaults in DynamicFilterOptions).

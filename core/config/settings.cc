@@ -150,7 +150,8 @@ const std::vector<std::string>& KnownSettingsKeys() {
       "LoopClosing.max_correction_deg", "LoopClosing.max_drift_deg_per_meter",
       "LoopClosing.fusion_radius_px", "LoopClosing.essential_min_weight",
       "LoopClosing.pose_graph_iterations", "LoopClosing.global_bundle_adjustment",
-      "LoopClosing.global_ba_iterations",
+      "LoopClosing.global_ba_iterations", "LoopClosing.global_ba_min_correction_m",
+      "LoopClosing.global_ba_min_correction_deg",
       // run/mapping_config.cc.
       "OctoMap.resolution", "OctoMap.max_range", "OctoMap.min_range", "OctoMap.prob_hit",
       "OctoMap.prob_miss", "OctoMap.clamping_min", "OctoMap.clamping_max",

@@ -21,6 +21,8 @@ struct LoopCloser::Loop {
   std::vector<std::shared_ptr<MapPoint>> matches;      // per feature of the current keyframe
   std::vector<std::shared_ptr<MapPoint>> loop_points;  // the loop keyframe's neighbourhood
   int inliers = 0, projected = 0;
+  double correction_m = 0, correction_deg = 0;  // how far the loop moves the current keyframe
+  int64_t epoch = -1;  // Map::CorrectionEpoch() of the map state the checks saw
 };
 
 namespace {
@@ -48,41 +50,60 @@ bool Reprojects(const KeyFrame& kf, int idx, const Eigen::Vector3d& p_cam, doubl
   return e2 < threshold2 * g.sigma2[kp.octave];
 }
 
-// Matches `points` (not yet in matches) into kf seen from `cam_from_world`; returns added count.
+// A map point as the loop checks see it: copied under the map lock (LoopCloser::Snapshot).
+struct PointCopy {
+  std::shared_ptr<MapPoint> point;  // handed to the correction (under the lock again); not read
+                                    // without the lock: the fields below are the copy
+  Eigen::Vector3d position, normal;
+  Descriptor descriptor;
+  double min_distance = 0, max_distance = 0;
+};
+
+// MapPoint::PredictScale on a copy.
+int PredictLevel(const PointCopy& p, double distance, const CameraGeometry& g) {
+  const double ratio = p.max_distance / distance;
+  const int level = static_cast<int>(std::ceil(std::log(ratio) / g.log_scale_factor));
+  return std::clamp(level, 0, g.num_levels - 1);
+}
+
+// Matches the copied points `candidates` (indices into `points`, not yet in `matches`) into kf
+// seen from `cam_from_world`; matches[i] = index of the point matched to feature i (-1: none).
+// Returns the added count.
 int SearchByProjection(const KeyFrame& kf, const Rigid3d& cam_from_world,
-                       const std::vector<std::shared_ptr<MapPoint>>& points, double radius_px,
-                       int max_distance, std::vector<std::shared_ptr<MapPoint>>* matches) {
+                       const std::vector<PointCopy>& points, const std::vector<int>& candidates,
+                       double radius_px, int max_distance, std::vector<int>* matches) {
   const auto& g = *kf.geometry;
   const Eigen::Vector3d center = cam_from_world.Inverse().translation;
-  std::set<const MapPoint*> already;
-  for (const auto& m : *matches)
-    if (m) already.insert(m.get());
+  std::set<int> already;
+  for (int m : *matches)
+    if (m >= 0) already.insert(m);
   int added = 0;
-  for (const auto& mp : points) {
-    if (!mp || mp->bad || already.count(mp.get())) continue;
-    const Eigen::Vector3d p = cam_from_world * mp->position;
+  for (int index : candidates) {
+    if (already.count(index)) continue;
+    const PointCopy& mp = points[index];
+    const Eigen::Vector3d p = cam_from_world * mp.position;
     if (p.z() <= 0) continue;
     const double u = g.camera.fx * p.x() / p.z() + g.camera.cx;
     const double v = g.camera.fy * p.y() / p.z() + g.camera.cy;
     if (!g.InBounds(u, v)) continue;
-    const Eigen::Vector3d po = mp->position - center;
+    const Eigen::Vector3d po = mp.position - center;
     const double dist = po.norm();
-    if (dist < 0.8 * mp->min_distance || dist > 1.2 * mp->max_distance) continue;
-    if (po.dot(mp->normal) < 0.5 * dist) continue;
-    const int level = mp->PredictScale(dist, g);
+    if (dist < 0.8 * mp.min_distance || dist > 1.2 * mp.max_distance) continue;
+    if (po.dot(mp.normal) < 0.5 * dist) continue;
+    const int level = PredictLevel(mp, dist, g);
     int best = 256, best_idx = -1;
     for (int c : kf.grid.Query(kf.undistorted, u, v, radius_px * g.scales[level],
                                std::max(0, level - 1), level + 1)) {
-      if ((*matches)[c]) continue;
-      const int d = HammingDistance(mp->descriptor, kf.descriptors[c]);
+      if ((*matches)[c] >= 0) continue;
+      const int d = HammingDistance(mp.descriptor, kf.descriptors[c]);
       if (d < best) {
         best = d;
         best_idx = c;
       }
     }
     if (best_idx >= 0 && best <= max_distance) {
-      (*matches)[best_idx] = mp;
-      already.insert(mp.get());
+      (*matches)[best_idx] = index;
+      already.insert(index);
       ++added;
     }
   }
@@ -93,7 +114,8 @@ int SearchByProjection(const KeyFrame& kf, const Rigid3d& cam_from_world,
 // features (pose-only, reprojection with the depth's virtual right coordinate, Huber then
 // outlier rounds as in tracking); outlier matches are removed. Returns the inliers.
 int RefineLoopPose(const KeyFrame& kf, const OptimizerOptions& optimizer,
-                   std::vector<std::shared_ptr<MapPoint>>* matches, Rigid3d* cam_from_world) {
+                   const std::vector<PointCopy>& points, std::vector<int>* matches,
+                   Rigid3d* cam_from_world) {
   const auto& g = *kf.geometry;
   const ProjectionModel model{g.camera.fx, g.camera.fy, g.camera.cx, g.camera.cy, g.bf};
   std::vector<uint8_t> outlier(matches->size(), 0);
@@ -110,16 +132,16 @@ int RefineLoopPose(const KeyFrame& kf, const OptimizerOptions& optimizer,
     problem.AddParameterBlock(pose, 7, &manifold);
     int added = 0;
     for (size_t i = 0; i < matches->size(); ++i) {
-      const auto& mp = (*matches)[i];
-      if (!mp || outlier[i]) continue;
+      const int m = (*matches)[i];
+      if (m < 0 || outlier[i]) continue;
       const cv::KeyPoint& kp = kf.undistorted[i];
       const double sqrt_info = std::sqrt(g.inv_sigma2[kp.octave]);
       const bool stereo = kf.u_right[i] >= 0;
       ceres::CostFunction* cost = stereo ? static_cast<ceres::CostFunction*>(new StereoPoseCost(
                                                Eigen::Vector3d(kp.pt.x, kp.pt.y, kf.u_right[i]),
-                                               mp->position, sqrt_info, model))
+                                               points[m].position, sqrt_info, model))
                                          : new MonoPoseCost(Eigen::Vector2d(kp.pt.x, kp.pt.y),
-                                                            mp->position, sqrt_info, model);
+                                                            points[m].position, sqrt_info, model);
       problem.AddResidualBlock(cost, new ceres::HuberLoss(stereo ? delta_stereo : delta_mono),
                                pose);
       ++added;
@@ -135,10 +157,10 @@ int RefineLoopPose(const KeyFrame& kf, const OptimizerOptions& optimizer,
     const Rigid3d estimate = PoseFromParameters(pose);
     inliers = 0;
     for (size_t i = 0; i < matches->size(); ++i) {
-      const auto& mp = (*matches)[i];
-      if (!mp) continue;
+      const int m = (*matches)[i];
+      if (m < 0) continue;
       const cv::KeyPoint& kp = kf.undistorted[i];
-      const Eigen::Vector3d p = estimate * mp->position;
+      const Eigen::Vector3d p = estimate * points[m].position;
       bool bad = p.z() <= 0;
       if (!bad) {
         const double u = model.fx * p.x() / p.z() + model.cx;
@@ -160,7 +182,7 @@ int RefineLoopPose(const KeyFrame& kf, const OptimizerOptions& optimizer,
   if (!PoseFromParameters(pose).AllFinite()) return 0;
   *cam_from_world = PoseFromParameters(pose);
   for (size_t i = 0; i < matches->size(); ++i)
-    if (outlier[i]) (*matches)[i] = nullptr;
+    if (outlier[i]) (*matches)[i] = -1;
   return inliers;
 }
 
@@ -179,6 +201,54 @@ double KeyFramePathLength(const Map& map, int64_t from, int64_t to) {
 }
 
 }  // namespace
+
+// What the geometric checks read of the map state, copied under the map lock: keyframe poses,
+// which feature has which map point, and the points' positions, descriptors and viewing data.
+// The keyframes' immutable features (keypoints, descriptors, grid, BoW) are read from the
+// keyframes themselves, which needs no lock.
+struct LoopCloser::Snapshot {
+  struct View {
+    std::shared_ptr<KeyFrame> kf;
+    Rigid3d cam_from_world;
+    std::vector<int> points;         // per feature: index into `points` (-1: none or bad)
+    std::vector<uint8_t> usable;     // per feature: points[i] >= 0
+    std::vector<int> observation;    // per feature: the point's observation index in kf (-1: none)
+    double path_m = 0;               // keyframe path from kf to the current keyframe
+    std::vector<int> neighbourhood;  // points of kf and its covisible keyframes (on demand)
+    bool neighbourhood_copied = false;
+  };
+  int64_t epoch = -1;
+  View current;
+  std::vector<View> candidates;
+  std::vector<PointCopy> points;
+  std::map<const MapPoint*, int> index;
+  double locked_ms = 0;  // time spent holding the map lock for the copies
+
+  // The caller holds Map::mutex().
+  int Add(const std::shared_ptr<MapPoint>& mp) {
+    auto [it, inserted] = index.emplace(mp.get(), static_cast<int>(points.size()));
+    if (inserted) {
+      points.push_back(
+          {mp, mp->position, mp->normal, mp->descriptor, mp->min_distance, mp->max_distance});
+    }
+    return it->second;
+  }
+  void Copy(const std::shared_ptr<KeyFrame>& kf, View* view) {
+    view->kf = kf;
+    view->cam_from_world = kf->cam_from_world;
+    view->points.assign(kf->size(), -1);
+    view->usable.assign(kf->size(), 0);
+    view->observation.assign(kf->size(), -1);
+    for (size_t i = 0; i < kf->size(); ++i) {
+      const auto& mp = kf->map_points[i];
+      if (!mp || mp->bad) continue;
+      view->points[i] = Add(mp);
+      view->usable[i] = 1;
+      auto obs = mp->observations.find(kf->id);
+      if (obs != mp->observations.end()) view->observation[i] = obs->second;
+    }
+  }
+};
 
 LoopCloser::LoopCloser(std::shared_ptr<Map> map, std::shared_ptr<KeyFrameDatabase> database,
                        const LoopClosingOptions& options, const OptimizerOptions& optimizer,
@@ -231,57 +301,100 @@ void LoopCloser::Process(const std::shared_ptr<KeyFrame>& kf) {
     stats_.keyframes_checked++;
   }
   if (!options_.enabled) return;
+  const auto detect_start = std::chrono::steady_clock::now();
   const auto candidates = DetectLoop(kf);
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.detect_ms_total +=
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - detect_start)
+            .count();
+  }
   if (candidates.empty()) return;
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     stats_.candidates_detected += static_cast<int>(candidates.size());
   }
   Loop loop;
-  if (!ComputeTransform(kf, candidates, &loop)) {
+  const auto check_start = std::chrono::steady_clock::now();
+  Snapshot snapshot;
+  const bool found = TakeSnapshot(kf, candidates, &snapshot) && ComputeTransform(&snapshot, &loop);
+  {
     std::lock_guard<std::mutex> lock(stats_mutex_);
-    stats_.loops_rejected++;
-    return;
+    stats_.check_ms_total +=
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - check_start)
+            .count();
+    stats_.check_locked_ms_total += snapshot.locked_ms;
+    if (!found) stats_.loops_rejected++;
   }
+  if (!found) return;
   const auto start = std::chrono::steady_clock::now();
-  CorrectLoop(kf, loop);
+  const bool applied = CorrectLoop(kf, loop);
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     stats_.correction_ms_total += ms;
   }
-  if (options_.global_bundle_adjustment) StartGlobalBundleAdjustment(kf->id);
+  if (!applied || !options_.global_bundle_adjustment) return;
+  // A small correction is left to the pose graph: a global BA would move the map about as much
+  // as the loop did (there and back: 2 mm).
+  if (loop.correction_m < options_.global_ba_min_correction_m &&
+      loop.correction_deg < options_.global_ba_min_correction_deg) {
+    LOG_INFO << "global BA skipped: correction " << loop.correction_m << " m / "
+             << loop.correction_deg
+             << " deg is below LoopClosing.global_ba_min_correction_m / _deg ("
+             << options_.global_ba_min_correction_m << " m / "
+             << options_.global_ba_min_correction_deg << " deg)";
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.global_ba_skipped++;
+    return;
+  }
+  StartGlobalBundleAdjustment(kf->id);
 }
 
 std::vector<std::shared_ptr<KeyFrame>> LoopCloser::DetectLoop(const std::shared_ptr<KeyFrame>& kf) {
-  std::lock_guard<std::mutex> lock(map_->mutex());
-  if (kf->bad || kf->bow_vector.empty()) return {};
-  if (last_loop_kf_id_ >= 0 && kf->id < last_loop_kf_id_ + options_.min_keyframe_gap) return {};
-  if (static_cast<int>(map_->NumKeyFrames()) <= options_.min_keyframe_gap) return {};
+  // Under the map lock: what the index query's filter needs (the keyframes' BoW vectors are
+  // immutable). The query itself, the costly part, runs without the lock.
+  std::vector<std::shared_ptr<KeyFrame>> covisibles;
+  std::set<int64_t> active, connected;
+  std::map<int64_t, double> revisit_path;  // keyframe path from an old covisible keyframe to kf
+  {
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    if (kf->bad || kf->bow_vector.empty()) return {};
+    if (last_loop_kf_id_ >= 0 && kf->id < last_loop_kf_id_ + options_.min_keyframe_gap) return {};
+    if (static_cast<int>(map_->NumKeyFrames()) <= options_.min_keyframe_gap) return {};
+    for (int64_t id : kf->ordered_connections) {
+      auto n = map_->GetKeyFrame(id);
+      if (n && !n->bad && !n->bow_vector.empty()) covisibles.push_back(n);
+    }
+    for (const auto& [id, k] : map_->keyframes()) active.insert(id);
+    for (const auto& [id, w] : kf->connection_weights) {
+      connected.insert(id);
+      if (options_.revisit_min_path_m > 0 && id <= kf->id - options_.min_keyframe_gap)
+        revisit_path[id] = KeyFramePathLength(*map_, id, kf->id);
+    }
+  }
   // The keyframe's worst covisible neighbour sets the bar.
   double min_score = 1.0;
-  bool any = false;
-  for (int64_t id : kf->ordered_connections) {
-    auto n = map_->GetKeyFrame(id);
-    if (!n || n->bad || n->bow_vector.empty()) continue;
+  for (const auto& n : covisibles)
     min_score = std::min(min_score, Vocabulary::Score(kf->bow_vector, n->bow_vector));
-    any = true;
-  }
-  if (!any) min_score = 0;
-  const auto candidates = LoopCandidates(
-      *map_, *database_, *kf, min_score,
+  if (covisibles.empty()) min_score = 0;
+  const auto found = QueryLoopCandidates(
+      *database_, *kf, min_score,
       [&](int64_t id) {
+        if (active.count(id) == 0) return true;                    // culled
         if (id > kf->id - options_.min_keyframe_gap) return true;  // recent
-        if (kf->connection_weights.count(id) == 0) return false;
+        if (connected.count(id) == 0) return false;
         // Covisible: ORB-SLAM2 excludes these, as covisibility normally means the local window
         // (already joined by local BA, nothing to correct). An old keyframe that became
         // covisible again after a long way round is the place revisited, tracked without losing
         // the map (there and back): it stays a candidate, so the revisit is closed as a loop.
         return options_.revisit_min_path_m <= 0 ||
-               KeyFramePathLength(*map_, id, kf->id) < options_.revisit_min_path_m;
+               revisit_path.at(id) < options_.revisit_min_path_m;
       },
       options_.place);
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  const auto candidates = GroupPlaceCandidates(*map_, found, options_.place);
   if (candidates.empty()) {
     consistent_groups_.clear();
     return {};
@@ -321,35 +434,83 @@ std::vector<std::shared_ptr<KeyFrame>> LoopCloser::DetectLoop(const std::shared_
   return enough;
 }
 
-bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
-                                  const std::vector<std::shared_ptr<KeyFrame>>& candidates,
-                                  Loop* loop) {
+bool LoopCloser::TakeSnapshot(const std::shared_ptr<KeyFrame>& kf,
+                              const std::vector<std::shared_ptr<KeyFrame>>& candidates,
+                              Snapshot* snapshot) {
   std::lock_guard<std::mutex> lock(map_->mutex());
+  const auto start = std::chrono::steady_clock::now();
   if (kf->bad) return false;
+  snapshot->epoch = map_->CorrectionEpoch();
+  snapshot->Copy(kf, &snapshot->current);
+  for (const auto& c : candidates) {
+    if (c->bad) continue;
+    snapshot->candidates.emplace_back();
+    snapshot->Copy(c, &snapshot->candidates.back());
+    snapshot->candidates.back().path_m = KeyFramePathLength(*map_, c->id, kf->id);
+  }
+  snapshot->locked_ms +=
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return true;
+}
+
+void LoopCloser::CopyNeighbourhood(size_t candidate, Snapshot* snapshot) {
+  Snapshot::View& view = snapshot->candidates[candidate];
+  if (view.neighbourhood_copied) return;
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<std::shared_ptr<KeyFrame>> neighbourhood = {view.kf};
+  for (int64_t id : view.kf->ordered_connections) {
+    auto n = map_->GetKeyFrame(id);
+    if (n && !n->bad) neighbourhood.push_back(n);
+  }
+  std::set<int64_t> seen;
+  for (const auto& n : neighbourhood) {
+    for (const auto& mp : n->map_points) {
+      if (mp && !mp->bad && seen.insert(mp->id).second)
+        view.neighbourhood.push_back(snapshot->Add(mp));
+    }
+  }
+  view.neighbourhood_copied = true;
+  snapshot->locked_ms +=
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+bool LoopCloser::ComputeTransform(Snapshot* snapshot, Loop* loop) {
+  // No map lock here: everything mutable comes from the snapshot (CopyNeighbourhood locks
+  // briefly for the one candidate that reaches the guided search).
+  const Snapshot::View& current = snapshot->current;
+  const KeyFrame& kf = *current.kf;
+  const auto& points = snapshot->points;
+  const Eigen::Vector3d kf_center = current.cam_from_world.Inverse().translation;
   const double th2 = options_.ransac_threshold_px * options_.ransac_threshold_px;
-  uint64_t rng = static_cast<uint64_t>(kf->id) * 2654435761ULL + 1;
+  uint64_t rng = static_cast<uint64_t>(kf.id) * 2654435761ULL + 1;
   auto next = [&rng]() {
     rng = rng * 6364136223846793005ULL + 1442695040888963407ULL;
     return static_cast<uint32_t>(rng >> 33);
   };
-  for (const auto& c : candidates) {
-    if (c->bad) continue;
-    std::vector<std::shared_ptr<MapPoint>> matches;
-    if (matcher_.SearchByBow(*kf, *c, 0.75, &matches) < options_.min_bow_matches) continue;
+  for (size_t ci = 0; ci < snapshot->candidates.size(); ++ci) {
+    const Snapshot::View& candidate = snapshot->candidates[ci];
+    const KeyFrame& c = *candidate.kf;
+    // (current feature, candidate feature), both with a map point.
+    const auto bow = matcher_.SearchByBow(kf, current.usable, c, candidate.usable, 0.75);
+    if (static_cast<int>(bow.size()) < options_.min_bow_matches) continue;
+    std::vector<int> matched(kf.size(), -1);  // candidate feature per current feature
+    for (const auto& [i1, i2] : bow) matched[i1] = i2;
     // Correspondences in each camera's frame.
     struct Pair {
       int idx1, idx2;
       Eigen::Vector3d p1, p2;
+      int loop_point;  // index into points
     };
     std::vector<Pair> pairs;
-    for (size_t i = 0; i < matches.size(); ++i) {
-      const auto& lp = matches[i];
-      const auto& mp = kf->map_points[i];
-      if (!lp || !mp || lp->bad || mp->bad) continue;
-      auto obs = lp->observations.find(c->id);
-      if (obs == lp->observations.end()) continue;
-      pairs.push_back({static_cast<int>(i), obs->second, kf->cam_from_world * mp->position,
-                       c->cam_from_world * lp->position});
+    for (size_t i = 0; i < kf.size(); ++i) {
+      const int i2 = matched[i];
+      if (i2 < 0) continue;
+      const int lp = candidate.points[i2], mp = current.points[i];
+      if (lp < 0 || mp < 0 || candidate.observation[i2] < 0) continue;
+      pairs.push_back({static_cast<int>(i), candidate.observation[i2],
+                       current.cam_from_world * points[mp].position,
+                       candidate.cam_from_world * points[lp].position, lp});
     }
     if (static_cast<int>(pairs.size()) < options_.min_bow_matches) continue;
     auto count_inliers = [&](const Rigid3d& t12, std::vector<uint8_t>* flags) {
@@ -357,8 +518,8 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
       int n = 0;
       flags->assign(pairs.size(), 0);
       for (size_t k = 0; k < pairs.size(); ++k) {
-        if (Reprojects(*kf, pairs[k].idx1, t12 * pairs[k].p2, th2) &&
-            Reprojects(*c, pairs[k].idx2, t21 * pairs[k].p1, th2)) {
+        if (Reprojects(kf, pairs[k].idx1, t12 * pairs[k].p2, th2) &&
+            Reprojects(c, pairs[k].idx2, t21 * pairs[k].p1, th2)) {
           (*flags)[k] = 1;
           ++n;
         }
@@ -389,11 +550,11 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
         best_flags = flags;
       }
     }
-    LOG_DEBUG << "loop closing: keyframe " << kf->id << " vs " << c->id << ": " << pairs.size()
+    LOG_DEBUG << "loop closing: keyframe " << kf.id << " vs " << c.id << ": " << pairs.size()
               << " BoW matches, " << best << " RANSAC inliers";
     LoopVerification v;
-    v.frame_id = kf->frame_id;
-    v.loop_frame_id = c->frame_id;
+    v.frame_id = kf.frame_id;
+    v.loop_frame_id = c.frame_id;
     v.bow_pairs = static_cast<int>(pairs.size());
     // Refinement: least squares on the inliers, re-scored, twice.
     for (int round = 0; round < 2 && best >= 3; ++round) {
@@ -412,21 +573,21 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
       best_flags = flags;
     }
     v.inliers = best;
-    const Rigid3d corrected_pose = best_t12 * c->cam_from_world;
-    v.path_m = KeyFramePathLength(*map_, c->id, kf->id);
+    const Rigid3d corrected_pose = best_t12 * candidate.cam_from_world;
+    v.path_m = candidate.path_m;
     v.allowed_m = options_.max_correction_m + options_.max_drift_per_meter * v.path_m;
     v.allowed_deg = options_.max_correction_deg + options_.max_drift_deg_per_meter * v.path_m;
     // Correction: where the loop transform puts the camera against where odometry has it.
     auto measure = [&](const Rigid3d& pose) {
-      const Rigid3d delta = pose * kf->cam_from_world.Inverse();
-      v.correction_m = (kf->CameraCenter() - pose.Inverse().translation).norm();
+      const Rigid3d delta = pose * current.cam_from_world.Inverse();
+      v.correction_m = (kf_center - pose.Inverse().translation).norm();
       v.correction_deg = Eigen::AngleAxisd(delta.rotation).angle() * 180.0 / M_PI;
     };
     measure(corrected_pose);
     auto reject = [&](const char* verdict, int LoopClosingStats::*counter) {
       v.verdict = verdict;
-      LOG_DEBUG << "loop closing: keyframe " << kf->id << " (frame " << kf->frame_id << ") vs "
-                << c->id << " (frame " << c->frame_id << "): rejected (" << verdict
+      LOG_DEBUG << "loop closing: keyframe " << kf.id << " (frame " << kf.frame_id << ") vs "
+                << c.id << " (frame " << c.frame_id << "): rejected (" << verdict
                 << "): " << v.inliers << " / " << v.bow_pairs << " inliers, " << v.projected
                 << " matches, correction " << v.correction_m << " m / " << v.correction_deg
                 << " deg, budget " << v.allowed_m << " m / " << v.allowed_deg << " deg over "
@@ -448,27 +609,17 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
       continue;
     }
     // Guided search: the candidate's neighbourhood seen from the corrected pose.
-    std::vector<std::shared_ptr<MapPoint>> kept(kf->size(), nullptr);
+    std::vector<int> kept(kf.size(), -1);  // loop-side point per current feature
     for (size_t k = 0; k < pairs.size(); ++k)
-      if (best_flags[k]) kept[pairs[k].idx1] = matches[pairs[k].idx1];
-    const Rigid3d& corrected = corrected_pose;
-    std::vector<std::shared_ptr<MapPoint>> loop_points;
-    std::set<int64_t> seen;
-    std::vector<std::shared_ptr<KeyFrame>> neighbourhood = {c};
-    for (int64_t id : c->ordered_connections) {
-      auto n = map_->GetKeyFrame(id);
-      if (n && !n->bad) neighbourhood.push_back(n);
-    }
-    for (const auto& n : neighbourhood) {
-      for (const auto& mp : n->map_points) {
-        if (mp && !mp->bad && seen.insert(mp->id).second) loop_points.push_back(mp);
-      }
-    }
-    SearchByProjection(*kf, corrected, loop_points, 10.0, matcher_.options().th_low, &kept);
+      if (best_flags[k]) kept[pairs[k].idx1] = pairs[k].loop_point;
+    CopyNeighbourhood(ci, snapshot);
+    const std::vector<int>& loop_points = candidate.neighbourhood;
+    SearchByProjection(kf, corrected_pose, points, loop_points, 10.0, matcher_.options().th_low,
+                       &kept);
     // The transform from a few 3D-3D inliers carries their depth noise: refine the pose on every
     // match by reprojection, keep the inliers, and check the correction again.
-    Rigid3d refined_pose = corrected;
-    const int total = RefineLoopPose(*kf, optimizer_, &kept, &refined_pose);
+    Rigid3d refined_pose = corrected_pose;
+    const int total = RefineLoopPose(kf, optimizer_, points, &kept, &refined_pose);
     v.projected = total;
     if (total < options_.min_projection_matches) {
       reject("guided matches", &LoopClosingStats::rejected_projection);
@@ -484,24 +635,40 @@ bool LoopCloser::ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
       std::lock_guard<std::mutex> stats_lock(stats_mutex_);
       stats_.verifications.push_back(v);
     }
-    loop->loop_kf = c;
+    loop->loop_kf = candidate.kf;
     loop->cam_from_world = refined_pose;
-    loop->matches = std::move(kept);
-    loop->loop_points = std::move(loop_points);
+    loop->matches.assign(kf.size(), nullptr);
+    for (size_t i = 0; i < kept.size(); ++i)
+      if (kept[i] >= 0) loop->matches[i] = points[kept[i]].point;
+    loop->loop_points.clear();
+    for (int index : loop_points) loop->loop_points.push_back(points[index].point);
     loop->inliers = best;
     loop->projected = total;
+    loop->correction_m = v.correction_m;
+    loop->correction_deg = v.correction_deg;
+    loop->epoch = snapshot->epoch;
     return true;
   }
   return false;
 }
 
-void LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& loop) {
+bool LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& loop) {
   std::vector<int64_t> moved;
   int fused = 0;
   double shift = 0;
   {
     std::lock_guard<std::mutex> lock(map_->mutex());
-    if (kf->bad || loop.loop_kf->bad) return;
+    // The checks ran without the lock: the map may have changed meanwhile. A culled keyframe or
+    // a global correction (a global BA written back moves every pose the transform was computed
+    // from) makes the loop stale: it is dropped (the revisit is seen again by later keyframes).
+    if (kf->bad || loop.loop_kf->bad || map_->CorrectionEpoch() != loop.epoch) {
+      LOG_INFO << "loop dropped: keyframe " << kf->id << " with keyframe " << loop.loop_kf->id
+               << (kf->bad || loop.loop_kf->bad ? " (a keyframe was culled)"
+                                                : " (the map was corrected during the checks)");
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      stats_.loops_dropped++;
+      return false;
+    }
     map_->BumpCorrectionEpoch();  // local BA in flight must not write back pre-loop poses
     // 1. Move the current keyframe's neighbourhood (and the points it sees) by the loop transform.
     // A revisit (loop keyframe covisible with the current one) must not move the loop side.
@@ -634,6 +801,7 @@ void LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& lo
            << " RANSAC inliers, " << loop.projected << " matches, correction " << shift << " m, "
            << fused << " points fused";
   Report(moved);
+  return true;
 }
 
 void LoopCloser::StartGlobalBundleAdjustment(int64_t loop_kf_id) {

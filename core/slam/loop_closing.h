@@ -6,7 +6,9 @@
 //      (metric depth: no scale) by RANSAC on 3-point Horn/Umeyama solutions scored by
 //      reprojection in both keyframes, refined on the inliers, then a guided projection search of
 //      the candidate's neighbourhood with that transform; enough matches accept the loop;
-//   3. correction: the keyframe and its covisible neighbours are moved by the loop transform (and
+//      Steps 1-2 hold the map lock only to copy what they need (see TakeSnapshot);
+//   3. correction (under the map lock, dropped if the map was corrected meanwhile): the keyframe
+//   and its covisible neighbours are moved by the loop transform (and
 //      their points with them), duplicated map points are fused, covisibility is updated, the
 //      essential graph (spanning tree, strong covisibility, loop edges) is optimised with Ceres,
 //      and map points follow their reference keyframes;
@@ -54,8 +56,16 @@ struct LoopClosingStats {
   std::vector<LoopVerification> verifications;
   int loops_closed = 0;
   int points_fused = 0;
+  // Loops accepted by the checks but not applied: the map was corrected (a global BA written
+  // back) or a keyframe of the loop culled while the checks ran without the map lock.
+  int loops_dropped = 0;
+  // Wall time of the candidates' geometric checks, and the part of it spent holding the map lock
+  // (copying what the checks need); matching, RANSAC and refinement run without it.
+  double check_ms_total = 0, check_locked_ms_total = 0;
+  double detect_ms_total = 0;  // candidate detection (index query), under the map lock
   int global_ba_runs = 0;
   int global_ba_discarded = 0;  // finished after a newer loop: not written back
+  int global_ba_skipped = 0;    // correction below LoopClosing.global_ba_min_correction_*
   double correction_ms_total = 0;
   double global_ba_ms_total = 0;  // wall time of the global BAs written back
   // Every global BA that got to its solver: [start, end] in seconds of std::chrono::steady_clock
@@ -87,11 +97,17 @@ class LoopCloser {
 
  private:
   struct Loop;
+  struct Snapshot;
   void Process(const std::shared_ptr<KeyFrame>& kf);
   std::vector<std::shared_ptr<KeyFrame>> DetectLoop(const std::shared_ptr<KeyFrame>& kf);
-  bool ComputeTransform(const std::shared_ptr<KeyFrame>& kf,
-                        const std::vector<std::shared_ptr<KeyFrame>>& candidates, Loop* loop);
-  void CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& loop);
+  // The geometric checks work on a copy of the map state they need (poses and map points of the
+  // keyframe and its candidates), taken under a short map lock; matching, RANSAC, guided search
+  // and refinement then run without the lock, so tracking and local mapping are not held up.
+  bool TakeSnapshot(const std::shared_ptr<KeyFrame>& kf,
+                    const std::vector<std::shared_ptr<KeyFrame>>& candidates, Snapshot* snapshot);
+  void CopyNeighbourhood(size_t candidate, Snapshot* snapshot);  // locks the map briefly
+  bool ComputeTransform(Snapshot* snapshot, Loop* loop);
+  bool CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& loop);  // false: dropped
   void StartGlobalBundleAdjustment(int64_t loop_kf_id);
   void RunGlobalBundleAdjustment(int64_t epoch);
   void Report(const std::vector<int64_t>& moved);

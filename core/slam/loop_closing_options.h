@@ -48,6 +48,11 @@ struct LoopClosingOptions {
   int essential_min_weight = 100;
   int pose_graph_iterations = 20;
   bool global_bundle_adjustment = true;  // after a loop, in the background
+  // ...unless the loop's correction is below both of these: then the pose graph step is enough
+  // (a 2 mm correction on the there-and-back sequence was followed by a global BA that moved
+  // the trajectory about as much again; BENCHMARKS.md, issue 14).
+  double global_ba_min_correction_m = 0.02;
+  double global_ba_min_correction_deg = 1.0;
   int global_ba_iterations = 10;
   PlaceRecognitionOptions place;
   void Check() const {
@@ -76,6 +81,11 @@ struct LoopClosingOptions {
     DYGSLAM_CHECK_OPTION(essential_min_weight >= 1, "LoopClosing.essential_min_weight");
     DYGSLAM_CHECK_OPTION(pose_graph_iterations >= 1, "LoopClosing.pose_graph_iterations");
     DYGSLAM_CHECK_OPTION(global_ba_iterations >= 1, "LoopClosing.global_ba_iterations");
+    DYGSLAM_CHECK_OPTION(
+        global_ba_min_correction_m >= 0 && std::isfinite(global_ba_min_correction_m),
+        "LoopClosing.global_ba_min_correction_m");
+    DYGSLAM_CHECK_OPTION(global_ba_min_correction_deg >= 0 && global_ba_min_correction_deg <= 180,
+                         "LoopClosing.global_ba_min_correction_deg");
     place.Check();
   }
 };

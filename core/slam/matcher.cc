@@ -419,4 +419,15 @@ int Matcher::SearchByBow(const KeyFrame& kf1, const KeyFrame& kf2, double ratio,
   return static_cast<int>(pairs.size());
 }
 
+std::vector<std::pair<int, int>> Matcher::SearchByBow(const KeyFrame& kf1,
+                                                      const std::vector<uint8_t>& usable1,
+                                                      const KeyFrame& kf2,
+                                                      const std::vector<uint8_t>& usable2,
+                                                      double ratio) const {
+  return MatchWithinNodes(
+      kf2.bow_features, kf2.descriptors, kf2.undistorted, kf1.bow_features, kf1.descriptors,
+      kf1.undistorted, options_, ratio, [&](int i) { return usable2[i] != 0; },
+      [&](int c) { return usable1[c] != 0; });
+}
+
 }  // namespace dygslam

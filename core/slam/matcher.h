@@ -41,6 +41,14 @@ class Matcher {
   // matches[i] = kf2's point matched to kf1's feature i (nullptr: none). Returns the count.
   int SearchByBow(const KeyFrame& kf1, const KeyFrame& kf2, double ratio,
                   std::vector<std::shared_ptr<MapPoint>>* matches) const;
+  // The same search on copies of the map state: usable1/usable2[i] = 1 where feature i has a
+  // usable map point (taken under the map lock; only the keyframes' immutable features are read
+  // here, so no lock is needed). Returns (kf1 feature, kf2 feature) pairs.
+  std::vector<std::pair<int, int>> SearchByBow(const KeyFrame& kf1,
+                                               const std::vector<uint8_t>& usable1,
+                                               const KeyFrame& kf2,
+                                               const std::vector<uint8_t>& usable2,
+                                               double ratio) const;
   // Projects the keyframe's map points using the frame's pose guess (relocalization refinement).
   int SearchByProjection(Frame& frame, const KeyFrame& kf,
                          const std::set<const MapPoint*>& already_found, double radius_px,

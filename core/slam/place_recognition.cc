@@ -75,4 +75,22 @@ std::vector<std::shared_ptr<KeyFrame>> LoopCandidates(const Map& map,
   return GroupCandidates(map, found, options);
 }
 
+std::vector<PlaceCandidate> QueryLoopCandidates(const KeyFrameDatabase& database,
+                                                const KeyFrame& kf, double min_score,
+                                                const std::function<bool(int64_t)>& exclude,
+                                                const PlaceRecognitionOptions& options) {
+  PlaceQueryOptions q;
+  q.min_common_words_ratio = options.min_common_words_ratio;
+  q.min_score = min_score;
+  q.max_results = 1 << 30;
+  return database.Query(kf.bow_vector, q,
+                        [&](int64_t id) { return id == kf.id || (exclude && exclude(id)); });
+}
+
+std::vector<std::shared_ptr<KeyFrame>> GroupPlaceCandidates(
+    const Map& map, const std::vector<PlaceCandidate>& found,
+    const PlaceRecognitionOptions& options) {
+  return GroupCandidates(map, found, options);
+}
+
 }  // namespace dygslam

@@ -42,4 +42,16 @@ std::vector<std::shared_ptr<KeyFrame>> LoopCandidates(const Map& map,
                                                       const std::function<bool(int64_t)>& exclude,
                                                       const PlaceRecognitionOptions& options);
 
+// LoopCandidates in two steps, for a caller that queries the index without the map lock:
+// the query (reads only the index and the keyframe's immutable BoW vector; `exclude` must not
+// touch the map unless the caller holds its lock), then the grouping (the caller holds
+// Map::mutex()).
+std::vector<PlaceCandidate> QueryLoopCandidates(const KeyFrameDatabase& database,
+                                                const KeyFrame& kf, double min_score,
+                                                const std::function<bool(int64_t)>& exclude,
+                                                const PlaceRecognitionOptions& options);
+std::vector<std::shared_ptr<KeyFrame>> GroupPlaceCandidates(
+    const Map& map, const std::vector<PlaceCandidate>& found,
+    const PlaceRecognitionOptions& options);
+
 }  // namespace dygslam

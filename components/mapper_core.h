@@ -1,8 +1,8 @@
 // MapperCore: the mapper component's work without DDS. Keyframe messages' content (new /
-// pose update / removed) -> KeyframeConsumer (mapping/keyframe_consumer.h) -> OctoMapBuilder; the map as a MapUpdate message (binary .bt stream)
-// and as files (map.bt atomically, the .ot at the end). Optionally continues an existing OctoMap
-// (base_map_path). The shell (mapper_component.h) reads keyframes, decides when to publish and
-// writes the status.
+// pose update / removed) -> KeyframeConsumer (mapping/keyframe_consumer.h) -> OctoMapBuilder; the
+// map as a MapUpdate message (binary .bt stream) and as files (map.bt atomically, the .ot at the
+// end). Optionally continues an existing OctoMap (base_map_path). The shell (mapper_component.h)
+// reads keyframes, decides when to publish and writes the status.
 #pragma once
 
 #include <octomap/OcTree.h>

@@ -368,7 +368,13 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
   const double close = frame.geometry->close_depth;
   for (size_t i = 0; i < frame.size(); ++i) {
     if (frame.depth[i] <= 0 || frame.depth[i] >= close) continue;
-    if (frame.map_points[i] && !frame.outlier[i]) {
+    // keyframe_counts_odometry_points = false (ORB-SLAM2's rule): map points only; the temporary
+    // points made from the last frame's depth for the motion model (no keyframe observes them)
+    // do not count as tracked. Counting them let the close features look tracked on a long
+    // straight side of a generated loop while the real inliers fell from 591 to 37, so no
+    // keyframe was made and tracking was lost (issue 14, BENCHMARKS).
+    if (frame.map_points[i] && !frame.outlier[i] &&
+        (options_.keyframe_counts_odometry_points || frame.map_points[i]->NumObservations() > 0)) {
       ++tracked_close;
     } else {
       ++untracked_close;

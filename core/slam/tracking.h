@@ -31,6 +31,12 @@ struct TrackingOptions {
   int new_points_min = 100;  // new keyframe: at least this many points from depth
   int local_keyframes_max = 80;
   int relocalization_candidates = 5;
+  // The keyframe decision's "tracked close points" include the motion model's temporary points
+  // (made from the last frame's depth). true: measured better on bonn_crowd_part (threaded median
+  // of 3: 0.0143 vs 0.0154 m); false: ORB-SLAM2's rule (map points only), which keeps making
+  // keyframes on long loops where the map thins out (the 61.8 m generated loop is tracked to the
+  // end only with false). BENCHMARKS.md, issue 14.
+  bool keyframe_counts_odometry_points = true;
   PlaceRecognitionOptions place;  // candidates from the BoW index (when a vocabulary is set)
   OptimizerOptions optimizer;
   MatcherOptions matcher;

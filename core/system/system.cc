@@ -120,9 +120,9 @@ class SystemImpl {
       database_ = std::make_shared<KeyFrameDatabase>();
       for (const auto& [id, kf] : map_->keyframes()) database_->Add(id, kf->bow_vector);
       tracker_.SetPlaceRecognition(vocabulary_, database_);
-      loop_closer_ = std::make_unique<LoopCloser>(map_, database_, options.loop_closing,
-                                                  options.local_mapping.optimizer,
-                                                  options.local_mapping.matcher, !options.deterministic);
+      loop_closer_ = std::make_unique<LoopCloser>(
+          map_, database_, options.loop_closing, options.local_mapping.optimizer,
+          options.local_mapping.matcher, !options.deterministic);
       loop_closer_->SetCorrectionCallback(
           [this](const std::vector<int64_t>& moved) { EmitMapChanges(moved, {}); });
       LoopCloser* closer = loop_closer_.get();

@@ -84,10 +84,13 @@ struct SystemOptions {
   // The internal detector runs on every n-th frame (`Detector.every_n_frames`); the frames in
   // between get the last boxes shifted by their content's image motion (box_propagation, see
   // core/dynamic/detection_propagation.h) and the filter carries its per-feature probabilities
-  // through the matches as on every frame. 1: every frame (the paper); 3 (the default, issue 19):
-  // ~0.86x the CPU per frame at an ATE not worse on bonn_crowd_part. Detections given to
-  // FeedRgbdFrame from outside are used as given (and carried to FeedRgbdFrameCarryingBoxes).
-  int detection_every_n_frames = 3;
+  // through the matches as on every frame. 1: every frame (the paper, the default); 3: ~0.86x the
+  // CPU per frame at an ATE not worse on bonn_crowd_part, but the keyframe masks made from
+  // carried boxes let more of the people into the map (ghost voxels 90 instead of 69-75 against
+  // 758 unfiltered: 8.4x fewer instead of the 10x mapping/SlamMap requires). BENCHMARKS.md,
+  // issue 19. Detections given to FeedRgbdFrame from outside are used as given (and carried to
+  // FeedRgbdFrameCarryingBoxes).
+  int detection_every_n_frames = 1;
   BoxPropagationOptions box_propagation;
   // Crowded frames: when fewer than this share of nFeatures survive the filter, features are
   // extracted again outside the detection boxes (budget = the shortfall) so tracking keeps a

@@ -91,12 +91,14 @@ TEST(MapFileBonn, MapThenLocalizeThenExtend) {
   // Localization adds nothing to the map.
   EXPECT_EQ(localization.sizes.keyframes, mapping.sizes.keyframes);
   EXPECT_EQ(localization.sizes.map_points, mapping.sizes.map_points);
-  // Each frame's pose as a robot gets it: localizing in the finished map is better than what the
-  // mapping run knew at that frame (measured 0.0186 against 0.0204 m). The mapping run's final
-  // trajectory has its keyframes refined by local BA after the fact, which localization (a fixed
-  // map) cannot do: measured 0.0164 against 0.0160 m (1.03x); margin to 1.10x.
-  EXPECT_LE(online_localization, online_mapping);
-  EXPECT_LE(ate_localization, 1.10 * ate_mapping);
+  // Deterministic, after issue 22's filter (fixed anchors, depth-refined boxes): the mapping
+  // run's per-frame poses improved from 0.0204 to 0.0151 m and localizing in the finished map
+  // gives 0.0169 m per frame (1.12x) and 0.0157 m final against 0.0146 m (1.08x); before that
+  // filter 0.0186 vs 0.0204 (0.91x) and 0.0164 vs 0.0160 (1.03x). With real threading the
+  // localization's median was below the mapping run's (BENCHMARKS, SLAM map files). Margins:
+  // 1.25x per frame, 1.15x final.
+  EXPECT_LE(online_localization, 1.25 * online_mapping);
+  EXPECT_LE(ate_localization, 1.15 * ate_mapping);
   // Extended without localization: the known places are not mapped again (measured +0 %
   // keyframes, +3.5 % points).
   EXPECT_LT(extension.sizes.keyframes, 1.10 * mapping.sizes.keyframes);

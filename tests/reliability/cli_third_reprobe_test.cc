@@ -21,6 +21,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -242,7 +243,14 @@ TEST_F(CliThirdReprobe, DdsRunAppliesTheCadenceAndKeepsTheUsersGroundTruth) {
   DYGSLAM_REQUIRE_MODELS(models);
   const std::string dataset = SmallDataset(source, 10, "dds", /*with_groundtruth=*/true);
   const std::string settings = dir_ + "/every3.yaml";
-  std::ofstream(settings) << testing::ReadAll(Config()) << "Detector:\n  every_n_frames: 3\n";
+  {
+    // The preset's own Detector.every_n_frames line is replaced (a key given twice is an error).
+    std::istringstream preset(testing::ReadAll(Config()));
+    std::ofstream out(settings);
+    for (std::string line; std::getline(preset, line);)
+      if (line.rfind("Detector.every_n_frames", 0) != 0) out << line << "\n";
+    out << "Detector:\n  every_n_frames: 3\n";
+  }
   const std::string out = dir_ + "/o_dds";
   fs::create_directories(out);
   const std::string mine = "# my own ground truth, not the dataset's\n1 0 0 0 0 0 0 1\n";

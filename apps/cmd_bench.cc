@@ -251,7 +251,7 @@ std::string SafeName(const std::string& s) {
 int RunBench(const std::vector<std::string>& args) {
   ArgParser p(
       "bench", kUsage,
-      "Runs every configuration (none = no filter, ORB-SLAM2-equivalent; boxes = box removal\n"
+      "Runs every configuration (none = no filter, our tracker; boxes = box removal\n"
       "only; geometry = geometry only; full = the full method) and the cv::rgbd::RgbdICPOdometry\n"
       "baseline on every TUM/Bonn sequence in DATA_DIR (a sequence folder or a folder of them),\n"
       "N runs each, and writes DIR/report.md (medians: ATE like the paper's Tables 1-2, stage\n"

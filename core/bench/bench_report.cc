@@ -262,7 +262,7 @@ std::string RenderBenchMarkdown(const BenchContext& context, const std::vector<B
   md << "### Accuracy (layout of the paper's Tables 1-2)\n\n";
   md << "ATE in metres over all frames with a pose (ok, fallback or relocalized; poses / frames "
         "beside it), median over runs. γ = (1 − η/μ) × 100 %: η = the configuration, μ = no "
-        "filter (ORB-SLAM2-equivalent) on the same frame set: its ATE over only the frames the "
+        "filter (our tracker) on the same frame set: its ATE over only the frames the "
         "configuration has a pose for.\n\n";
   // μ of a configuration: the no-filter ATE on the configuration's frames when known.
   auto mu = [](const BenchCell& c, const BenchCell& none) {

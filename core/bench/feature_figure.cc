@@ -137,7 +137,7 @@ FeatureFigure DrawFeatureFigure(const RgbdDataset& dataset, size_t rgb_entry,
     figure.num_kept_in_boxes_full = kept_in_boxes;
     char text[160];
     std::snprintf(text, sizeof(text), "%d features, all used", n);
-    DrawLabel(all, "no filter (ORB-SLAM2-equivalent)", text);
+    DrawLabel(all, "no filter (our tracker)", text);
     std::snprintf(text, sizeof(text), "%d boxes: %d removed, %d static", figure.num_boxes,
                   by_boxes.num_dynamic, n - by_boxes.num_dynamic);
     DrawLabel(boxed, "box removal only", text);

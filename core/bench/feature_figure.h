@@ -1,5 +1,5 @@
 // The features picture of `dygslam bench` (like the paper's Fig. 3 and 10): one frame drawn three
-// ways side by side: every ORB feature (no filter, ORB-SLAM2-equivalent), box removal only, and
+// ways side by side: every ORB feature (no filter, our tracker), box removal only, and
 // the full method (static features green, dynamic red, static features kept inside a box yellow,
 // detector boxes red). The filters run on the frames before the drawn one as well, so the
 // Kalman-fused probabilities of the full method are those of a running system.

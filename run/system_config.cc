@@ -84,6 +84,7 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
        {"motion_radius_px", &options.tracking.motion_radius_px},
        {"max_frames_between_keyframes", &options.tracking.max_frames_between_keyframes},
        {"ref_ratio", &options.tracking.ref_ratio},
+       {"localization_local_keyframes", &options.tracking.localization_local_keyframes},
        {"keyframe_counts_odometry_points", &options.tracking.keyframe_counts_odometry_points},
        {"dense_fallback", &options.tracking.dense_fallback},
        {"fallback_min_inlier_fraction", &options.tracking.fallback.min_inlier_fraction},

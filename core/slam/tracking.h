@@ -30,6 +30,10 @@ struct TrackingOptions {
   int close_untracked_min = 70;
   int new_points_min = 100;  // new keyframe: at least this many points from depth
   int local_keyframes_max = 80;
+  // Localization mode: the local map is the keyframe sharing the most of the frame's matched
+  // points plus its best covisible keyframes, this many keyframes in all (the mapping run's local
+  // map, every keyframe observing a matched point, mixes points of other times and drift).
+  int localization_local_keyframes = 2;
   int relocalization_candidates = 5;
   // The keyframe decision's "tracked close points" include the motion model's temporary points
   // (made from the last frame's depth). true: measured better on bonn_crowd_part (threaded median
@@ -59,6 +63,8 @@ struct TrackingOptions {
     DYGSLAM_CHECK_OPTION(init_min_features > 0, "Tracking.init_min_features");
     DYGSLAM_CHECK_OPTION(motion_radius_px > 0, "Tracking.motion_radius_px");
     DYGSLAM_CHECK_OPTION(ref_ratio > 0 && ref_ratio <= 1, "Tracking.ref_ratio");
+    DYGSLAM_CHECK_OPTION(localization_local_keyframes >= 1,
+                         "Tracking.localization_local_keyframes");
     DYGSLAM_CHECK_OPTION(max_frames_between_keyframes >= 1,
                          "Tracking.max_frames_between_keyframes");
     place.Check();

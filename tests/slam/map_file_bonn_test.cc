@@ -91,14 +91,37 @@ TEST(MapFileBonn, MapThenLocalizeThenExtend) {
   // Localization adds nothing to the map.
   EXPECT_EQ(localization.sizes.keyframes, mapping.sizes.keyframes);
   EXPECT_EQ(localization.sizes.map_points, mapping.sizes.map_points);
-  // Deterministic, after issue 22's filter (fixed anchors, depth-refined boxes): the mapping
-  // run's per-frame poses improved from 0.0204 to 0.0151 m and localizing in the finished map
-  // gives 0.0169 m per frame (1.12x) and 0.0157 m final against 0.0146 m (1.08x); before that
-  // filter 0.0186 vs 0.0204 (0.91x) and 0.0164 vs 0.0160 (1.03x). With real threading the
-  // localization's median was below the mapping run's (BENCHMARKS, SLAM map files). Margins:
-  // 1.25x per frame, 1.15x final.
-  EXPECT_LE(online_localization, 1.25 * online_mapping);
-  EXPECT_LE(ate_localization, 1.15 * ate_mapping);
+  // The acceptance: localization final ATE <= the mapping run's. Deterministic, localizing
+  // against the reference keyframe and its best covisible (Tracking.localization_local_keyframes):
+  // 0.0140 m final against the mapping run's 0.0146 m (0.96x) and 0.0150 m per frame against
+  // 0.0151 m (0.99x); with every keyframe that sees a matched point (the mapping run's local map)
+  // it was 0.0157 / 0.0169 m (1.08x / 1.12x). Per frame: margin 5 %.
+  EXPECT_LE(ate_localization, ate_mapping);
+  EXPECT_LE(online_localization, 1.05 * online_mapping);
+  // A localization run's map does not move: its final trajectory differs from the per-frame one
+  // only where a fallback stretch was re-anchored when features returned (the stretch and the
+  // weakly held feature frames just before it; measured 22 frames: 19 fallback + 3 before them).
+  ASSERT_EQ(localization.trajectory.size(), localization.states.size());
+  ASSERT_EQ(localization.online.size(), localization.states.size());
+  // (Moved: by more than 1 um / 1 urad; the two are computed differently, cam_from_ref x
+  // keyframe pose vs the frame's own pose, and differ in the last bits.)
+  std::vector<bool> moved(localization.states.size());
+  for (size_t i = 0; i < moved.size(); ++i) {
+    const Rigid3d& final_pose = localization.trajectory[i].world_from_cam;
+    const Rigid3d& online_pose = localization.online[i].world_from_cam;
+    moved[i] = (final_pose.translation - online_pose.translation).norm() > 1e-6 ||
+               RotationAngle(final_pose.rotation.inverse() * online_pose.rotation) > 1e-6;
+  }
+  int moved_count = 0;
+  for (size_t i = 0; i < moved.size(); ++i) {
+    if (!moved[i]) continue;
+    ++moved_count;
+    size_t k = i;  // the moved run this frame starts must reach a fallback frame
+    while (k < moved.size() && moved[k] && localization.states[k] != TrackingState::kFallback) ++k;
+    EXPECT_TRUE(k < moved.size() && moved[k] && localization.states[k] == TrackingState::kFallback)
+        << "frame " << i << " moved after the fact outside a re-anchored fallback stretch";
+  }
+  std::printf("localization: %d frames re-anchored after the fact\n", moved_count);
   // Extended without localization: the known places are not mapped again (measured +0 %
   // keyframes, +3.5 % points).
   EXPECT_LT(extension.sizes.keyframes, 1.10 * mapping.sizes.keyframes);

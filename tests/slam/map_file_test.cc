@@ -46,6 +46,7 @@ class MapFileTest : public ::testing::Test {
     for (const SyntheticFrame& f : *frames_) mapping.FeedRgbdFrame(f.rgb, f.depth, f.stamp);
     mapping.Shutdown();
     mapping_trajectory_ = new std::vector<StampedPose>(mapping.Trajectory());
+    mapping_keyframes_ = new std::vector<StampedPose>(mapping.KeyframeTrajectory());
     mapping_sizes_ = new MapStatistics(mapping.MapSizes());
     mapping.SaveMap(MapPath());
   }
@@ -54,6 +55,7 @@ class MapFileTest : public ::testing::Test {
     delete synth_;
     delete dir_;
     delete mapping_trajectory_;
+    delete mapping_keyframes_;
     delete mapping_sizes_;
   }
   static SystemOptions Options() {
@@ -102,13 +104,15 @@ class MapFileTest : public ::testing::Test {
   static SyntheticOptions* synth_;
   static std::vector<SyntheticFrame>* frames_;
   static std::string* dir_;
-  static std::vector<StampedPose>* mapping_trajectory_;
+  static std::vector<StampedPose>* mapping_trajectory_;  // final: through the map's keyframes
+  static std::vector<StampedPose>* mapping_keyframes_;   // the map's keyframes (saved poses)
   static MapStatistics* mapping_sizes_;
 };
 SyntheticOptions* MapFileTest::synth_ = nullptr;
 std::vector<SyntheticFrame>* MapFileTest::frames_ = nullptr;
 std::string* MapFileTest::dir_ = nullptr;
 std::vector<StampedPose>* MapFileTest::mapping_trajectory_ = nullptr;
+std::vector<StampedPose>* MapFileTest::mapping_keyframes_ = nullptr;
 MapStatistics* MapFileTest::mapping_sizes_ = nullptr;
 
 TEST_F(MapFileTest, SaveLoadSaveIsByteIdentical) {
@@ -150,19 +154,48 @@ TEST_F(MapFileTest, LocalizationTracksEveryFrameDeterministicallyWithoutGrowing)
     EXPECT_TRUE(a[i].world_from_cam.translation == b[i].world_from_cam.translation);
     EXPECT_TRUE(a[i].world_from_cam.rotation.coeffs() == b[i].world_from_cam.rotation.coeffs());
   }
-  // The same world frame as the mapping run, pose for pose (unaligned): the map's poses are the
-  // mapping run's keyframes (measured 17 mm at most over the 80 frames; margin 3x), and the
-  // localization is at least as accurate as the mapping run against the ground truth (ATE
-  // measured 0.7x the mapping run's; margin: not worse by more than 10 %).
+  // The same world frame as the mapping run, pose for pose (unaligned), compared with the mapping
+  // run's final trajectory, which is defined by the same map: a keyframe's frame has the map's
+  // keyframe pose, any other frame its keyframe's pose x the relative pose tracked then. Not
+  // bit-identical (issue 15, BENCHMARKS.md "identity with the mapping run"): the relative pose of a
+  // non-keyframe was estimated against the map as it was at that frame (points since moved by
+  // local BA, fused, culled, keyframes added), which the finished map does not contain; and a
+  // keyframe's pose is the joint optimum of bundle adjustment over its own observations, while
+  // localization re-matches the frame and optimises its pose alone against the fixed points.
+  // What holds: the frames that made the keyframes are localized at the map's keyframe poses,
+  // and every frame near its mapping-run pose (measured: 2.4 mm / 0.037 deg at the 12 keyframes'
+  // frames, 16.4 mm over all 80 frames; margins 3x).
   ASSERT_EQ(a.size(), mapping_trajectory_->size());
-  double max_diff = 0;
-  for (size_t i = 0; i < a.size(); ++i)
-    max_diff = std::max(max_diff, (a[i].world_from_cam.translation -
-                                   (*mapping_trajectory_)[i].world_from_cam.translation)
-                                      .norm());
-  std::printf("localization vs mapping run: max position difference %.5f m over %zu frames\n",
-              max_diff, a.size());
+  ASSERT_FALSE(mapping_keyframes_->empty());
+  double max_diff = 0, max_keyframe_diff = 0, max_keyframe_angle = 0;
+  size_t keyframes_seen = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].stamp, (*mapping_trajectory_)[i].stamp);
+    const double diff =
+        (a[i].world_from_cam.translation - (*mapping_trajectory_)[i].world_from_cam.translation)
+            .norm();
+    max_diff = std::max(max_diff, diff);
+    for (const StampedPose& kf : *mapping_keyframes_) {
+      if (kf.stamp != a[i].stamp) continue;
+      ++keyframes_seen;
+      max_keyframe_diff =
+          std::max(max_keyframe_diff,
+                   (a[i].world_from_cam.translation - kf.world_from_cam.translation).norm());
+      max_keyframe_angle = std::max(
+          max_keyframe_angle,
+          RotationAngle(a[i].world_from_cam.rotation.inverse() * kf.world_from_cam.rotation));
+    }
+  }
+  std::printf(
+      "localization vs mapping run: max position difference %.5f m over %zu frames; at the %zu "
+      "keyframes' frames %.5f m, %.4f deg\n",
+      max_diff, a.size(), keyframes_seen, max_keyframe_diff, max_keyframe_angle * 180 / M_PI);
+  EXPECT_EQ(keyframes_seen, mapping_keyframes_->size());
   EXPECT_LT(max_diff, 0.05);
+  EXPECT_LT(max_keyframe_diff, 0.0075);
+  EXPECT_LT(max_keyframe_angle * 180 / M_PI, 0.12);
+  // At least as accurate as the mapping run against the ground truth (ATE measured 0.77x the
+  // mapping run's; margin: not worse by more than 10 %).
   std::vector<StampedPose> gt;
   for (const SyntheticFrame& f : *frames_) gt.push_back({f.stamp, f.world_from_cam});
   const double ate_localization = ComputeAte(gt, a).error.rmse;

@@ -85,6 +85,7 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
        {"max_frames_between_keyframes", &options.tracking.max_frames_between_keyframes},
        {"ref_ratio", &options.tracking.ref_ratio},
        {"keyframe_counts_odometry_points", &options.tracking.keyframe_counts_odometry_points},
+       {"keyframe_min_map_inliers", &options.tracking.keyframe_min_map_inliers},
        {"dense_fallback", &options.tracking.dense_fallback},
        {"fallback_min_inlier_fraction", &options.tracking.fallback.min_inlier_fraction},
        {"fallback_min_inliers", &options.tracking.fallback.min_inliers},

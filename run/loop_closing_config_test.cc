@@ -31,7 +31,7 @@ SystemOptions Options(const std::string& section) {
 
 TEST(LoopClosingConfig, DefaultsUseTheShippedVocabulary) {
   const SystemOptions o = Options("");
-  EXPECT_FALSE(o.loop_closing.enabled);  // off by default (a false loop on bonn_crowd_part)
+  EXPECT_TRUE(o.loop_closing.enabled);  // on by default (BENCHMARKS.md, issue 14)
   EXPECT_NE(o.loop_closing.vocabulary.find("vocabulary.dygvoc"), std::string::npos);
   std::ifstream file(o.loop_closing.vocabulary);
   EXPECT_TRUE(file.good()) << o.loop_closing.vocabulary;
@@ -46,6 +46,20 @@ TEST(LoopClosingConfig, SwitchOnOffAndNoVocabulary) {
   EXPECT_FALSE(off.loop_closing.vocabulary.empty());  // relocalization still uses the index
   const SystemOptions none = Options("LoopClosing:\n  vocabulary: none\n");
   EXPECT_TRUE(none.loop_closing.vocabulary.empty());
+}
+
+TEST(LoopClosingConfig, KeyframeMapInlierFloorIsReadAndChecked) {
+  EXPECT_EQ(Options("").tracking.keyframe_min_map_inliers,
+            TrackingOptions{}.keyframe_min_map_inliers);
+  EXPECT_EQ(Options("Tracking:\n  keyframe_min_map_inliers: 0\n").tracking.keyframe_min_map_inliers,
+            0);
+  try {
+    Options("Tracking:\n  keyframe_min_map_inliers: -5\n");
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("Tracking.keyframe_min_map_inliers"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(LoopClosingConfig, MissingVocabularyAndBadValuesAreNamed) {

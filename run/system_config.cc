@@ -86,6 +86,7 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
        {"ref_ratio", &options.tracking.ref_ratio},
        {"localization_local_keyframes", &options.tracking.localization_local_keyframes},
        {"keyframe_counts_odometry_points", &options.tracking.keyframe_counts_odometry_points},
+       {"keyframe_min_map_inliers", &options.tracking.keyframe_min_map_inliers},
        {"dense_fallback", &options.tracking.dense_fallback},
        {"fallback_min_inlier_fraction", &options.tracking.fallback.min_inlier_fraction},
        {"fallback_min_inliers", &options.tracking.fallback.min_inliers},

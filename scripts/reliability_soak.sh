@@ -5,8 +5,8 @@
 #   scripts/reliability_soak.sh [BUILD_DIR] [MINUTES] [DATASET_DIR] [FILTER] [OUT_DIR]
 # Defaults: build-rel, 30, $DYGSLAM_DATA_DIR/bonn_crowd_part (or ../shared/data/...), full,
 # out/soak. Build first: cmake --build BUILD_DIR --target reliability_soak
-# DYGSLAM_SOAK_CONFIG=FILE: settings file instead of config/bonn.yaml (e.g. with
-# `LoopClosing: {enabled: true}`: the summary counts the loops closed per soak loop).
+# DYGSLAM_SOAK_CONFIG=FILE: settings file instead of config/bonn.yaml (loop closing is on by
+# default: the summary counts the loops closed per soak loop; `LoopClosing: {enabled: false}` turns it off).
 #
 # The DDS pipeline instead (issue 19): `dygslam run DATASET --loop-minutes MINUTES` (the player
 # replays the frames, map on) in the default mode (components as threads) or with --processes,

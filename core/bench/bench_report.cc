@@ -86,7 +86,7 @@ std::string Num(double v) {
 }  // namespace
 
 std::string ConfigLabel(const std::string& config) {
-  if (config == "none") return "no filter (our tracker; loop closing off by default)";
+  if (config == "none") return "no filter (our tracker)";
   if (config == "boxes") return "box removal only";
   if (config == "geometry") return "geometry only";
   if (config == "paper") return "paper's method (DYG-SLAM as written)";

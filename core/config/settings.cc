@@ -127,7 +127,7 @@ const std::vector<std::string>& KnownSettingsKeys() {
       // run/system_config.cc.
       "Tracking.init_min_features", "Tracking.motion_radius_px",
       "Tracking.max_frames_between_keyframes", "Tracking.ref_ratio",
-      "Tracking.keyframe_counts_odometry_points",
+      "Tracking.keyframe_counts_odometry_points", "Tracking.keyframe_min_map_inliers",
       "Tracking.fallback_smoothing", "Tracking.fallback_smoothing_weak_inliers",
       "LocalMapping.triangulation_neighbors", "LocalMapping.cull_keyframes",
       "LocalMapping.redundancy_ratio", "DynamicFilter.mode", "DynamicFilter.C1",

@@ -13,12 +13,12 @@ struct LoopClosingOptions {
   // Bag-of-words vocabulary file (`dygslam vocab`). Empty: no place recognition at all
   // (relocalization and reference-keyframe tracking match by brute force, no loop closing).
   std::string vocabulary;
-  // LoopClosing.enabled: detect and close loops. Off by default: on bonn_crowd_part (no revisit,
-  // no loop accepted since the stricter checks; deterministic output identical on and off) the
-  // threaded median of 3 was still a little worse on than off on the shared machine (2026-12-02:
-  // 0.0171 vs 0.0162 m; BENCHMARKS.md, issue 14). Relocalization and reference-keyframe tracking
-  // use the index either way.
-  bool enabled = false;
+  // LoopClosing.enabled: detect and close loops. On by default: on bonn_crowd_part (no revisit, no
+  // loop accepted; deterministic output identical on and off) it cost nothing measurable once the
+  // checks ran outside the map lock (quiet machine, 2026-12-02, threaded median of 3: ATE 0.0139
+  // on vs 0.0142 m off, CPU per frame within the run-to-run spread; BENCHMARKS.md, issue 14).
+  // Relocalization and reference-keyframe tracking use the index either way.
+  bool enabled = true;
   // Candidates: keyframes at least this many keyframes older than the query...
   int min_keyframe_gap = 10;
   // ...and not covisible with it, unless the keyframe path since them is at least this long (a

@@ -398,8 +398,11 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
       ++untracked_close;
     }
   }
-  const bool need_close =
-      tracked_close < options_.close_tracked_min && untracked_close > options_.close_untracked_min;
+  // The map-point floor (keyframe_min_map_inliers) joins the close-point rule: both say the map
+  // no longer covers what the camera sees, whatever the odometry points hold up.
+  const bool need_close = (tracked_close < options_.close_tracked_min &&
+                           untracked_close > options_.close_untracked_min) ||
+                          last_inliers_ < options_.keyframe_min_map_inliers;
   const double ratio = kfs < 2 ? 0.4 : options_.ref_ratio;
   const bool c1a = frame.id >= last_kf_frame_id_ + options_.max_frames_between_keyframes;
   const bool c1b = mapper_idle;

@@ -724,10 +724,33 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
   }
 
   // f. Expansion to unmatched dynamic-region features (eqs. 11-12).
-  std::vector<int> matched_dyn;
-  for (int i = 0; i < n; ++i)
+  std::vector<int> matched_dyn, matched_outside;
+  for (int i = 0; i < n; ++i) {
     if (has_posterior[i] && result.features[i].in_dynamic_region) matched_dyn.push_back(i);
+    if (has_posterior[i] && !result.features[i].in_dynamic_region) matched_outside.push_back(i);
+  }
   const double delta2 = o.delta * o.delta;
+  // Eqs. 11-12 from `sources` to feature i (depth-gated in depth mode), starting from `base`.
+  const auto expand = [&](int i, double base, const std::vector<int>& sources) {
+    double weight_sum = 0, change = 0;
+    for (int m : sources) {
+      const double dx = kps[m].pt.x - kps[i].pt.x, dy = kps[m].pt.y - kps[i].pt.y;
+      const double d2 = dx * dx + dy * dy;
+      if (d2 > delta2) continue;
+      if (depth_mode && o.expansion_depth_gap > 0) {
+        const float zi = (*input.depths)[i], zm = (*input.depths)[m];
+        if (zi > 0 && zm > 0 && std::abs(zi - zm) > o.expansion_depth_gap) continue;
+      }
+      const double w = ExpansionWeight(std::sqrt(d2), o.c2, o.delta);
+      weight_sum += w;
+      change += w * (posterior[m].p - base);
+    }
+    // Eq. 11 sums without normalising (the paper; clamped below). Ours (depth mode): a
+    // weighted mean once the weights exceed 1, so many static neighbours cannot add up to a
+    // certainty.
+    return std::clamp(base + (depth_mode && weight_sum > 1 ? change / weight_sum : change), 0.0,
+                      1.0);
+  };
   std::vector<State> states(n);
   for (int i = 0; i < n; ++i) {
     FeatureStatus& fs = result.features[i];
@@ -738,6 +761,13 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
         states[i] = {true, posterior[i]};
         fs.is_dynamic = fs.probability > o.threshold;
         result.num_dynamic += fs.is_dynamic;
+      } else if (test_outside && o.expand_outside && has_prev_) {
+        // expand_outside: an unmatched feature outside the boxes inherits from its matched
+        // neighbours outside the boxes, and its track starts from that (as in geometry mode).
+        fs.probability = expand(i, o.outside_p_init, matched_outside);
+        states[i] = {true, {fs.probability, o.initial_variance}};
+        fs.is_dynamic = fs.probability > o.threshold;
+        result.num_dynamic += fs.is_dynamic;
       }
       continue;
     }
@@ -746,24 +776,7 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
       states[i] = {true, posterior[i]};
     } else {
       const double base = fs.in_box_background ? o.outside_p_init : region_prior;
-      double p = base, weight_sum = 0, change = 0;
-      for (int m : matched_dyn) {
-        const double dx = kps[m].pt.x - kps[i].pt.x, dy = kps[m].pt.y - kps[i].pt.y;
-        const double d2 = dx * dx + dy * dy;
-        if (d2 > delta2) continue;
-        if (depth_mode && o.expansion_depth_gap > 0) {
-          const float zi = (*input.depths)[i], zm = (*input.depths)[m];
-          if (zi > 0 && zm > 0 && std::abs(zi - zm) > o.expansion_depth_gap) continue;
-        }
-        const double w = ExpansionWeight(std::sqrt(d2), o.c2, o.delta);
-        weight_sum += w;
-        change += w * (posterior[m].p - base);
-      }
-      // Eq. 11 sums without normalising (the paper; clamped below). Ours (depth mode): a
-      // weighted mean once the weights exceed 1, so many static neighbours cannot add up to a
-      // certainty.
-      p += depth_mode && weight_sum > 1 ? change / weight_sum : change;
-      fs.probability = std::clamp(p, 0.0, 1.0);
+      fs.probability = expand(i, base, matched_dyn);
       states[i] = {true, {fs.probability, o.initial_variance}};
     }
     // g. Decision. Geometry mode has no information on the first frame: keep everything.

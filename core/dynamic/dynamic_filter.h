@@ -169,6 +169,12 @@ struct DynamicFilterOptions {
   double consensus_radius = 90.0;    // px
   double consensus_depth_gap = 0.3;  // m
   int consensus_min_neighbours = 3;
+  // Ours (issue 22, round 3): in full mode with the depth-residual test, unmatched features
+  // outside the boxes get the expansion (eqs. 11-12, from outside_p_init) from their matched
+  // neighbours outside the boxes and carry it as their track's prior, as every feature does in
+  // geometry mode. Without it a new track on a mover no box reports starts again from
+  // outside_p_init (measured: undetected-mover recall 0.50 without, 0.99 with).
+  bool expand_outside = true;
 
   void Check() const;
 };

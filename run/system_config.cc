@@ -191,6 +191,9 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                       {"outside_p_init", &f.outside_p_init},
                       {"world_anchors", &f.world_anchors},
                       {"box_depth_band", &f.box_depth_band},
+                      {"consensus_radius", &f.consensus_radius},
+                      {"consensus_depth_gap", &f.consensus_depth_gap},
+                      {"expand_outside", &f.expand_outside},
                       {"expansion_depth_gap", &f.expansion_depth_gap}});
   filter.CheckOptions(f);
 

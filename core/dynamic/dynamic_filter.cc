@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 #include <opencv2/calib3d.hpp>
+#include <unordered_map>
 
 #include "core/dynamic/dynamic_mask.h"
 
@@ -50,7 +51,8 @@ void DynamicFilterOptions::Check() const {
   DYGSLAM_CHECK_OPTION(initial_variance > 0 && std::isfinite(initial_variance),
                        "DynamicFilter.initial_variance");
   DYGSLAM_CHECK_OPTION(box_margin >= 0 && std::isfinite(box_margin), "DynamicFilter.box_margin");
-  DYGSLAM_CHECK_OPTION(box_margin_fraction >= 0 && box_margin_fraction <= 1, "DynamicFilter.box_margin_fraction");
+  DYGSLAM_CHECK_OPTION(box_margin_fraction >= 0 && box_margin_fraction <= 1,
+                       "DynamicFilter.box_margin_fraction");
   DYGSLAM_CHECK_OPTION(search_radius > 0 && search_radius <= 1000, "DynamicFilter.search_radius");
   DYGSLAM_CHECK_OPTION(max_hamming >= 0 && max_hamming <= 256, "DynamicFilter.max_hamming");
   DYGSLAM_CHECK_OPTION(ratio > 0 && ratio <= 1, "DynamicFilter.ratio");
@@ -84,6 +86,12 @@ void DynamicFilterOptions::Check() const {
   DYGSLAM_CHECK_OPTION(outside_p_init >= 0 && outside_p_init <= 1, "DynamicFilter.outside_p_init");
   DYGSLAM_CHECK_OPTION(std::isfinite(box_depth_band) && box_depth_band <= 10,
                        "DynamicFilter.box_depth_band");
+  DYGSLAM_CHECK_OPTION(consensus_radius >= 0 && consensus_radius <= 200,
+                       "DynamicFilter.consensus_radius");
+  DYGSLAM_CHECK_OPTION(consensus_depth_gap > 0 && std::isfinite(consensus_depth_gap),
+                       "DynamicFilter.consensus_depth_gap");
+  DYGSLAM_CHECK_OPTION(consensus_min_neighbours >= 1 && consensus_min_neighbours <= 100,
+                       "DynamicFilter.consensus_min_neighbours");
 }
 
 std::vector<uint8_t> FilterResult::DynamicFlags() const {
@@ -130,7 +138,8 @@ int HammingDistance256(const uint8_t* a, const uint8_t* b) {
   return dist;
 }
 
-bool InAnyBox(const cv::Point2f& p, const std::vector<Detection>& detections, const DynamicFilterOptions& o) {
+bool InAnyBox(const cv::Point2f& p, const std::vector<Detection>& detections,
+              const DynamicFilterOptions& o) {
   for (const Detection& d : detections) {
     const cv::Rect2f r = DynamicRegion(d, o);
     if (p.x >= r.x && p.x <= r.x + r.width && p.y >= r.y && p.y <= r.y + r.height) return true;
@@ -139,8 +148,10 @@ bool InAnyBox(const cv::Point2f& p, const std::vector<Detection>& detections, co
 }
 
 cv::Rect2f DynamicRegion(const Detection& detection, const DynamicFilterOptions& options) {
-  const float m = static_cast<float>(options.box_margin + options.box_margin_fraction * detection.box.width);
-  return cv::Rect2f(detection.box.x - m, detection.box.y - m, detection.box.width + 2 * m, detection.box.height + 2 * m);
+  const float m =
+      static_cast<float>(options.box_margin + options.box_margin_fraction * detection.box.width);
+  return cv::Rect2f(detection.box.x - m, detection.box.y - m, detection.box.width + 2 * m,
+                    detection.box.height + 2 * m);
 }
 
 DynamicFilter::DynamicFilter(const DynamicFilterOptions& options) : options_(options) {
@@ -342,6 +353,51 @@ void DynamicFilter::SplitBoxesByDepth(const FilterInput& input, FilterResult* re
   }
 }
 
+void DynamicFilter::Consensus(const FilterInput& input, FilterResult* result) const {
+  const DynamicFilterOptions& o = options_;
+  const std::vector<cv::KeyPoint>& kps = input.keypoints;
+  const std::vector<float>& depths = *input.depths;
+  const int n = static_cast<int>(kps.size());
+  // Features with depth in a grid of consensus_radius cells.
+  const double cell = o.consensus_radius;
+  std::unordered_map<int64_t, std::vector<int>> grid;
+  const auto key = [](int64_t cx, int64_t cy) { return (cx << 32) ^ (cy & 0xffffffff); };
+  for (int i = 0; i < n; ++i)
+    if (depths[i] > 0)
+      grid[key(static_cast<int64_t>(std::floor(kps[i].pt.x / cell)),
+               static_cast<int64_t>(std::floor(kps[i].pt.y / cell)))]
+          .push_back(i);
+  const double r2 = o.consensus_radius * o.consensus_radius;
+  std::vector<char> label(n);
+  for (int i = 0; i < n; ++i) label[i] = result->features[i].is_dynamic;
+  for (int i = 0; i < n; ++i) {
+    // Features without depth, and the box's object itself, keep their label.
+    if (depths[i] <= 0 || result->features[i].at_object_depth) continue;
+    const int64_t cx = static_cast<int64_t>(std::floor(kps[i].pt.x / cell));
+    const int64_t cy = static_cast<int64_t>(std::floor(kps[i].pt.y / cell));
+    int near = 0, flagged = 0;
+    for (int64_t gx = cx - 1; gx <= cx + 1; ++gx) {
+      for (int64_t gy = cy - 1; gy <= cy + 1; ++gy) {
+        const auto it = grid.find(key(gx, gy));
+        if (it == grid.end()) continue;
+        for (int j : it->second) {
+          if (j == i) continue;
+          const double dx = kps[j].pt.x - kps[i].pt.x, dy = kps[j].pt.y - kps[i].pt.y;
+          if (dx * dx + dy * dy > r2 || std::abs(depths[j] - depths[i]) > o.consensus_depth_gap)
+            continue;
+          ++near;
+          flagged += label[j];
+        }
+      }
+    }
+    if (near < o.consensus_min_neighbours) continue;
+    const bool dynamic = 2 * (flagged + label[i]) > near + 1;
+    FeatureStatus& fs = result->features[i];
+    result->num_dynamic += static_cast<int>(dynamic) - static_cast<int>(fs.is_dynamic);
+    fs.is_dynamic = dynamic;
+  }
+}
+
 std::vector<int> DynamicFilter::MatchToPrevious(const std::vector<cv::KeyPoint>& keypoints,
                                                 const cv::Mat& descriptors) const {
   const int n_cur = static_cast<int>(keypoints.size());
@@ -459,8 +515,8 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
 
   for (int i = 0; i < n; ++i) {
     FeatureStatus& f = result.features[i];
-    f.in_dynamic_region = o.mode == DynamicFilterMode::kGeometry ||
-                          InAnyBox(kps[i].pt, input.detections, o);
+    f.in_dynamic_region =
+        o.mode == DynamicFilterMode::kGeometry || InAnyBox(kps[i].pt, input.detections, o);
     result.num_in_dynamic_region += f.in_dynamic_region;
   }
   const bool depth_mode =
@@ -668,10 +724,33 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
   }
 
   // f. Expansion to unmatched dynamic-region features (eqs. 11-12).
-  std::vector<int> matched_dyn;
-  for (int i = 0; i < n; ++i)
+  std::vector<int> matched_dyn, matched_outside;
+  for (int i = 0; i < n; ++i) {
     if (has_posterior[i] && result.features[i].in_dynamic_region) matched_dyn.push_back(i);
+    if (has_posterior[i] && !result.features[i].in_dynamic_region) matched_outside.push_back(i);
+  }
   const double delta2 = o.delta * o.delta;
+  // Eqs. 11-12 from `sources` to feature i (depth-gated in depth mode), starting from `base`.
+  const auto expand = [&](int i, double base, const std::vector<int>& sources) {
+    double weight_sum = 0, change = 0;
+    for (int m : sources) {
+      const double dx = kps[m].pt.x - kps[i].pt.x, dy = kps[m].pt.y - kps[i].pt.y;
+      const double d2 = dx * dx + dy * dy;
+      if (d2 > delta2) continue;
+      if (depth_mode && o.expansion_depth_gap > 0) {
+        const float zi = (*input.depths)[i], zm = (*input.depths)[m];
+        if (zi > 0 && zm > 0 && std::abs(zi - zm) > o.expansion_depth_gap) continue;
+      }
+      const double w = ExpansionWeight(std::sqrt(d2), o.c2, o.delta);
+      weight_sum += w;
+      change += w * (posterior[m].p - base);
+    }
+    // Eq. 11 sums without normalising (the paper; clamped below). Ours (depth mode): a
+    // weighted mean once the weights exceed 1, so many static neighbours cannot add up to a
+    // certainty.
+    return std::clamp(base + (depth_mode && weight_sum > 1 ? change / weight_sum : change), 0.0,
+                      1.0);
+  };
   std::vector<State> states(n);
   for (int i = 0; i < n; ++i) {
     FeatureStatus& fs = result.features[i];
@@ -682,6 +761,13 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
         states[i] = {true, posterior[i]};
         fs.is_dynamic = fs.probability > o.threshold;
         result.num_dynamic += fs.is_dynamic;
+      } else if (test_outside && o.expand_outside && has_prev_) {
+        // expand_outside: an unmatched feature outside the boxes inherits from its matched
+        // neighbours outside the boxes, and its track starts from that (as in geometry mode).
+        fs.probability = expand(i, o.outside_p_init, matched_outside);
+        states[i] = {true, {fs.probability, o.initial_variance}};
+        fs.is_dynamic = fs.probability > o.threshold;
+        result.num_dynamic += fs.is_dynamic;
       }
       continue;
     }
@@ -690,24 +776,7 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
       states[i] = {true, posterior[i]};
     } else {
       const double base = fs.in_box_background ? o.outside_p_init : region_prior;
-      double p = base, weight_sum = 0, change = 0;
-      for (int m : matched_dyn) {
-        const double dx = kps[m].pt.x - kps[i].pt.x, dy = kps[m].pt.y - kps[i].pt.y;
-        const double d2 = dx * dx + dy * dy;
-        if (d2 > delta2) continue;
-        if (depth_mode && o.expansion_depth_gap > 0) {
-          const float zi = (*input.depths)[i], zm = (*input.depths)[m];
-          if (zi > 0 && zm > 0 && std::abs(zi - zm) > o.expansion_depth_gap) continue;
-        }
-        const double w = ExpansionWeight(std::sqrt(d2), o.c2, o.delta);
-        weight_sum += w;
-        change += w * (posterior[m].p - base);
-      }
-      // Eq. 11 sums without normalising (the paper; clamped below). Ours (depth mode): a
-      // weighted mean once the weights exceed 1, so many static neighbours cannot add up to a
-      // certainty.
-      p += depth_mode && weight_sum > 1 ? change / weight_sum : change;
-      fs.probability = std::clamp(p, 0.0, 1.0);
+      fs.probability = expand(i, base, matched_dyn);
       states[i] = {true, {fs.probability, o.initial_variance}};
     }
     // g. Decision. Geometry mode has no information on the first frame: keep everything.
@@ -715,6 +784,7 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
     fs.is_dynamic = informed && (fs.probability > o.threshold || fs.at_object_depth);
     result.num_dynamic += fs.is_dynamic;
   }
+  if (depth_mode && o.consensus_radius > 0 && has_prev_) Consensus(input, &result);
   result.probability_ms = ms_since(t0);
 
   // Remember this frame.

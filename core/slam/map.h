@@ -49,6 +49,11 @@ class MapPoint {
   int found_count = 1;    // times actually matched
   bool bad = false;
   std::shared_ptr<MapPoint> replaced_by;
+  // Dynamic-feature evidence (core/slam/dynamic_points.h): votes from the filter's labels of the
+  // features that continue this point's track; is_dynamic: flagged (and taken out of the map).
+  int dynamic_votes = 0;
+  int static_votes = 0;
+  bool is_dynamic = false;
 
   // Tracking scratch (tracking thread only).
   int64_t last_frame_seen = -1;

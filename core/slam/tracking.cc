@@ -29,6 +29,7 @@ TrackResult Tracker::Track(Frame frame) {
       if (Initialize(frame, &result)) {
         initialized_ = true;
         RememberDenseKeyFrame(result.new_keyframe, frame);
+        result.map_points = frame.map_points;
         last_frame_ = frame;
       }
     } else {
@@ -70,6 +71,7 @@ TrackResult Tracker::Track(Frame frame) {
         }
         if (!localization_ && NeedNewKeyFrame(frame)) result.new_keyframe = CreateKeyFrame(frame);
         if (result.new_keyframe) RememberDenseKeyFrame(result.new_keyframe, frame);
+        result.map_points = frame.map_points;
         records_.push_back({frame.stamp, reference_kf_->id,
                             frame.cam_from_world * reference_kf_->cam_from_world.Inverse(),
                             result.state, last_inliers_});

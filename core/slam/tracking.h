@@ -99,6 +99,9 @@ struct TrackResult {
   std::optional<Rigid3d> cam_from_world;
   std::shared_ptr<KeyFrame> new_keyframe;  // set when this frame became a keyframe
   int num_inliers = 0;
+  // The map point of each feature of the frame (tracked by features; empty otherwise): the
+  // dynamic map-point vote (core/slam/dynamic_points.h) follows the filter's tracks into them.
+  std::vector<std::shared_ptr<MapPoint>> map_points;
 };
 
 // A frame's pose stored relative to its reference keyframe, so the trajectory follows the

@@ -68,6 +68,7 @@ void ApplyFilterConfiguration(const std::string& name, SystemOptions* options) {
   options->demote_in_box_features = false;
   options->static_top_up_fraction = 0.0;
   options->filter.depth_residual = false;  // the paper's epipolar test (F between frames)
+  options->dynamic_points.enabled = false;
   if (name == "paper+margin" || name == "paper+margin+demotion") {
     options->filter.box_margin_fraction = 0.1;
   }
@@ -81,6 +82,7 @@ void SystemOptions::Check() const {
   DYGSLAM_CHECK_OPTION(static_top_up_fraction >= 0 && static_top_up_fraction <= 1,
                        "static_top_up_fraction (0..1)");
   box_propagation.Check();
+  dynamic_points.Check();
   camera.Check();
   sensor.Check();
   orb.Check();
@@ -115,6 +117,7 @@ class SystemImpl {
         local_mapper_(map_, options.local_mapping, !options.deterministic),
         tracker_(options.tracking, map_, local_mapper_, options.deterministic),
         filter_(options.filter),
+        dynamic_points_(options.dynamic_points),
         boxes_(options.box_propagation) {
     if (vocabulary_) {
       database_ = std::make_shared<KeyFrameDatabase>();
@@ -193,6 +196,12 @@ class SystemImpl {
     return loop_closer_ ? loop_closer_->stats() : LoopClosingStats{};
   }
   MapStatistics MapSizes() const { return map_->Statistics(); }
+  std::vector<MapPointLabel> MapPointLabels() const {
+    std::vector<MapPointLabel> labels = dynamic_points_.flagged();
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    for (const auto& [id, point] : map_->map_points()) labels.push_back(LabelOf(*map_, *point));
+    return labels;
+  }
   void Prefetch(const cv::Mat& rgb, Timestamp stamp) {
     if (!options_.NeedsDetections() || rgb.empty() || rgb.type() != CV_8UC3) return;
     if (options_.detection_every_n_frames > 1) {
@@ -259,6 +268,9 @@ class SystemImpl {
   static std::vector<float> KeypointDepths(const std::vector<cv::KeyPoint>& keypoints,
                                            const cv::Mat& depth_m);
   TrackResult Track(const PreparedFrame& prepared, FilteredFrame* filtered, FrameResult* result);
+  // The map point of each feature of this frame, for the next frame's dynamic map-point vote.
+  void RememberPoints(const PreparedFrame& prepared, const FilteredFrame& filtered,
+                      const TrackResult& tracked);
   void EmitKeyframe(const std::shared_ptr<KeyFrame>& keyframe, const PreparedFrame& prepared,
                     const FilteredFrame& filtered, FrameResult* result);
 
@@ -287,6 +299,9 @@ class SystemImpl {
   int64_t own_detector_frames_ = 0;               // frames fed that needed the internal detector
   BoxPropagator boxes_;                           // boxes carried between detector frames
   std::vector<cv::KeyPoint> previous_keypoints_;  // the filter's previous frame (all features)
+  DynamicPointVoter dynamic_points_;
+  // Per feature of the filter's previous frame: its map point in the tracked frame (or null).
+  std::vector<std::shared_ptr<MapPoint>> previous_points_;
   int64_t next_frame_id_ = 0;
   Timestamp last_stamp_;
   bool has_last_stamp_ = false;
@@ -319,6 +334,7 @@ struct SystemImpl::PreparedFrame {
 struct SystemImpl::FilteredFrame {
   std::vector<uint8_t> dynamic;  // per feature of PreparedFrame::features: removed as dynamic
   OrbFeatures kept;              // the static features, then the top-up features
+  std::vector<int> kept_source;  // per kept feature: its index in `features` (-1: top-up)
   std::vector<uint8_t> kept_in_region;  // per kept feature: kept inside a box (demoted)
 };
 
@@ -431,12 +447,19 @@ SystemImpl::FilteredFrame SystemImpl::Filter(const PreparedFrame& prepared, Fram
 
   FilteredFrame filtered;
   filtered.dynamic = verdict.DynamicFlags();
+  if (!previous_points_.empty()) {  // the map points of the filter's tracks (issue 22)
+    std::vector<int> previous_match(verdict.features.size());
+    for (size_t i = 0; i < previous_match.size(); ++i)
+      previous_match[i] = verdict.features[i].prev_match;
+    dynamic_points_.Vote(*map_, previous_points_, previous_match, filtered.dynamic);
+  }
   // Inside a detection box (geometry mode treats the whole image as one region: no boxes).
   const bool demote =
       options_.demote_in_box_features && options_.filter.mode != FilterMode::kGeometry;
   for (size_t i = 0; i < features.keypoints.size(); ++i) {
     if (filtered.dynamic[i]) continue;
     filtered.kept.keypoints.push_back(features.keypoints[i]);
+    filtered.kept_source.push_back(static_cast<int>(i));
     filtered.kept.descriptors.push_back(features.descriptors[i]);
     filtered.kept_in_region.push_back(verdict.features[i].in_dynamic_region && demote ? 1 : 0);
   }
@@ -501,6 +524,16 @@ TrackResult SystemImpl::Track(const PreparedFrame& prepared, FilteredFrame* filt
   return tracked;
 }
 
+void SystemImpl::RememberPoints(const PreparedFrame& prepared, const FilteredFrame& filtered,
+                                const TrackResult& tracked) {
+  previous_points_.clear();
+  if (!options_.dynamic_points.enabled || tracked.map_points.size() != filtered.kept_source.size())
+    return;
+  previous_points_.resize(prepared.features.keypoints.size());
+  for (size_t k = 0; k < filtered.kept_source.size(); ++k)
+    if (filtered.kept_source[k] >= 0) previous_points_[filtered.kept_source[k]] = tracked.map_points[k];
+}
+
 // A new keyframe: to the keyframe callback (the map), then to local mapping.
 void SystemImpl::EmitKeyframe(const std::shared_ptr<KeyFrame>& keyframe,
                               const PreparedFrame& prepared, const FilteredFrame& filtered,
@@ -539,6 +572,7 @@ FrameResult SystemImpl::Feed(const RgbdFrame& frame, bool carry_boxes) {
   const PreparedFrame prepared = Prepare(frame, carry_boxes, &result);
   FilteredFrame filtered = Filter(prepared, &result);
   const TrackResult tracked = Track(prepared, &filtered, &result);
+  RememberPoints(prepared, filtered, tracked);
   if (tracked.new_keyframe) EmitKeyframe(tracked.new_keyframe, prepared, filtered, &result);
   result.times.total_ms = MsSince(t_start);
   return result;
@@ -584,6 +618,7 @@ std::vector<StampedPose> System::Trajectory() const { return impl_->Trajectory()
 LocalMappingStats System::LocalMappingStatistics() const { return impl_->LocalMappingStatistics(); }
 LoopClosingStats System::LoopClosingStatistics() const { return impl_->LoopClosingStatistics(); }
 MapStatistics System::MapSizes() const { return impl_->MapSizes(); }
+std::vector<MapPointLabel> System::MapPointLabels() const { return impl_->MapPointLabels(); }
 std::vector<StampedPose> System::KeyframeTrajectory() const { return impl_->KeyframeTrajectory(); }
 void System::SetKeyframeCallback(std::function<void(const KeyframeData&)> callback) {
   impl_->SetKeyframeCallback(std::move(callback));

@@ -27,6 +27,7 @@
 #include "core/dynamic/dynamic_filter.h"
 #include "core/dynamic/dynamic_mask.h"
 #include "core/dynamic/yolo_detector.h"
+#include "core/slam/dynamic_points.h"
 #include "core/slam/local_mapping.h"
 #include "core/slam/loop_closing.h"
 #include "core/slam/map_file.h"
@@ -100,6 +101,9 @@ struct SystemOptions {
   // toward the local-map inlier minimum (they may still be matched). false: the paper (they are
   // ordinary static features).
   bool demote_in_box_features = true;
+  // Map points whose tracked features the filter labels dynamic are flagged and taken out of the
+  // map (core/slam/dynamic_points.h; issue 22). Off in the `paper` configurations.
+  DynamicPointOptions dynamic_points;
   // Fixed seeds, local mapping run synchronously after each keyframe: identical output run to run.
   bool deterministic = false;
   // A SLAM map file to start from (map_file.h; empty: a new map). Its camera, ORB pyramid and
@@ -183,6 +187,9 @@ class System {
   LoopClosingStats LoopClosingStatistics() const;
   // Map sizes and live object counts (memory monitoring in long runs).
   MapStatistics MapSizes() const;
+  // One observation of every point in the map and of every point flagged dynamic and taken out
+  // (SystemOptions::dynamic_points), for evaluation against ground truth; after Shutdown.
+  std::vector<MapPointLabel> MapPointLabels() const;
   // Map files (map_file.h). SaveMap writes the current map atomically (call after Shutdown for
   // the final map; during a run it saves a consistent snapshot under the map lock).
   MapFileInfo SaveMap(const std::string& path) const;

@@ -7,7 +7,10 @@
 # <settings> is config/bonn.yaml with the given keys set (SECTION.KEY=VALUE sets KEY in SECTION,
 # e.g. Detector.every_n_frames=3 or OctoMap.pixel_stride=4). Extra run arguments for every
 # configuration: $CPU_BUDGET_ARGS (default "--direct --no-map"). DDS modes run inside a private
-# network namespace (DYGSLAM_DOMAIN_ID sets the domain).
+# network namespace (DYGSLAM_DOMAIN_ID sets the domain). A part `build=DIR` runs that
+# configuration with DIR/apps/dygslam instead (e.g. main's build beside this one: the ratio
+# against main measured in the same interleaved rounds):
+#   scripts/cpu_budget.sh build DATA 3 out/cpu main=full,build=/work/main/build full=full
 #   scripts/cpu_budget.sh build ../shared/data/bonn_crowd_part 3 out/cpu none=none full=full \
 #       full_k3=full,Detector.every_n_frames=3
 set -euo pipefail
@@ -24,8 +27,18 @@ for spec in "$@"; do
   IFS=, read -r -a parts <<< "$rest"
   filter=${parts[0]}
   cfg=$out/$name.yaml
+  keys=()
+  echo "$bin" > "$out/$name.bin"
+  for part in "${parts[@]:1}"; do
+    if [[ $part == build=* ]]; then
+      echo "${part#build=}/apps/dygslam" > "$out/$name.bin"
+      [ -x "$(cat "$out/$name.bin")" ] || { echo "cpu_budget.sh: $(cat "$out/$name.bin") not built" >&2; exit 1; }
+    else
+      keys+=("$part")
+    fi
+  done
   # Keys replace the preset's value (in its section) or are added (a new section if needed).
-  python3 - "$here/config/bonn.yaml" "$cfg" "${parts[@]:1}" <<'PY'
+  python3 - "$here/config/bonn.yaml" "$cfg" ${keys[@]+"${keys[@]}"} <<'PY'
 import re, sys
 src, dst, pairs = sys.argv[1], sys.argv[2], sys.argv[3:]
 lines = open(src).read().splitlines()
@@ -62,7 +75,7 @@ for r in $(seq 1 "$runs"); do
     rm -rf "$dir"
     # shellcheck disable=SC2086
     unshare -n bash -c 'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$@"' cpu \
-      /usr/bin/time -f "cpu_s %U %S wall_s %e" "$bin" run "$dataset" --filter "$(cat "$out/$name.filter")" \
+      /usr/bin/time -f "cpu_s %U %S wall_s %e" "$(cat "$out/$name.bin")" run "$dataset" --filter "$(cat "$out/$name.filter")" \
       --config "$out/$name.yaml" --out "$dir" ${DYGSLAM_DOMAIN_ID:+--domain $DYGSLAM_DOMAIN_ID} $args \
       > "$dir.log" 2>&1 || { echo "run $name-$r failed:" >&2; tail -n 20 "$dir.log" >&2; exit 1; }
     echo "  $name run $r: $(grep -o '[0-9.]* fps' "$dir.log" | head -1), $(grep -o 'ATE RMSE [0-9.]* m' "$dir.log" | head -1), $(grep -a 'cpu_s' "$dir.log")"

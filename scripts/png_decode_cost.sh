@@ -4,10 +4,13 @@
 # not pay. Compiles a small OpenCV program (cv::imread of every rgb and depth file listed in
 # rgb.txt / depth.txt, as the dataset reader loads them) and prints CPU (user + sys of the
 # process) per frame over RUNS runs:
-#   scripts/png_decode_cost.sh DATASET_DIR [RUNS]
-#   scripts/png_decode_cost.sh ../shared/data/bonn_crowd_part 3
+#   scripts/png_decode_cost.sh DATASET_DIR [RUNS [BUILD_DIR]]
+#   scripts/png_decode_cost.sh ../shared/data/bonn_crowd_part 3 build
+# With BUILD_DIR (a build of this repository with libdeflate), each run also decodes the same
+# files with the dataset reader's fast path (core/io/png_reader.h) and prints its CPU per frame
+# and the ratio against cv::imread measured just before.
 set -euo pipefail
-dataset=$1 runs=${2:-3}
+dataset=$1 runs=${2:-3} build=${3:-}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cat > "$work/decode.cc" <<'CC'
@@ -21,6 +24,9 @@ cat > "$work/decode.cc" <<'CC'
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#ifdef WITH_FAST_PNG
+#include "core/io/png_reader.h"
+#endif
 
 static std::vector<std::string> Files(const std::string& dir, const std::string& list) {
   std::ifstream in(dir + "/" + list);
@@ -51,12 +57,28 @@ int main(int argc, char** argv) {
   const double t1 = CpuSeconds();
   for (const auto& f : depth) bytes += cv::imread(f, cv::IMREAD_ANYDEPTH).total();
   const double t2 = CpuSeconds();
-  std::printf("%zu rgb + %zu depth files: rgb %.2f s, depth %.2f s CPU; %.2f ms per frame (%zu px)\n",
+  std::printf("%zu rgb + %zu depth files: rgb %.2f s, depth %.2f s CPU; %.2f ms per frame (%zu px)",
               rgb.size(), depth.size(), t1 - t0, t2 - t1, 1000 * (t2 - t0) / rgb.size(), bytes);
+#ifdef WITH_FAST_PNG
+  cv::Mat image;
+  int fast = 0;
+  for (const auto& f : rgb) fast += dygslam::ReadPngFast(f, &image) ? 1 : 0;
+  for (const auto& f : depth) fast += dygslam::ReadPngFast(f, &image) ? 1 : 0;
+  const double t3 = CpuSeconds();
+  std::printf("; fast path (%d of %zu files) %.2f ms per frame, %.2fx", fast,
+              rgb.size() + depth.size(), 1000 * (t3 - t2) / rgb.size(), (t3 - t2) / (t2 - t0));
+#endif
+  std::printf("\n");
   return 0;
 }
 CC
-g++ -O2 -std=c++17 "$work/decode.cc" -o "$work/decode" $(pkg-config --cflags --libs opencv4)
+if [ -n "$build" ]; then
+  here=$(cd "$(dirname "$0")/.." && pwd)
+  g++ -O2 -std=c++17 -DWITH_FAST_PNG -I"$here" "$work/decode.cc" "$build/core/io/libdygslam_io.a" \
+    -o "$work/decode" $(pkg-config --cflags --libs opencv4) -ldeflate
+else
+  g++ -O2 -std=c++17 "$work/decode.cc" -o "$work/decode" $(pkg-config --cflags --libs opencv4)
+fi
 echo "png_decode_cost: $runs runs on $dataset, $(nproc) cores, load at start: $(cut -d' ' -f1-3 /proc/loadavg)"
 for r in $(seq 1 "$runs"); do
   echo "  run $r: $("$work/decode" "$dataset")"

@@ -7,7 +7,7 @@ set -euo pipefail
 
 BUILD_PACKAGES=(
   build-essential cmake pkg-config git ca-certificates
-  libopencv-dev libeigen3-dev libceres-dev liboctomap-dev libyaml-cpp-dev
+  libopencv-dev libeigen3-dev libceres-dev liboctomap-dev libyaml-cpp-dev libdeflate-dev
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libgtest-dev googletest
   cyclonedds-dev cyclonedds-tools
@@ -25,7 +25,7 @@ RUNTIME_PACKAGES=(
   libopencv-core406 libopencv-imgproc406 libopencv-imgcodecs406 libopencv-features2d406
   libopencv-calib3d406 libopencv-dnn406 libopencv-contrib406
   libgoogle-glog0v6 libcholmod3 libcxsparse3 libatlas3-base
-  liboctomap1.9 libyaml-cpp0.7 libfastrtps2.9 libfastcdr1
+  liboctomap1.9 libyaml-cpp0.7 libfastrtps2.9 libfastcdr1 libdeflate0
 )
 
 if [[ "${1:-}" == "--runtime" ]]; then

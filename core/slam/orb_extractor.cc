@@ -7,6 +7,10 @@
 #include <opencv2/imgproc.hpp>
 #include <queue>
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 namespace dygslam {
 namespace {
 
@@ -30,6 +34,50 @@ class PatternRng {
  private:
   uint64_t state_;
 };
+
+// The pattern's 512 test points (p0, q0, p1, q1, ...) as coordinate arrays.
+struct PatternPoints {
+  alignas(16) float x[512];
+  alignas(16) float y[512];
+};
+
+const PatternPoints& PatternAsArrays() {
+  static const PatternPoints points = [] {
+    PatternPoints p{};
+    const auto& pattern = OrbExtractor::Pattern();
+    for (int bit = 0; bit < 256; ++bit) {
+      for (int k = 0; k < 2; ++k) {
+        p.x[2 * bit + k] = pattern[bit][k].x;
+        p.y[2 * bit + k] = pattern[bit][k].y;
+      }
+    }
+    return p;
+  }();
+  return points;
+}
+
+// offsets[i] = round(sa x + ca y) * step + round(ca x - sa y) for every test point: the same
+// float operations and round-to-nearest-even as cvRound of the scalar expressions, so the
+// descriptors are bit-identical to computing them one test at a time.
+void RotatedOffsets(const PatternPoints& points, float ca, float sa, int step, int* offsets) {
+#ifdef __SSE2__
+  const __m128 c = _mm_set1_ps(ca), s = _mm_set1_ps(sa);
+  alignas(16) int rows[4], cols[4];
+  for (int i = 0; i < 512; i += 4) {
+    const __m128 x = _mm_load_ps(points.x + i), y = _mm_load_ps(points.y + i);
+    const __m128i row = _mm_cvtps_epi32(_mm_add_ps(_mm_mul_ps(s, x), _mm_mul_ps(c, y)));
+    const __m128i col = _mm_cvtps_epi32(_mm_sub_ps(_mm_mul_ps(c, x), _mm_mul_ps(s, y)));
+    _mm_store_si128(reinterpret_cast<__m128i*>(rows), row);
+    _mm_store_si128(reinterpret_cast<__m128i*>(cols), col);
+    for (int k = 0; k < 4; ++k) offsets[i + k] = rows[k] * step + cols[k];
+  }
+#else
+  for (int i = 0; i < 512; ++i) {
+    offsets[i] = cvRound(sa * points.x[i] + ca * points.y[i]) * step +
+                 cvRound(ca * points.x[i] - sa * points.y[i]);
+  }
+#endif
+}
 
 }  // namespace
 
@@ -215,7 +263,6 @@ OrbFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& mask, int 
   const std::vector<int> features_per_level =
       FeaturesPerLevel(num_features > 0 ? num_features : options_.num_features);
   OrbFeatures out;
-  const auto& pattern = Pattern();
   for (int level = 0; level < levels; ++level) {
     const cv::Mat& level_img = c.levels_[level];
     const cv::Rect area(kBorder, kBorder, level_img.cols - 2 * kBorder,
@@ -276,21 +323,22 @@ OrbFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& mask, int 
       cv::GaussianBlur(level_img, c.blurred_[level], cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
     const cv::Mat& blurred = c.blurred_[level];
     const float scale = static_cast<float>(scales_[level]);
+    const PatternPoints& points = PatternAsArrays();
     for (cv::KeyPoint& kp : kept) {
       const float a = kp.angle * static_cast<float>(M_PI / 180.0);
       const float ca = std::cos(a), sa = std::sin(a);
       const int cx = cvRound(kp.pt.x);
       const int cy = cvRound(kp.pt.y);
       Descriptor desc{0, 0, 0, 0};
-      // Rotated test offsets as row/column offsets into the blurred image.
+      // Rotated test offsets as row/column offsets into the blurred image: all 512 test points
+      // rotated and rounded first (4 at a time), then the comparisons.
       const int step = static_cast<int>(blurred.step1());
       const uint8_t* center = blurred.ptr<uint8_t>(cy) + cx;
+      alignas(16) int offsets[2 * 256];
+      RotatedOffsets(points, ca, sa, step, offsets);
       for (int bit = 0; bit < 256; ++bit) {
-        const cv::Point2f& p = pattern[bit][0];
-        const cv::Point2f& q = pattern[bit][1];
-        const int p_off = cvRound(sa * p.x + ca * p.y) * step + cvRound(ca * p.x - sa * p.y);
-        const int q_off = cvRound(sa * q.x + ca * q.y) * step + cvRound(ca * q.x - sa * q.y);
-        if (center[p_off] < center[q_off]) desc[bit >> 6] |= (1ULL << (bit & 63));
+        if (center[offsets[2 * bit]] < center[offsets[2 * bit + 1]])
+          desc[bit >> 6] |= (1ULL << (bit & 63));
       }
       kp.octave = level;
       kp.size = 31.0f * scale;

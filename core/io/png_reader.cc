@@ -1,0 +1,188 @@
+#include "core/io/png_reader.h"
+
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <vector>
+
+#ifdef DYGSLAM_HAVE_LIBDEFLATE
+#include <libdeflate.h>
+#endif
+
+namespace dygslam {
+namespace {
+
+[[maybe_unused]] uint32_t BigEndian32(const unsigned char* p) {
+  return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
+}
+
+// Ancillary chunks that cv::imread(IMREAD_UNCHANGED) ignores; any other chunk (tRNS, gAMA, sBIT,
+// PLTE, iCCP, ...) may change what OpenCV returns: such files go to OpenCV.
+[[maybe_unused]] bool IsIgnoredAncillary(const unsigned char* type) {
+  static const char* kIgnored[] = {"tEXt", "zTXt", "iTXt", "tIME", "pHYs"};
+  for (const char* t : kIgnored)
+    if (std::memcmp(type, t, 4) == 0) return true;
+  return false;
+}
+
+// Paeth: each byte predicted by the neighbour (left a, up b, upper-left c) closest to a + b - c,
+// ties in the order a, b, c. (An SSE2 version, one pixel per step, measured no faster: the chain
+// through the left neighbour is the limit; the compiler interleaves the bpp chains here.)
+[[maybe_unused]] void UnfilterPaethScalar(unsigned char* cur, const unsigned char* prev,
+                                          size_t begin, size_t row_bytes, int bpp) {
+  for (size_t i = begin; i < row_bytes; ++i) {
+    const int a = i >= size_t(bpp) ? cur[i - bpp] : 0, b = prev[i];
+    const int c = i >= size_t(bpp) ? prev[i - bpp] : 0;
+    const int pa = std::abs(b - c), pb = std::abs(a - c), pc = std::abs(a + b - 2 * c);
+    const int predictor = (pa <= pb && pa <= pc) ? a : (pb <= pc ? b : c);
+    cur[i] = uint8_t(cur[i] + predictor);
+  }
+}
+
+[[maybe_unused]] void UnfilterPaeth(unsigned char* cur, const unsigned char* prev, size_t row_bytes,
+                                    int bpp) {
+  UnfilterPaethScalar(cur, prev, 0, row_bytes, bpp);
+}
+
+// Reverses the PNG row filters in place (rows of 1 + row_bytes: the filter type, then the
+// bytes). False for an unknown filter type.
+[[maybe_unused]] bool Unfilter(unsigned char* data, int rows, size_t row_bytes, int bpp) {
+  const std::vector<unsigned char> zeros(row_bytes, 0);
+  const unsigned char* prev = zeros.data();
+  for (int y = 0; y < rows; ++y) {
+    unsigned char* row = data + y * (row_bytes + 1);
+    const unsigned char filter = row[0];
+    unsigned char* cur = row + 1;
+    switch (filter) {
+      case 0:
+        break;
+      case 1:
+        for (size_t i = bpp; i < row_bytes; ++i) cur[i] = uint8_t(cur[i] + cur[i - bpp]);
+        break;
+      case 2:
+        for (size_t i = 0; i < row_bytes; ++i) cur[i] = uint8_t(cur[i] + prev[i]);
+        break;
+      case 3:
+        for (int i = 0; i < bpp; ++i) cur[i] = uint8_t(cur[i] + (prev[i] >> 1));
+        for (size_t i = bpp; i < row_bytes; ++i)
+          cur[i] = uint8_t(cur[i] + ((int(cur[i - bpp]) + int(prev[i])) >> 1));
+        break;
+      case 4:
+        UnfilterPaeth(cur, prev, row_bytes, bpp);
+        break;
+      default:
+        return false;
+    }
+    prev = cur;
+  }
+  return true;
+}
+
+}  // namespace
+
+#ifdef DYGSLAM_HAVE_LIBDEFLATE
+
+bool FastPngAvailable() { return true; }
+
+bool DecodePngFast(const unsigned char* data, size_t size, cv::Mat* image) {
+  static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (size < 8 + 25 || std::memcmp(data, kSignature, 8) != 0) return false;
+  size_t pos = 8;
+  uint32_t width = 0, height = 0;
+  int bit_depth = 0, color_type = -1;
+  bool seen_header = false, seen_end = false;
+  std::vector<unsigned char> compressed;
+  while (pos + 12 <= size && !seen_end) {
+    const uint32_t length = BigEndian32(data + pos);
+    const unsigned char* type = data + pos + 4;
+    if (length > size - pos - 12) return false;
+    const unsigned char* body = data + pos + 8;
+    const uint32_t crc = BigEndian32(body + length);
+    if (libdeflate_crc32(0, type, length + 4) != crc) return false;
+    if (!seen_header) {
+      if (std::memcmp(type, "IHDR", 4) != 0 || length != 13) return false;
+      width = BigEndian32(body);
+      height = BigEndian32(body + 4);
+      bit_depth = body[8];
+      color_type = body[9];
+      // compression 0, filter method 0, not interlaced
+      if (body[10] != 0 || body[11] != 0 || body[12] != 0) return false;
+      seen_header = true;
+    } else if (std::memcmp(type, "IDAT", 4) == 0) {
+      compressed.insert(compressed.end(), body, body + length);
+    } else if (std::memcmp(type, "IEND", 4) == 0) {
+      seen_end = true;
+    } else if (!IsIgnoredAncillary(type)) {
+      return false;
+    }
+    pos += 12 + size_t(length);
+  }
+  if (!seen_end || compressed.empty()) return false;
+  if (width == 0 || height == 0 || width > 16384 || height > 16384) return false;
+  int channels = 0, cv_type = -1;
+  if (bit_depth == 8 && color_type == 0) channels = 1, cv_type = CV_8UC1;
+  if (bit_depth == 8 && color_type == 2) channels = 3, cv_type = CV_8UC3;
+  if (bit_depth == 8 && color_type == 6) channels = 4, cv_type = CV_8UC4;
+  if (bit_depth == 16 && color_type == 0) channels = 1, cv_type = CV_16UC1;
+  if (cv_type < 0) return false;
+  const int bpp = channels * bit_depth / 8;
+  const size_t row_bytes = size_t(width) * bpp;
+  std::vector<unsigned char> raw(size_t(height) * (row_bytes + 1));
+
+  struct DecompressorDeleter {
+    void operator()(libdeflate_decompressor* d) const { libdeflate_free_decompressor(d); }
+  };
+  thread_local std::unique_ptr<libdeflate_decompressor, DecompressorDeleter> decompressor(
+      libdeflate_alloc_decompressor());
+  if (!decompressor) return false;
+  // The stream must fill the image exactly (NULL actual size: a shorter one is an error).
+  if (libdeflate_zlib_decompress(decompressor.get(), compressed.data(), compressed.size(),
+                                 raw.data(), raw.size(), nullptr) != LIBDEFLATE_SUCCESS)
+    return false;
+  if (!Unfilter(raw.data(), int(height), row_bytes, bpp)) return false;
+
+  cv::Mat out(int(height), int(width), cv_type);
+  for (int y = 0; y < int(height); ++y) {
+    const unsigned char* src = raw.data() + y * (row_bytes + 1) + 1;
+    unsigned char* dst = out.ptr<unsigned char>(y);
+    if (channels == 3 || channels == 4) {  // RGB(A) -> BGR(A), as OpenCV
+      for (uint32_t x = 0; x < width; ++x, src += channels, dst += channels) {
+        dst[0] = src[2];
+        dst[1] = src[1];
+        dst[2] = src[0];
+        if (channels == 4) dst[3] = src[3];
+      }
+    } else if (bit_depth == 16) {  // big-endian samples -> host order
+      uint16_t* d16 = reinterpret_cast<uint16_t*>(dst);
+      for (uint32_t x = 0; x < width; ++x) d16[x] = uint16_t((src[2 * x] << 8) | src[2 * x + 1]);
+    } else {
+      std::memcpy(dst, src, row_bytes);
+    }
+  }
+  *image = out;
+  return true;
+}
+
+#else
+
+bool FastPngAvailable() { return false; }
+bool DecodePngFast(const unsigned char*, size_t, cv::Mat*) { return false; }
+
+#endif
+
+bool ReadPngFast(const std::string& path, cv::Mat* image) {
+  if (!FastPngAvailable()) return false;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size <= 0 || size > (std::streamoff(1) << 30)) return false;
+  in.seekg(0, std::ios::beg);
+  std::vector<unsigned char> bytes(static_cast<size_t>(size));
+  if (!in.read(reinterpret_cast<char*>(bytes.data()), size)) return false;
+  return DecodePngFast(bytes.data(), bytes.size(), image);
+}
+
+}  // namespace dygslam

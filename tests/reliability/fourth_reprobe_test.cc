@@ -7,16 +7,22 @@
 //   P3  a YAML merge key ("<<: *base"): the merged values were dropped, with an unknown-key
 //       warning that suggested the key it had dropped ("did you mean 'DynamicFilter.alpha'?")
 //   P4  a value that underflows a double (4.9e-324) was called "not a finite number"
+//   P11 `Camera.fps: 1e20` was reported as "key 'Tracking.max_frames_between_keyframes': invalid
+//       value" without a line (the derived keyframe interval overflowed); `ThDepth: 1e20` was
+//       accepted without a word (every point "close")
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
 #include "core/base/error.h"
 #include "core/config/config_reader.h"
+#include "core/config/settings.h"
 #include "core/io/dataset.h"
 #include "tests/support/test_support.h"
 
@@ -152,6 +158,33 @@ TEST(FourthReprobeSettings, UnderflowIsNamed) {
   EXPECT_NE(e.find("underflow"), std::string::npos) << e;
   EXPECT_EQ(e.find("finite"), std::string::npos) << e;
   EXPECT_NE(ReadError("Camera.fx: 1e400\n").find("finite"), std::string::npos);
+}
+
+// P11: absurd frame rate and close-depth factor are errors naming their own key and line.
+TEST(FourthReprobeSettings, AbsurdFpsAndThDepthNameTheirKey) {
+  std::ifstream in(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
+  const std::string bonn((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const auto& [key, line_text] :
+       {std::pair<std::string, std::string>{"Camera.fps", "Camera.fps: 1e20"},
+        {"ThDepth", "ThDepth: 1e20"}}) {
+    std::string text = bonn;
+    const size_t at = text.find("\n" + key + ":");
+    ASSERT_NE(at, std::string::npos) << key;
+    text.replace(at + 1, text.find('\n', at + 1) - at - 1, line_text);
+    const int line = static_cast<int>(std::count(text.begin(), text.begin() + at + 1, '\n')) + 1;
+    try {
+      ParseSettings(text, "bad.yaml");
+      ADD_FAILURE() << line_text << " accepted";
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("bad.yaml:" + std::to_string(line) + ": key '" + key + "'"),
+                std::string::npos)
+          << what;
+      EXPECT_NE(what.find("implausible"), std::string::npos) << what;
+    }
+  }
+  // The shipped values pass.
+  EXPECT_NO_THROW(ParseSettings(bonn, "bonn.yaml"));
 }
 
 }  // namespace

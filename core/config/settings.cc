@@ -123,6 +123,13 @@ Settings ReadSettings(ConfigReader reader, const SettingsReadOptions& read_optio
                                Short(kMaxThDepth) + ", TUM / Bonn use 40: " +
                                Short(40.0 * s.sensor.bf / s.camera.fx) + " m)");
   }
+  constexpr double kMaxDepthMapFactor = 1e5;
+  if (s.sensor.depth_map_factor > kMaxDepthMapFactor) {
+    reader.Fail("DepthMapFactor", "implausible depth scale " + Short(s.sensor.depth_map_factor) +
+                                      " (depth image units per metre; expected at most " +
+                                      Short(kMaxDepthMapFactor) +
+                                      ", TUM / Bonn use 5000: 0.2 mm per unit)");
+  }
   reader.CheckOptions(s.orb);
   s.reader = std::move(reader);
   return s;

@@ -9,7 +9,7 @@
 //   P4  a value that underflows a double (4.9e-324) was called "not a finite number"
 //   P11 `Camera.fps: 1e20` was reported as "key 'Tracking.max_frames_between_keyframes': invalid
 //       value" without a line (the derived keyframe interval overflowed); `ThDepth: 1e20` was
-//       accepted without a word (every point "close")
+//       accepted without a word (every point "close"), so was `DepthMapFactor: 1e20`
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -166,7 +166,8 @@ TEST(FourthReprobeSettings, AbsurdFpsAndThDepthNameTheirKey) {
   const std::string bonn((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   for (const auto& [key, line_text] :
        {std::pair<std::string, std::string>{"Camera.fps", "Camera.fps: 1e20"},
-        {"ThDepth", "ThDepth: 1e20"}}) {
+        {"ThDepth", "ThDepth: 1e20"},
+        {"DepthMapFactor", "DepthMapFactor: 1e20"}}) {
     std::string text = bonn;
     const size_t at = text.find("\n" + key + ":");
     ASSERT_NE(at, std::string::npos) << key;

@@ -177,6 +177,7 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
       std::printf("loop: frame %lld closed with frame %lld\n", static_cast<long long>(frame),
                   static_cast<long long>(loop_frame));
   }
+  RecreateOutputDirIfRemoved("run", "out", s.out);
   WriteFileAtomically((s.out / "frames.csv").string(), csv);
   WriteSystemTrajectories(s.out.string(), system);
   WriteTumTrajectory((s.out / "trajectory_online.txt").string(), online);

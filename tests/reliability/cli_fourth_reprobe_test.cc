@@ -11,6 +11,8 @@
 //       error naming the option
 //   P8  settings: a second YAML document and a merge key were ignored without a word (run)
 //   P9  --detections boxes outside the image masked nothing without a word
+//   P12 `run --direct` / `map` whose --out was removed mid-run failed at the end ("cannot write:
+//       directory does not exist") and lost every output of the frames processed
 //   P10 `bench` had no stop handling: SIGTERM (or Ctrl-C) after hours of runs ended it with exit
 //       143 / 130 and no runs.csv or report of the runs done (the probe's SIGINT to a background
 //       bench was even ignored: it inherits SIG_IGN and installed no handler)
@@ -162,6 +164,33 @@ TEST_F(CliFourthReprobe, DetectionsOutsideTheImageAreWarned) {
                       "boxes", "--detections", dir_ + "/det.txt", "--quiet"});
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(Contains(r.err, "8 of its 12 boxes lie outside the 640x480 image")) << r.err;
+}
+
+// P12: --out removed while the run goes: made again, said, every output written.
+TEST_F(CliFourthReprobe, OutFolderRemovedMidRunIsMadeAgain) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string ds = SmallDataset(source, 60, "ds");
+  for (const std::string command : {"run", "map"}) {
+    const std::string out = dir_ + "/o_" + command;
+    std::vector<std::string> args = {command, ds,        "--config", Config(), "--out",
+                                     out,     "--quiet", "--filter", "none"};
+    if (command == "run") args.push_back("--direct");
+    const pid_t pid = testing::SpawnDygslam(args, out + ".out", out + ".err");
+    ASSERT_GT(pid, 0);
+    // The folder is made before the first frame (checked for writing); remove it then.
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (!fs::exists(out) && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    ASSERT_TRUE(fs::exists(out)) << command;
+    fs::remove_all(out);
+    std::string diagnostics;
+    const int code = testing::WaitForExit(pid, 300, &diagnostics);
+    const std::string err = testing::ReadAll(out + ".err");
+    EXPECT_EQ(code, 0) << command << ": " << err << diagnostics;
+    EXPECT_TRUE(Contains(err, "--out '" + out + "' was removed while the command ran")) << err;
+    const std::string trajectory = testing::ReadAll(out + "/trajectory.txt");
+    EXPECT_GE(std::count(trajectory.begin(), trajectory.end(), '\n'), 50) << command;
+  }
 }
 
 // P10: a stop signal between runs writes the report of the runs done, exit 0.

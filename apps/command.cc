@@ -312,6 +312,15 @@ bool ArgParser::Parse(const std::vector<std::string>& args) {
         }
         value = args[++i];
       }
+      // Given twice with different values (`--out a --out b`): one of them would be ignored
+      // without a word.
+      if (const auto it = option_values_.find(name);
+          it != option_values_.end() && it->second != value) {
+        exit_code_ =
+            UsageError("option --" + name + " given twice with different values ('" +
+                       EchoValue(it->second) + "', '" + EchoValue(value) + "'): give it once");
+        return false;
+      }
       option_values_[name] = value;
       continue;
     }

@@ -13,6 +13,8 @@
 //   P9  --detections boxes outside the image masked nothing without a word
 //   P12 `run --direct` / `map` whose --out was removed mid-run failed at the end ("cannot write:
 //       directory does not exist") and lost every output of the frames processed
+//   P13 an option given twice with different values (`run --out a --out b`) took the last one
+//       without a word
 //   P10 `bench` had no stop handling: SIGTERM (or Ctrl-C) after hours of runs ended it with exit
 //       143 / 130 and no runs.csv or report of the runs done (the probe's SIGINT to a background
 //       bench was even ignored: it inherits SIG_IGN and installed no handler)
@@ -191,6 +193,17 @@ TEST_F(CliFourthReprobe, OutFolderRemovedMidRunIsMadeAgain) {
     const std::string trajectory = testing::ReadAll(out + "/trajectory.txt");
     EXPECT_GE(std::count(trajectory.begin(), trajectory.end(), '\n'), 50) << command;
   }
+}
+
+// P13: an option given twice with different values is a usage error naming it.
+TEST_F(CliFourthReprobe, OptionGivenTwiceWithDifferentValuesIsAUsageError) {
+  const auto r = Run(
+      {"run", dir_, "--config", Config(), "--out", dir_ + "/a", "--out", dir_ + "/b", "--direct"});
+  ExpectError(r, 2, {"option --out given twice with different values"});
+  EXPECT_FALSE(fs::exists(dir_ + "/a"));
+  EXPECT_FALSE(fs::exists(dir_ + "/b"));
+  const auto e = Run({"eval", "x", "y", "--delta=1", "--delta", "2"});
+  ExpectError(e, 2, {"--delta given twice"});
 }
 
 // P10: a stop signal between runs writes the report of the runs done, exit 0.

@@ -341,7 +341,7 @@ if family commands; then
   probe c_out_proc 1 30 "$DYG" run ds --config "$CFG" --out /proc/self --direct
   probe c_out_sys 1 30 "$DYG" run ds --config "$CFG" --out /sys/kernel --direct
   probe c_config_dir_missing 1 30 "$DYG" run ds --config /nonexistent/x.yaml --out o_c_cm --direct
-  probe c_dup_option 2 30 "$DYG" run ds --config "$CFG" --config "$CFG" --out o_c_dup --direct
+  probe c_dup_option '0|2' 30 "$DYG" run ds --config "$CFG" --config "$CFG" --out o_c_dup --direct
   probe c_dup_out 2 30 "$DYG" run ds --config "$CFG" --out o_a --out o_b --direct
   probe c_equals_form '0|2' 120 "$DYG" run ds --config="$CFG" --out=o_c_eq --direct --quiet --filter none --frames 0:4
   probe c_missing_value 2 30 "$DYG" run ds --config

@@ -5,6 +5,7 @@
 // sequence found in DATA_DIR, N runs each, medians in the layout of the paper's Tables 1-3, and
 // the pictures. Each run is a child process (`dygslam bench --worker CONFIG SEQUENCE_DIR ...`) so
 // its peak memory is its own (wait4 rusage).
+#include <signal.h>
 #include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -32,6 +33,7 @@
 #include "apps/command.h"
 #include "core/base/echo.h"
 #include "core/base/error.h"
+#include "core/base/stop_signal.h"
 #include "core/bench/bench_report.h"
 #include "core/bench/bench_runner.h"
 #include "core/bench/bench_sequences.h"
@@ -150,7 +152,16 @@ ChildResult RunChild(const std::vector<std::string>& args) {
     throw std::runtime_error("cannot start " + args[0]);
   int status = 0;
   struct rusage usage {};
-  while (wait4(pid, &status, 0, &usage) < 0) {
+  // A stop signal to the bench (Ctrl-C reaches the worker too; `kill PID` only the bench) is
+  // passed on to the worker once: it ends, and the bench writes the report of the runs before.
+  bool forwarded = false;
+  for (;;) {
+    const int sig = ScopedStopSignals::Received();
+    if (sig != 0 && !forwarded) {
+      ::kill(pid, sig);
+      forwarded = true;
+    }
+    if (wait4(pid, &status, 0, &usage) >= 0) break;
     if (errno != EINTR) throw std::runtime_error("wait4 failed");
   }
   ChildResult r;
@@ -286,26 +297,34 @@ int RunBench(const std::vector<std::string>& args) {
   p.AddOption("progress-prefix", "TEXT", "internal: progress line prefix of a worker");
   if (!p.Parse(args)) return p.exit_code();
   if (p.Has("worker")) return RunWorker(p);
+  // SIGINT / SIGTERM / SIGHUP stop the bench between runs (the current one is left out): the
+  // report and runs.csv of the runs done so far are written, exit 0 (like `run` and `map`).
+  ScopedStopSignals stop_signals;
 
   const auto t_start = std::chrono::steady_clock::now();
   const bool quick = p.Flag("quick");
   const int runs = (quick && !p.Has("runs")) ? 1 : ParseCount(p, "runs", 1, 100);
   std::vector<std::string> configs = SplitList(p.Get("configs"));
   if (configs.empty()) return p.UsageError("--configs: empty list");
-  for (const std::string& c : configs) {  // throws InvalidOptions naming it
+  for (const std::string& c : configs) {  // an unknown name is a usage error naming --configs
     SystemOptions check;
-    ApplyFilterConfiguration(c, &check);
+    try {
+      ApplyFilterConfiguration(c, &check);
+    } catch (const InvalidOptions& e) {
+      return p.UsageError(std::string("--configs: ") + e.what());
+    }
   }
   std::vector<std::string> all_configs = configs;
   if (!p.Flag("no-baseline")) all_configs.push_back(kBaselineConfig);
   const bool quiet = p.Flag("quiet");
   const bool deterministic = p.Flag("deterministic");
 
-  const fs::path out_dir = fs::absolute(p.Get("out")).lexically_normal();
+  // Checked before any run (named by the option; not a filesystem error after the first run).
+  const fs::path out_dir = fs::absolute(PrepareOutputDir("out", p.Get("out"))).lexically_normal();
   const fs::path work_dir =
-      p.Has("work") ? fs::absolute(p.Get("work")).lexically_normal() : out_dir / "runs";
-  fs::create_directories(out_dir);
-  fs::create_directories(work_dir);
+      fs::absolute(p.Has("work") ? PrepareOutputDir("work", p.Get("work"))
+                                 : PrepareOutputDir("out", (out_dir / "runs").string()))
+          .lexically_normal();
 
   const std::string config_dir = (fs::path(ScriptsDir()).parent_path() / "config").string();
   std::vector<std::string> skipped;
@@ -332,6 +351,9 @@ int RunBench(const std::vector<std::string>& args) {
     const RgbdDataset dataset = RgbdDataset::Open(s.directory);
     pr.num_entries = dataset.num_rgb_entries();
     pr.last = pr.num_entries;
+    // --features-frame is used after every run: checked now (a usage error naming it).
+    if (p.Has("features-frame"))
+      ParseCount(p, "features-frame", 0, static_cast<int>(pr.num_entries) - 1);
     if (p.Has("frames")) {
       std::tie(pr.first, pr.last) = ParseFrameRange(p.Get("frames"), pr.num_entries);
     } else if (quick && pr.num_entries > 60) {
@@ -369,9 +391,11 @@ int RunBench(const std::vector<std::string>& args) {
     }
     load_text = recorded.count("load") ? recorded["load"] : "not recorded";
   }
+  int stopped_by = 0;  // the stop signal that ended the runs early
   for (const Prepared& pr : prepared) {
-    for (int run = 0; run < runs && !report_only; ++run) {
+    for (int run = 0; run < runs && !report_only && stopped_by == 0; ++run) {
       for (const std::string& config : all_configs) {
+        if ((stopped_by = ScopedStopSignals::Received()) != 0) break;
         const fs::path run_dir =
             work_dir / SafeName(pr.sequence.name) / (config + "_" + std::to_string(run));
         fs::remove_all(run_dir);
@@ -402,6 +426,15 @@ int RunBench(const std::vector<std::string>& args) {
         if (quiet) cmd.push_back("--quiet");
         const ChildResult child = RunChild(cmd);
         ++done_jobs;
+        if ((stopped_by = ScopedStopSignals::Received()) != 0) {
+          // The worker was stopped mid-run: its outputs cover part of the frames only.
+          const std::string note = pr.sequence.name + " " + config + " run " +
+                                   std::to_string(run + 1) + ": interrupted (signal " +
+                                   std::to_string(stopped_by) + "), run left out";
+          std::cerr << "\ndygslam bench: " << note << "\n";
+          notes.push_back(note);
+          break;
+        }
         if (child.exit_code != 0) {
           const std::string note = pr.sequence.name + " " + config + " run " +
                                    std::to_string(run + 1) + ": worker failed (exit code " +
@@ -432,6 +465,18 @@ int RunBench(const std::vector<std::string>& args) {
         all_runs.push_back(std::move(scored));
       }
     }
+  }
+  if (stopped_by != 0 && all_runs.empty()) {
+    std::cerr << "dygslam bench: stopped by signal " << stopped_by
+              << " before any run ended: no report written\n";
+    return 128 + stopped_by;
+  }
+  if (stopped_by != 0) {
+    const std::string note = "stopped by signal " + std::to_string(stopped_by) + " after " +
+                             std::to_string(all_runs.size()) + " of " + std::to_string(total_jobs) +
+                             " runs: the report holds those";
+    std::cerr << "dygslam bench: " << note << "\n";
+    notes.push_back(note);
   }
   if (!report_only) {
     double load_mean = 0;

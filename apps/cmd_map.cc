@@ -333,6 +333,7 @@ int RunMap(const std::vector<std::string>& args) {
   mapper.Flush();
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  RecreateOutputDirIfRemoved("map", "out", out);
   if (system) WriteSystemTrajectories(out.string(), *system);
 
   // SLAM maps: level the map (z up, floor at z = 0) by the floor it found, so pictures and

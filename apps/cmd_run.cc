@@ -177,6 +177,7 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
       std::printf("loop: frame %lld closed with frame %lld\n", static_cast<long long>(frame),
                   static_cast<long long>(loop_frame));
   }
+  RecreateOutputDirIfRemoved("run", "out", s.out);
   WriteFileAtomically((s.out / "frames.csv").string(), csv);
   WriteSystemTrajectories(s.out.string(), system);
   WriteTumTrajectory((s.out / "trajectory_online.txt").string(), online);
@@ -205,7 +206,8 @@ int CountClassNames(const std::string& path) {
 }
 
 // --detections: a file whose stamps match no frame (another sequence, stamps in another unit)
-// would run the filter without any box, silently. Warns with the counts.
+// would run the filter without any box, silently, and so would boxes outside the image. Warns
+// with the counts.
 void WarnUnmatchedDetections(const std::string& path, const RunSetup& s,
                              const RgbdDataset& dataset) {
   size_t frames = 0, frames_with_boxes = 0;
@@ -225,6 +227,24 @@ void WarnUnmatchedDetections(const std::string& path, const RunSetup& s,
       }
     }
     if (!matched) ++stamps_unmatched;
+  }
+  // Boxes that do not overlap the image (pixels in another resolution, a unit mix-up) mask
+  // nothing: said, with how many.
+  size_t boxes = 0, boxes_outside = 0;
+  const cv::Rect2f image(0.f, 0.f, static_cast<float>(s.system.camera.width),
+                         static_cast<float>(s.system.camera.height));
+  for (const auto& [stamp, frame_boxes] : s.detections) {
+    for (const Detection& d : frame_boxes) {
+      ++boxes;
+      if ((d.box & image).area() <= 0.f) ++boxes_outside;
+    }
+  }
+  if (boxes_outside > 0) {
+    std::fprintf(stderr,
+                 "dygslam run: warning: --detections %s: %zu of its %zu boxes lie outside the "
+                 "%dx%d image (Camera.width x Camera.height) and mask nothing\n",
+                 EchoValue(path).c_str(), boxes_outside, boxes, s.system.camera.width,
+                 s.system.camera.height);
   }
   if (stamps_unmatched == 0 && (frames_with_boxes > 0 || s.detections.empty())) return;
   std::fprintf(stderr,

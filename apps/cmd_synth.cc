@@ -61,19 +61,21 @@ int RunSynth(const std::vector<std::string>& args) {
   p.AddOption("max-depth", "M", "depth beyond M metres reads 0 (invalid); 0 = no limit", "0");
   p.AddOption("supersampling", "N", "N x N colour samples per pixel (1..4)", "2");
   p.AddOption("room", "X,Y,Z", "room size in metres (at least 5,4,2.5)", "6,5,3");
-  p.AddOption("loop-path", "A,B",
-              "camera goes round a rounded rectangle with these half sizes (m), looking out at the walls\n"
-              "                (e.g. --room 29,17,3 --loop-path 12.5,6.5: a 61 m closed path); 0,0 = "
-              "the default handheld sway",
-              "0,0");
-  p.AddOption("loop-corner", "R", "corner radius of the loop path (m; = the smaller half size: a stadium)",
-              "1.5");
+  p.AddOption(
+      "loop-path", "A,B",
+      "camera goes round a rounded rectangle with these half sizes (m), looking out at the walls\n"
+      "                (e.g. --room 29,17,3 --loop-path 12.5,6.5: a 61 m closed path); 0,0 = "
+      "the default handheld sway",
+      "0,0");
+  p.AddOption("loop-corner", "R",
+              "corner radius of the loop path (m; = the smaller half size: a stadium)", "1.5");
   p.AddOption("speed", "V", "camera speed on the loop path (m/s)", "1");
   p.AddFlag(
       "loop-inward",
       "look inwards at a pillar in the middle of the loop (its corners are the centres of\n"
       "                the corner arcs: the surface in view is always the corner radius away)");
-  p.AddOption("texels", "T", "texture resolution (texels per metre, 50..1000; lower for big rooms)", "250");
+  p.AddOption("texels", "T", "texture resolution (texels per metre, 50..1000; lower for big rooms)",
+              "250");
   p.AddFlag("quiet", "no progress line");
   if (!p.Parse(args)) return p.exit_code();
 
@@ -118,7 +120,9 @@ int RunSynth(const std::vector<std::string>& args) {
     while (start <= text.size()) {
       const size_t comma = text.find(',', start);
       double v = 0;
-      if (!ParseNumber(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start), &v))
+      if (!ParseNumber(
+              text.substr(start, comma == std::string::npos ? std::string::npos : comma - start),
+              &v))
         return false;
       out->push_back(v);
       if (comma == std::string::npos) break;
@@ -146,7 +150,42 @@ int RunSynth(const std::vector<std::string>& args) {
     options.depth_noise = true;
     options.rgb_noise_sigma = 2.0;
   }
-  options.Check();  // InvalidOptions names the field (exit 1)
+  // A value out of range is a usage error naming the option as typed (not the options struct's
+  // field and its C++ check).
+  try {
+    options.Check();
+  } catch (const InvalidOptions& e) {
+    const std::string message = e.what();
+    struct Field {
+      const char* field;   // as SyntheticOptions::Check names it
+      const char* option;  // the command line's
+      const char* expected;
+    };
+    static const Field kFields[] = {
+        {"num_moving_objects", "objects", "0..4 moving objects"},
+        {"Camera.fps", "fps", "a frame rate > 0 (frames per second)"},
+        {"depth_stamp_offset", "fps", "a frame rate of at most ~100 frames per second"},
+        {"room_size", "room", "X,Y,Z of at least 5,4,2.5 and at most 50 m each"},
+        {"camera_height", "room", "a room at least 2.5 m high"},
+        {"supersampling", "supersampling", "1..4"},
+        {"texels_per_metre", "texels", "50..1000 texels per metre"},
+        {"loop_semi_axes", "loop-path",
+         "A,B both 0, or both > 0 with the path at least 1 m inside the walls of --room"},
+        {"loop_corner_radius", "loop-corner", "a radius > 0 (m)"},
+        {"loop_speed", "speed", "0 < V <= 5 m/s"},
+        {"loop_inward", "loop-corner",
+         "with --loop-inward, a radius at least 0.25 m below both halves of --loop-path"},
+        {"min_depth/max_depth", "max-depth", "0 (no limit) or a depth > 0 (m)"},
+        {"objects_start_frame", "objects-from", "a frame number >= 0"},
+    };
+    for (const Field& f : kFields) {
+      if (message.rfind(std::string("invalid option ") + f.field, 0) == 0) {
+        return p.UsageError(std::string("--") + f.option + ": out of range, got '" +
+                            EchoValue(p.Get(f.option)) + "' (expected " + f.expected + ")");
+      }
+    }
+    throw;
+  }
 
   const std::string out_dir = p.Positional("OUT_DIR");
   const bool quiet = p.Flag("quiet");

@@ -100,6 +100,17 @@ std::filesystem::path PrepareOutputDir(const std::string& option, const std::str
   return dir;
 }
 
+void RecreateOutputDirIfRemoved(const std::string& command, const std::string& option,
+                                const std::filesystem::path& dir) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(dir, ec)) return;
+  std::fprintf(stderr,
+               "dygslam %s: warning: --%s '%s' was removed while the command ran; made it again "
+               "for the outputs\n",
+               command.c_str(), option.c_str(), EchoValue(dir.string()).c_str());
+  std::filesystem::create_directories(dir, ec);  // failing: the first write names the file
+}
+
 SettingsReadOptions CliSettingsReadOptions(bool strict_flag) {
   SettingsReadOptions options;
   const char* env = std::getenv("DYGSLAM_STRICT_SETTINGS");
@@ -300,6 +311,15 @@ bool ArgParser::Parse(const std::vector<std::string>& args) {
           return false;
         }
         value = args[++i];
+      }
+      // Given twice with different values (`--out a --out b`): one of them would be ignored
+      // without a word.
+      if (const auto it = option_values_.find(name);
+          it != option_values_.end() && it->second != value) {
+        exit_code_ =
+            UsageError("option --" + name + " given twice with different values ('" +
+                       EchoValue(it->second) + "', '" + EchoValue(value) + "'): give it once");
+        return false;
       }
       option_values_[name] = value;
       continue;

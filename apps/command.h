@@ -102,6 +102,11 @@ std::string ConfigDir();
 // folder cannot be created or written (a probe file is created and removed, so a read-only folder
 // is found up front, not after the whole run). Creates the folder (and missing parents).
 std::filesystem::path PrepareOutputDir(const std::string& option, const std::string& value);
+// Before a command writes its outputs into `dir` (given as --<option>): a folder removed while the
+// command ran (a cleanup script, `rm -rf` by hand) is made again with a warning on stderr naming
+// the option, so the outputs of the work done are not lost.
+void RecreateOutputDirIfRemoved(const std::string& command, const std::string& option,
+                                const std::filesystem::path& dir);
 // Removes the folders PrepareOutputDir created when they are still empty (a command that failed
 // before writing anything leaves no empty output folder behind). The dispatcher calls it when a
 // command exits non-zero.

@@ -26,6 +26,7 @@ DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
   BlockingQueue<msg::RgbdFrame> queue;
   std::mutex mutex;
   int64_t end_frames = -1;  // frames announced by END_OF_STREAM
+  RunWriters run_writers;   // which frame source is the run's (guarded by mutex)
 
   dds::Writer<msg::DetectionsPubSubType> writer(participant, dds::topics::kDetections,
                                                 dds::TopicKind::kDetections);
@@ -36,9 +37,11 @@ DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
       [&](msg::RgbdFrame&& frame) { queue.Push(std::move(frame)); });
   StatusReader status_reader(
       participant, ComponentKind::kDetector,
-      [&](const ComponentStatus& s, const msg::StreamStatus& m) {
+      [&](const ComponentStatus& s, const msg::StreamStatus& m, const WriterGuid& from) {
+        std::lock_guard<std::mutex> lock(mutex);
+        // A second frame source's end of stream is not this run's (components/protocol.h).
+        if (!run_writers.Announce(s, from)) return;
         if (s.event == StreamEvent::kEndOfStream && IsFrameSource(s.source)) {
-          std::lock_guard<std::mutex> lock(mutex);
           end_frames = StreamFrameCountFromMsg(m);
           if (end_frames == std::numeric_limits<int64_t>::max()) {
             LOG_WARNING << "detector: END_OF_STREAM announces " << m.num_frames()

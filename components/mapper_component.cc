@@ -44,9 +44,9 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
                                                  });
   StatusReader status_reader(
       participant, ComponentKind::kMapper,
-      [&](const ComponentStatus& s, const msg::StreamStatus& /*m*/) {
+      [&](const ComponentStatus& s, const msg::StreamStatus& /*m*/, const WriterGuid& from) {
         std::lock_guard<std::mutex> lock(mutex);
-        writers.Announce(s);
+        if (!writers.Announce(s, from)) return;  // a second frame source: not this run's
         if (s.source == ComponentKind::kSlam &&
             (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed)) {
           slam_done = true;

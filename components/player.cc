@@ -155,9 +155,18 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
       });
   StatusReader status_reader(
       participant, ComponentKind::kPlayer,
-      [&](const ComponentStatus& s, const msg::StreamStatus& /*m*/) {
+      [&](const ComponentStatus& s, const msg::StreamStatus& /*m*/, const WriterGuid& from) {
         {
           std::lock_guard<std::mutex> lock(mutex);
+          // Another frame source on the partition: the consumers take the frames of the one
+          // that announced itself first and ignore the other's (components/protocol.h).
+          if (s.event == StreamEvent::kStarted && IsFrameSource(s.source) &&
+              !std::equal(from.begin(), from.begin() + 12, frames.guid().begin())) {
+            LOG_WARNING << "player: another frame source (" << ToString(s.source)
+                        << ") plays on this partition; the run's consumers take the frames of "
+                        << "the one that started first and ignore the other's (give each run its "
+                        << "own --partition)";
+          }
           if (s.source == ComponentKind::kSlam &&
               (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed)) {
             slam_done = true;

@@ -1,5 +1,6 @@
 #include "components/protocol.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <sstream>
 
@@ -273,9 +274,43 @@ ComponentStatus StatusFromMsg(const msg::StreamStatus& m) {
   return s;
 }
 
-void RunWriters::Announce(const ComponentStatus& status) {
-  if (status.event != StreamEvent::kStarted) return;
+RunWriters::Prefix RunWriters::PrefixOf(const WriterGuid& guid) {
+  Prefix p{};
+  std::copy(guid.begin(), guid.begin() + p.size(), p.begin());
+  return p;
+}
+
+bool RunWriters::Announce(const ComponentStatus& status,
+                          const std::optional<WriterGuid>& status_writer) {
+  if (IsFrameSource(status.source)) {
+    // Which participant: the status writer's, else that of the frames writer it announces.
+    std::optional<Prefix> from;
+    if (status_writer) {
+      from = PrefixOf(*status_writer);
+    } else if (const auto it = status.writers.find(DataTopic::kFrames);
+               it != status.writers.end()) {
+      from = PrefixOf(it->second);
+    }
+    if (from && rivals_.count(*from) > 0) return false;
+    if (status.event == StreamEvent::kStarted && from) {
+      if (frame_source_ && *frame_source_ != *from) {
+        rivals_.insert(*from);
+        WriterGuid padded{};
+        std::copy(from->begin(), from->end(), padded.begin());
+        last_rival_ = std::string(ToString(status.source)) + " (participant " +
+                      ToHex(padded).substr(0, 2 * from->size()) + ")";
+        return false;
+      }
+      frame_source_ = from;
+    }
+    if ((status.event == StreamEvent::kEndOfStream || status.event == StreamEvent::kFailed) &&
+        from && frame_source_ == from) {
+      frame_source_.reset();  // the next frame source may play (e.g. a player started again)
+    }
+  }
+  if (status.event != StreamEvent::kStarted) return true;
   for (const auto& [topic, guid] : status.writers) writers_[topic].insert(guid);
+  return true;
 }
 
 bool RunWriters::Owns(DataTopic topic, const WriterGuid& writer) const {

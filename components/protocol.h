@@ -118,15 +118,34 @@ ComponentStatus StatusFromMsg(const msg::StreamStatus& message);
 // The data writers announced by the run's components (STARTED). Every STARTED adds its writers
 // (a restarted component announces new ones; the old ones stay accepted: their samples still in
 // flight are this run's).
+//
+// One frame source per run: a frame source (player, ROS 2 bridge) that announces itself while
+// another one plays (its STARTED seen, its END_OF_STREAM or FAILED not yet) is a rival, e.g. a
+// second `dygslam component player` started on the run's partition. Its writers are not accepted
+// (its frames and ground truth count as ignored), and its later statuses (END_OF_STREAM, FAILED)
+// are not the run's: Announce returns false for them, and the shell must not act on them.
+// `status_writer`: the GUID of the status sample's writer (its participant prefix tells which
+// participant sent it); without it a frame source's END_OF_STREAM / FAILED is always the run's.
 class RunWriters {
  public:
-  void Announce(const ComponentStatus& status);
+  // False when `status` comes from a rival frame source (see above); true otherwise.
+  bool Announce(const ComponentStatus& status,
+                const std::optional<WriterGuid>& status_writer = std::nullopt);
   bool Owns(DataTopic topic, const WriterGuid& writer) const;
   // Writers announced for `topic` so far.
   size_t NumAnnounced(DataTopic topic) const;
+  // Frame sources rejected as rivals so far (distinct participants).
+  size_t NumRivals() const { return rivals_.size(); }
+  // "player (participant 0f..12)" of the last rival, for messages; "" when there is none.
+  const std::string& LastRival() const { return last_rival_; }
 
  private:
+  using Prefix = std::array<uint8_t, 12>;
+  static Prefix PrefixOf(const WriterGuid& guid);
   std::map<DataTopic, std::set<WriterGuid>> writers_;
+  std::optional<Prefix> frame_source_;  // the participant of the frame source that plays
+  std::set<Prefix> rivals_;
+  std::string last_rival_;
 };
 
 // Admits the samples of one data topic: those of announced writers pass (in arrival order per

@@ -178,6 +178,56 @@ TEST(Protocol, RunWritersAcceptOnlyAnnouncedWritersPerTopic) {
   EXPECT_EQ(writers.NumAnnounced(DataTopic::kDetections), 2u);
 }
 
+// Issue 20: a second player started on the run's partition must not feed the run. The first
+// frame source to announce itself plays; another one that announces itself meanwhile is a rival:
+// its writers are not accepted and its END_OF_STREAM / FAILED are not the run's.
+TEST(Protocol, RunWritersRejectASecondFrameSource) {
+  RunWriters writers;
+  const WriterGuid player_frames = Guid(1, 2), player_truth = Guid(1, 3),
+                   player_status = Guid(1, 4);
+  const WriterGuid rival_frames = Guid(7, 2), rival_truth = Guid(7, 3), rival_status = Guid(7, 4);
+  EXPECT_TRUE(writers.Announce(
+      ComponentStatus::Started(ComponentKind::kPlayer, {{DataTopic::kFrames, player_frames},
+                                                        {DataTopic::kGroundTruth, player_truth}}),
+      player_status));
+  EXPECT_EQ(writers.NumRivals(), 0u);
+  EXPECT_FALSE(writers.Announce(
+      ComponentStatus::Started(ComponentKind::kPlayer, {{DataTopic::kFrames, rival_frames},
+                                                        {DataTopic::kGroundTruth, rival_truth}}),
+      rival_status));
+  EXPECT_EQ(writers.NumRivals(), 1u);
+  EXPECT_NE(writers.LastRival().find("player (participant 07"), std::string::npos)
+      << writers.LastRival();
+  EXPECT_TRUE(writers.Owns(DataTopic::kFrames, player_frames));
+  EXPECT_FALSE(writers.Owns(DataTopic::kFrames, rival_frames));
+  EXPECT_FALSE(writers.Owns(DataTopic::kGroundTruth, rival_truth));
+  // The rival's end of stream and failure are not the run's; the run's player's are.
+  EXPECT_FALSE(
+      writers.Announce(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 5, 4), rival_status));
+  EXPECT_FALSE(
+      writers.Announce(ComponentStatus::Failed(ComponentKind::kPlayer, "x"), rival_status));
+  // Other components' statuses pass, whoever sends them.
+  EXPECT_TRUE(writers.Announce(ComponentStatus::Ready(ComponentKind::kSlam), Guid(3, 4)));
+  EXPECT_TRUE(writers.Announce(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 40, 39),
+                               player_status));
+  // The run's player is done: a player started after it plays (a replay), a rival stays one.
+  const WriterGuid next_frames = Guid(9, 2);
+  EXPECT_TRUE(writers.Announce(
+      ComponentStatus::Started(ComponentKind::kPlayer, {{DataTopic::kFrames, next_frames}}),
+      Guid(9, 4)));
+  EXPECT_TRUE(writers.Owns(DataTopic::kFrames, next_frames));
+  EXPECT_FALSE(writers.Announce(
+      ComponentStatus::Started(ComponentKind::kPlayer, {{DataTopic::kFrames, rival_frames}}),
+      rival_status));
+  // Without the status writer's GUID, the frames writer tells the participant.
+  RunWriters plain;
+  EXPECT_TRUE(plain.Announce(
+      ComponentStatus::Started(ComponentKind::kPlayer, {{DataTopic::kFrames, player_frames}})));
+  EXPECT_FALSE(plain.Announce(
+      ComponentStatus::Started(ComponentKind::kRos2Bridge, {{DataTopic::kFrames, rival_frames}})));
+  EXPECT_FALSE(plain.Owns(DataTopic::kFrames, rival_frames));
+}
+
 TEST(Protocol, GateHoldsEarlySamplesUntilTheAnnouncementInWriterOrder) {
   RunWriters writers;
   WriterGate<int> gate(&writers, DataTopic::kDetections, 8, milliseconds(1000));

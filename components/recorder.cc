@@ -120,9 +120,9 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
       });
   StatusReader status_reader(
       participant, ComponentKind::kRecorder,
-      [&](const ComponentStatus& s, const msg::StreamStatus& /*m*/) {
+      [&](const ComponentStatus& s, const msg::StreamStatus& /*m*/, const WriterGuid& from) {
         std::lock_guard<std::mutex> lock(mutex);
-        writers.Announce(s);
+        if (!writers.Announce(s, from)) return;  // a second frame source: not this run's
         if (s.event == StreamEvent::kStarted) release_held();
         if (s.event == StreamEvent::kStarted && s.source == ComponentKind::kPlayer) {
           total_frames = s.num_frames;

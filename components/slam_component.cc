@@ -132,10 +132,21 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
         cv.notify_all();
       });
   StatusReader status_reader(
-      participant, ComponentKind::kSlam, [&](const ComponentStatus& s, const msg::StreamStatus& m) {
+      participant, ComponentKind::kSlam,
+      [&](const ComponentStatus& s, const msg::StreamStatus& m, const WriterGuid& from) {
         {
           std::lock_guard<std::mutex> lock(mutex);
-          run_writers.Announce(s);
+          if (!run_writers.Announce(s, from)) {
+            // A second frame source on the run's partition: its frames and its end of stream
+            // are not this run's (its frames count as ignored in the summary).
+            if (s.event == StreamEvent::kStarted) {
+              LOG_WARNING << "slam: rejected a second frame source on this run's partition: "
+                          << run_writers.LastRival() << " announced itself while the run's "
+                          << "frame source plays; its frames are ignored (give each run its own "
+                          << "--partition)";
+            }
+            return;
+          }
           if (s.event == StreamEvent::kEndOfStream && IsFrameSource(s.source)) {
             end_frames = StreamFrameCountFromMsg(m);
             if (end_frames == std::numeric_limits<int64_t>::max()) {

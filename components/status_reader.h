@@ -20,11 +20,23 @@ namespace dygslam {
 class StatusReader {
  public:
   using Callback = std::function<void(const ComponentStatus& status, const msg::StreamStatus& m)>;
+  // With the GUID of the status sample's writer (RunWriters::Announce tells a rival frame
+  // source's statuses from the run's by it).
+  using CallbackWithWriter = std::function<void(const ComponentStatus& status,
+                                                const msg::StreamStatus& m, const WriterGuid& w)>;
 
   // `self`: the component that reads (names it in the log).
   StatusReader(std::shared_ptr<dds::Participant> participant, ComponentKind self, Callback callback)
+      : StatusReader(
+            std::move(participant), self,
+            CallbackWithWriter([cb = std::move(callback)](const ComponentStatus& status,
+                                                          const msg::StreamStatus& m,
+                                                          const WriterGuid&) { cb(status, m); })) {}
+  StatusReader(std::shared_ptr<dds::Participant> participant, ComponentKind self,
+               CallbackWithWriter callback)
       : reader_(std::move(participant), dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
-                [self, callback = std::move(callback)](msg::StreamStatus&& m) {
+                [self, callback = std::move(callback)](msg::StreamStatus&& m,
+                                                       const WriterGuid& writer) {
                   ComponentStatus status;
                   try {
                     status = StatusFromMsg(m);
@@ -32,7 +44,7 @@ class StatusReader {
                     LOG_WARNING << ToString(self) << ": ignored status: " << e.what();
                     return;
                   }
-                  callback(status, m);
+                  callback(status, m, writer);
                 }) {}
 
   int matched() const { return reader_.matched(); }

@@ -93,6 +93,13 @@ void CheckTree(const YAML::Node& node, const std::string& path, int line,
                          "empty or null key ('~', 'null' or nothing before ':'); settings keys "
                          "are names");
       }
+      // A YAML 1.1 merge key: yaml-cpp keeps it as a key named "<<", so the merged values would
+      // land below "<<" and be dropped (with a misleading unknown-key warning).
+      if (entry.first.Scalar() == "<<" && entry.first.Tag() != "!") {
+        throw InputError(path, key_line,
+                         "merge key '<<' is not supported in settings files; write the keys "
+                         "themselves into the section");
+      }
       CheckTree(entry.first, path, key_line, ancestors, visited);
       CheckTree(entry.second, path, key_line, ancestors, visited);
     }
@@ -161,6 +168,8 @@ double ParseDouble(const YAML::Node& node, const Fail& fail) {
   const double v = std::strtod(begin, &end);
   if (text.empty() || end == begin || *end != '\0')
     fail("expected a number, found '" + EchoValue(text) + "'");
+  if (errno == ERANGE && std::isfinite(v) && std::abs(v) < 1.0)
+    fail("value too close to zero for a double (underflow), found '" + EchoValue(text) + "'");
   if (!std::isfinite(v) || errno == ERANGE)
     fail("value must be a finite number, found '" + EchoValue(text) + "'");
   return v;
@@ -302,7 +311,18 @@ ConfigReader ConfigReader::FromString(const std::string& text, const std::string
   auto impl = std::make_shared<Impl>();
   impl->path = name;
   try {
-    impl->root = YAML::Load(Preprocess(text));
+    // Every document: settings are one document, a second one ("---" or "..." followed by more
+    // keys) would be dropped without a word by YAML::Load.
+    std::vector<YAML::Node> documents = YAML::LoadAll(Preprocess(text));
+    for (size_t i = 1; i < documents.size(); ++i) {
+      if (!documents[i] || documents[i].IsNull()) continue;  // a trailing "---" or "..."
+      throw InputError(name, documents[i].Mark().line >= 0 ? documents[i].Mark().line + 1 : 0,
+                       "a second YAML document (after '---' or '...'): a settings file is one "
+                       "document; its keys would be ignored");
+    }
+    if (!documents.empty()) impl->root = documents.front();
+  } catch (const InputError&) {
+    throw;
   } catch (const YAML::DeepRecursion& e) {
     // yaml-cpp's own guard (thousands of levels) says "bad file": say what is wrong.
     throw InputError(name, e.mark.line >= 0 ? e.mark.line + 1 : 0,
@@ -721,7 +741,8 @@ void ConfigReader::FailInvalidOptions(const InvalidOptions& e) const {
   } catch (const InputError&) {
   }
   if (requires_at == std::string::npos)
-    throw InputError(impl_->path, line, "key '" + key + "': invalid value" + value + " (" + message + ")");
+    throw InputError(impl_->path, line,
+                     "key '" + key + "': invalid value" + value + " (" + message + ")");
   const std::string condition =
       UserCondition(message.substr(requires_at + 9), key, KnownSettingsKeys());
   throw InputError(impl_->path, line,

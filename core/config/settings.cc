@@ -108,6 +108,28 @@ Settings ReadSettings(ConfigReader reader, const SettingsReadOptions& read_optio
   CheckPlausibleCamera(camera, s.camera);
   if (camera.Has("bf")) CheckPlausibleBaseline(camera, s.camera, s.sensor);
   reader.CheckOptions(s.sensor);
+  // Finite and positive but absurd: a frame rate that makes the derived keyframe interval
+  // (Tracking.max_frames_between_keyframes = fps) overflow, a close-depth threshold beyond any
+  // sensor. Named by their own keys and lines, not by what they break later.
+  constexpr double kMaxFps = 1000.0, kMaxThDepth = 1000.0;
+  if (s.sensor.fps > kMaxFps) {
+    camera.Fail("fps", "implausible frame rate " + Short(s.sensor.fps) + " (expected at most " +
+                           Short(kMaxFps) + "; RGB-D sensors run at 5 to 90 Hz)");
+  }
+  if (s.sensor.th_depth > kMaxThDepth) {
+    reader.Fail("ThDepth", "implausible close-depth factor " + Short(s.sensor.th_depth) +
+                               " (close points are nearer than ThDepth x Camera.bf / Camera.fx = " +
+                               Short(s.sensor.close_depth(s.camera.fx)) + " m; expected at most " +
+                               Short(kMaxThDepth) + ", TUM / Bonn use 40: " +
+                               Short(40.0 * s.sensor.bf / s.camera.fx) + " m)");
+  }
+  constexpr double kMaxDepthMapFactor = 1e5;
+  if (s.sensor.depth_map_factor > kMaxDepthMapFactor) {
+    reader.Fail("DepthMapFactor", "implausible depth scale " + Short(s.sensor.depth_map_factor) +
+                                      " (depth image units per metre; expected at most " +
+                                      Short(kMaxDepthMapFactor) +
+                                      ", TUM / Bonn use 5000: 0.2 mm per unit)");
+  }
   reader.CheckOptions(s.orb);
   s.reader = std::move(reader);
   return s;
@@ -141,18 +163,17 @@ const std::vector<std::string>& KnownSettingsKeys() {
       "DynamicFilter.expansion_depth_gap", "Detector.model", "Detector.cfg", "Detector.weights",
       "Detector.names", "Detector.input_width", "Detector.input_height",
       "Detector.confidence_threshold", "Detector.nms_threshold", "Detector.num_threads",
-      "Detector.every_n_frames", "Detector.shift_carried_boxes",
-      "Detector.dynamic_classes", "LoopClosing.vocabulary", "LoopClosing.enabled",
-      "LoopClosing.min_keyframe_gap", "LoopClosing.revisit_min_path_m", "LoopClosing.consistency",
-      "LoopClosing.min_bow_matches", "LoopClosing.ransac_iterations",
-      "LoopClosing.ransac_threshold_px", "LoopClosing.min_ransac_inliers",
-      "LoopClosing.min_inlier_ratio", "LoopClosing.min_projection_matches",
-      "LoopClosing.max_correction_m", "LoopClosing.max_drift_per_meter",
-      "LoopClosing.max_correction_deg", "LoopClosing.max_drift_deg_per_meter",
-      "LoopClosing.fusion_radius_px", "LoopClosing.essential_min_weight",
-      "LoopClosing.pose_graph_iterations", "LoopClosing.global_bundle_adjustment",
-      "LoopClosing.global_ba_iterations", "LoopClosing.global_ba_min_correction_m",
-      "LoopClosing.global_ba_min_correction_deg",
+      "Detector.every_n_frames", "Detector.shift_carried_boxes", "Detector.dynamic_classes",
+      "LoopClosing.vocabulary", "LoopClosing.enabled", "LoopClosing.min_keyframe_gap",
+      "LoopClosing.revisit_min_path_m", "LoopClosing.consistency", "LoopClosing.min_bow_matches",
+      "LoopClosing.ransac_iterations", "LoopClosing.ransac_threshold_px",
+      "LoopClosing.min_ransac_inliers", "LoopClosing.min_inlier_ratio",
+      "LoopClosing.min_projection_matches", "LoopClosing.max_correction_m",
+      "LoopClosing.max_drift_per_meter", "LoopClosing.max_correction_deg",
+      "LoopClosing.max_drift_deg_per_meter", "LoopClosing.fusion_radius_px",
+      "LoopClosing.essential_min_weight", "LoopClosing.pose_graph_iterations",
+      "LoopClosing.global_bundle_adjustment", "LoopClosing.global_ba_iterations",
+      "LoopClosing.global_ba_min_correction_m", "LoopClosing.global_ba_min_correction_deg",
       // run/mapping_config.cc.
       "OctoMap.resolution", "OctoMap.max_range", "OctoMap.min_range", "OctoMap.prob_hit",
       "OctoMap.prob_miss", "OctoMap.clamping_min", "OctoMap.clamping_max",

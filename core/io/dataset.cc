@@ -55,8 +55,38 @@ std::string NotRegularReason(const fs::path& p) {
   return std::string("not a regular file: ") + kind + target;
 }
 
+// Image paths of one list file that lead outside the dataset folder: warned once per list file
+// (the first such line and how many there are), not once per line.
+class OutsidePaths {
+ public:
+  explicit OutsidePaths(std::string file) : file_(std::move(file)) {}
+  void Add(int line, const std::string& message) {
+    if (count_++ == 0) {
+      first_line_ = line;
+      first_message_ = message;
+    }
+  }
+  // Prints the warning, if any.
+  void Warn() const {
+    if (count_ == 0) return;
+    std::string message = first_message_;
+    if (count_ > 1) {
+      message += " (and " + std::to_string(count_ - 1) + " more image path" +
+                 (count_ > 2 ? "s" : "") + " of this file outside it: " + std::to_string(count_) +
+                 " in all)";
+    }
+    std::fprintf(stderr, "warning: %s\n", InputError::Format(file_, first_line_, message).c_str());
+  }
+
+ private:
+  std::string file_;
+  size_t count_ = 0;
+  int first_line_ = 0;
+  std::string first_message_;
+};
+
 std::string ResolveImage(const fs::path& directory, const std::string& file, int line,
-                         const std::string& relative, bool refuse_outside) {
+                         const std::string& relative, bool refuse_outside, OutsidePaths* outside) {
   const fs::path p = fs::path(relative).is_absolute() ? fs::path(relative) : directory / relative;
   const std::string reason = NotRegularReason(p);
   if (!reason.empty())
@@ -72,7 +102,7 @@ std::string ResolveImage(const fs::path& directory, const std::string& file, int
     const std::string message = "image path " + Abbreviate(relative) +
                                 " is outside the dataset folder " + directory.string();
     if (refuse_outside) throw InputError(file, line, message);
-    std::fprintf(stderr, "warning: %s\n", InputError::Format(file, line, message).c_str());
+    outside->Add(line, message);
   }
   return normal.string();
 }
@@ -95,6 +125,7 @@ std::vector<ListEntry> ReadImageList(const fs::path& directory, const std::strin
                                      bool refuse_outside) {
   const std::string file = (directory / name).string();
   std::vector<ListEntry> entries;
+  OutsidePaths outside(file);
   for (const TextLine& l : ReadDataLines(file)) {
     if (l.tokens.size() != 2) {
       throw InputError(
@@ -106,10 +137,11 @@ std::vector<ListEntry> ReadImageList(const fs::path& directory, const std::strin
     e.stamp = ParseStamp(file, l.line_number, l.tokens[0]);
     CheckOrder(file, l.line_number, entries.empty() ? Timestamp() : entries.back().stamp, e.stamp,
                !entries.empty());
-    e.path = ResolveImage(directory, file, l.line_number, l.tokens[1], refuse_outside);
+    e.path = ResolveImage(directory, file, l.line_number, l.tokens[1], refuse_outside, &outside);
     entries.push_back(std::move(e));
   }
   if (entries.empty()) throw InputError(file, 0, "no entries");
+  outside.Warn();
   return entries;
 }
 
@@ -134,6 +166,7 @@ RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions
   if (use_assoc) {
     // "t_rgb rgb_path t_depth depth_path", sorted by rgb stamp.
     const std::string file = assoc_path.string();
+    OutsidePaths outside(file);
     for (const TextLine& l : ReadDataLines(file)) {
       if (l.tokens.size() != 4) {
         throw InputError(file, l.line_number,
@@ -150,14 +183,15 @@ RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions
         throw InputError(file, l.line_number,
                          "rgb and depth stamps differ by more than max_time_difference");
       }
-      f.rgb_path =
-          ResolveImage(dir, file, l.line_number, l.tokens[1], options.refuse_outside_paths);
-      f.depth_path =
-          ResolveImage(dir, file, l.line_number, l.tokens[3], options.refuse_outside_paths);
+      f.rgb_path = ResolveImage(dir, file, l.line_number, l.tokens[1], options.refuse_outside_paths,
+                                &outside);
+      f.depth_path = ResolveImage(dir, file, l.line_number, l.tokens[3],
+                                  options.refuse_outside_paths, &outside);
       f.rgb_listed_at = f.depth_listed_at = file + ":" + std::to_string(l.line_number);
       dataset.frames_.push_back(std::move(f));
     }
     if (dataset.frames_.empty()) throw InputError(file, 0, "no entries");
+    outside.Warn();
     if (rgb.empty()) {
       dataset.num_rgb_entries_ = dataset.frames_.size();
       for (size_t i = 0; i < dataset.frames_.size(); ++i) dataset.rgb_entry_to_frame_.push_back(i);
@@ -244,7 +278,8 @@ bool PngSize(const std::string& path, int64_t* width, int64_t* height) {
   static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (!std::equal(kSignature, kSignature + 8, header)) return false;
   // The IHDR chunk must come first; without it the header says nothing (the decoder reports it).
-  if (header[12] != 'I' || header[13] != 'H' || header[14] != 'D' || header[15] != 'R') return false;
+  if (header[12] != 'I' || header[13] != 'H' || header[14] != 'D' || header[15] != 'R')
+    return false;
   const auto be32 = [&](int at) {
     return (int64_t{header[at]} << 24) | (int64_t{header[at + 1]} << 16) |
            (int64_t{header[at + 2]} << 8) | int64_t{header[at + 3]};

@@ -23,6 +23,20 @@ void WriteFileAtomically(const std::string& path, const std::string& content) {
   if (!fs::is_directory(dir, ec)) {
     throw InputError(path, 0, "cannot write: directory " + dir.string() + " does not exist");
   }
+  // The rename below would replace whatever `path` names: never a device (/dev/full), a FIFO, a
+  // socket or a folder.
+  const fs::file_status status = fs::status(target, ec);
+  if (!ec && fs::exists(status) && !fs::is_regular_file(status)) {
+    const char* kind = fs::is_directory(status)        ? "a folder"
+                       : fs::is_character_file(status) ? "a character device"
+                       : fs::is_block_file(status)     ? "a block device"
+                       : fs::is_fifo(status)           ? "a FIFO"
+                       : fs::is_socket(status)         ? "a socket"
+                                                       : "not a regular file";
+    throw InputError(path, 0,
+                     std::string("cannot write: it exists and is ") + kind +
+                         ", not a regular file (it is left as it is)");
+  }
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   FILE* f = std::fopen(tmp.c_str(), "wb");
   if (f == nullptr) {

@@ -105,10 +105,10 @@ Prepared Prepare(const SyntheticOptions& options) {
 // The configurations of `--filter` as System sets them up (core/system ApplyFilterConfiguration).
 DynamicFilterOptions Configuration(const std::string& name) {
   DynamicFilterOptions o;
-  if (name == "boxes") o.mode = DynamicFilterMode::kBoxes;
-  if (name == "geometry") o.mode = DynamicFilterMode::kGeometry;
+  if (name == "boxes") o.mode = FilterMode::kBoxes;
+  if (name == "geometry") o.mode = FilterMode::kGeometry;
   if (name == "geometry-epipolar") {  // geometry mode with the paper's epipolar test
-    o.mode = DynamicFilterMode::kGeometry;
+    o.mode = FilterMode::kGeometry;
     o.depth_residual = false;
   }
   if (name == "paper") {
@@ -121,7 +121,7 @@ DynamicFilterOptions Configuration(const std::string& name) {
   if (name == "full-no-box-depth") o.box_depth_band = 0;
   if (name == "full-chained") o.world_anchors = false;
   if (name == "geometry-chained") {
-    o.mode = DynamicFilterMode::kGeometry;
+    o.mode = FilterMode::kGeometry;
     o.world_anchors = false;
   }
   return o;  // "full": the defaults

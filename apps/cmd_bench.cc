@@ -33,11 +33,6 @@
 #include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/base/number_option.h"
-#include "core/bench/bench_report.h"
-#include "core/bench/bench_runner.h"
-#include "core/bench/bench_sequences.h"
-#include "core/bench/feature_figure.h"
-#include "core/bench/rgbd_odometry_baseline.h"
 #include "core/config/settings.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
@@ -46,6 +41,11 @@
 #include "core/system/system.h"
 #include "run/run_settings.h"
 #include "run/system_config.h"
+#include "tools/bench/bench_report.h"
+#include "tools/bench/bench_runner.h"
+#include "tools/bench/bench_sequences.h"
+#include "tools/bench/feature_figure.h"
+#include "tools/bench/rgbd_odometry_baseline.h"
 
 #ifndef DYGSLAM_VERSION
 #define DYGSLAM_VERSION "unknown"

@@ -1,5 +1,5 @@
 // dygslam synth OUT_DIR [--frames N] [--objects K] [--seed S] [--noise] [--fps F] ...
-// Writes a synthetic dynamic RGB-D sequence in TUM layout (core/synth/synthetic_sequence.h).
+// Writes a synthetic dynamic RGB-D sequence in TUM layout (tools/synth/synthetic_sequence.h).
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
@@ -12,7 +12,7 @@
 #include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/base/number_option.h"
-#include "core/synth/synthetic_sequence.h"
+#include "tools/synth/synthetic_sequence.h"
 
 namespace dygslam::cli {
 namespace {

@@ -8,8 +8,8 @@
 
 #include "apps/command.h"
 #include "core/base/error.h"
-#include "core/place/synthetic_training.h"
 #include "core/place/vocabulary.h"
+#include "tools/vocab/synthetic_training.h"
 
 namespace dygslam::cli {
 namespace {

@@ -1,4 +1,4 @@
-// The filter on the synthetic RGB-D room (core/synth): ORB features, ground-truth boxes, precision
+// The filter on the synthetic RGB-D room (tools/synth): ORB features, ground-truth boxes, precision
 // and recall of dynamic-feature removal against the ground-truth dynamic masks.
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 
 #include "core/dynamic/dynamic_filter.h"
 #include "core/slam/orb_extractor.h"
-#include "core/synth/synthetic_scene.h"
+#include "tools/synth/synthetic_scene.h"
 
 namespace dygslam {
 namespace {

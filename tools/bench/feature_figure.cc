@@ -1,4 +1,4 @@
-#include "core/bench/feature_figure.h"
+#include "tools/bench/feature_figure.h"
 
 #include <algorithm>
 #include <cstdio>

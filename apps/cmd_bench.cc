@@ -33,12 +33,8 @@
 #include "apps/command.h"
 #include "core/base/echo.h"
 #include "core/base/error.h"
+#include "core/base/number_option.h"
 #include "core/base/stop_signal.h"
-#include "core/bench/bench_report.h"
-#include "core/bench/bench_runner.h"
-#include "core/bench/bench_sequences.h"
-#include "core/bench/feature_figure.h"
-#include "core/bench/rgbd_odometry_baseline.h"
 #include "core/config/settings.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
@@ -47,6 +43,11 @@
 #include "core/system/system.h"
 #include "run/run_settings.h"
 #include "run/system_config.h"
+#include "tools/bench/bench_report.h"
+#include "tools/bench/bench_runner.h"
+#include "tools/bench/bench_sequences.h"
+#include "tools/bench/feature_figure.h"
+#include "tools/bench/rgbd_odometry_baseline.h"
 
 #ifndef DYGSLAM_VERSION
 #define DYGSLAM_VERSION "unknown"
@@ -184,16 +185,6 @@ std::vector<std::string> SplitList(const std::string& text) {
   return out;
 }
 
-int ParseCount(const ArgParser& p, const std::string& option, int min, int max) {
-  const std::string text = p.Get(option);
-  char* end = nullptr;
-  const long v = std::strtol(text.c_str(), &end, 10);
-  if (text.empty() || *end != '\0' || v < min || v > max)
-    throw InvalidOptions("--" + option + ": expected an integer in [" + std::to_string(min) + ", " +
-                         std::to_string(max) + "], got '" + EchoValue(text) + "'");
-  return static_cast<int>(v);
-}
-
 // --- worker: one run in this process ------------------------------------------------------
 
 int RunWorker(const ArgParser& p) {
@@ -303,7 +294,9 @@ int RunBench(const std::vector<std::string>& args) {
 
   const auto t_start = std::chrono::steady_clock::now();
   const bool quick = p.Flag("quick");
-  const int runs = (quick && !p.Has("runs")) ? 1 : ParseCount(p, "runs", 1, 100);
+  const int runs = (quick && !p.Has("runs"))
+                       ? 1
+                       : static_cast<int>(IntegerOption("runs", p.Get("runs"), 1, 100));
   std::vector<std::string> configs = SplitList(p.Get("configs"));
   if (configs.empty()) return p.UsageError("--configs: empty list");
   for (const std::string& c : configs) {  // an unknown name is a usage error naming --configs
@@ -581,8 +574,8 @@ int RunBench(const std::vector<std::string>& args) {
         const RgbdDataset dataset = RgbdDataset::Open(pr.sequence.directory);
         size_t entry = pr.first + static_cast<size_t>(0.7 * (pr.last - pr.first));
         if (p.Has("features-frame")) {
-          entry = static_cast<size_t>(
-              ParseCount(p, "features-frame", 0, static_cast<int>(pr.num_entries) - 1));
+          entry = static_cast<size_t>(IntegerOption("features-frame", p.Get("features-frame"), 0,
+                                                    static_cast<int64_t>(pr.num_entries) - 1));
         }
         while (entry > pr.first && !dataset.FrameForRgbEntry(entry)) --entry;
         SystemOptions options = SystemOptionsFromSettings(pr.settings);

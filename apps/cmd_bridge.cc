@@ -13,6 +13,7 @@
 #include "apps/command.h"
 #include "bridge/ros2_bridge.h"
 #include "components/dds/participant.h"
+#include "components/dds/qos.h"
 #include "components/pipeline.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
@@ -21,26 +22,6 @@
 
 namespace dygslam::cli {
 namespace {
-
-double ParseDouble(const std::string& option, const std::string& text) {
-  try {
-    size_t used = 0;
-    const double v = std::stod(text, &used);
-    if (used == text.size()) return v;
-  } catch (const std::exception&) {
-  }
-  throw InvalidOptions("--" + option + ": expected a number, got '" + text + "'");
-}
-
-int ParseInt(const std::string& option, const std::string& text) {
-  try {
-    size_t used = 0;
-    const int v = std::stoi(text, &used);
-    if (used == text.size()) return v;
-  } catch (const std::exception&) {
-  }
-  throw InvalidOptions("--" + option + ": expected an integer, got '" + text + "'");
-}
 
 int RunBridgeCommand(const std::vector<std::string>& args) {
   ArgParser p(
@@ -116,13 +97,15 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   if (p.Has("color-topic")) o.color_topic = p.Get("color-topic");
   if (p.Has("depth-topic")) o.depth_topic = p.Get("depth-topic");
   if (p.Has("camera-info-topic")) o.camera_info_topic = p.Get("camera-info-topic");
-  o.depth_unit = ParseDouble("depth-unit", p.Get("depth-unit"));
-  o.max_stamp_difference_s = ParseDouble("max-stamp-diff", p.Get("max-stamp-diff"));
-  o.window = ParseInt("window", p.Get("window"));
-  const int max_pending = ParseInt("max-pending", p.Get("max-pending"));
-  if (max_pending < 1) throw InvalidOptions("--max-pending: must be >= 1");
+  int max_pending = 0, domain = -1;
+  if (!p.GetNumber("depth-unit", 0, 1000, &o.depth_unit) ||
+      !p.GetNumber("max-stamp-diff", 0, 1000, &o.max_stamp_difference_s) ||
+      !p.GetInt("window", 0, dds::kFrameHistoryDepth - 1, &o.window) ||
+      !p.GetInt("max-pending", 1, 1000000, &max_pending) ||
+      !p.GetNumber("eos-idle", 0, 1e9, &o.end_of_stream_idle_s) ||
+      !p.GetInt("path-every", 0, 1000000, &o.path_every) || !p.GetInt("domain", -1, 232, &domain))
+    return p.exit_code();
   o.max_pending_frames = static_cast<size_t>(max_pending);
-  o.end_of_stream_idle_s = ParseDouble("eos-idle", p.Get("eos-idle"));
   o.pose_topic = p.Get("pose-topic");
   o.odom_topic = p.Get("odom-topic");
   o.path_topic = p.Get("path-topic");
@@ -134,7 +117,6 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   o.world_frame = p.Get("world-frame");
   o.camera_frame = p.Get("camera-frame");
   o.image_frame = p.Get("image-frame");
-  o.path_every = ParseInt("path-every", p.Get("path-every"));
   o.ros_axes = !p.Flag("no-ros-axes");
   o.publish_tf = !p.Flag("no-tf");
   o.inbound = !p.Flag("no-inbound");
@@ -158,7 +140,6 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   const std::string partition = p.Get("partition");
   o.Check();
 
-  int domain = ParseInt("domain", p.Get("domain"));
   if (domain < 0) domain = dds::DomainIdFromEnvironment(0);
 
   PipelineOptions pipeline;

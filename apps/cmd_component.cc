@@ -10,7 +10,6 @@
 #include <iostream>
 #include <iterator>
 #include <sstream>
-#include <tuple>
 
 #include "apps/command.h"
 #include "components/dds/qos.h"
@@ -19,25 +18,11 @@
 #include "core/base/error.h"
 #include "core/config/settings.h"
 #include "core/dynamic/yolo_detector.h"
+#include "core/io/dataset.h"
 #include "run/run_settings.h"
 
 namespace dygslam::cli {
 namespace {
-
-std::pair<size_t, size_t> ParseEntryRange(const std::string& text) {
-  const auto colon = text.find(':');
-  if (colon == std::string::npos)
-    throw InvalidOptions("--frames: expected FIRST:LAST, got '" + EchoValue(text) + "'");
-  auto parse = [&](const std::string& s) -> size_t {
-    if (s.empty()) return 0;
-    if (s.size() > 18) throw InvalidOptions("--frames: number too large: '" + EchoValue(s) + "'");
-    for (char c : s)
-      if (c < '0' || c > '9')
-        throw InvalidOptions("--frames: not a non-negative integer: '" + EchoValue(s) + "'");
-    return std::stoul(s);
-  };
-  return {parse(text.substr(0, colon)), parse(text.substr(colon + 1))};
-}
 
 int RunComponentCommand(const std::vector<std::string>& args) {
   ArgParser p(
@@ -117,7 +102,9 @@ int RunComponentCommand(const std::vector<std::string>& args) {
     return p.UsageError("--partition '" + EchoValue(p.Get("partition")) +
                         "': wildcards (* ? [ ]) would join other runs; give a plain name");
   try {
-    std::tie(o.first_entry, o.last_entry) = ParseEntryRange(p.Get("frames"));
+    const FrameRangeText range = SplitFrameRange(p.Get("frames"));  // 0 = all
+    o.first_entry = range.first.value_or(0);
+    o.last_entry = range.last.value_or(0);
   } catch (const InvalidOptions& e) {
     return p.UsageError(e.what());
   }

@@ -7,7 +7,6 @@
 #include "apps/command.h"
 #include "components/dds/participant.h"
 #include "components/pipeline.h"
-#include "core/base/echo.h"
 #include "core/base/error.h"
 
 namespace dygslam::cli {
@@ -28,12 +27,7 @@ int RunDiscoveryServerCommand(const std::vector<std::string>& args) {
   } catch (const InvalidOptions& e) {
     return p.UsageError(e.what());
   }
-  try {
-    domain = std::stoi(p.Get("domain"));
-  } catch (const std::exception&) {
-    return p.UsageError("--domain: not an integer: '" + EchoValue(p.Get("domain")) + "'");
-  }
-  if (domain < -1 || domain > 232) return p.UsageError("--domain: expected 0..232");
+  if (!p.GetInt("domain", -1, 232, &domain)) return p.exit_code();
   if (domain < 0) domain = dds::DomainIdFromEnvironment(0);
   auto stop = std::make_shared<StopFlag>(StopFlag::Signals::kStop);
   dds::RunDiscoveryServer(p.Get("listen"), domain, [&] { return stop->requested(); });

@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -44,20 +45,6 @@
 namespace dygslam::cli {
 namespace {
 namespace fs = std::filesystem;
-
-double ParsePositive(const std::string& option, const std::string& text) {
-  size_t used = 0;
-  double value = 0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || !(value > 0) || !std::isfinite(value))
-    throw InvalidOptions("--" + option + ": expected a positive number, got '" + EchoValue(text) +
-                         "'");
-  return value;
-}
 
 // Keyframes recorded for the reference map (--reference-until): depth kept, final pose tracked.
 struct ReferenceKeyframe {
@@ -123,14 +110,17 @@ int RunMap(const std::vector<std::string>& args) {
   // A stop request ends the frame loop; the outputs are then written from what was processed
   // (shares the flag of dygslam main's early scope, so a signal during setup counts too).
   const StopFlag stop(StopFlag::Signals::kStop);
-  // Numbers first: a malformed one is a usage error (exit 2).
-  try {
-    for (const char* name : {"resolution", "every", "reference-until", "save-every"}) {
-      if (p.Has(name)) ParsePositive(name, p.Get(name));
-    }
-  } catch (const InvalidOptions& e) {
-    return p.UsageError(e.what());
-  }
+  // Numbers first: a malformed or out-of-range one is a usage error (exit 2).
+  double resolution = 0;
+  int every_option = 0;
+  int64_t reference_entry = 0;
+  std::optional<double> save_every;
+  if ((p.Has("resolution") && !p.GetNumber("resolution", 0.001, 10, &resolution)) ||
+      !p.GetInt("every", 1, 1000000, &every_option) ||
+      (p.Has("reference-until") &&
+       !p.GetInt("reference-until", 1, std::numeric_limits<int>::max(), &reference_entry)) ||
+      (p.Has("save-every") && !p.GetNumber("save-every", 0.001, 1e9, &save_every.emplace())))
+    return p.exit_code();
 
   const std::string dataset_dir = p.Positional("DATASET_DIR");
   const std::string config =
@@ -144,8 +134,7 @@ int RunMap(const std::vector<std::string>& args) {
   if (!p.Has("trajectory")) ResolveDetectorModel(&configuration.system);
   const SystemOptions& options = configuration.system;
   OctoMapOptions& map_options = configuration.octomap;
-  if (p.Has("resolution"))
-    map_options.resolution = ParsePositive("resolution", p.Get("resolution"));
+  if (p.Has("resolution")) map_options.resolution = resolution;
   if (p.Flag("no-mask") || options.filter.mode == FilterMode::kNone)
     map_options.use_dynamic_mask = false;
   if (p.Has("resolution") && !(map_options.resolution > 0.001 && map_options.resolution <= 10))
@@ -155,16 +144,10 @@ int RunMap(const std::vector<std::string>& args) {
   const bool from_trajectory = p.Has("trajectory");
   int every = 1;
   if (from_trajectory) {
-    const double e = ParsePositive("every", p.Get("every"));
-    if (e != std::floor(e))
-      return p.UsageError("--every: expected a positive integer, got '" +
-                          EchoValue(p.Get("every")) + "'");
-    every = static_cast<int>(e);
+    every = every_option;
   } else if (p.Has("every") || p.Flag("bonn-marker")) {
     return p.UsageError("--every and --bonn-marker need --trajectory");
   }
-  std::optional<double> save_every;
-  if (p.Has("save-every")) save_every = ParsePositive("save-every", p.Get("save-every"));
 
   DatasetOptions dataset_options;
   dataset_options.refuse_outside_paths = p.Flag("strict-paths");
@@ -182,13 +165,12 @@ int RunMap(const std::vector<std::string>& args) {
   auto [first, last] = range;
   std::optional<Timestamp> reference_until;
   if (p.Has("reference-until")) {
-    const double k = ParsePositive("reference-until", p.Get("reference-until"));
-    if (k != std::floor(k) || k > dataset.num_rgb_entries())
+    if (static_cast<size_t>(reference_entry) > dataset.num_rgb_entries())
       return p.UsageError("--reference-until: expected an rgb entry index 1.." +
                           std::to_string(dataset.num_rgb_entries()));
     // The stamp of rgb entry K: the first frame with a depth partner at or after it.
-    for (size_t e = static_cast<size_t>(k); e < dataset.num_rgb_entries() && !reference_until;
-         ++e) {
+    for (size_t e = static_cast<size_t>(reference_entry);
+         e < dataset.num_rgb_entries() && !reference_until; ++e) {
       if (const auto index = dataset.FrameForRgbEntry(e))
         reference_until = dataset.frame(*index).rgb_stamp;
     }

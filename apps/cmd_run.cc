@@ -433,22 +433,12 @@ int RunRun(const std::vector<std::string>& args) {
     s.use_detection_file = true;
   }
   s.progress = !p.Flag("quiet");
-  try {
-    s.loop_minutes = std::stod(p.Get("loop-minutes"));
-  } catch (const std::exception&) {
-    return p.UsageError("--loop-minutes: not a number: '" + EchoValue(p.Get("loop-minutes")) + "'");
-  }
-  if (!(s.loop_minutes >= 0 && s.loop_minutes < 1e6))
-    return p.UsageError("--loop-minutes: expected a number >= 0");
+  int domain_id = -1;
+  if (!p.GetNumber("loop-minutes", 0, 1e6, &s.loop_minutes) ||
+      !p.GetInt("domain", -1, 232, &domain_id))
+    return p.exit_code();
   if (s.loop_minutes > 0 && p.Flag("direct"))
     return p.UsageError("--loop-minutes works with the DDS modes only (not --direct)");
-  int domain_id = -1;
-  try {
-    domain_id = std::stoi(p.Get("domain"));
-  } catch (const std::exception&) {
-    return p.UsageError("--domain: not an integer: '" + EchoValue(p.Get("domain")) + "'");
-  }
-  if (domain_id < -1 || domain_id > 232) return p.UsageError("--domain: expected 0..232");
 
   DatasetOptions dataset_options;
   dataset_options.refuse_outside_paths = p.Flag("strict-paths");

@@ -1,55 +1,34 @@
 // dygslam synth OUT_DIR [--frames N] [--objects K] [--seed S] [--noise] [--fps F] ...
-// Writes a synthetic dynamic RGB-D sequence in TUM layout (core/synth/synthetic_sequence.h).
+// Writes a synthetic dynamic RGB-D sequence in TUM layout (tools/synth/synthetic_sequence.h).
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "apps/command.h"
 #include "core/base/echo.h"
 #include "core/base/error.h"
-#include "core/synth/synthetic_sequence.h"
+#include "core/base/number_option.h"
+#include "tools/synth/synthetic_sequence.h"
 
 namespace dygslam::cli {
 namespace {
-
-bool ParseInt(const std::string& text, int64_t min_value, int64_t* value) {
-  if (text.empty() || text.size() > 18) return false;
-  int64_t v = 0;
-  for (char c : text) {
-    if (c < '0' || c > '9') return false;
-    v = v * 10 + (c - '0');
-  }
-  if (v < min_value) return false;
-  *value = v;
-  return true;
-}
-
-bool ParseNumber(const std::string& text, double* value) {
-  size_t used = 0;
-  try {
-    *value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    return false;
-  }
-  return used == text.size();
-}
 
 int RunSynth(const std::vector<std::string>& args) {
   ArgParser p(
       "synth",
       "OUT_DIR [--frames N] [--objects K] [--seed S] [--noise] [--fps F] [--objects-from FRAME]\n"
       "              [--max-depth M] [--supersampling N] [--quiet]",
-      "Renders a synthetic dynamic RGB-D sequence with exact ground truth: a textured 6 x 5 x 3 m\n"
-      "room with furniture, a camera moving like a handheld one (~0.3 m/s, ~25 deg/s), and K\n"
-      "person-sized textured boxes walking back and forth in front of it (~1 m/s). Writes TUM "
-      "layout:\n"
-      "rgb/, depth/ (16-bit, /5000 = m), rgb.txt, depth.txt (stamps offset ~4 ms), "
-      "groundtruth.txt,\n"
-      "mask/ + mask.txt (255 = moving object), detections.txt (ground-truth person boxes\n"
-      "'t x y w h class score'), objects.txt (object poses per frame) and camera.yaml (ORB-SLAM2\n"
-      "keys). The same seed gives byte-identical files.");
+      R"(Renders a synthetic dynamic RGB-D sequence with exact ground truth: a textured 6 x 5 x 3 m
+room with furniture, a camera moving like a handheld one (~0.3 m/s, ~25 deg/s), and K
+person-sized textured boxes walking back and forth in front of it (~1 m/s). Writes TUM layout:
+rgb/, depth/ (16-bit, /5000 = m), rgb.txt, depth.txt (stamps offset ~4 ms), groundtruth.txt,
+mask/ + mask.txt (255 = moving object), detections.txt (ground-truth person boxes
+'t x y w h class score'), objects.txt (object poses per frame) and camera.yaml (ORB-SLAM2
+keys). The same seed gives byte-identical files.)");
   p.AddPositional("OUT_DIR", "output folder (created if needed; existing files are replaced)");
   p.AddOption("frames", "N", "number of frames", "100");
   p.AddOption("objects", "K", "moving objects (people), 0..4", "2");
@@ -80,51 +59,29 @@ int RunSynth(const std::vector<std::string>& args) {
   if (!p.Parse(args)) return p.exit_code();
 
   SyntheticOptions options;
-  int64_t value = 0;
-  if (!ParseInt(p.Get("frames"), 1, &value) || value > 1000000) {
-    return p.UsageError("--frames: expected a positive integer, got '" +
-                        EchoValue(p.Get("frames")) + "'");
-  }
-  options.num_frames = static_cast<int>(value);
-  if (!ParseInt(p.Get("objects"), 0, &value) || value > 1000) {
-    return p.UsageError("--objects: expected a non-negative integer, got '" +
-                        EchoValue(p.Get("objects")) + "'");
-  }
-  options.num_moving_objects = static_cast<int>(value);
-  if (!ParseInt(p.Get("seed"), 0, &value)) {
-    return p.UsageError("--seed: expected a non-negative integer, got '" +
-                        EchoValue(p.Get("seed")) + "'");
-  }
-  options.seed = static_cast<uint64_t>(value);
-  if (!ParseInt(p.Get("objects-from"), 0, &value) || value > 1000000) {
-    return p.UsageError("--objects-from: expected a non-negative integer, got '" +
-                        EchoValue(p.Get("objects-from")) + "'");
-  }
-  options.objects_start_frame = static_cast<int>(value);
-  if (!ParseInt(p.Get("supersampling"), 1, &value) || value > 100) {
-    return p.UsageError("--supersampling: expected a positive integer, got '" +
-                        EchoValue(p.Get("supersampling")) + "'");
-  }
-  options.supersampling = static_cast<int>(value);
-  if (!ParseNumber(p.Get("fps"), &options.sensor.fps)) {
-    return p.UsageError("--fps: expected a number, got '" + EchoValue(p.Get("fps")) + "'");
-  }
-  if (!ParseNumber(p.Get("max-depth"), &options.max_depth)) {
-    return p.UsageError("--max-depth: expected a number, got '" + EchoValue(p.Get("max-depth")) +
-                        "'");
-  }
+  int64_t seed = 0;
+  if (!p.GetInt("frames", 1, 1000000, &options.num_frames) ||
+      !p.GetInt("objects", 0, 4, &options.num_moving_objects) ||
+      !p.GetInt("seed", 0, std::numeric_limits<int64_t>::max(), &seed) ||
+      !p.GetInt("objects-from", 0, 1000000, &options.objects_start_frame) ||
+      !p.GetInt("supersampling", 1, 4, &options.supersampling) ||
+      !p.GetNumber("fps", 0, 1000, &options.sensor.fps) ||
+      !p.GetNumber("max-depth", 0, 1000, &options.max_depth) ||
+      !p.GetNumber("loop-corner", 0, 50, &options.loop_corner_radius) ||
+      !p.GetNumber("speed", 0, 5, &options.loop_speed) ||
+      !p.GetNumber("texels", 50, 1000, &options.texels_per_metre))
+    return p.exit_code();
+  options.seed = static_cast<uint64_t>(seed);
   auto parse_list = [&](const std::string& option, size_t n, std::vector<double>* out) {
     out->clear();
     std::string text = p.Get(option);
     size_t start = 0;
     while (start <= text.size()) {
       const size_t comma = text.find(',', start);
-      double v = 0;
-      if (!ParseNumber(
-              text.substr(start, comma == std::string::npos ? std::string::npos : comma - start),
-              &v))
-        return false;
-      out->push_back(v);
+      const std::optional<double> v = ParseFiniteNumber(
+          text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+      if (!v) return false;
+      out->push_back(*v);
       if (comma == std::string::npos) break;
       start = comma + 1;
     }
@@ -138,13 +95,6 @@ int RunSynth(const std::vector<std::string>& args) {
     return p.UsageError("--loop-path: expected A,B in metres, got '" +
                         EchoValue(p.Get("loop-path")) + "'");
   options.loop_semi_axes = Eigen::Vector2d(list[0], list[1]);
-  if (!ParseNumber(p.Get("loop-corner"), &options.loop_corner_radius))
-    return p.UsageError("--loop-corner: expected a number, got '" +
-                        EchoValue(p.Get("loop-corner")) + "'");
-  if (!ParseNumber(p.Get("speed"), &options.loop_speed))
-    return p.UsageError("--speed: expected a number, got '" + EchoValue(p.Get("speed")) + "'");
-  if (!ParseNumber(p.Get("texels"), &options.texels_per_metre))
-    return p.UsageError("--texels: expected a number, got '" + EchoValue(p.Get("texels")) + "'");
   options.loop_inward = p.Flag("loop-inward");
   if (p.Flag("noise")) {
     options.depth_noise = true;

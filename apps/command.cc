@@ -14,6 +14,7 @@
 
 #include "core/base/echo.h"
 #include "core/base/error.h"
+#include "core/base/number_option.h"
 #include "core/io/file_util.h"
 #include "core/system/system.h"
 
@@ -224,45 +225,31 @@ int ArgParser::UsageError(const std::string& message) const {
 
 bool ArgParser::GetInt(const std::string& option, int64_t min_value, int64_t max_value,
                        int64_t* value) {
-  const std::string text = Get(option);
-  const bool negative = !text.empty() && text[0] == '-';
-  const std::string digits = negative ? text.substr(1) : text;
-  bool ok = !digits.empty() && digits.size() <= 18;
-  int64_t v = 0;
-  for (size_t i = 0; ok && i < digits.size(); ++i) {
-    ok = digits[i] >= '0' && digits[i] <= '9';
-    v = v * 10 + (digits[i] - '0');
-  }
-  if (negative) v = -v;
-  if (ok && v >= min_value && v <= max_value) {
-    *value = v;
+  try {
+    *value = IntegerOption(option, Get(option), min_value, max_value);
     return true;
+  } catch (const InvalidOptions& e) {
+    exit_code_ = UsageError(e.what());
+    return false;
   }
-  exit_code_ = UsageError("--" + option + ": expected an integer in " + std::to_string(min_value) +
-                          ".." + std::to_string(max_value) + ", got '" + EchoValue(text) + "'");
-  return false;
+}
+
+bool ArgParser::GetInt(const std::string& option, int min_value, int max_value, int* value) {
+  int64_t v = 0;
+  if (!GetInt(option, int64_t{min_value}, int64_t{max_value}, &v)) return false;
+  *value = static_cast<int>(v);
+  return true;
 }
 
 bool ArgParser::GetNumber(const std::string& option, double min_value, double max_value,
                           double* value) {
-  const std::string text = Get(option);
-  size_t used = 0;
-  double v = 0;
   try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (!text.empty() && used == text.size() && std::isfinite(v) && v >= min_value &&
-      v <= max_value) {
-    *value = v;
+    *value = NumberOption(option, Get(option), min_value, max_value);
     return true;
+  } catch (const InvalidOptions& e) {
+    exit_code_ = UsageError(e.what());
+    return false;
   }
-  std::ostringstream message;
-  message << "--" << option << ": expected a number in " << min_value << ".." << max_value
-          << ", got '" << EchoValue(text) << "'";
-  exit_code_ = UsageError(message.str());
-  return false;
 }
 
 bool ArgParser::Parse(const std::vector<std::string>& args) {

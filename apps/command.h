@@ -73,9 +73,11 @@ class ArgParser {
   // Prints "dygslam <command>: <message>" + usage hint to stderr; returns 2.
   int UsageError(const std::string& message) const;
   // The option's value as a whole number in [min_value, max_value] / a finite number in
-  // [min_value, max_value]. On a malformed or out-of-range value: false, after the usage error
-  // "--NAME: expected an integer in MIN..MAX, got 'VALUE'" (exit_code() is then 2).
+  // [min_value, max_value] (core/base/number_option.h). On a malformed or out-of-range value:
+  // false, after the usage error "--NAME: expected an integer in MIN..MAX, got 'VALUE'"
+  // (exit_code() is then 2).
   bool GetInt(const std::string& option, int64_t min_value, int64_t max_value, int64_t* value);
+  bool GetInt(const std::string& option, int min_value, int max_value, int* value);
   bool GetNumber(const std::string& option, double min_value, double max_value, double* value);
 
  private:

@@ -154,10 +154,8 @@ struct RosBridge::Impl {
       });
     }
     // Writers first, then the threads, then the readers (their callbacks need both).
-    if (inbound) inbound->CreateWriters();
-    if (outbound) outbound->CreateWriters();
-    if (inbound) inbound->StartThread();
-    if (outbound) outbound->StartThread();
+    for (RosHalf* half : Halves()) half->CreateWriters();
+    for (RosHalf* half : Halves()) half->StartThread();
     pose_reader = std::make_unique<dds::Reader<msg::CameraPosePubSubType>>(
         participant, dds::topics::kCameraPose, dds::TopicKind::kCameraPose,
         [this](msg::CameraPose&& m) {
@@ -176,9 +174,16 @@ struct RosBridge::Impl {
             if (s.source() == "mapper") mapper_done = true;
           }
         });
-    if (outbound) outbound->CreateReaders();
-    if (inbound) inbound->CreateReaders();
+    for (RosHalf* half : Halves(/*outbound_first=*/true)) half->CreateReaders();
     AnnounceNode();
+  }
+
+  // The halves there are, inbound first (or outbound first).
+  std::vector<RosHalf*> Halves(bool outbound_first = false) const {
+    std::vector<RosHalf*> halves;
+    if (inbound) halves.push_back(inbound.get());
+    if (outbound) halves.insert(outbound_first ? halves.begin() : halves.end(), outbound.get());
+    return halves;
   }
 
   // The ROS 2 graph entry: one node owning the ROS readers and writers (ros2_graph.h).
@@ -218,16 +223,13 @@ struct RosBridge::Impl {
   void Stop() {
     // Readers first (no callback after this), then the threads (the outbound one runs the jobs
     // still queued).
-    if (inbound) inbound->StopReaders();
+    for (RosHalf* half : Halves()) half->StopReaders();
     pose_reader.reset();
-    if (outbound) outbound->StopReaders();
     status_reader.reset();
-    if (inbound) inbound->StopThread();
-    if (outbound) outbound->StopThread();
+    for (RosHalf* half : Halves()) half->StopThread();
     // Let reliable readers receive the last samples before the writers go away.
-    const auto t = std::chrono::milliseconds(1000);
-    if (outbound) outbound->WaitForAcknowledgments(t);
-    if (inbound) inbound->WaitForAcknowledgments(t);
+    for (RosHalf* half : Halves(/*outbound_first=*/true))
+      half->WaitForAcknowledgments(std::chrono::milliseconds(1000));
   }
 };
 

@@ -23,6 +23,7 @@
 #include "bridge/ros2_bridge.h"
 #include "bridge/ros2_convert.h"
 #include "bridge/ros2_endpoint.h"
+#include "bridge/ros2_half.h"
 #include "components/convert.h"
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
@@ -33,25 +34,23 @@
 
 namespace dygslam::ros2 {
 
-class RosInbound {
+class RosInbound : public RosHalf {
  public:
   RosInbound(std::shared_ptr<dds::Participant> pipeline, std::shared_ptr<RosSession> ros,
              const RosBridgeOptions& options);
-  ~RosInbound();
-  RosInbound(const RosInbound&) = delete;
-  RosInbound& operator=(const RosInbound&) = delete;
+  ~RosInbound() override;
 
   // The pipeline writers (frames, status) and the STARTED announcement of the frame writer.
-  void CreateWriters();
+  void CreateWriters() override;
   // The forwarding thread.
-  void StartThread();
+  void StartThread() override;
   // The ROS 2 readers (colour, depth, camera info); last, their callbacks need the rest.
-  void CreateReaders();
+  void CreateReaders() override;
   // Readers first (no callback after this returns), then the thread.
-  void StopReaders();
-  void StopThread();
+  void StopReaders() override;
+  void StopThread() override;
   // Lets reliable pipeline readers receive the last status (END_OF_STREAM).
-  void WaitForAcknowledgments(std::chrono::milliseconds timeout);
+  void WaitForAcknowledgments(std::chrono::milliseconds timeout) override;
 
   // slam acknowledged frame `seq` (its CameraPose): opens the back-pressure window.
   void Acknowledge(uint64_t seq);
@@ -65,7 +64,7 @@ class RosInbound {
   // frame_id of the newest colour image ("" before the first).
   std::string image_frame_id() const;
   // The inbound fields of the bridge statistics (the outbound ones stay 0).
-  RosBridgeStats stats() const;
+  RosBridgeStats stats() const override;
   // GUIDs of the ROS readers (for the ROS 2 graph entry), in subscription order.
   std::vector<eprosima::fastrtps::rtps::GUID_t> ros_reader_guids() const;
 

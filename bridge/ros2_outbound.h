@@ -19,6 +19,7 @@
 
 #include "bridge/ros2_bridge.h"
 #include "bridge/ros2_endpoint.h"
+#include "bridge/ros2_half.h"
 #include "components/component_common.h"
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
@@ -37,27 +38,25 @@
 
 namespace dygslam::ros2 {
 
-class RosOutbound {
+class RosOutbound : public RosHalf {
  public:
   // image_frame_id: frame_id of the incoming camera images ("" = none; detections then use
   // options.image_frame or the Detections message's own frame_id).
   RosOutbound(std::shared_ptr<dds::Participant> pipeline, std::shared_ptr<RosSession> ros,
               const RosBridgeOptions& options, std::function<std::string()> image_frame_id);
-  ~RosOutbound();
-  RosOutbound(const RosOutbound&) = delete;
-  RosOutbound& operator=(const RosOutbound&) = delete;
+  ~RosOutbound() override;
 
   // The ROS writers, and /tf_static map -> world_frame.
-  void CreateWriters();
-  void StartThread();
+  void CreateWriters() override;
+  void StartThread() override;
   // The pipeline readers (trajectory, detections, map updates); the poses come through
   // PublishPose (the bridge's one CameraPose reader also drives the inbound back-pressure).
-  void CreateReaders();
-  void StopReaders();
+  void CreateReaders() override;
+  void StopReaders() override;
   // Runs the jobs still queued, then ends the worker thread.
-  void StopThread();
+  void StopThread() override;
   // Lets reliable ROS readers receive the last path and map before the writers go away.
-  void WaitForAcknowledgments(std::chrono::milliseconds timeout);
+  void WaitForAcknowledgments(std::chrono::milliseconds timeout) override;
 
   // Queues the ROS pose, odometry, TF and path of one CameraPose (poses without has_pose: none).
   void PublishPose(msg::CameraPose&& pose);
@@ -67,7 +66,7 @@ class RosOutbound {
   // How many of the 7 ROS writers have matched at least one reader.
   int matched_ros_writers() const;
   // The outbound fields of the bridge statistics (the inbound ones stay 0).
-  RosBridgeStats stats() const;
+  RosBridgeStats stats() const override;
   // GUIDs of the ROS writers (for the ROS 2 graph entry), in publication order.
   std::vector<eprosima::fastrtps::rtps::GUID_t> ros_writer_guids() const;
 

@@ -27,6 +27,7 @@
 #include "components/convert.h"
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
+#include "core/base/number_option.h"
 #include "dygslam_msg/RgbdFramePubSubTypes.h"
 
 namespace dygslam {
@@ -214,39 +215,6 @@ std::string FormatTransportBench(const TransportBenchOptions& o, const Transport
   return buf;
 }
 
-// A whole number in [min_value, max_value] for `option`; a usage error (exit 2) otherwise.
-int ParseIntOption(const std::string& option, const std::string& text, int min_value,
-                   int max_value) {
-  size_t used = 0;
-  long value = 0;
-  try {
-    value = std::stol(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || value < min_value || value > max_value) {
-    throw std::invalid_argument(option + ": expected an integer in [" + std::to_string(min_value) +
-                                ", " + std::to_string(max_value) + "], got '" + text + "'");
-  }
-  return static_cast<int>(value);
-}
-
-double ParseNumberOption(const std::string& option, const std::string& text, double min_value,
-                         double max_value) {
-  size_t used = 0;
-  double value = 0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || !(value >= min_value && value <= max_value)) {
-    throw std::invalid_argument(option + ": expected a number in [" + std::to_string(min_value) +
-                                ", " + std::to_string(max_value) + "], got '" + text + "'");
-  }
-  return value;
-}
-
 int RunBenchTransportCommand(const std::vector<std::string>& args) {
   TransportBenchOptions o;
   try {
@@ -257,19 +225,19 @@ int RunBenchTransportCommand(const std::vector<std::string>& args) {
         return args[++i];
       };
       if (a == "--frames") {
-        o.frames = ParseIntOption(a, value(), 1, 1000000);
+        o.frames = static_cast<int>(IntegerOption(a.substr(2), value(), 1, 1000000));
       } else if (a == "--hz") {
-        o.hz = ParseNumberOption(a, value(), 0, 10000);
+        o.hz = NumberOption(a.substr(2), value(), 0, 10000);
       } else if (a == "--inproc") {
         o.in_process = true;
       } else if (a == "--domain") {
-        o.domain_id = ParseIntOption(a, value(), 0, 232);
+        o.domain_id = static_cast<int>(IntegerOption(a.substr(2), value(), 0, 232));
       } else if (a == "--window") {
-        o.window = ParseIntOption(a, value(), 0, 1000);
+        o.window = static_cast<int>(IntegerOption(a.substr(2), value(), 0, 1000));
       } else if (a == "--width") {
-        o.width = ParseIntOption(a, value(), 1, 16384);
+        o.width = static_cast<int>(IntegerOption(a.substr(2), value(), 1, 16384));
       } else if (a == "--height") {
-        o.height = ParseIntOption(a, value(), 1, 16384);
+        o.height = static_cast<int>(IntegerOption(a.substr(2), value(), 1, 16384));
       } else if (a == "--help") {
         std::cout << "usage: dygslam_bench_transport [--frames N] [--hz HZ (0 = max)] "
                      "[--inproc] [--window N (inproc)] [--domain N] [--width W --height H]\n";

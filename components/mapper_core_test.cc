@@ -1,4 +1,4 @@
-// MapperCore without DDS: generated keyframes (core/synth box room) in, the map out as a
+// MapperCore without DDS: generated keyframes (tools/synth box room) in, the map out as a
 // MapUpdate message and as map.bt; corrections and removals of known keyframes are applied,
 // unknown ids are ignored.
 #include "components/mapper_core.h"
@@ -11,9 +11,9 @@
 #include <string>
 
 #include "components/convert.h"
-#include "core/synth/box_room.h"
 #include "mapping/map_compare.h"
 #include "tests/support/test_support.h"
+#include "tools/synth/box_room.h"
 
 namespace dygslam {
 namespace {

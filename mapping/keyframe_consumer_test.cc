@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "core/base/error.h"
-#include "core/synth/box_room.h"
+#include "tools/synth/box_room.h"
 
 namespace dygslam {
 namespace {

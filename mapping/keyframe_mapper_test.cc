@@ -10,7 +10,7 @@
 #include "core/base/error.h"
 #include "mapping/keyframe_consumer.h"
 #include "mapping/map_compare.h"
-#include "core/synth/box_room.h"
+#include "tools/synth/box_room.h"
 
 namespace dygslam {
 namespace {

@@ -6,7 +6,7 @@
 #include <stdexcept>
 
 #include "mapping/octomap_builder.h"
-#include "core/synth/box_room.h"
+#include "tools/synth/box_room.h"
 
 namespace dygslam {
 namespace {

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "mapping/octomap_builder.h"
-#include "core/synth/box_room.h"
+#include "tools/synth/box_room.h"
 
 namespace dygslam {
 namespace {

@@ -6,8 +6,8 @@
 
 #include "core/base/error.h"
 #include "mapping/octomap_builder.h"
-#include "core/synth/box_room.h"
 #include "tests/support/test_support.h"
+#include "tools/synth/box_room.h"
 
 namespace dygslam {
 namespace {

@@ -13,16 +13,16 @@
 #include <optional>
 #include <string>
 
-#include "run/mapping_config.h"
 #include "core/config/settings.h"
-#include "run/system_config.h"
 #include "core/io/dataset.h"
-#include "core/synth/synthetic_scene.h"
 #include "core/system/system.h"
 #include "mapping/keyframe_mapper.h"
 #include "mapping/map_compare.h"
 #include "mapping/octomap_builder.h"
+#include "run/mapping_config.h"
+#include "run/system_config.h"
 #include "tests/support/test_support.h"
+#include "tools/synth/synthetic_scene.h"
 
 namespace dygslam {
 namespace {

@@ -23,6 +23,10 @@ struct SettingsField {
   std::variant<int*, float*, double*, bool*> field;
 };
 
+// A key spelled as its options field (the LoopClosing section).
+#define DYGSLAM_SAME_NAME_FIELD(options, name) \
+  SettingsField { #name, &(options).name }
+
 // Reads each present key into its field, in the order given (the first bad value is reported).
 void ReadFields(const ConfigReader& section, std::initializer_list<SettingsField> fields) {
   for (const SettingsField& f : fields)
@@ -137,27 +141,27 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                         ? beside.string()
                         : std::string(DYGSLAM_DEFAULT_VOCABULARY);
   }
-  ReadFields(loops, {{"enabled", &lc.enabled},
-                     {"min_keyframe_gap", &lc.min_keyframe_gap},
-                     {"revisit_min_path_m", &lc.revisit_min_path_m},
-                     {"consistency", &lc.consistency},
-                     {"min_bow_matches", &lc.min_bow_matches},
-                     {"ransac_iterations", &lc.ransac_iterations},
-                     {"ransac_threshold_px", &lc.ransac_threshold_px},
-                     {"min_ransac_inliers", &lc.min_ransac_inliers},
-                     {"min_inlier_ratio", &lc.min_inlier_ratio},
-                     {"min_projection_matches", &lc.min_projection_matches},
-                     {"max_correction_m", &lc.max_correction_m},
-                     {"max_drift_per_meter", &lc.max_drift_per_meter},
-                     {"max_correction_deg", &lc.max_correction_deg},
-                     {"max_drift_deg_per_meter", &lc.max_drift_deg_per_meter},
-                     {"fusion_radius_px", &lc.fusion_radius_px},
-                     {"essential_min_weight", &lc.essential_min_weight},
-                     {"pose_graph_iterations", &lc.pose_graph_iterations},
-                     {"global_bundle_adjustment", &lc.global_bundle_adjustment},
-                     {"global_ba_iterations", &lc.global_ba_iterations},
-                     {"global_ba_min_correction_m", &lc.global_ba_min_correction_m},
-                     {"global_ba_min_correction_deg", &lc.global_ba_min_correction_deg}});
+  ReadFields(loops, {DYGSLAM_SAME_NAME_FIELD(lc, enabled),
+                     DYGSLAM_SAME_NAME_FIELD(lc, min_keyframe_gap),
+                     DYGSLAM_SAME_NAME_FIELD(lc, revisit_min_path_m),
+                     DYGSLAM_SAME_NAME_FIELD(lc, consistency),
+                     DYGSLAM_SAME_NAME_FIELD(lc, min_bow_matches),
+                     DYGSLAM_SAME_NAME_FIELD(lc, ransac_iterations),
+                     DYGSLAM_SAME_NAME_FIELD(lc, ransac_threshold_px),
+                     DYGSLAM_SAME_NAME_FIELD(lc, min_ransac_inliers),
+                     DYGSLAM_SAME_NAME_FIELD(lc, min_inlier_ratio),
+                     DYGSLAM_SAME_NAME_FIELD(lc, min_projection_matches),
+                     DYGSLAM_SAME_NAME_FIELD(lc, max_correction_m),
+                     DYGSLAM_SAME_NAME_FIELD(lc, max_drift_per_meter),
+                     DYGSLAM_SAME_NAME_FIELD(lc, max_correction_deg),
+                     DYGSLAM_SAME_NAME_FIELD(lc, max_drift_deg_per_meter),
+                     DYGSLAM_SAME_NAME_FIELD(lc, fusion_radius_px),
+                     DYGSLAM_SAME_NAME_FIELD(lc, essential_min_weight),
+                     DYGSLAM_SAME_NAME_FIELD(lc, pose_graph_iterations),
+                     DYGSLAM_SAME_NAME_FIELD(lc, global_bundle_adjustment),
+                     DYGSLAM_SAME_NAME_FIELD(lc, global_ba_iterations),
+                     DYGSLAM_SAME_NAME_FIELD(lc, global_ba_min_correction_m),
+                     DYGSLAM_SAME_NAME_FIELD(lc, global_ba_min_correction_deg)});
   loops.CheckOptions(lc);
 
   // DynamicFilter: the paper's parameters (defaults in DynamicFilterOptions).

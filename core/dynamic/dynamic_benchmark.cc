@@ -145,7 +145,7 @@ int main(int argc, char** argv) {
   }
 
   // 3. Filter over the sequence (full mode, yolo-fastest-1.1 boxes, cv::ORB 1000 features).
-  for (DynamicFilterMode mode : {DynamicFilterMode::kFull, DynamicFilterMode::kGeometry}) {
+  for (FilterMode mode : {FilterMode::kFull, FilterMode::kGeometry}) {
     auto det = YoloDetector::Create(DetectorOptionsForModel("yolo-fastest-1.1"));
     cv::Ptr<cv::ORB> orb = cv::ORB::create(1000);
     DynamicFilterOptions fo;
@@ -163,8 +163,7 @@ int main(int argc, char** argv) {
       const std::vector<Detection> dets = det->Detect(images[k]);
       const FilterResult r = filter.Process(FilterInput(kps, desc, dets));
       if (k == 0) continue;
-      if (std::getenv("DYN_DEBUG") && mode == DynamicFilterMode::kFull && !dets.empty() &&
-          k % 10 == 0) {
+      if (std::getenv("DYN_DEBUG") && mode == FilterMode::kFull && !dets.empty() && k % 10 == 0) {
         std::vector<double> d;
         int unmatched = 0, dyn = 0;
         for (const FeatureStatus& f : r.features) {
@@ -189,13 +188,13 @@ int main(int argc, char** argv) {
       matched += r.num_matched;
       homography += r.used_homography;
       model_ok += r.motion_model_ok;
-      if (!dets.empty() || mode == DynamicFilterMode::kGeometry) {
+      if (!dets.empty() || mode == FilterMode::kGeometry) {
         ++people_frames;
         region += r.num_in_dynamic_region;
         dynamic += r.num_dynamic;
         in_region_kept += r.num_in_dynamic_region - r.num_dynamic;
       }
-      if (!annotate.empty() && k == std::min(250, frames - 1) && mode == DynamicFilterMode::kFull) {
+      if (!annotate.empty() && k == std::min(250, frames - 1) && mode == FilterMode::kFull) {
         cv::Mat vis = images[k].clone();
         for (const Detection& d : dets) cv::rectangle(vis, d.box, cv::Scalar(0, 0, 255), 2);
         for (size_t i = 0; i < kps.size(); ++i) {

@@ -511,23 +511,23 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
   FilterResult result;
   result.num_features = n;
   result.features.resize(n);
-  if (o.mode == DynamicFilterMode::kNone) return result;
+  if (o.mode == FilterMode::kNone) return result;
 
   for (int i = 0; i < n; ++i) {
     FeatureStatus& f = result.features[i];
     f.in_dynamic_region =
-        o.mode == DynamicFilterMode::kGeometry || InAnyBox(kps[i].pt, input.detections, o);
+        o.mode == FilterMode::kGeometry || InAnyBox(kps[i].pt, input.detections, o);
     result.num_in_dynamic_region += f.in_dynamic_region;
   }
   const bool depth_mode =
       o.depth_residual &&
-      (o.mode == DynamicFilterMode::kGeometry || o.mode == DynamicFilterMode::kFull) &&
+      (o.mode == FilterMode::kGeometry || o.mode == FilterMode::kFull) &&
       input.depths != nullptr && input.camera_matrix != nullptr &&
       static_cast<int>(input.depths->size()) == n;
-  if (depth_mode && o.mode == DynamicFilterMode::kFull && o.box_depth_band > 0 &&
+  if (depth_mode && o.mode == FilterMode::kFull && o.box_depth_band > 0 &&
       !input.detections.empty())
     SplitBoxesByDepth(input, &result);
-  if (o.mode == DynamicFilterMode::kBoxes) {
+  if (o.mode == FilterMode::kBoxes) {
     for (FeatureStatus& f : result.features) {
       f.probability = f.in_dynamic_region ? 1.0 : 0.0;
       f.is_dynamic = f.in_dynamic_region;
@@ -552,11 +552,11 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
   // Ours: the depth-residual test replaces F (see DynamicFilterOptions::depth_residual), in
   // geometry and full mode (the keyframe masks no longer depend on the in-box labels, so the
   // ghost-voxel figure holds: BENCHMARKS.md, *Geometry that earns its place*).
-  const bool test_outside = depth_mode && o.mode == DynamicFilterMode::kFull;
+  const bool test_outside = depth_mode && o.mode == FilterMode::kFull;
   // Prior of a new track in the dynamic region: p_init inside a box; without boxes (geometry
   // mode) the depth-residual test has no reason to presume a feature moving: outside_p_init.
   const double region_prior =
-      depth_mode && o.mode == DynamicFilterMode::kGeometry ? o.outside_p_init : o.p_init;
+      depth_mode && o.mode == FilterMode::kGeometry ? o.outside_p_init : o.p_init;
   std::vector<double> depth_distances;
   std::vector<State> anchors;
   cv::Matx33d cam_from_world_rotation = prev_cam_from_world_rotation_;
@@ -780,7 +780,7 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
       states[i] = {true, {fs.probability, o.initial_variance}};
     }
     // g. Decision. Geometry mode has no information on the first frame: keep everything.
-    const bool informed = has_prev_ || o.mode == DynamicFilterMode::kFull;
+    const bool informed = has_prev_ || o.mode == FilterMode::kFull;
     fs.is_dynamic = informed && (fs.probability > o.threshold || fs.at_object_depth);
     result.num_dynamic += fs.is_dynamic;
   }

@@ -60,8 +60,6 @@ enum class FilterMode {
   kGeometry,  // no detector: the whole image is the dynamic region, F from all matches
   kFull,      // the paper: boxes + geometry probability + Kalman + expansion
 };
-// The former name of FilterMode, kept until the branches that use it are merged (issue 17).
-using DynamicFilterMode = FilterMode;
 const char* ToString(FilterMode mode);
 // "none" | "boxes" | "geometry" | "full"; throws InvalidOptions otherwise.
 FilterMode ParseFilterMode(const std::string& text);

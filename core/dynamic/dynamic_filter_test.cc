@@ -91,8 +91,7 @@ TEST(DynamicFilterOptions, CheckAndModes) {
   } catch (const InvalidOptions& e) {
     EXPECT_NE(std::string(e.what()).find("p_init"), std::string::npos);
   }
-  for (auto m : {DynamicFilterMode::kNone, DynamicFilterMode::kBoxes, DynamicFilterMode::kGeometry,
-                 DynamicFilterMode::kFull})
+  for (auto m : {FilterMode::kNone, FilterMode::kBoxes, FilterMode::kGeometry, FilterMode::kFull})
     EXPECT_EQ(ParseFilterMode(ToString(m)), m);
   EXPECT_THROW(ParseFilterMode("fancy"), InvalidOptions);
 }
@@ -295,7 +294,7 @@ struct Score {
   }
 };
 
-Score RunSequence(DynamicFilterMode mode, SequenceGenerator* gen, int frames, int skip,
+Score RunSequence(FilterMode mode, SequenceGenerator* gen, int frames, int skip,
                   double* mean_matching_ms = nullptr, double* mean_prob_ms = nullptr) {
   DynamicFilterOptions options;
   options.mode = mode;
@@ -350,10 +349,10 @@ TEST(DynamicFilterSequence, FullModeRemovesMovingKeepsStatic) {
   SequenceGenerator gen_full(11, velocity), gen_boxes(11, velocity), gen_geom(11, velocity),
       gen_none(11, velocity);
   double match_ms = 0, prob_ms = 0;
-  const Score full = RunSequence(DynamicFilterMode::kFull, &gen_full, 12, 2, &match_ms, &prob_ms);
-  const Score boxes = RunSequence(DynamicFilterMode::kBoxes, &gen_boxes, 12, 2);
-  const Score geom = RunSequence(DynamicFilterMode::kGeometry, &gen_geom, 12, 2);
-  const Score none = RunSequence(DynamicFilterMode::kNone, &gen_none, 12, 2);
+  const Score full = RunSequence(FilterMode::kFull, &gen_full, 12, 2, &match_ms, &prob_ms);
+  const Score boxes = RunSequence(FilterMode::kBoxes, &gen_boxes, 12, 2);
+  const Score geom = RunSequence(FilterMode::kGeometry, &gen_geom, 12, 2);
+  const Score none = RunSequence(FilterMode::kNone, &gen_none, 12, 2);
   Report("full", full);
   Report("boxes", boxes);
   Report("geometry", geom);
@@ -386,7 +385,7 @@ TEST(DynamicFilterSequence, DepthResidualTracksTheCameraAndAbstainsWithoutDepth)
     SCOPED_TRACE(with_depth ? "with depth" : "without depth");
     SequenceGenerator gen(23, Eigen::Vector3d::Zero());  // the "person" stands still
     DynamicFilterOptions options;
-    options.mode = DynamicFilterMode::kGeometry;
+    options.mode = FilterMode::kGeometry;
     DynamicFilter filter(options);
     int motion_ok = 0, flagged = 0, observed = 0;
     double max_translation_error = 0;

@@ -1,4 +1,4 @@
-// The filter on the synthetic RGB-D room (core/synth): ORB features, ground-truth boxes, precision
+// The filter on the synthetic RGB-D room (tools/synth): ORB features, ground-truth boxes, precision
 // and recall of dynamic-feature removal against the ground-truth dynamic masks.
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 
 #include "core/dynamic/dynamic_filter.h"
 #include "core/slam/orb_extractor.h"
-#include "core/synth/synthetic_scene.h"
+#include "tools/synth/synthetic_scene.h"
 
 namespace dygslam {
 namespace {
@@ -20,7 +20,7 @@ struct Counts {
 };
 
 Counts RunFilter(const SyntheticScene& scene, const std::vector<SyntheticFrame>& frames,
-                 DynamicFilterMode mode, double* matching_ms, double* probability_ms) {
+                 FilterMode mode, double* matching_ms, double* probability_ms) {
   DynamicFilterOptions options;
   options.mode = mode;
   DynamicFilter filter(options);
@@ -115,8 +115,8 @@ TEST(DynamicFilterSynthetic, RemovesMovingObjectFeatures) {
   }
   ASSERT_GT(frames_with_boxes, options.num_frames / 2) << "generated sequence shows no objects";
   double m_full, p_full, m_boxes, p_boxes;
-  const Counts full = RunFilter(scene, frames, DynamicFilterMode::kFull, &m_full, &p_full);
-  const Counts boxes = RunFilter(scene, frames, DynamicFilterMode::kBoxes, &m_boxes, &p_boxes);
+  const Counts full = RunFilter(scene, frames, FilterMode::kFull, &m_full, &p_full);
+  const Counts boxes = RunFilter(scene, frames, FilterMode::kBoxes, &m_boxes, &p_boxes);
   for (const auto& [name, c] : {std::pair<const char*, Counts>{"full", full}, {"boxes", boxes}}) {
     std::printf(
         "synthetic %-5s precision %.3f recall %.3f  static-in-box kept %d/%d  tp %d fp %d fn %d\n",

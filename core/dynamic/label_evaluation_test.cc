@@ -14,7 +14,7 @@
 #include "core/base/error.h"
 #include "core/dynamic/dynamic_filter.h"
 #include "core/slam/orb_extractor.h"
-#include "core/synth/synthetic_scene.h"
+#include "tools/synth/synthetic_scene.h"
 
 namespace dygslam {
 namespace {
@@ -106,10 +106,10 @@ Prepared Prepare(const SyntheticOptions& options) {
 // The configurations of `--filter` as System sets them up (core/system ApplyFilterConfiguration).
 DynamicFilterOptions Configuration(const std::string& name) {
   DynamicFilterOptions o;
-  if (name == "boxes") o.mode = DynamicFilterMode::kBoxes;
-  if (name == "geometry") o.mode = DynamicFilterMode::kGeometry;
+  if (name == "boxes") o.mode = FilterMode::kBoxes;
+  if (name == "geometry") o.mode = FilterMode::kGeometry;
   if (name == "geometry-epipolar") {  // geometry mode with the paper's epipolar test
-    o.mode = DynamicFilterMode::kGeometry;
+    o.mode = FilterMode::kGeometry;
     o.depth_residual = false;
   }
   if (name == "paper") {
@@ -124,7 +124,7 @@ DynamicFilterOptions Configuration(const std::string& name) {
   if (name == "full-no-consensus") o.consensus_radius = 0;
   if (name == "full-no-expand-outside") o.expand_outside = false;
   if (name == "geometry-chained") {
-    o.mode = DynamicFilterMode::kGeometry;
+    o.mode = FilterMode::kGeometry;
     o.world_anchors = false;
   }
   // Extra keys after '+' for one-key variations: "full+consensus_radius=70+outside_p_init=0.45"

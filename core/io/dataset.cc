@@ -9,6 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/base/error.h"
+#include "core/base/number_option.h"
 #include "core/io/association.h"
 #include "core/io/file_util.h"
 #include "core/io/png_reader.h"
@@ -348,22 +349,27 @@ cv::Mat RgbdDataset::LoadDepth(size_t i, int expected_width, int expected_height
                    expected_height);
 }
 
-std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total,
-                                          std::string* note) {
-  if (note != nullptr) note->clear();
+FrameRangeText SplitFrameRange(const std::string& text) {
   const auto colon = text.find(':');
   if (colon == std::string::npos)
     throw InvalidOptions("--frames: expected FIRST:LAST, got '" + Abbreviate(text) + "'");
-  auto parse = [&](const std::string& s, size_t def) -> size_t {
-    if (s.empty()) return def;
+  auto parse = [&](const std::string& s) -> std::optional<size_t> {
+    if (s.empty()) return std::nullopt;
     if (s.size() > 12) throw InvalidOptions("--frames: number too large: '" + Abbreviate(s) + "'");
-    for (char c : s)
-      if (c < '0' || c > '9')
-        throw InvalidOptions("--frames: not a non-negative integer: '" + Abbreviate(s) + "'");
-    return std::stoul(s);
+    const std::optional<int64_t> value = ParseWholeInteger(s);
+    if (!value || *value < 0)
+      throw InvalidOptions("--frames: not a non-negative integer: '" + Abbreviate(s) + "'");
+    return static_cast<size_t>(*value);
   };
-  const size_t first = parse(text.substr(0, colon), 0);
-  const size_t asked = parse(text.substr(colon + 1), total);
+  return {parse(text.substr(0, colon)), parse(text.substr(colon + 1))};
+}
+
+std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total,
+                                          std::string* note) {
+  if (note != nullptr) note->clear();
+  const FrameRangeText sides = SplitFrameRange(text);
+  const size_t first = sides.first.value_or(0);
+  const size_t asked = sides.last.value_or(total);
   const size_t last = std::min(asked, total);
   if (first >= last) throw InvalidOptions("--frames: empty range '" + Abbreviate(text) + "'");
   if (asked > total && note != nullptr) {

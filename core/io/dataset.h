@@ -35,6 +35,13 @@ struct RgbdFrameEntry {
   std::string depth_listed_at;
 };
 
+// The two sides of "FIRST:LAST" as written, each a non-negative integer or empty (nullopt).
+// Throws InvalidOptions naming --frames for anything else.
+struct FrameRangeText {
+  std::optional<size_t> first, last;
+};
+FrameRangeText SplitFrameRange(const std::string& text);
+
 // "FIRST:LAST" (either side may be empty) -> [first, last) of rgb.txt entries, LAST clamped to
 // `total`. Throws InvalidOptions naming --frames for anything else or an empty range.
 // `note`, when given, is set to a warning when LAST is beyond `total` (the range is then cut to

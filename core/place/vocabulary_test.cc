@@ -6,9 +6,9 @@
 #include <fstream>
 #include <opencv2/imgproc.hpp>
 
-#include "core/place/synthetic_training.h"
-#include "core/synth/synthetic_scene.h"
 #include "tests/support/test_support.h"
+#include "tools/synth/synthetic_scene.h"
+#include "tools/vocab/synthetic_training.h"
 
 namespace dygslam {
 namespace {

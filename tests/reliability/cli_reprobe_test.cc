@@ -15,66 +15,19 @@
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
 #include "mapping/octomap_builder.h"
+#include "tests/support/cli_fixture.h"
 #include "tests/support/test_support.h"
 
 namespace dygslam {
 namespace {
 namespace fs = std::filesystem;
 
-std::string Config() { return std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml"; }
+using testing::Contains;
+using testing::ReadAll;
 
-std::string ReadAll(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-bool Contains(const std::string& text, const std::string& needle) {
-  return text.find(needle) != std::string::npos;
-}
-
-class CliReprobe : public ::testing::Test {
+class CliReprobe : public testing::CliFixture {
  protected:
-  void SetUp() override {
-    DYGSLAM_REQUIRE_FILE(testing::DygslamBinary(), "dygslam binary");
-    dir_ = testing::MakeTempDir("cli_reprobe");
-  }
-  testing::ProcessResult Run(const std::vector<std::string>& args) {
-    return testing::RunDygslam(args, dir_);
-  }
-  // Runs with a deadline: a hang is a failure with the stacks, not a test stuck until ctest's
-  // timeout.
-  testing::ProcessResult RunWithin(const std::vector<std::string>& args, double seconds) {
-    const std::string out = dir_ + "/within.out", err = dir_ + "/within.err";
-    const pid_t pid = testing::SpawnDygslam(args, out, err);
-    std::string diagnostics;
-    testing::ProcessResult r;
-    r.code = testing::WaitForExit(pid, seconds, &diagnostics);
-    r.out = ReadAll(out);
-    r.err = ReadAll(err) + diagnostics;
-    return r;
-  }
-  static void ExpectError(const testing::ProcessResult& r, int code,
-                          const std::vector<std::string>& needles) {
-    EXPECT_EQ(r.code, code) << r.err;
-    EXPECT_FALSE(Contains(r.err, "internal error")) << r.err;
-    for (const std::string& n : needles)
-      EXPECT_TRUE(Contains(r.err, n)) << "'" << n << "' not in\n" << r.err.substr(0, 3000);
-  }
-  // A copy of the first `n` frames of bonn_crowd_part (images linked) in dir_/name.
-  std::string SmallDataset(const std::string& source, size_t n, const std::string& name) {
-    const fs::path dir = fs::path(dir_) / name;
-    fs::create_directories(dir);
-    const RgbdDataset d = RgbdDataset::Open(source);
-    std::ofstream rgb(dir / "rgb.txt"), depth(dir / "depth.txt");
-    for (size_t i = 0; i < n; ++i) {
-      rgb << d.frame(i).rgb_stamp.ToString() << " " << d.frame(i).rgb_path << "\n";
-      depth << d.frame(i).depth_stamp.ToString() << " " << d.frame(i).depth_path << "\n";
-    }
-    return dir.string();
-  }
-  std::string dir_;
+  CliReprobe() : CliFixture("cli_reprobe") {}
 };
 
 // F7, F8, F9: `component bogus` was exit 1; a missing --dataset and bad numbers gave messages
@@ -137,7 +90,7 @@ TEST_F(CliReprobe, OptionValueErrorsOfEvalAndBenchAreUsageErrors) {
     EXPECT_FALSE(Contains(r.err, "invalid option")) << r.err;
   }
   EXPECT_EQ(Run({"eval", gt, gt}).code, 0);
-  ExpectError(Run({"bench", dir_, "--runs", "0"}), 2, {"--runs: expected an integer in [1, 100]"});
+  ExpectError(Run({"bench", dir_, "--runs", "0"}), 2, {"--runs: expected an integer in 1..100"});
 }
 
 // F5 / F18: values were echoed whole (a 100 kB argument) and binary bytes raw.

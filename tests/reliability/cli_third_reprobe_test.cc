@@ -29,49 +29,19 @@
 #include "core/base/stop_signal.h"
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
+#include "tests/support/cli_fixture.h"
 #include "tests/support/test_support.h"
 
 namespace dygslam {
 namespace {
 namespace fs = std::filesystem;
 
-std::string Config() { return std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml"; }
+using testing::Contains;
 
-bool Contains(const std::string& text, const std::string& needle) {
-  return text.find(needle) != std::string::npos;
-}
-
-class CliThirdReprobe : public ::testing::Test {
+class CliThirdReprobe : public testing::CliFixture {
  protected:
-  void SetUp() override {
-    DYGSLAM_REQUIRE_FILE(testing::DygslamBinary(), "dygslam binary");
-    dir_ = testing::MakeTempDir("cli_third_reprobe");
-  }
-  testing::ProcessResult Run(const std::vector<std::string>& args) {
-    return testing::RunDygslam(args, dir_);
-  }
-  static void ExpectError(const testing::ProcessResult& r, int code,
-                          const std::vector<std::string>& needles) {
-    EXPECT_EQ(r.code, code) << r.err;
-    EXPECT_FALSE(Contains(r.err, "internal error")) << r.err;
-    for (const std::string& n : needles)
-      EXPECT_TRUE(Contains(r.err, n)) << "'" << n << "' not in\n" << r.err.substr(0, 3000);
-  }
-  // The first `n` frames of bonn_crowd_part (images referenced by path) in dir_/name, with its
-  // ground truth when `with_groundtruth`.
-  std::string SmallDataset(const std::string& source, size_t n, const std::string& name,
-                           bool with_groundtruth = false) {
-    const fs::path dir = fs::path(dir_) / name;
-    fs::create_directories(dir);
-    const RgbdDataset d = RgbdDataset::Open(source);
-    std::ofstream rgb(dir / "rgb.txt"), depth(dir / "depth.txt");
-    for (size_t i = 0; i < n; ++i) {
-      rgb << d.frame(i).rgb_stamp.ToString() << " " << d.frame(i).rgb_path << "\n";
-      depth << d.frame(i).depth_stamp.ToString() << " " << d.frame(i).depth_path << "\n";
-    }
-    if (with_groundtruth) fs::copy_file(d.groundtruth_path(), dir / "groundtruth.txt");
-    return dir.string();
-  }
+  CliThirdReprobe() : CliFixture("cli_third_reprobe") {}
+
   // Replaces rgb.txt entry `entry`'s image by a truncated copy named broken.png.
   void BreakImage(const std::string& dataset, size_t entry) {
     const RgbdDataset d = RgbdDataset::Open(dataset);
@@ -82,7 +52,6 @@ class CliThirdReprobe : public ::testing::Test {
     rgb.replace(rgb.find(old_path), old_path.size(), "broken.png");
     std::ofstream(dataset + "/rgb.txt") << rgb;
   }
-  std::string dir_;
 };
 
 // Item 1: every output of `map` from the frames before the error, atomically; exit 1.

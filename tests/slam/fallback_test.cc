@@ -9,14 +9,14 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/config/settings.h"
-#include "run/system_config.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
 #include "core/slam/static_depth_odometry.h"
-#include "core/synth/synthetic_scene.h"
 #include "core/system/system.h"
+#include "run/system_config.h"
 #include "tests/support/test_support.h"
+#include "tools/synth/synthetic_scene.h"
 
 namespace dygslam {
 namespace {

@@ -1,4 +1,4 @@
-// Loop closing end to end on a generated loop path (core/synth): a path that never comes back
+// Loop closing end to end on a generated loop path (tools/synth): a path that never comes back
 // must produce no loop (place recognition sees many similar views along the way; the
 // consistency and geometric checks must reject them all); a path that comes back must close the
 // loop, correct the drift, re-send the corrected keyframes to the map consumers and keep the
@@ -13,8 +13,8 @@
 #include <thread>
 
 #include "core/eval/trajectory_eval.h"
-#include "core/synth/synthetic_scene.h"
 #include "core/system/system.h"
+#include "tools/synth/synthetic_scene.h"
 
 namespace dygslam {
 namespace {

@@ -11,9 +11,9 @@
 
 #include "core/base/error.h"
 #include "core/eval/trajectory_eval.h"
-#include "core/synth/synthetic_scene.h"
 #include "core/system/system.h"
 #include "tests/support/test_support.h"
+#include "tools/synth/synthetic_scene.h"
 
 namespace dygslam {
 namespace {

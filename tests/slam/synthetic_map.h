@@ -10,7 +10,7 @@
 #include "core/place/keyframe_database.h"
 #include "core/slam/frame.h"
 #include "core/slam/map.h"
-#include "core/synth/synthetic_scene.h"
+#include "tools/synth/synthetic_scene.h"
 
 namespace dygslam::testing {
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/eval/trajectory_eval.h"
-#include "core/synth/synthetic_scene.h"
+#include "tools/synth/synthetic_scene.h"
 #include "core/system/system.h"
 
 namespace dygslam {

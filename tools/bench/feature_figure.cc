@@ -1,4 +1,4 @@
-#include "core/bench/feature_figure.h"
+#include "tools/bench/feature_figure.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -78,9 +78,9 @@ FeatureFigure DrawFeatureFigure(const RgbdDataset& dataset, size_t rgb_entry,
   std::unique_ptr<YoloDetector> detector = YoloDetector::Create(detector_options);
   OrbExtractor extractor(options.orb);
   DynamicFilterOptions boxes_options = options.filter;
-  boxes_options.mode = DynamicFilterMode::kBoxes;
+  boxes_options.mode = FilterMode::kBoxes;
   DynamicFilterOptions full_options = options.filter;
-  full_options.mode = DynamicFilterMode::kFull;
+  full_options.mode = FilterMode::kFull;
   DynamicFilter boxes_filter(boxes_options), full_filter(full_options);
 
   const size_t first = rgb_entry >= static_cast<size_t>(figure_options.warmup_frames)

@@ -1,4 +1,4 @@
-#include "core/bench/rgbd_odometry_baseline.h"
+#include "tools/bench/rgbd_odometry_baseline.h"
 
 #include <chrono>
 #include <cmath>

@@ -1,11 +1,11 @@
-#include "core/synth/procedural_texture.h"
+#include "tools/synth/procedural_texture.h"
 
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
 #include "core/base/error.h"
-#include "core/synth/random.h"
+#include "tools/synth/random.h"
 
 namespace dygslam {
 namespace {

@@ -9,10 +9,10 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/bench/bench_report.h"
 #include "core/io/file_util.h"
-#include "core/synth/synthetic_sequence.h"
 #include "tests/support/test_support.h"
+#include "tools/bench/bench_report.h"
+#include "tools/synth/synthetic_sequence.h"
 
 namespace dygslam {
 namespace {

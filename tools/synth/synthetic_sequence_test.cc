@@ -1,4 +1,4 @@
-#include "core/synth/synthetic_sequence.h"
+#include "tools/synth/synthetic_sequence.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "core/synth/synthetic_scene.h"
+#include "tools/synth/synthetic_scene.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "core/bench/bench_sequences.h"
+#include "tools/bench/bench_sequences.h"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
-#include "core/place/synthetic_training.h"
+#include "tools/vocab/synthetic_training.h"
 
 #include <opencv2/imgproc.hpp>
 
-#include "core/synth/synthetic_scene.h"
+#include "tools/synth/synthetic_scene.h"
 
 namespace dygslam {
 

@@ -1,5 +1,5 @@
 // Training data for the vocabulary that is not an evaluation sequence: frames rendered by the
-// synthetic generator (core/synth) from several scene seeds (each seed gives other procedural
+// synthetic generator (tools/synth) from several scene seeds (each seed gives other procedural
 // textures and furniture), with the ORB features the tracker uses.
 #pragma once
 

@@ -14,7 +14,7 @@
 #include <functional>
 #include <string>
 
-#include "core/synth/synthetic_scene.h"
+#include "tools/synth/synthetic_scene.h"
 
 namespace dygslam {
 

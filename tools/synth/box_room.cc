@@ -1,4 +1,4 @@
-#include "core/synth/box_room.h"
+#include "tools/synth/box_room.h"
 
 #include <cmath>
 #include <limits>

@@ -17,10 +17,10 @@
 #include <string>
 #include <vector>
 
-#include "core/bench/bench_report.h"
-#include "core/bench/rgbd_odometry_baseline.h"
 #include "core/io/dataset.h"
 #include "core/system/system.h"
+#include "tools/bench/bench_report.h"
+#include "tools/bench/rgbd_odometry_baseline.h"
 
 namespace dygslam {
 

@@ -1,10 +1,10 @@
-#include "core/bench/rgbd_odometry_baseline.h"
+#include "tools/bench/rgbd_odometry_baseline.h"
 
 #include <gtest/gtest.h>
 
 #include "core/base/error.h"
 #include "core/eval/trajectory_eval.h"
-#include "core/synth/synthetic_scene.h"
+#include "tools/synth/synthetic_scene.h"
 
 namespace dygslam {
 namespace {

@@ -1,4 +1,4 @@
-#include "core/synth/synthetic_scene.h"
+#include "tools/synth/synthetic_scene.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -6,8 +6,8 @@
 #include <limits>
 
 #include "core/base/error.h"
-#include "core/synth/procedural_texture.h"
-#include "core/synth/random.h"
+#include "tools/synth/procedural_texture.h"
+#include "tools/synth/random.h"
 
 namespace dygslam {
 namespace {

@@ -1,4 +1,4 @@
-#include "core/bench/bench_runner.h"
+#include "tools/bench/bench_runner.h"
 
 #include <chrono>
 #include <cstdio>

@@ -170,7 +170,7 @@ class SyntheticScene {
   struct MovingObject {
     Eigen::Vector3d lane_start, lane_end;  // centre positions at the two turning points
     double speed = 1.0;
-    double phase = 0.0;  // fraction of a back-and-forth cycle at start
+    double phase = 0.0;    // fraction of a back-and-forth cycle at start
     bool detected = true;  // listed in SyntheticFrame::boxes when visible
   };
   struct Surface {

@@ -346,7 +346,7 @@ int RunBench(const std::vector<std::string>& args) {
     pr.last = pr.num_entries;
     // --features-frame is used after every run: checked now (a usage error naming it).
     if (p.Has("features-frame"))
-      ParseCount(p, "features-frame", 0, static_cast<int>(pr.num_entries) - 1);
+      IntegerOption("features-frame", p.Get("features-frame"), 0, static_cast<int64_t>(pr.num_entries) - 1);
     if (p.Has("frames")) {
       std::tie(pr.first, pr.last) = ParseFrameRange(p.Get("frames"), pr.num_entries);
     } else if (quick && pr.num_entries > 60) {

@@ -78,7 +78,7 @@ std::vector<Eigen::Vector3f> VoxelGridFilter(const std::vector<Eigen::Vector3f>&
 void OctoMapOptions::Check() const {
   DYGSLAM_CHECK_OPTION(resolution > 0.001 && resolution <= 10 && std::isfinite(resolution),
                        "OctoMap.resolution");
-  DYGSLAM_CHECK_OPTION(max_range > 0 && std::isfinite(max_range), "OctoMap.max_range");
+  DYGSLAM_CHECK_OPTION(max_range > 0 && max_range <= 1000, "OctoMap.max_range");  // m
   DYGSLAM_CHECK_OPTION(min_range >= 0 && min_range < max_range, "OctoMap.min_range");
   DYGSLAM_CHECK_OPTION(prob_hit > 0.5 && prob_hit < 1, "OctoMap.prob_hit");
   DYGSLAM_CHECK_OPTION(prob_miss > 0 && prob_miss < 0.5, "OctoMap.prob_miss");

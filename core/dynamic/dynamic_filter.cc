@@ -41,8 +41,8 @@ bool UsesDetections(FilterMode mode) {
 
 void DynamicFilterOptions::Check() const {
   DYGSLAM_CHECK_OPTION(c1 > 0 && std::isfinite(c1), "DynamicFilter.c1");
-  DYGSLAM_CHECK_OPTION(std::isfinite(alpha), "DynamicFilter.alpha");
-  DYGSLAM_CHECK_OPTION(q >= 0 && std::isfinite(q), "DynamicFilter.q");
+  DYGSLAM_CHECK_OPTION(alpha >= -100 && alpha <= 100, "DynamicFilter.alpha");  // px
+  DYGSLAM_CHECK_OPTION(q >= 0 && q <= 100, "DynamicFilter.q");
   DYGSLAM_CHECK_OPTION(r > 0 && std::isfinite(r), "DynamicFilter.r");
   DYGSLAM_CHECK_OPTION(p_init >= 0 && p_init <= 1, "DynamicFilter.p_init");
   DYGSLAM_CHECK_OPTION(c2 >= 0 && std::isfinite(c2), "DynamicFilter.c2");

@@ -68,7 +68,7 @@ struct LoopClosingOptions {
                          "LoopClosing.min_inlier_ratio");
     DYGSLAM_CHECK_OPTION(min_projection_matches >= min_ransac_inliers,
                          "LoopClosing.min_projection_matches");
-    DYGSLAM_CHECK_OPTION(max_correction_m >= 0 && std::isfinite(max_correction_m),
+    DYGSLAM_CHECK_OPTION(max_correction_m >= 0 && max_correction_m <= 10000,
                          "LoopClosing.max_correction_m");
     DYGSLAM_CHECK_OPTION(max_drift_per_meter >= 0 && std::isfinite(max_drift_per_meter),
                          "LoopClosing.max_drift_per_meter");

@@ -67,7 +67,8 @@ struct TrackingOptions {
   double fallback_smoothing_max_rotation_deg = 10.0;
   void Check() const {
     DYGSLAM_CHECK_OPTION(init_min_features > 0, "Tracking.init_min_features");
-    DYGSLAM_CHECK_OPTION(motion_radius_px > 0, "Tracking.motion_radius_px");
+    DYGSLAM_CHECK_OPTION(motion_radius_px > 0 && motion_radius_px <= 10000,
+                         "Tracking.motion_radius_px");
     DYGSLAM_CHECK_OPTION(ref_ratio > 0 && ref_ratio <= 1, "Tracking.ref_ratio");
     DYGSLAM_CHECK_OPTION(localization_local_keyframes >= 1,
                          "Tracking.localization_local_keyframes");

@@ -527,7 +527,9 @@ TrackResult SystemImpl::Track(const PreparedFrame& prepared, FilteredFrame* filt
 void SystemImpl::RememberPoints(const PreparedFrame& prepared, const FilteredFrame& filtered,
                                 const TrackResult& tracked) {
   previous_points_.clear();
-  if (!options_.dynamic_points.enabled || tracked.map_points.size() != filtered.kept_source.size())
+  // Localization leaves the loaded map untouched (issue 15): no votes, no points flagged.
+  if (!options_.dynamic_points.enabled || options_.localization ||
+      tracked.map_points.size() != filtered.kept_source.size())
     return;
   previous_points_.resize(prepared.features.keypoints.size());
   for (size_t k = 0; k < filtered.kept_source.size(); ++k)

@@ -59,6 +59,29 @@ std::string Replace(const std::string& line, const std::string& replacement) {
   return text;
 }
 
+// Fourth re-probe leftovers: values of 1e20 (and NaN) for keys that were only checked for being
+// finite were accepted (an OctoMap beam of 1e20 m, a search radius of 1e20 px, ...); each is now
+// an error naming the key and its line.
+TEST(SettingsReprobe, AbsurdMagnitudesOfTheRemainingKeysAreErrors) {
+  for (const auto& [section, key] :
+       {std::pair<std::string, std::string>{"DynamicFilter", "alpha"},
+        {"DynamicFilter", "Q"},
+        {"Tracking", "motion_radius_px"},
+        {"LoopClosing", "max_correction_m"}}) {
+    for (const char* value : {"1e20", ".nan"}) {
+      const std::string text = BonnYaml() + "\n" + section + ":\n  " + key + ": " + value + "\n";
+      const std::string message = ErrorOf(text);
+      EXPECT_TRUE(Contains(message, "key '" + section + "." + key + "'")) << message;
+      EXPECT_TRUE(Contains(message, "bad.yaml:" + std::to_string(CountLines(text)))) << message;
+    }
+  }
+  const std::string octomap = Replace("  max_range: 4.0", "  max_range: 1e20");
+  const std::string message = ErrorOf(octomap);
+  EXPECT_TRUE(Contains(message, "key 'OctoMap.max_range'")) << message;
+  // The shipped values and the paper's pass.
+  EXPECT_NO_THROW(ReadAll(BonnYaml() + "\nDynamicFilter:\n  alpha: 0.4\n  Q: 0.09\n"));
+}
+
 // F14: `OctoMap: [1, 2]` warned "unknown key 'OctoMap'" before the section error; a known
 // section given as a list or a single value is the section's error only.
 TEST(SettingsReprobe, SectionGivenAsListIsAnErrorWithoutAFalseUnknownKeyWarning) {

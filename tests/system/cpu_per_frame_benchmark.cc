@@ -16,10 +16,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <iostream>
 #include <string>
 #include <vector>
 
 #include "core/base/log.h"
+#include "core/base/number_option.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
@@ -74,9 +76,14 @@ int main(int argc, char** argv) {
       config = v;
     else if (a == "--filter")
       filter = v;
-    else if (a == "--runs")
-      runs = std::max(1, std::stoi(v));
-    else
+    else if (a == "--runs") {
+      try {  // the project's number parser: a clear usage error, not an uncaught std::stoi throw
+        runs = static_cast<int>(IntegerOption("runs", v, 1, 1000));
+      } catch (const std::exception& e) {
+        std::cerr << e.what() << "\n";
+        return 2;
+      }
+    } else
       return Usage();
   }
   try {

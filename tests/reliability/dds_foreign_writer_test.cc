@@ -81,6 +81,10 @@ void RunWithIntruder(const std::string& dataset, bool processes, int domain) {
   const msg::Trajectory forged_frames = TrajectoryToMsg(forged, false);
   const msg::Trajectory forged_keyframes = TrajectoryToMsg(forged, true);
 
+  // 150 frames (~5-10 s): long enough that every component (a process of its own with
+  // --processes) has discovered the intruder before the end, also on a loaded machine where a
+  // lost initial announcement means waiting for the next periodic one (60 frames, ~3.6 s, once
+  // ended before the mapper had matched the intruder's keyframe writer).
   const std::vector<std::string> args = {testing::DygslamBinary(),
                                          "run",
                                          dataset,
@@ -89,7 +93,7 @@ void RunWithIntruder(const std::string& dataset, bool processes, int domain) {
                                          "--filter",
                                          "none",
                                          "--frames",
-                                         "0:60",
+                                         "0:150",
                                          "--out",
                                          dir + "/out",
                                          "--quiet",
@@ -147,7 +151,7 @@ void RunWithIntruder(const std::string& dataset, bool processes, int domain) {
   ASSERT_GT(published, 10u) << "the intruder never matched the run's readers\n" << log;
   // The run's own trajectory, none of the forged poses.
   const auto trajectory = ReadTumTrajectory(dir + "/out/trajectory.txt");
-  EXPECT_GE(trajectory.size(), 50u) << log;
+  EXPECT_GE(trajectory.size(), 140u) << log;
   EXPECT_EQ(ReadAll(dir + "/out/frames.csv").find("\n4242."), std::string::npos)
       << "slam tracked a forged frame";
   for (const char* name : {"trajectory.txt", "trajectory_online.txt", "keyframes.txt"}) {
@@ -160,14 +164,14 @@ void RunWithIntruder(const std::string& dataset, bool processes, int domain) {
   // Counted and reported.
   EXPECT_NE(log.find("recorder: ignored"), std::string::npos) << log;
   EXPECT_NE(log.find("mapper: ignored"), std::string::npos) << log;
-  // slam: the forged frames (and detections) were ignored, its own 60 frames processed.
+  // slam: the forged frames (and detections) were ignored, its own 150 frames processed.
   std::smatch m;
   ASSERT_TRUE(
       std::regex_search(log, m, std::regex(R"(slam: ignored (\d+) frames and (\d+) detections)")))
       << log;
   EXPECT_GT(std::stol(m[1]), 0) << log;
   EXPECT_GT(std::stol(m[2]), 0) << log;
-  EXPECT_NE(log.find("slam: 60 frames"), std::string::npos) << log;
+  EXPECT_NE(log.find("slam: 150 frames"), std::string::npos) << log;
   // And the run's summary (stdout) gives the total of the components' counts (in both modes;
   // with --processes each child reports its count to the runner).
   size_t components_total = std::stoul(m[1]) + std::stoul(m[2]);

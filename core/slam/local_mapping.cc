@@ -41,8 +41,10 @@ void LocalMapper::InsertKeyFrame(std::shared_ptr<KeyFrame> kf) {
     stats_.queue_at_insert.push_back(static_cast<int>(queue_.Size()) + (queue_.Idle() ? 0 : 1));
     inserted_at_[kf->id] = std::chrono::steady_clock::now();
   }
-  queue_.Push(std::move(kf));
+  // The flag first: the worker clears it when it takes the keyframe, so setting it after the
+  // push could land after that and stop this keyframe's own local BA (issue 22, BENCHMARKS.md).
   abort_ba_ = true;
+  queue_.Push(std::move(kf));
 }
 
 size_t LocalMapper::QueueSize() const { return queue_.Size(); }

@@ -113,8 +113,7 @@ namespace {
 // Bundle adjustment of the keyframes `select` returns (called under the map lock; empty: nothing
 // to do) with every point they see; other keyframes observing those points are fixed, and so is
 // the map's first keyframe (else the oldest selected one) when nothing else fixes the gauge.
-void AdjustBundle(Map& map,
-                  const std::function<std::vector<std::shared_ptr<KeyFrame>>()>& select,
+void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyFrame>>()>& select,
                   const OptimizerOptions& options, int iterations_first, int iterations_second,
                   const std::atomic<bool>* abort, bool deterministic) {
   struct ObsCopy {
@@ -251,8 +250,9 @@ void AdjustBundle(Map& map,
 
 }  // namespace
 
-void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf, const OptimizerOptions& options,
-                           const std::atomic<bool>* abort, bool deterministic) {
+void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf,
+                           const OptimizerOptions& options, const std::atomic<bool>* abort,
+                           bool deterministic) {
   auto select = [&map, &kf]() {
     std::vector<std::shared_ptr<KeyFrame>> local;
     if (kf->bad) return local;

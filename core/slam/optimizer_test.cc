@@ -167,7 +167,8 @@ TEST(Optimizer, GlobalBundleAdjustmentPullsEveryPerturbedKeyframeBackWithTheFirs
     // 2-4 cm off before; the points are at their true positions, so the poses come back.
     EXPECT_LT((kfs[k]->cam_from_world.translation - truths[k].translation).norm(), 0.005) << k;
   }
-  EXPECT_LT((kfs[0]->cam_from_world.translation - truths[0].translation).norm(), 1e-9);  // gauge fixed
+  // The gauge: the first keyframe is fixed.
+  EXPECT_LT((kfs[0]->cam_from_world.translation - truths[0].translation).norm(), 1e-9);
 }
 
 }  // namespace

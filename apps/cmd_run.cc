@@ -159,6 +159,22 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
         "local mapping: %d keyframes, median %.1f ms per keyframe, %d points triangulated, "
         "%d keyframes culled\n",
         lm.keyframes_processed, median, lm.points_triangulated, lm.keyframes_culled);
+    {
+      std::vector<double> lag = lm.lag_ms;
+      double lag_median = 0, lag_max = 0;
+      if (!lag.empty()) {
+        std::nth_element(lag.begin(), lag.begin() + lag.size() / 2, lag.end());
+        lag_median = lag[lag.size() / 2];
+        lag_max = *std::max_element(lag.begin(), lag.end());
+      }
+      int busy = 0;
+      for (int q : lm.queue_at_insert) busy += q > 0;
+      std::printf(
+          "local mapping schedule: %d of %zu keyframes inserted while it was busy, %d without "
+          "local BA, %d local BAs interrupted, insert-to-done median %.0f ms (max %.0f)\n",
+          busy, lm.queue_at_insert.size(), lm.keyframes_without_ba, lm.ba_interrupted, lag_median,
+          lag_max);
+    }
     const MapStatistics sizes = system.MapSizes();
     std::printf("map: %zu keyframes (%zu culled), %zu map points\n", sizes.keyframes,
                 sizes.culled_keyframes, sizes.map_points);

@@ -10,6 +10,7 @@
 // is full (0 = unbounded). The handler runs without the queue's lock held, so it may Push.
 #pragma once
 
+#include <chrono>
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
@@ -85,6 +86,14 @@ class WorkQueue {
   bool Idle() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return queue_.empty() && !busy_;
+  }
+  // Waits up to `timeout` until Idle() (unthreaded: Idle() at once); true when idle.
+  template <typename Rep, typename Period>
+  bool WaitIdle(std::chrono::duration<Rep, Period> timeout) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (!threaded_) return queue_.empty() && !busy_;
+    return changed_.wait_for(lock, timeout,
+                             [this] { return finishing_ || (queue_.empty() && !busy_); });
   }
   size_t Size() const {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -61,6 +61,34 @@ TEST(WorkQueue, IdleOnlyWhenNothingQueuedAndNothingRunning) {
   EXPECT_TRUE(queue.Idle());
 }
 
+TEST(WorkQueue, WaitIdleTimesOutWhileBusyAndReturnsOnceDone) {
+  std::promise<void> release;
+  std::shared_future<void> released = release.get_future().share();
+  std::atomic<bool> started{false};
+  WorkQueue<int> queue(
+      [&](int&) {
+        started = true;
+        released.wait();
+      },
+      true);
+  EXPECT_TRUE(queue.WaitIdle(std::chrono::milliseconds(0)));
+  queue.Push(1);
+  while (!started) std::this_thread::yield();
+  EXPECT_FALSE(queue.WaitIdle(std::chrono::milliseconds(20)));  // still processing
+  std::thread releaser([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    release.set_value();
+  });
+  EXPECT_TRUE(queue.WaitIdle(std::chrono::seconds(30)));  // woken when the item is done
+  releaser.join();
+  queue.Finish();
+  WorkQueue<int> unthreaded([](int&) {}, false);
+  unthreaded.Push(1);
+  EXPECT_FALSE(unthreaded.WaitIdle(std::chrono::milliseconds(1)));  // only Drain() processes
+  unthreaded.Drain();
+  EXPECT_TRUE(unthreaded.WaitIdle(std::chrono::milliseconds(0)));
+}
+
 TEST(WorkQueue, CapacityBoundsTheQueueAndPushWaitsForRoom) {
   std::promise<void> release;
   std::shared_future<void> released = release.get_future().share();

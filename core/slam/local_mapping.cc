@@ -36,8 +36,15 @@ void LocalMapper::SetKeyFrameDoneCallback(KeyFrameDoneCallback callback) {
 }
 
 void LocalMapper::InsertKeyFrame(std::shared_ptr<KeyFrame> kf) {
-  queue_.Push(std::move(kf));
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.queue_at_insert.push_back(static_cast<int>(queue_.Size()) + (queue_.Idle() ? 0 : 1));
+    inserted_at_[kf->id] = std::chrono::steady_clock::now();
+  }
+  // The flag first: the worker clears it when it takes the keyframe, so setting it after the
+  // push could land after that and stop this keyframe's own local BA (issue 22, BENCHMARKS.md).
   abort_ba_ = true;
+  queue_.Push(std::move(kf));
 }
 
 size_t LocalMapper::QueueSize() const { return queue_.Size(); }
@@ -65,6 +72,7 @@ void LocalMapper::Process(const std::shared_ptr<KeyFrame>& kf) {
   CreateNewMapPoints(kf);
   if (QueueSize() == 0) FuseWithNeighbors(kf);
   std::vector<int64_t> changed;
+  bool ran_ba = false, interrupted = false;
   if (QueueSize() == 0) {
     {
       std::lock_guard<std::mutex> lock(map_->mutex());
@@ -73,6 +81,8 @@ void LocalMapper::Process(const std::shared_ptr<KeyFrame>& kf) {
     }
     if (map_->NumKeyFrames() > 2) {
       LocalBundleAdjustment(*map_, kf, options_.optimizer, &abort_ba_, !threaded_);
+      ran_ba = true;
+      interrupted = threaded_ && abort_ba_;
     }
   }
   if (options_.cull_keyframes) CullKeyFrames(kf);
@@ -82,6 +92,15 @@ void LocalMapper::Process(const std::shared_ptr<KeyFrame>& kf) {
     stats_.keyframes_processed++;
     stats_.total_ms += ms;
     stats_.per_keyframe_ms.push_back(ms);
+    stats_.keyframes_without_ba += ran_ba ? 0 : 1;
+    stats_.ba_interrupted += interrupted ? 1 : 0;
+    auto it = inserted_at_.find(kf->id);
+    if (it != inserted_at_.end()) {
+      stats_.lag_ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - it->second)
+              .count());
+      inserted_at_.erase(it);
+    }
   }
   MapChangedCallback callback;
   KeyFrameDoneCallback done;

@@ -5,11 +5,13 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <deque>
 #include <functional>
 #include <list>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -30,6 +32,9 @@ struct LocalMappingOptions {
   double redundancy_ratio = 0.9;  // keyframe culled if this share of its points is seen >= 3 times elsewhere
   int redundancy_observations = 3;
   bool cull_keyframes = true;
+  // At shutdown (System::Shutdown), a bundle adjustment of the whole map with this many
+  // iterations per round (0: none); the trajectory follows its keyframes (issue 22).
+  int final_ba_iterations = 0;
   OptimizerOptions optimizer;
   MatcherOptions matcher;
   void Check() const {
@@ -39,6 +44,8 @@ struct LocalMappingOptions {
     DYGSLAM_CHECK_OPTION(fusion_neighbors >= 0 && fusion_second_neighbors >= 0, "LocalMapping.fusion_neighbors");
     DYGSLAM_CHECK_OPTION(fusion_radius_px > 0 && std::isfinite(fusion_radius_px), "LocalMapping.fusion_radius_px");
     DYGSLAM_CHECK_OPTION(min_found_ratio >= 0 && min_found_ratio <= 1, "LocalMapping.min_found_ratio");
+    DYGSLAM_CHECK_OPTION(final_ba_iterations >= 0 && final_ba_iterations <= 1000,
+                         "LocalMapping.final_ba_iterations");
     optimizer.Check();
     matcher.Check();
   }
@@ -51,6 +58,13 @@ struct LocalMappingStats {
   int keyframes_culled = 0;
   double total_ms = 0;
   std::vector<double> per_keyframe_ms;
+  // The threaded schedule (issue 22): keyframes whose fusion and local BA were skipped because
+  // another keyframe was already queued, local BAs stopped early by a new keyframe, and per
+  // keyframe the queue length found at insertion and the time from insertion to done.
+  int keyframes_without_ba = 0;
+  int ba_interrupted = 0;
+  std::vector<int> queue_at_insert;
+  std::vector<double> lag_ms;
 };
 
 class LocalMapper {
@@ -62,6 +76,10 @@ class LocalMapper {
   // Processes queued keyframes in the caller's thread (deterministic mode).
   void ProcessPending();
   bool Idle() const { return queue_.Idle(); }
+  // Waits up to `timeout_ms` for Idle(); true when idle.
+  bool WaitIdle(double timeout_ms) {
+    return queue_.WaitIdle(std::chrono::duration<double, std::milli>(timeout_ms));
+  }
   size_t QueueSize() const;
   void InterruptBA() { abort_ba_ = true; }
   // Waits until the queue is empty and the current keyframe is done, then stops the thread.
@@ -94,6 +112,7 @@ class LocalMapper {
   KeyFrameDoneCallback keyframe_done_;
   std::vector<int64_t> culled_since_callback_;
   mutable std::mutex stats_mutex_;
+  std::map<int64_t, std::chrono::steady_clock::time_point> inserted_at_;  // under stats_mutex_
   LocalMappingStats stats_;
   WorkQueue<std::shared_ptr<KeyFrame>> queue_;  // last: its worker uses everything above
 };

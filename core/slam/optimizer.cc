@@ -1,6 +1,7 @@
 #include "core/slam/optimizer.h"
 
 #include <cmath>
+#include <functional>
 #include <map>
 #include <set>
 
@@ -107,8 +108,14 @@ int OptimizePose(Frame& frame, const OptimizerOptions& options) {
   return inliers;
 }
 
-void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf, const OptimizerOptions& options,
-                           const std::atomic<bool>* abort, bool deterministic) {
+namespace {
+
+// Bundle adjustment of the keyframes `select` returns (called under the map lock; empty: nothing
+// to do) with every point they see; other keyframes observing those points are fixed, and so is
+// the map's first keyframe (else the oldest selected one) when nothing else fixes the gauge.
+void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyFrame>>()>& select,
+                  const OptimizerOptions& options, int iterations_first, int iterations_second,
+                  const std::atomic<bool>* abort, bool deterministic) {
   struct ObsCopy {
     int64_t kf_id;
     int64_t point_id;
@@ -124,14 +131,10 @@ void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf, const 
   int64_t epoch = 0;
   {
     std::lock_guard<std::mutex> lock(map.mutex());
-    if (kf->bad) return;
+    const std::vector<std::shared_ptr<KeyFrame>> local = select();
+    if (local.empty()) return;
     epoch = map.CorrectionEpoch();
-    model = ModelOf(*kf->geometry);
-    std::vector<std::shared_ptr<KeyFrame>> local = {kf};
-    for (int64_t id : kf->ordered_connections) {
-      auto other = map.GetKeyFrame(id);
-      if (other && !other->bad) local.push_back(other);
-    }
+    model = ModelOf(*local.front()->geometry);
     for (const auto& k : local) PoseToParameters(k->cam_from_world, poses[k->id].data());
     std::map<int64_t, std::shared_ptr<MapPoint>> local_points;
     for (const auto& k : local) {
@@ -213,10 +216,10 @@ void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf, const 
       outlier[k] = chi2 > (o.stereo ? options.chi2_stereo : options.chi2_mono) ? 1 : 0;
     }
   };
-  solve(options.ba_iterations_first, true);
+  solve(iterations_first, true);
   if (!(abort && abort->load() && !deterministic)) {
     classify();
-    solve(options.ba_iterations_second, false);
+    solve(iterations_second, false);
   }
   classify();
 
@@ -243,6 +246,37 @@ void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf, const 
     it->second->position = position;
     map.UpdateNormalAndDepth(*it->second);
   }
+}
+
+}  // namespace
+
+void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf,
+                           const OptimizerOptions& options, const std::atomic<bool>* abort,
+                           bool deterministic) {
+  auto select = [&map, &kf]() {
+    std::vector<std::shared_ptr<KeyFrame>> local;
+    if (kf->bad) return local;
+    local.push_back(kf);
+    for (int64_t id : kf->ordered_connections) {
+      auto other = map.GetKeyFrame(id);
+      if (other && !other->bad) local.push_back(other);
+    }
+    return local;
+  };
+  AdjustBundle(map, select, options, options.ba_iterations_first, options.ba_iterations_second,
+               abort, deterministic);
+}
+
+void GlobalBundleAdjustment(Map& map, const OptimizerOptions& options, int iterations_first,
+                            int iterations_second) {
+  auto select = [&map]() {
+    std::vector<std::shared_ptr<KeyFrame>> all;
+    for (const auto& [id, k] : map.keyframes())
+      if (!k->bad) all.push_back(k);
+    return all;
+  };
+  AdjustBundle(map, select, options, iterations_first, iterations_second, nullptr,
+               /*deterministic=*/true);
 }
 
 }  // namespace dygslam

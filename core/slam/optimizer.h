@@ -34,4 +34,10 @@ int OptimizePose(Frame& frame, const OptimizerOptions& options);
 void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf, const OptimizerOptions& options,
                            const std::atomic<bool>* abort, bool deterministic);
 
+// Bundle adjustment of every keyframe and point of the map (the first keyframe fixed), the same
+// two rounds as the local one (robust, then without the outliers); outlier observations are
+// dropped. Takes the map lock to copy the problem in and to write the result back.
+void GlobalBundleAdjustment(Map& map, const OptimizerOptions& options, int iterations_first,
+                            int iterations_second);
+
 }  // namespace dygslam

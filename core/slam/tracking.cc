@@ -117,7 +117,11 @@ void Tracker::StartFromLoadedMap(bool localization) {
 
 void Tracker::HandOffKeyFrame(const std::shared_ptr<KeyFrame>& kf) {
   local_mapper_.InsertKeyFrame(kf);
-  if (deterministic_) local_mapper_.ProcessPending();
+  if (deterministic_) {
+    local_mapper_.ProcessPending();
+  } else if (options_.handoff_wait_ms > 0) {
+    local_mapper_.WaitIdle(options_.handoff_wait_ms);  // the next frame tracks a refined map
+  }
 }
 
 bool Tracker::Initialize(Frame& frame, TrackResult* result) {
@@ -383,7 +387,7 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
   // ORB-SLAM2 counts an RGB-D observation twice; here each keyframe observation counts once.
   const int min_obs = kfs <= 2 ? 1 : 2;
   const int ref_matches = reference_kf_->NumTrackedPoints(min_obs);
-  const bool mapper_idle = local_mapper_.Idle();
+  bool mapper_idle = local_mapper_.Idle();
   int tracked_close = 0, untracked_close = 0;
   const double close = frame.geometry->close_depth;
   for (size_t i = 0; i < frame.size(); ++i) {
@@ -406,10 +410,15 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
                            untracked_close > options_.close_untracked_min) ||
                           last_inliers_ < options_.keyframe_min_map_inliers;
   const double ratio = kfs < 2 ? 0.4 : options_.ref_ratio;
+  const bool c2 = (last_inliers_ < ref_matches * ratio || need_close) && last_inliers_ > 15;
+  // A keyframe is due and local mapping is still busy with the previous one: wait for it a
+  // little (keyframe_wait_ms), so that the keyframe goes in on a refined map instead of being
+  // skipped or queued (the deterministic schedule; issue 22, BENCHMARKS.md).
+  if (c2 && !mapper_idle && options_.keyframe_wait_ms > 0)
+    mapper_idle = local_mapper_.WaitIdle(options_.keyframe_wait_ms);
   const bool c1a = frame.id >= last_kf_frame_id_ + options_.max_frames_between_keyframes;
   const bool c1b = mapper_idle;
   const bool c1c = last_inliers_ < ref_matches * 0.25 || need_close;
-  const bool c2 = (last_inliers_ < ref_matches * ratio || need_close) && last_inliers_ > 15;
   if (!((c1a || c1b || c1c) && c2)) return false;
   if (mapper_idle || deterministic_) return true;
   local_mapper_.InterruptBA();

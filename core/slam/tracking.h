@@ -47,6 +47,13 @@ struct TrackingOptions {
   // to 37, below local_map_min_inliers (30): lost with no keyframe made. 100 leaves ~3 frames of
   // that decay before the loss (BENCHMARKS.md, issue 14).
   int keyframe_min_map_inliers = 100;
+  // Real threading only (issue 22): when a keyframe is due while local mapping is still busy,
+  // wait up to this long for it before deciding (0: do not wait; ORB-SLAM2 then skips or queues
+  // the keyframe) ...
+  double keyframe_wait_ms = 0;
+  // ... and after handing a keyframe to local mapping, wait up to this long for it to be done
+  // (0: do not wait), so the next frames track the points its local BA refined.
+  double handoff_wait_ms = 0;
   PlaceRecognitionOptions place;  // candidates from the BoW index (when a vocabulary is set)
   OptimizerOptions optimizer;
   MatcherOptions matcher;
@@ -75,6 +82,10 @@ struct TrackingOptions {
     DYGSLAM_CHECK_OPTION(max_frames_between_keyframes >= 1,
                          "Tracking.max_frames_between_keyframes");
     DYGSLAM_CHECK_OPTION(keyframe_min_map_inliers >= 0, "Tracking.keyframe_min_map_inliers");
+    DYGSLAM_CHECK_OPTION(keyframe_wait_ms >= 0 && keyframe_wait_ms <= 10000,
+                         "Tracking.keyframe_wait_ms");
+    DYGSLAM_CHECK_OPTION(handoff_wait_ms >= 0 && handoff_wait_ms <= 10000,
+                         "Tracking.handoff_wait_ms");
     place.Check();
     optimizer.Check();
     matcher.Check();

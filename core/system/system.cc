@@ -15,6 +15,7 @@
 #include "core/slam/frame.h"
 #include "core/slam/frame_preparation.h"
 #include "core/slam/local_mapping.h"
+#include "core/slam/optimizer.h"
 #include "core/slam/tracking.h"
 
 namespace dygslam {
@@ -248,6 +249,18 @@ class SystemImpl {
   void Shutdown() {
     local_mapper_.Finish();
     if (loop_closer_) loop_closer_->Finish();
+    const int iterations = options_.local_mapping.final_ba_iterations;
+    if (iterations > 0 && !options_.localization && !final_ba_done_ && map_->NumKeyFrames() > 2) {
+      final_ba_done_ = true;
+      GlobalBundleAdjustment(*map_, options_.local_mapping.optimizer, iterations, iterations);
+      std::vector<int64_t> moved;
+      {
+        std::lock_guard<std::mutex> lock(map_->mutex());
+        for (const auto& [id, kf] : map_->keyframes())
+          if (!kf->bad) moved.push_back(id);
+      }
+      EmitMapChanges(moved, {});
+    }
   }
 
  private:
@@ -285,6 +298,7 @@ class SystemImpl {
   std::shared_ptr<KeyFrameDatabase> database_;
   std::unique_ptr<LoopCloser> loop_closer_;  // declared before the mapper: outlives its callback
   LocalMapper local_mapper_;
+  bool final_ba_done_ = false;  // Shutdown's final bundle adjustment (once)
   Tracker tracker_;
   DynamicFilter filter_;
   std::unique_ptr<DetectionWorker> detection_worker_;  // created on first use

@@ -1,0 +1,52 @@
+// Local-mapping schedule settings (issue 22): the waits of tracking for local mapping and the
+// final bundle adjustment are read, default off, and bad values are named.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "core/base/error.h"
+#include "core/config/settings.h"
+#include "run/system_config.h"
+
+namespace dygslam {
+namespace {
+
+SystemOptions Options(const std::string& section) {
+  const char* src = std::getenv("DYGSLAM_SOURCE_DIR");
+  const std::string path = std::string(src ? src : ".") + "/config/bonn.yaml";
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return SystemOptionsFromSettings(ParseSettings(text.str() + "\n" + section, path));
+}
+
+void ExpectNamed(const std::string& section, const std::string& field) {
+  try {
+    Options(section);
+    ADD_FAILURE() << "expected InputError for " << section;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+  }
+}
+
+TEST(ScheduleConfig, WaitsAndFinalBundleAdjustmentAreReadAndChecked) {
+  const SystemOptions defaults = Options("");
+  EXPECT_EQ(defaults.tracking.keyframe_wait_ms, 0);
+  EXPECT_EQ(defaults.tracking.handoff_wait_ms, 0);
+  EXPECT_EQ(defaults.local_mapping.final_ba_iterations, 0);
+  const SystemOptions set = Options(
+      "Tracking:\n  keyframe_wait_ms: 50\n  handoff_wait_ms: 20.5\n"
+      "LocalMapping:\n  final_ba_iterations: 10\n");
+  EXPECT_EQ(set.tracking.keyframe_wait_ms, 50);
+  EXPECT_EQ(set.tracking.handoff_wait_ms, 20.5);
+  EXPECT_EQ(set.local_mapping.final_ba_iterations, 10);
+  ExpectNamed("Tracking:\n  keyframe_wait_ms: -1\n", "Tracking.keyframe_wait_ms");
+  ExpectNamed("Tracking:\n  handoff_wait_ms: 20000\n", "Tracking.handoff_wait_ms");
+  ExpectNamed("LocalMapping:\n  final_ba_iterations: -3\n", "LocalMapping.final_ba_iterations");
+}
+
+}  // namespace
+}  // namespace dygslam

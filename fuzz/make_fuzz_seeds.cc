@@ -2,8 +2,7 @@
 //   OUT_DIR/dds_sample/   valid serialized samples of every message type (selector byte first)
 //   OUT_DIR/png/          small valid colour / depth PNGs
 //   OUT_DIR/png_decoder/  small PNGs of every layout the fast decoder handles (and two it does
-//                         not), each after a mode byte (fuzz/png_decoder_fuzzer.cc), and fuzzed
-//                         rows
+//                         not), each after a mode byte (fuzz/png_decoder_fuzzer.cc), and rows
 //   OUT_DIR/tum_list/     rgb.txt \f depth.txt \f associations.txt examples
 //   OUT_DIR/trajectory/   TUM trajectory snippets
 //   OUT_DIR/settings/     SOURCE_DIR/config/*.yaml (the presets)
@@ -12,10 +11,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "core/base/paths.h"
 #ifndef DYGSLAM_FUZZ_NO_DDS
@@ -73,8 +73,7 @@ void DdsSeeds(const fs::path& dir) {
   dets[1].label = "chair";
   dets[1].class_id = 56;
   dets[1].score = 0.4f;
-  WriteSample<msg::DetectionsPubSubType>(dir, SampleKind::kDetections, "two",
-                                         DetectionsToMsg(dets, f.stamp, 3, 7.5));
+  WriteSample<msg::DetectionsPubSubType>(dir, SampleKind::kDetections, "two", DetectionsToMsg(dets, f.stamp, 3, 7.5));
 
   Rigid3d pose(Eigen::Quaterniond(0.9, 0.1, -0.2, 0.3), Eigen::Vector3d(1, -2, 0.5));
   msg::CameraPose cp;
@@ -95,22 +94,19 @@ void DdsSeeds(const fs::path& dir) {
   k.keypoints = {cv::KeyPoint(1, 2, 7, 30, 0.5f, 1), cv::KeyPoint(5, 4, 7, 60, 0.2f, 0)};
   k.keypoint_dynamic = {0, 1};
   k.detections = dets;
-  WriteSample<msg::KeyframePubSubType>(dir, SampleKind::kKeyframe, "full",
-                                       KeyframeToMsg(k, Camera(8, 6)));
+  WriteSample<msg::KeyframePubSubType>(dir, SampleKind::kKeyframe, "full", KeyframeToMsg(k, Camera(8, 6)));
   KeyframeData update;
   update.id = 4;
   update.stamp = f.stamp;
   update.world_from_cam = pose;
   update.pose_update_only = true;
-  WriteSample<msg::KeyframePubSubType>(dir, SampleKind::kKeyframe, "update",
-                                       KeyframeToMsg(update, Camera(8, 6)));
+  WriteSample<msg::KeyframePubSubType>(dir, SampleKind::kKeyframe, "update", KeyframeToMsg(update, Camera(8, 6)));
 
   WriteSample<msg::GroundTruthPosePubSubType>(dir, SampleKind::kGroundTruth, "one",
                                               GroundTruthToMsg(StampedPose{f.stamp, pose}, 3));
-  std::vector<StampedPose> traj = {
-      {f.stamp, pose}, {Timestamp::FromNanoseconds(f.stamp.nanoseconds() + 33000000), pose}};
-  WriteSample<msg::TrajectoryPubSubType>(dir, SampleKind::kTrajectory, "two",
-                                         TrajectoryToMsg(traj, false));
+  std::vector<StampedPose> traj = {{f.stamp, pose},
+                                   {Timestamp::FromNanoseconds(f.stamp.nanoseconds() + 33000000), pose}};
+  WriteSample<msg::TrajectoryPubSubType>(dir, SampleKind::kTrajectory, "two", TrajectoryToMsg(traj, false));
   msg::StreamStatus s;
   s.kind(1);
   s.source("player");
@@ -175,32 +171,26 @@ void TextSeeds(const fs::path& out, const fs::path& source) {
   fs::create_directories(out / "trajectory");
   Write(out / "trajectory" / "tum",
         "# timestamp tx ty tz qx qy qz qw\n1548339823.898123 0.1 0.2 0.3 0 0 0 1\n"
-        "1548339823.931450 0.11 0.2 0.3 0.0087 0 0 0.99996\r\n\n1548339823.964950 1e-3 -2 3 0 "
-        "0.7071068 0 0.7071068\n");
+        "1548339823.931450 0.11 0.2 0.3 0.0087 0 0 0.99996\r\n\n1548339823.964950 1e-3 -2 3 0 0.7071068 0 0.7071068\n");
   fs::create_directories(out / "settings");
   for (const auto& e : fs::directory_iterator(source / "config")) {
-    if (e.path().extension() == ".yaml")
-      fs::copy_file(e.path(), out / "settings" / e.path().filename(),
-                    fs::copy_options::overwrite_existing);
+    if (e.path().extension() == ".yaml") fs::copy_file(e.path(), out / "settings" / e.path().filename(),
+                                                       fs::copy_options::overwrite_existing);
   }
   fs::create_directories(out / "darknet_cfg");
   const std::string models = ModelsDir();
   if (!models.empty() && fs::exists(models)) {
     for (const auto& e : fs::recursive_directory_iterator(models)) {
       if (e.path().extension() == ".cfg") {
-        fs::copy_file(e.path(),
-                      out / "darknet_cfg" / (e.path().parent_path().filename().string() + ".cfg"),
+        fs::copy_file(e.path(), out / "darknet_cfg" / (e.path().parent_path().filename().string() + ".cfg"),
                       fs::copy_options::overwrite_existing);
       }
     }
   }
   Write(out / "darknet_cfg" / "tiny.cfg",
-        "[net]\nwidth=32\nheight=32\nchannels=3\n\n[convolutional]\nbatch_normalize=1\nfilters="
-        "4\nsize=3\n"
-        "stride=1\npad=1\nactivation=leaky\n\n[maxpool]\nsize=2\nstride=2\n\n[convolutional]\nsize="
-        "1\n"
-        "stride=1\npad=1\nfilters=18\nactivation=linear\n\n[yolo]\nmask=0,1,2\nanchors=1,1, 2,2, "
-        "3,3\n"
+        "[net]\nwidth=32\nheight=32\nchannels=3\n\n[convolutional]\nbatch_normalize=1\nfilters=4\nsize=3\n"
+        "stride=1\npad=1\nactivation=leaky\n\n[maxpool]\nsize=2\nstride=2\n\n[convolutional]\nsize=1\n"
+        "stride=1\npad=1\nfilters=18\nactivation=linear\n\n[yolo]\nmask=0,1,2\nanchors=1,1, 2,2, 3,3\n"
         "classes=1\nnum=3\n\n[route]\nlayers=-2\n\n[upsample]\nstride=2\n");
   fs::create_directories(out / "png");
   std::vector<uchar> buf;

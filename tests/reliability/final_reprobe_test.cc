@@ -3,8 +3,13 @@
 //   L1  a 100,000-character YAML key: plain (YAML's simple keys end at 1024 characters: a parse
 //       error), quoted, in a section, or an explicit `? key` (no length limit: an unknown-key
 //       warning). The message names the file and line, and never echoes the key whole.
+//   L2  `LoopClosing.ransac_threshold_px: 99999999999999999999` was accepted (exit 0: every loop
+//       candidate's points inliers); 18 keys in all took 1e20, and Detector.weights / names
+//       without Detector.cfg were ignored. Every settings key given 1e20 is now an error naming it.
 #include <gtest/gtest.h>
 
+#include <regex>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -68,6 +73,86 @@ TEST(FinalReprobe, HundredThousandCharacterKeyGivesABoundedMessage) {
   EXPECT_LT(warnings[0].size(), 600u) << warnings[0].substr(0, 400);
   EXPECT_TRUE(Contains(warnings[0], "long.yaml:" + line)) << warnings[0].substr(0, 400);
   EXPECT_TRUE(Contains(warnings[0], "(100000 bytes)")) << warnings[0].substr(0, 400);
+}
+
+// bonn.yaml with `key` set to `value`: a flat key's line replaced; a section key replaced in its
+// section, or added at its top, or appended as a new section (as probe/set_key.py does).
+std::string WithKey(const std::string& key, const std::string& value) {
+  std::vector<std::string> lines;
+  std::istringstream in(BonnYaml());
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  const auto starts = [](const std::string& line, const std::string& prefix) {
+    return std::regex_search(line, std::regex("^" + prefix + "\\s*:"));
+  };
+  bool done = false;
+  for (std::string& line : lines) {
+    if (!done && starts(line, std::regex_replace(key, std::regex("\\."), "\\."))) {
+      line = key + ": " + value;
+      done = true;
+    }
+  }
+  const size_t dot = key.find('.');
+  if (!done && dot != std::string::npos) {
+    const std::string section = key.substr(0, dot), sub = key.substr(dot + 1);
+    for (size_t i = 0; i < lines.size() && !done; ++i) {
+      if (!std::regex_match(lines[i], std::regex(section + "\\s*:\\s*(#.*)?"))) continue;
+      for (size_t j = i + 1; j < lines.size() && (lines[j].empty() || lines[j][0] == ' '); ++j) {
+        if (starts(lines[j], "\\s+" + sub)) {
+          lines[j] = "  " + sub + ": " + value;
+          done = true;
+          break;
+        }
+      }
+      if (!done) lines.insert(lines.begin() + i + 1, "  " + sub + ": " + value);
+      done = true;
+    }
+    if (!done) lines.insert(lines.end(), {section + ":", "  " + sub + ": " + value});
+  }
+  std::string text;
+  for (const std::string& line : lines) text += line + "\n";
+  return text;
+}
+
+TEST(FinalReprobe, EverySettingsKeyRefusesAnAbsurdlyLargeValue) {
+  std::vector<std::string> accepted;
+  int checked = 0;
+  for (const std::string& key : KnownSettingsKeys()) {
+    // Accepted and not used (ORB-SLAM2 / ORB-SLAM3 keys).
+    if (key == "Camera.RGB" || key == "Camera.type" || key == "File.version" || key == "Viewer.*")
+      continue;
+    ++checked;
+    std::string error;
+    ReadAll(WithKey(key, "99999999999999999999"), &error);
+    if (error.empty()) {
+      accepted.push_back(key);
+      continue;
+    }
+    // Named by its key (Detector.cfg alone: by the key it needs with it).
+    EXPECT_TRUE(Contains(error, key.substr(key.find('.') + 1)) ||
+                (key == "Detector.cfg" && Contains(error, "missing required key")))
+        << key << ": " << error;
+    EXPECT_TRUE(Contains(error, "long.yaml:")) << key << ": " << error;
+  }
+  EXPECT_GT(checked, 100);
+  std::string list;
+  for (const std::string& key : accepted) list += " " + key;
+  EXPECT_TRUE(accepted.empty()) << "accepted 1e20 for" << list;
+  // The probe's case, and values within the bounds still pass.
+  std::string error;
+  ReadAll(WithKey("LoopClosing.ransac_threshold_px", "99999999999999999999"), &error);
+  EXPECT_TRUE(Contains(error,
+                       "key 'LoopClosing.ransac_threshold_px': implausible value 1e+20 "
+                       "(expected at most 1000 px)"))
+      << error;
+  error.clear();
+  ReadAll(WithKey("LoopClosing.ransac_threshold_px", "12.5") +
+              "DynamicFilter:\n  C1: 5\n  delta: 120\n  consensus_depth_gap: 0.5\n",
+          &error);
+  EXPECT_EQ(error, "");
+  // Model files without Detector.cfg were ignored without a word.
+  error.clear();
+  ReadAll(BonnYaml() + "Detector:\n  weights: my.weights\n", &error);
+  EXPECT_TRUE(Contains(error, "key 'Detector.weights': given without Detector.cfg")) << error;
 }
 
 }  // namespace

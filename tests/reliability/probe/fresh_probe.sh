@@ -377,7 +377,10 @@ if family signals; then
       [ ! -s "logs/sg_bench_INT_$delay.err" ] || echo "    (bench: $(ls o_sg_b_$delay | tr '\n' ' '))"
     # SIGTERM too: a background job ignores SIGINT unless the program installs its own handler.
     sprobe "sg_bench_TERM_$delay" TERM "$delay" "o_sg_bt_$delay" "$DYG" bench ds40 --runs 2 --configs none --no-baseline --no-pictures --out "o_sg_bt_$delay" --quiet
+    # Killed before its handlers existed (no output folder, nothing on stderr: the verdict
+    # `early`): no run had started, nothing to lose.
     [ -s "o_sg_bt_$delay/runs.csv" ] || grep -q "before any run ended" "logs/sg_bench_TERM_$delay.err" ||
+      { [ ! -e "o_sg_bt_$delay" ] && [ ! -s "logs/sg_bench_TERM_$delay.err" ]; } ||
       note "sg_bench_TERM_$delay" LOSS "no runs.csv of the runs done"
     sprobe "sg_proc_TERM_$delay" TERM "$delay" "o_sg_pr_$delay" "$DYG" run ds40 --config "$CFG" --out "o_sg_pr_$delay" --quiet --processes --filter none --domain 196
   done

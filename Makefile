@@ -60,10 +60,15 @@ ci: test test-fuzz test-docker
 
 # Sanitizer CI option: the whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (any
 # report fails the test). Slow (~2-3x); ASAN_CTEST_ARGS narrows it, e.g. ASAN_CTEST_ARGS='-R ^reliability/'.
+# new_delete_type_mismatch=0: Fast DDS 2.9 (libfastrtps, not instrumented) deletes its writers
+# through a base pointer with the base's size (RTPSWriter::~RTPSWriter, every DDS test that deletes
+# a writer); ASan cannot suppress that report by library. Leaks of third-party libraries only:
+# scripts/sanitizers/lsan.supp.
+ASAN_RUN_OPTIONS := detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=0:new_delete_type_mismatch=0
 test-asan: setup
 	cmake -S . -B $(ASAN_BUILD_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDYGSLAM_SANITIZE=ON $(CMAKE_ARGS)
 	cmake --build $(ASAN_BUILD_DIR) -j$(JOBS)
-	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=0 \
+	ASAN_OPTIONS=$(ASAN_RUN_OPTIONS) LSAN_OPTIONS=suppressions=$(CURDIR)/scripts/sanitizers/lsan.supp \
 	UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
 	ctest --test-dir $(ASAN_BUILD_DIR) --output-on-failure -j$(JOBS) --timeout 1800 $(ASAN_CTEST_ARGS)
 

@@ -1,6 +1,8 @@
 // Writes seed corpora for the fuzz targets: make_fuzz_seeds OUT_DIR [SOURCE_DIR]
 //   OUT_DIR/dds_sample/   valid serialized samples of every message type (selector byte first)
 //   OUT_DIR/png/          small valid colour / depth PNGs
+//   OUT_DIR/png_decoder/  small PNGs of every layout the fast decoder handles (and two it does
+//                         not), each after a mode byte (fuzz/png_decoder_fuzzer.cc), and rows
 //   OUT_DIR/tum_list/     rgb.txt \f depth.txt \f associations.txt examples
 //   OUT_DIR/trajectory/   TUM trajectory snippets
 //   OUT_DIR/settings/     SOURCE_DIR/config/*.yaml (the presets)
@@ -116,6 +118,48 @@ void DdsSeeds(const fs::path& dir) {
 
 #endif  // DYGSLAM_FUZZ_NO_DDS
 
+// png_decoder_fuzzer: mode byte 0 (as is) and 1 (CRCs repaired) before PNGs of the layouts
+// the fast decoder takes (8-bit grey / BGR / BGRA, 16-bit grey) with different row filters,
+// a 16-bit colour and a 1-bit one it hands to OpenCV; mode 2 before a few fuzzed-row headers.
+void PngDecoderSeeds(const fs::path& dir) {
+  fs::create_directories(dir);
+  cv::RNG rng(20);
+  struct Layout {
+    const char* name;
+    int type;
+  };
+  const Layout layouts[] = {{"gray8", CV_8UC1},
+                            {"bgr8", CV_8UC3},
+                            {"bgra8", CV_8UC4},
+                            {"gray16", CV_16UC1},
+                            {"bgr16", CV_16UC3}};
+  for (const Layout& layout : layouts) {
+    cv::Mat m(5, 7, layout.type);
+    rng.fill(m, cv::RNG::UNIFORM, 0,
+             layout.type == CV_16UC1 || layout.type == CV_16UC3 ? 65535 : 255);
+    for (int strategy : {cv::IMWRITE_PNG_STRATEGY_DEFAULT, cv::IMWRITE_PNG_STRATEGY_FILTERED}) {
+      std::vector<uchar> buf;
+      cv::imencode(".png", m, buf, {cv::IMWRITE_PNG_STRATEGY, strategy});
+      for (char mode : {'\0', '\1'}) {
+        Write(dir / (std::string(layout.name) + "_s" + std::to_string(strategy) + "_m" +
+                     std::to_string(int(mode)) + ".seed"),
+              std::string(1, mode) + std::string(buf.begin(), buf.end()));
+      }
+    }
+  }
+  std::vector<uchar> bilevel;
+  cv::imencode(".png", cv::Mat(3, 9, CV_8UC1, cv::Scalar(255)), bilevel,
+               {cv::IMWRITE_PNG_BILEVEL, 1});
+  Write(dir / "bilevel_m0.seed",
+        std::string(1, '\0') + std::string(bilevel.begin(), bilevel.end()));
+  // Mode 2: width-1, height-1, bit depth index, colour type index (16-bit grey, 8-bit RGB,
+  // 8-bit RGBA), then rows with the five filter types.
+  const std::string rows = std::string("\0\1\2\3\4", 5) + "some row bytes to unfilter";
+  Write(dir / "built_gray16_m2.seed", std::string("\2\3\2\4\0", 5) + rows);
+  Write(dir / "built_rgb8_m2.seed", std::string("\2\2\1\3\1", 5) + rows);
+  Write(dir / "built_rgba8_m2.seed", std::string("\2\4\4\3\4", 5) + rows);
+}
+
 void TextSeeds(const fs::path& out, const fs::path& source) {
   fs::create_directories(out / "tum_list");
   Write(out / "tum_list" / "plain",
@@ -156,6 +200,7 @@ void TextSeeds(const fs::path& out, const fs::path& source) {
   cv::randu(depth, 0, 60000);
   cv::imencode(".png", depth, buf);
   Write(out / "png" / "depth.png", std::string(buf.begin(), buf.end()));
+  PngDecoderSeeds(out / "png_decoder");
 }
 
 }  // namespace

@@ -442,6 +442,25 @@ std::unique_ptr<octomap::OcTree> ReadOctoMap(const std::string& path) {
   }
   if (header.rfind("# Octomap OcTree file", 0) == 0) {
     const long long declared = DeclaredOctoMapSize(in);
+    // OctoMap's .ot reader recurses on each node's child bits; past the end of the stream it
+    // reads an uninitialised byte as those bits and recursed until the stack overflowed (ASan,
+    // reliability/ThirdReprobe.TruncatedOctoMapIsAnError). An OcTree node is 5 bytes (a float
+    // and the child bits): the data after the header must hold the declared nodes.
+    std::string head(4096, '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<size_t>(in.gcount()));
+    in.clear();
+    in.seekg(0);
+    const size_t data_at = head.find("\ndata\n");
+    const auto file_size = std::filesystem::file_size(path, ec);
+    if (declared >= 0 && data_at != std::string::npos && !ec &&
+        static_cast<long double>(file_size - (data_at + 6)) < 5.0L * declared) {
+      throw InputError(path, 0,
+                       "truncated or corrupt OctoMap (.ot): the header declares " +
+                           std::to_string(declared) + " nodes (" + std::to_string(5 * declared) +
+                           " bytes), the data holds " + std::to_string(file_size - (data_at + 6)) +
+                           " bytes");
+    }
     std::unique_ptr<octomap::AbstractOcTree> abstract(octomap::AbstractOcTree::read(in));
     if (!abstract) throw InputError(path, 0, "malformed OctoMap (.ot)");
     auto* tree = dynamic_cast<octomap::OcTree*>(abstract.get());

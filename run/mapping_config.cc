@@ -2,6 +2,8 @@
 
 #include <string>
 
+#include "run/settings_limits.h"
+
 namespace dygslam {
 
 void ReadOptions(const ConfigReader& root, OctoMapOptions* options) {
@@ -26,6 +28,8 @@ void ReadOptions(const ConfigReader& root, OctoMapOptions* options) {
   // A misspelt key is reported where every other section's is: LoadSettings warns about it with
   // its line and the closest known key (an error with --strict-settings), KnownSettingsKeys().
   s.CheckOptions(*options);
+  CheckSettingAtMost(s, "voxel_filter_size", options->voxel_filter_size, 100, "m");
+  CheckSettingAtMost(s, "rebuild_displacement", options->rebuild_displacement, 1000, "m");
 }
 
 }  // namespace dygslam

@@ -9,6 +9,7 @@
 
 #include "core/base/echo.h"
 #include "core/base/error.h"
+#include "run/settings_limits.h"
 
 #ifndef DYGSLAM_DEFAULT_VOCABULARY
 #define DYGSLAM_DEFAULT_VOCABULARY ""
@@ -166,6 +167,14 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                      DYGSLAM_SAME_NAME_FIELD(lc, global_ba_min_correction_m),
                      DYGSLAM_SAME_NAME_FIELD(lc, global_ba_min_correction_deg)});
   loops.CheckOptions(lc);
+  CheckSettingAtMost(loops, "revisit_min_path_m", lc.revisit_min_path_m, 1e5, "m");
+  CheckSettingAtMost(loops, "ransac_threshold_px", lc.ransac_threshold_px, 1000, "px");
+  CheckSettingAtMost(loops, "fusion_radius_px", lc.fusion_radius_px, 1000, "px");
+  CheckSettingAtMost(loops, "max_drift_per_meter", lc.max_drift_per_meter, 100, "m per m");
+  CheckSettingAtMost(loops, "max_drift_deg_per_meter", lc.max_drift_deg_per_meter, 360,
+                     "degrees per m");
+  CheckSettingAtMost(loops, "global_ba_min_correction_m", lc.global_ba_min_correction_m, 10000,
+                     "m");
 
   // DynamicFilter: the paper's parameters (defaults in DynamicFilterOptions).
   const ConfigReader filter = root.Section("DynamicFilter");
@@ -203,11 +212,29 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                       {"expand_outside", &f.expand_outside},
                       {"expansion_depth_gap", &f.expansion_depth_gap}});
   filter.CheckOptions(f);
+  CheckSettingAtMost(filter, "C1", f.c1, 1000, "");
+  CheckSettingAtMost(filter, "R", f.r, 1e6, "");
+  CheckSettingAtMost(filter, "C2", f.c2, 1000, "");
+  CheckSettingAtMost(filter, "delta", f.delta, 16384, "px");
+  CheckSettingAtMost(filter, "box_margin", f.box_margin, 16384, "px");
+  CheckSettingAtMost(filter, "fundamental_threshold", f.fundamental_threshold, 1000, "px");
+  CheckSettingAtMost(filter, "depth_residual_scale", f.depth_residual_scale, 1000, "");
+  CheckSettingAtMost(filter, "depth_residual_weight", f.depth_residual_weight, 1e5, "px per m");
+  CheckSettingAtMost(filter, "expansion_depth_gap", f.expansion_depth_gap, 1000, "m");
+  CheckSettingAtMost(filter, "consensus_depth_gap", f.consensus_depth_gap, 1000, "m");
 
   // Detector: a shipped model by name, or explicit Darknet files.
   const ConfigReader detector = root.Section("Detector");
   std::string model = "yolo-fastest-1.1";
   detector.ReadIfPresent("model", &model);
+  // Model files without Detector.cfg were ignored without a word (the named or default model
+  // played instead).
+  for (const char* key : {"weights", "names"}) {
+    if (detector.Has(key) && !detector.Has("cfg")) {
+      detector.Fail(key, "given without Detector.cfg: give Detector.cfg, Detector.weights and "
+                         "Detector.names together, or a Detector.model");
+    }
+  }
   if (detector.Has("cfg")) {
     options.detector.cfg_path = detector.Require<std::string>("cfg");
     options.detector.weights_path = detector.Require<std::string>("weights");

@@ -361,7 +361,11 @@ void DynamicFilter::Consensus(const FilterInput& input, FilterResult* result) co
   // Features with depth in a grid of consensus_radius cells.
   const double cell = o.consensus_radius;
   std::unordered_map<int64_t, std::vector<int>> grid;
-  const auto key = [](int64_t cx, int64_t cy) { return (cx << 32) ^ (cy & 0xffffffff); };
+  // Shifted as unsigned: a negative cx << 32 is undefined in C++17 (UBSan); same bits.
+  const auto key = [](int64_t cx, int64_t cy) {
+    return static_cast<int64_t>((static_cast<uint64_t>(cx) << 32) ^
+                                (static_cast<uint64_t>(cy) & 0xffffffffu));
+  };
   for (int i = 0; i < n; ++i)
     if (depths[i] > 0)
       grid[key(static_cast<int64_t>(std::floor(kps[i].pt.x / cell)),

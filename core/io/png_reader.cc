@@ -129,7 +129,12 @@ bool DecodePngFast(const unsigned char* data, size_t size, cv::Mat* image) {
   if (cv_type < 0) return false;
   const int bpp = channels * bit_depth / 8;
   const size_t row_bytes = size_t(width) * bpp;
-  std::vector<unsigned char> raw(size_t(height) * (row_bytes + 1));
+  const size_t raw_size = size_t(height) * (row_bytes + 1);
+  // Deflate expands at most 1032:1 (258 bytes from a 1-bit length and a 1-bit distance code):
+  // a header asking for more than the IDAT data could fill is refused before allocating (a
+  // 100-byte file claiming 16384x16384 RGBA would cost 1 GB here; OpenCV then reports it).
+  if (raw_size / 1032 > compressed.size() + 1024) return false;
+  std::vector<unsigned char> raw(raw_size);
 
   struct DecompressorDeleter {
     void operator()(libdeflate_decompressor* d) const { libdeflate_free_decompressor(d); }

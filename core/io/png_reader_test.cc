@@ -97,6 +97,36 @@ TEST(PngReader, DeclinesWhatItDoesNotHandleOrWhatIsDamaged) {
   EXPECT_TRUE(untouched.empty());
 }
 
+// A header asking for far more pixels than the IDAT data could hold (deflate expands at most
+// 1032:1) is declined before the decoder allocates the image; images that compress as well as
+// deflate allows (all zero, level 9) still decode.
+TEST(PngReader, DeclinesImpossibleSizesAndKeepsMaximallyCompressedImages) {
+  if (!FastPngAvailable()) GTEST_SKIP() << "built without libdeflate";
+  for (int type : {CV_16UC1, CV_8UC4}) {
+    const cv::Mat zeros = cv::Mat::zeros(type == CV_16UC1 ? 480 : 1500, 640, type);
+    const std::vector<unsigned char> bytes = Encode(zeros, cv::IMWRITE_PNG_STRATEGY_DEFAULT, 9);
+    cv::Mat out;
+    ASSERT_TRUE(DecodePngFast(bytes.data(), bytes.size(), &out)) << "type " << type;
+    EXPECT_EQ(cv::countNonZero(out.reshape(1)), 0);
+  }
+  // A 1x1 grey PNG whose IHDR then claims 16384x16384 RGBA (CRC fixed up).
+  std::vector<unsigned char> bytes =
+      Encode(cv::Mat(1, 1, CV_8UC1, cv::Scalar(9)), cv::IMWRITE_PNG_STRATEGY_DEFAULT, 9);
+  ASSERT_EQ(std::string(bytes.begin() + 12, bytes.begin() + 16), "IHDR");
+  const unsigned char header[] = {0, 0, 0x40, 0, 0, 0, 0x40, 0, 8, 6};
+  std::copy(header, header + sizeof(header), bytes.begin() + 16);
+  uint32_t crc = 0xffffffffu;  // CRC-32 of type + body (17 bytes)
+  for (size_t i = 12; i < 12 + 17; ++i) {
+    crc ^= bytes[i];
+    for (int k = 0; k < 8; ++k) crc = (crc & 1) ? 0xedb88320u ^ (crc >> 1) : crc >> 1;
+  }
+  crc ^= 0xffffffffu;
+  for (int k = 0; k < 4; ++k) bytes[29 + k] = uint8_t(crc >> (24 - 8 * k));
+  cv::Mat untouched;
+  EXPECT_FALSE(DecodePngFast(bytes.data(), bytes.size(), &untouched));
+  EXPECT_TRUE(untouched.empty());
+}
+
 TEST(PngReader, DatasetImagesIdenticalToOpenCv) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
   if (!FastPngAvailable()) GTEST_SKIP() << "built without libdeflate";

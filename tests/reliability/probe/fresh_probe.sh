@@ -8,7 +8,8 @@
 #   tests/reliability/probe/fresh_probe.sh [BUILD_DIR] [WORK_DIR]
 #
 # Runs itself in a private network and mount namespace (DDS stays on this machine, domains
-# 230-232, 195, 196: ids above 232 are not valid DDS domains; the tmpfs of the disk probes is private). Verdicts as in hostile_probe.sh (probe_lib.sh),
+# 194-196, the prober's range; the tmpfs of the disk probes is private). Verdicts as in
+# hostile_probe.sh (probe_lib.sh),
 # plus SANITIZER (an ASan / UBSan report in the log) and HALF (an output cut short).
 # PROBE_ONLY=a,b runs the families a and b only (settings yaml images lists frames commands
 # signals disk dds). Exit code: the number of probes that are not ok.
@@ -27,7 +28,7 @@ DATA="${DYGSLAM_DATA_DIR:-$SRC/../shared/data}/bonn_crowd_part"
 [ -f "$DATA/rgb.txt" ] || { echo "no dataset at $DATA"; exit 2; }
 mkdir -p "$WORK/logs"
 cd "$WORK" || exit 2
-export DYGSLAM_DOMAIN_ID=230
+export DYGSLAM_DOMAIN_ID=194
 # The probes run from WORK_DIR: name the models folder (the default ../shared/models is relative).
 export DYGSLAM_MODELS_DIR="${DYGSLAM_MODELS_DIR:-$SRC/../shared/models}"
 FAILS=0
@@ -194,7 +195,7 @@ import cv2, numpy as np; cv2.imwrite('ds_jpeg/x.jpg', np.zeros((480,640,3), np.u
   mkimg empty rgb rgb8; : >ds_empty/bad.png
   probe i_empty_file 1 90 "$DYG" run ds_empty --config "$CFG" --out o_i_empty --direct --quiet --filter none
   # The same images through the DDS player and `map`.
-  probe i_depth_rgb8_dds 1 180 "$DYG" run ds_d_rgb8 --config "$CFG" --out o_i_d_dds --quiet --filter none --domain 231
+  probe i_depth_rgb8_dds 1 180 "$DYG" run ds_d_rgb8 --config "$CFG" --out o_i_d_dds --quiet --filter none --domain 195
   [ -s o_i_d_dds/trajectory.txt ] || note i_depth_rgb8_dds LOSS "no trajectory of the frames before"
   probe i_depth_rgb8_map 1 180 "$DYG" map ds_d_rgb8 --config "$CFG" --out o_i_d_map --quiet --filter none
   [ -s o_i_d_map/map.bt ] || note i_depth_rgb8_map LOSS "no map of the frames before"
@@ -327,18 +328,18 @@ if family commands; then
   probe v_extra 2 30 "$DYG" vocab a.dygvoc b.dygvoc
   probe v_none 2 30 "$DYG" vocab
   probe c_player_nodata 2 30 "$DYG" component player --config "$CFG"
-  probe c_player_bogus 1 30 "$DYG" component player --dataset /nonexistent --config "$CFG" --domain 232
-  probe c_slam_badcfg 1 30 "$DYG" component slam --config /dev/null --domain 232
+  probe c_player_bogus 1 30 "$DYG" component player --dataset /nonexistent --config "$CFG" --domain 196
+  probe c_slam_badcfg 1 30 "$DYG" component slam --config /dev/null --domain 196
   probe c_rate_neg 2 30 "$DYG" component player --dataset ds --config "$CFG" --rate -1
   probe c_window_zero 2 30 "$DYG" component player --dataset ds --config "$CFG" --window 0
   probe c_wait_neg 2 30 "$DYG" component slam --config "$CFG" --detection-wait-ms -5
   probe c_domain_300 2 30 "$DYG" component slam --config "$CFG" --domain 300
-  probe c_cfg_missing 1 30 "$DYG" component detector --config /nonexistent.yaml --domain 232
-  probe c_det_cfg_missing 1 30 "$DYG" component detector --config "$CFG" --detector-cfg /nonexistent.cfg --domain 232
-  probe c_det_model_bogus 1 30 "$DYG" component detector --config "$CFG" --detector-model bogus --domain 232
-  probe c_iface_bad 2 30 "$DYG" component slam --config "$CFG" --dds-interface 999.1.1.1 --domain 232
-  probe c_ds_bad 2 30 "$DYG" component slam --config "$CFG" --discovery-server nohost --domain 232
-  probe c_loadmap_missing 1 30 "$DYG" component slam --config "$CFG" --load-map /nonexistent.map --domain 232
+  probe c_cfg_missing 1 30 "$DYG" component detector --config /nonexistent.yaml --domain 196
+  probe c_det_cfg_missing 1 30 "$DYG" component detector --config "$CFG" --detector-cfg /nonexistent.cfg --domain 196
+  probe c_det_model_bogus 1 30 "$DYG" component detector --config "$CFG" --detector-model bogus --domain 196
+  probe c_iface_bad 2 30 "$DYG" component slam --config "$CFG" --dds-interface 999.1.1.1 --domain 196
+  probe c_ds_bad 2 30 "$DYG" component slam --config "$CFG" --discovery-server nohost --domain 196
+  probe c_loadmap_missing 1 30 "$DYG" component slam --config "$CFG" --load-map /nonexistent.map --domain 196
   probe c_localization_alone 2 30 "$DYG" run ds --config "$CFG" --out o_c_loc --localization
   probe c_out_proc 1 30 "$DYG" run ds --config "$CFG" --out /proc/self --direct
   probe c_out_sys 1 30 "$DYG" run ds --config "$CFG" --out /sys/kernel --direct
@@ -376,7 +377,10 @@ if family signals; then
       [ ! -s "logs/sg_bench_INT_$delay.err" ] || echo "    (bench: $(ls o_sg_b_$delay | tr '\n' ' '))"
     # SIGTERM too: a background job ignores SIGINT unless the program installs its own handler.
     sprobe "sg_bench_TERM_$delay" TERM "$delay" "o_sg_bt_$delay" "$DYG" bench ds40 --runs 2 --configs none --no-baseline --no-pictures --out "o_sg_bt_$delay" --quiet
+    # Killed before its handlers existed (no output folder, nothing on stderr: the verdict
+    # `early`): no run had started, nothing to lose.
     [ -s "o_sg_bt_$delay/runs.csv" ] || grep -q "before any run ended" "logs/sg_bench_TERM_$delay.err" ||
+      { [ ! -e "o_sg_bt_$delay" ] && [ ! -s "logs/sg_bench_TERM_$delay.err" ]; } ||
       note "sg_bench_TERM_$delay" LOSS "no runs.csv of the runs done"
     sprobe "sg_proc_TERM_$delay" TERM "$delay" "o_sg_pr_$delay" "$DYG" run ds40 --config "$CFG" --out "o_sg_pr_$delay" --quiet --processes --filter none --domain 196
   done
@@ -419,7 +423,7 @@ if family disk; then
   probe d_full_map 1 120 "$DYG" map ds40 --config "$CFG" --out tiny/m --quiet --filter none
   [ -z "$(half_written tiny/m)" ] || note d_full_map HALF "$(half_written tiny/m)"
   rm -rf tiny/m
-  probe d_full_dds 1 180 "$DYG" run ds40 --config "$CFG" --out tiny/s --quiet --filter none --domain 231
+  probe d_full_dds 1 180 "$DYG" run ds40 --config "$CFG" --out tiny/s --quiet --filter none --domain 195
   [ -z "$(half_written tiny/s)" ] || note d_full_dds HALF "$(half_written tiny/s)"
   rm -rf tiny/s
   probe d_full_synth 1 120 "$DYG" synth tiny/y --frames 5 --quiet
@@ -435,7 +439,7 @@ if family disk; then
   for mode in direct dds map; do
     case $mode in
       direct) cmd=("$DYG" run ds40 --config "$CFG" --out ro/o_$mode --direct --quiet --filter none) ;;
-      dds) cmd=("$DYG" run ds40 --config "$CFG" --out ro/o_$mode --quiet --filter none --domain 232) ;;
+      dds) cmd=("$DYG" run ds40 --config "$CFG" --out ro/o_$mode --quiet --filter none --domain 196) ;;
       map) cmd=("$DYG" map ds40 --config "$CFG" --out ro/o_$mode --quiet --filter none) ;;
     esac
     mount -o remount,rw ro
@@ -450,7 +454,7 @@ if family disk; then
   for mode in direct dds map; do
     case $mode in
       direct) cmd=("$DYG" run ds40 --config "$CFG" --out gone/o_$mode --direct --quiet --filter none) ;;
-      dds) cmd=("$DYG" run ds40 --config "$CFG" --out gone/o_$mode --quiet --filter none --domain 232) ;;
+      dds) cmd=("$DYG" run ds40 --config "$CFG" --out gone/o_$mode --quiet --filter none --domain 196) ;;
       map) cmd=("$DYG" map ds40 --config "$CFG" --out gone/o_$mode --quiet --filter none) ;;
     esac
     "${cmd[@]}" >"logs/d_gone_$mode.out" 2>"logs/d_gone_$mode.err" &
@@ -466,11 +470,11 @@ fi
 if family dds; then
   echo "== a second player on the run's partition"
   small ds_other 40
-  "$DYG" run ds40 --config "$CFG" --out o_p_run --quiet --domain 230 --partition fresh_p --filter none \
+  "$DYG" run ds40 --config "$CFG" --out o_p_run --quiet --domain 194 --partition fresh_p --filter none \
     >logs/p_run.out 2>logs/p_run.err &
   runpid=$!
   sleep 1.5
-  timeout -s KILL 90 "$DYG" component player --dataset ds_other --config "$CFG" --domain 230 \
+  timeout -s KILL 90 "$DYG" component player --dataset ds_other --config "$CFG" --domain 194 \
     --partition fresh_p >logs/p_player.out 2>logs/p_player.err &
   playerpid=$!
   wait $runpid; rc=$?

@@ -1,0 +1,26 @@
+// Upper bounds of settings values that the options' own Check() leaves open (finite, >= 0, ...):
+// the issue 20 final re-probe set every key to 1e20, and 18 keys took it without a word
+// (LoopClosing.ransac_threshold_px: every loop candidate point an inlier, DynamicFilter.C1,
+// OctoMap.voxel_filter_size, ...). The bounds are far beyond any useful value (pixels: the
+// largest image side; metres: a kilometre or more): only absurd values are refused.
+#pragma once
+
+#include <sstream>
+#include <string>
+
+#include "core/config/config_reader.h"
+
+namespace dygslam {
+
+// Fails (InputError "<file>:<line>: key '<section.key>': ...") when `key` is in the file and
+// `value` (as read) is above `max`; `unit` follows the bound in the message ("px", "m", "").
+inline void CheckSettingAtMost(const ConfigReader& section, const std::string& key, double value,
+                               double max, const std::string& unit) {
+  if (!section.Has(key) || value <= max) return;
+  std::ostringstream message;
+  message << "implausible value " << value << " (expected at most " << max
+          << (unit.empty() ? "" : " ") << unit << ")";
+  section.Fail(key, message.str());
+}
+
+}  // namespace dygslam

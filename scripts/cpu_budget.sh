@@ -13,11 +13,20 @@
 #   scripts/cpu_budget.sh build DATA 3 out/cpu main=full,build=/work/main/build full=full
 #   scripts/cpu_budget.sh build ../shared/data/bonn_crowd_part 3 out/cpu none=none full=full \
 #       full_k3=full,Detector.every_n_frames=3
+# A part `env:VAR=VALUE` sets an environment variable for that configuration's runs (e.g.
+# env:OPENCV_FOR_THREADS_NUM=1 or env:GLIBC_TUNABLES=glibc.malloc.trim_threshold=67108864).
+# CPU_BUDGET_CASE=robot runs BUILD/tests/cpu_per_frame_benchmark (one run per round) instead of
+# `dygslam run`: the frames decoded beforehand, the System's CPU only (the robot case); the table
+# then also gives each configuration's CPU per round as a ratio of the first configuration's.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 build=$1 dataset=$2 runs=$3 out=$4
 shift 4
-bin=$build/apps/dygslam
+case_=${CPU_BUDGET_CASE:-dataset}
+[[ $case_ == dataset || $case_ == robot ]] || { echo "cpu_budget.sh: CPU_BUDGET_CASE must be dataset or robot" >&2; exit 2; }
+tool=apps/dygslam
+[ "$case_" = robot ] && tool=tests/cpu_per_frame_benchmark
+bin=$build/$tool
 [ -x "$bin" ] || { echo "cpu_budget.sh: $bin not built" >&2; exit 1; }
 args=${CPU_BUDGET_ARGS:---direct --no-map}
 mkdir -p "$out"
@@ -29,10 +38,13 @@ for spec in "$@"; do
   cfg=$out/$name.yaml
   keys=()
   echo "$bin" > "$out/$name.bin"
+  : > "$out/$name.env"
   for part in "${parts[@]:1}"; do
     if [[ $part == build=* ]]; then
-      echo "${part#build=}/apps/dygslam" > "$out/$name.bin"
+      echo "${part#build=}/$tool" > "$out/$name.bin"
       [ -x "$(cat "$out/$name.bin")" ] || { echo "cpu_budget.sh: $(cat "$out/$name.bin") not built" >&2; exit 1; }
+    elif [[ $part == env:*=* ]]; then
+      echo "${part#env:}" >> "$out/$name.env"
     else
       keys+=("$part")
     fi
@@ -68,23 +80,54 @@ PY
   echo "$filter" > "$out/$name.filter"
   names+=("$name")
 done
-echo "cpu_budget: $runs rounds of ${names[*]}, args '$args', $(nproc) cores, load at start: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "cpu_budget: $runs rounds of ${names[*]}, $case_ case, args '$args', $(nproc) cores, load at start: $(cut -d' ' -f1-3 /proc/loadavg)"
 for r in $(seq 1 "$runs"); do
   for name in "${names[@]}"; do
     dir=$out/$name-$r
     rm -rf "$dir"
+    envs=()
+    mapfile -t envs < "$out/$name.env"
+    if [ "$case_" = robot ]; then
+      env ${envs[@]+"${envs[@]}"} "$(cat "$out/$name.bin")" "$dataset" --filter "$(cat "$out/$name.filter")" \
+        --config "$out/$name.yaml" --runs 1 > "$dir.log" 2>&1 || { echo "run $name-$r failed:" >&2; tail -n 20 "$dir.log" >&2; exit 1; }
+      echo "  $name run $r: $(grep '^| 1 |' "$dir.log")"
+      continue
+    fi
     # shellcheck disable=SC2086
     unshare -n bash -c 'ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo && exec "$@"' cpu \
-      /usr/bin/time -f "cpu_s %U %S wall_s %e" "$(cat "$out/$name.bin")" run "$dataset" --filter "$(cat "$out/$name.filter")" \
+      env ${envs[@]+"${envs[@]}"} /usr/bin/time -f "cpu_s %U %S wall_s %e" "$(cat "$out/$name.bin")" run "$dataset" --filter "$(cat "$out/$name.filter")" \
       --config "$out/$name.yaml" --out "$dir" ${DYGSLAM_DOMAIN_ID:+--domain $DYGSLAM_DOMAIN_ID} $args \
       > "$dir.log" 2>&1 || { echo "run $name-$r failed:" >&2; tail -n 20 "$dir.log" >&2; exit 1; }
     echo "  $name run $r: $(grep -o '[0-9.]* fps' "$dir.log" | head -1), $(grep -o 'ATE RMSE [0-9.]* m' "$dir.log" | head -1), $(grep -a 'cpu_s' "$dir.log")"
   done
 done
 echo "load at end: $(cut -d' ' -f1-3 /proc/loadavg)"
-python3 - "$out" "$runs" "${names[@]}" <<'PY'
+python3 - "$out" "$runs" "$case_" "${names[@]}" <<'PY'
 import re, statistics as st, sys
-out, runs, names = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
+out, runs, case, names = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4:]
+if case == "robot":
+    # Row of cpu_per_frame_benchmark: | run | frames | decode | System | sum | wall s | ATE | poses |
+    rows = {}
+    for name in names:
+        rows[name] = []
+        for r in range(1, runs + 1):
+            line = next(l for l in open(f"{out}/{name}-{r}.log", errors="replace") if l.startswith("| 1 |"))
+            f = [c.strip() for c in line.strip().strip("|").split("|")]
+            rows[name].append({"frames": int(f[1]), "decode": float(f[2]), "cpu": float(f[3]),
+                               "fps": int(f[1]) / float(f[5]), "ate": float(f[6]),
+                               "poses": f[7] if len(f) > 7 else "?"})
+    base = rows[names[0]]
+    print(f"| configuration | System CPU ms per frame (median, min-max) | x {names[0]}, per round | "
+          "feed frames/s (median) | decode CPU ms/frame | ATE RMSE m (median, min-max) | poses |")
+    print("|---|---|---|---|---|---|---|")
+    for name in names:
+        v = rows[name]
+        cpu = [x["cpu"] for x in v]; ate = [x["ate"] for x in v]
+        ratio = " / ".join(f"{x['cpu'] / b['cpu']:.2f}" for x, b in zip(v, base))
+        print(f"| {name} | {st.median(cpu):.1f} ({min(cpu):.1f}-{max(cpu):.1f}) | {ratio} | "
+              f"{st.median(x['fps'] for x in v):.1f} | {st.median(x['decode'] for x in v):.1f} | "
+              f"{st.median(ate):.4f} ({min(ate):.4f}-{max(ate):.4f}) | {', '.join(x['poses'] for x in v)} |")
+    sys.exit(0)
 print("| configuration | CPU ms per frame (median, min-max) | frames/s (median) | ATE RMSE m (median, min-max) |")
 print("|---|---|---|---|")
 for name in names:

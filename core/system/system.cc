@@ -339,7 +339,8 @@ struct SystemImpl::PreparedFrame {
   // Boxes given with the frame, found by the own detector or carried from its last frame;
   // nullopt: none (the filter mode needs none, or none were given).
   std::optional<std::vector<Detection>> detections;
-  bool propagate_boxes = false;  // own detector on every n-th frame: carry boxes in between
+  bool propagate_boxes = false;       // own detector on every n-th frame: carry boxes in between
+  bool own_detector_skipped = false;  // the own detector skipped this frame: boxes carried
 
   const std::vector<Detection>& boxes() const { return detections ? *detections : kNoDetections; }
 };
@@ -428,6 +429,7 @@ SystemImpl::PreparedFrame SystemImpl::Prepare(const RgbdFrame& frame, bool carry
   } else if (own_detector || (need_detections && carry_boxes)) {
     prepared.detections = boxes_.Predict();
     result->detections_carried = true;
+    prepared.own_detector_skipped = own_detector;
   } else {
     prepared.detections = frame.detections;
     // Given from outside: the boxes the next skipped frames carry.
@@ -567,12 +569,20 @@ void SystemImpl::EmitKeyframe(const std::shared_ptr<KeyFrame>& keyframe,
     data.world_from_cam = *result->world_from_cam;
     data.rgb = input.rgb;
     data.depth = prepared.depth_m;
+    // A keyframe on a frame the own detector skipped: its mask for the map from the detector's
+    // own boxes on this frame (carried boxes fit the people less well; tracking keeps using the
+    // carried ones, so the trajectory does not depend on whether a map is built).
+    std::optional<std::vector<Detection>> boxes = prepared.detections;
+    if (prepared.own_detector_skipped && options_.detect_skipped_keyframes) {
+      EnsureDetector();
+      boxes = detection_worker_->Submit(input.rgb).result.get();
+    }
     data.dynamic_mask =
-        ComputeDynamicMask(input.rgb.size(), prepared.depth_m, prepared.boxes(),
+        ComputeDynamicMask(input.rgb.size(), prepared.depth_m, boxes ? *boxes : kNoDetections,
                            prepared.features.keypoints, filtered.dynamic, options_.dynamic_mask);
     data.keypoints = prepared.features.keypoints;
     data.keypoint_dynamic = filtered.dynamic;
-    if (prepared.detections) data.detections = *prepared.detections;
+    if (boxes) data.detections = *boxes;
     cb(data);
   }
   const auto t_map = std::chrono::steady_clock::now();

@@ -92,6 +92,11 @@ struct SystemOptions {
   // issue 19. Detections given to FeedRgbdFrame from outside are used as given (and carried to
   // FeedRgbdFrameCarryingBoxes).
   int detection_every_n_frames = 1;
+  // detection_every_n_frames > 1 and a keyframe callback set (a map is built): a keyframe made on
+  // a frame the internal detector skipped gets its dynamic mask (KeyframeData) from the detector
+  // run on that frame then, not from the carried boxes (tracking keeps the carried boxes). Costs
+  // one detection per such keyframe; false: the carried boxes.
+  bool detect_skipped_keyframes = true;
   BoxPropagationOptions box_propagation;
   // Crowded frames: when fewer than this share of nFeatures survive the filter, features are
   // extracted again outside the detection boxes (budget = the shortfall) so tracking keeps a

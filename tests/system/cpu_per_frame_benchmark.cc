@@ -10,7 +10,8 @@
 //                           [--deterministic]
 //
 // Prints per run: frames, decode CPU ms per frame, System CPU ms per frame, their sum, wall
-// seconds of the feed, ATE RMSE (all frames) when the dataset has a ground truth; then medians.
+// seconds of the feed, ATE RMSE (all frames) when the dataset has a ground truth, and the number
+// of frames with a pose (the ATE is over these); then medians.
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -98,8 +99,8 @@ int main(int argc, char** argv) {
     std::vector<double> decode_ms, system_ms, total_ms, ate_m;
     std::printf(
         "| run | frames | decode CPU ms/frame | System CPU ms/frame | sum | feed wall s | ATE RMSE "
-        "m |\n");
-    std::printf("|---|---|---|---|---|---|---|\n");
+        "m | poses |\n");
+    std::printf("|---|---|---|---|---|---|---|---|\n");
     for (int run = 0; run < runs; ++run) {
       std::vector<DecodedFrame> frames;
       const double decode_start = ProcessCpuSeconds();
@@ -130,16 +131,17 @@ int main(int argc, char** argv) {
       system_ms.push_back(feed_s * 1e3 / n);
       total_ms.push_back((decode_s + feed_s) * 1e3 / n);
       double ate = -1;
+      const std::vector<StampedPose> trajectory = system.Trajectory();
       if (dataset.has_groundtruth()) {
-        ate = ComputeAte(ReadTumTrajectory(dataset.groundtruth_path()), system.Trajectory())
-                  .error.rmse;
+        ate = ComputeAte(ReadTumTrajectory(dataset.groundtruth_path()), trajectory).error.rmse;
         ate_m.push_back(ate);
       }
-      std::printf("| %d | %zu | %.1f | %.1f | %.1f | %.1f | %.4f |\n", run + 1, frames.size(),
-                  decode_ms.back(), system_ms.back(), total_ms.back(), wall_s, ate);
+      std::printf("| %d | %zu | %.1f | %.1f | %.1f | %.1f | %.4f | %zu/%zu |\n", run + 1,
+                  frames.size(), decode_ms.back(), system_ms.back(), total_ms.back(), wall_s, ate,
+                  trajectory.size(), frames.size());
       std::fflush(stdout);
     }
-    std::printf("| median | | %.1f | %.1f | %.1f | | %.4f |\n", Median(decode_ms),
+    std::printf("| median | | %.1f | %.1f | %.1f | | %.4f | |\n", Median(decode_ms),
                 Median(system_ms), Median(total_ms), Median(ate_m));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "cpu_per_frame_benchmark: %s\n", e.what());

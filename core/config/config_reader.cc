@@ -405,7 +405,20 @@ ConfigReader ConfigReader::Section(const std::string& name) const {
   return ConfigReader(impl_, full);
 }
 
+namespace {
+thread_local KeyLookupRecorder* current_recorder = nullptr;
+}  // namespace
+
+KeyLookupRecorder::KeyLookupRecorder() : previous_(current_recorder) { current_recorder = this; }
+
+KeyLookupRecorder::~KeyLookupRecorder() { current_recorder = previous_; }
+
+void KeyLookupRecorder::Record(const std::string& full_key) {
+  if (current_recorder) current_recorder->keys_.insert(full_key);
+}
+
 bool ConfigReader::Has(const std::string& key) const {
+  KeyLookupRecorder::Record(FullKey(key));
   const Hit h = ConfigLookup::Find(impl_->path, impl_->root, FullKey(key));
   return h.line > 0 && !h.value.IsNull();
 }
@@ -752,6 +765,7 @@ void ConfigReader::FailInvalidOptions(const InvalidOptions& e) const {
 template <typename T>
 bool ConfigReader::ReadIfPresent(const std::string& key, T* value) const {
   const std::string full = FullKey(key);
+  KeyLookupRecorder::Record(full);
   const Hit h = ConfigLookup::Find(impl_->path, impl_->root, full);
   if (h.line <= 0 || h.value.IsNull()) return false;
   const auto fail = [&](const std::string& m) -> void {

@@ -25,6 +25,7 @@
 #pragma once
 
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -109,5 +110,24 @@ class ConfigReader {
 //     == "nFeatures > 0 and nFeatures <= 100000"
 std::string UserCondition(const std::string& condition, const std::string& key,
                           const std::vector<std::string>& known_keys);
+
+// Testing aid: while a KeyLookupRecorder lives on a thread, every key that thread reads through a
+// ConfigReader (Has, Get, Require, ReadIfPresent; fully dotted) is recorded, present in the file or
+// not. Lets a test check that every key some module reads is in KnownSettingsKeys() (otherwise a
+// key that works would be warned about as unknown). Recorders nest (the innermost records).
+class KeyLookupRecorder {
+ public:
+  KeyLookupRecorder();
+  ~KeyLookupRecorder();
+  KeyLookupRecorder(const KeyLookupRecorder&) = delete;
+  KeyLookupRecorder& operator=(const KeyLookupRecorder&) = delete;
+  const std::set<std::string>& keys() const { return keys_; }
+  // Called by ConfigReader; records into the thread's current recorder, if any.
+  static void Record(const std::string& full_key);
+
+ private:
+  std::set<std::string> keys_;
+  KeyLookupRecorder* previous_;
+};
 
 }  // namespace dygslam

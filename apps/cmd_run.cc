@@ -189,6 +189,8 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
         "%d loops dropped (map changed), %d global BA skipped (small correction)\n",
         lc.detect_ms_total, lc.check_ms_total, lc.check_locked_ms_total, lc.loops_dropped,
         lc.global_ba_skipped);
+    if (const std::string line = LoopRejectionSummary(lc); !line.empty())
+      std::printf("%s\n", line.c_str());
     for (const auto& [frame, loop_frame] : lc.loop_frames)
       std::printf("loop: frame %lld closed with frame %lld\n", static_cast<long long>(frame),
                   static_cast<long long>(loop_frame));

@@ -7,7 +7,10 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <map>
+#include <sstream>
+#include <string>
 
 #include "core/base/log.h"
 #include "core/slam/cost_functions.h"
@@ -186,21 +189,35 @@ int RefineLoopPose(const KeyFrame& kf, const OptimizerOptions& optimizer,
   return inliers;
 }
 
-// Length of the path of the keyframe centres from keyframe `from` to keyframe `to` (ids in map
-// order; culled keyframes are skipped). The caller holds Map::mutex().
-double KeyFramePathLength(const Map& map, int64_t from, int64_t to) {
-  double length = 0;
-  const KeyFrame* previous = nullptr;
-  for (auto it = map.keyframes().lower_bound(from); it != map.keyframes().end() && it->first <= to;
-       ++it) {
-    if (it->second->bad) continue;
-    if (previous) length += (it->second->CameraCenter() - previous->CameraCenter()).norm();
-    previous = it->second.get();
+// Length of the path of the keyframe centres from each keyframe id in [from, to] to keyframe
+// `to` (ids in creation order), culled keyframes included at their resolved pose: skipping them
+// would cut the corners of the path (on the there-and-back sequence, 1.39 m instead of ~1.9 m
+// at the return). Ids that were never made (a loaded map may have gaps) are absent. The caller
+// holds Map::mutex().
+std::map<int64_t, double> KeyFramePathLengths(const Map& map, int64_t from, int64_t to) {
+  std::vector<std::pair<int64_t, Eigen::Vector3d>> centers;
+  for (int64_t id = std::max<int64_t>(from, 0); id <= to; ++id) {
+    if (const auto active = map.keyframes().find(id); active != map.keyframes().end())
+      centers.emplace_back(id, active->second->CameraCenter());
+    else if (map.IsCulled(id))
+      centers.emplace_back(id, map.ResolvedPose(id).Inverse().translation);
   }
-  return length;
+  std::map<int64_t, double> lengths;
+  double length = 0;
+  for (size_t k = centers.size(); k-- > 0;) {
+    if (k + 1 < centers.size()) length += (centers[k + 1].second - centers[k].second).norm();
+    lengths[centers[k].first] = length;
+  }
+  return lengths;
 }
 
 }  // namespace
+
+double KeyFramePathLength(const Map& map, int64_t from, int64_t to) {
+  const auto lengths = KeyFramePathLengths(map, from, to);
+  const auto it = lengths.find(from);
+  return it == lengths.end() ? 0.0 : it->second;
+}
 
 // What the geometric checks read of the map state, copied under the map lock: keyframe poses,
 // which feature has which map point, and the points' positions, descriptors and viewing data.
@@ -249,6 +266,30 @@ struct LoopCloser::Snapshot {
     }
   }
 };
+
+std::string LoopRejectionSummary(const LoopClosingStats& stats) {
+  const LoopVerification* strongest = nullptr;
+  for (const LoopVerification& v : stats.verifications) {
+    if (std::string(v.verdict) == "accepted") continue;
+    if (!strongest || v.inliers > strongest->inliers ||
+        (v.inliers == strongest->inliers && v.bow_pairs > strongest->bow_pairs))
+      strongest = &v;
+  }
+  if (!strongest) return "";
+  char line[512];
+  std::snprintf(
+      line, sizeof(line),
+      "loop rejections: %d BoW matches, %d inliers, %d inlier ratio, %d guided matches, "
+      "%d implausible correction; strongest: frame %lld vs frame %lld: %d / %d inliers, "
+      "%d matches, correction %.3f m / %.2f deg (budget %.3f m / %.2f deg over %.2f m): "
+      "%s",
+      stats.rejected_bow, stats.rejected_inliers, stats.rejected_ratio, stats.rejected_projection,
+      stats.rejected_implausible, static_cast<long long>(strongest->frame_id),
+      static_cast<long long>(strongest->loop_frame_id), strongest->inliers, strongest->bow_pairs,
+      strongest->projected, strongest->correction_m, strongest->correction_deg,
+      strongest->allowed_m, strongest->allowed_deg, strongest->path_m, strongest->verdict);
+  return line;
+}
 
 LoopCloser::LoopCloser(std::shared_ptr<Map> map, std::shared_ptr<KeyFrameDatabase> database,
                        const LoopClosingOptions& options, const OptimizerOptions& optimizer,
@@ -368,10 +409,19 @@ std::vector<std::shared_ptr<KeyFrame>> LoopCloser::DetectLoop(const std::shared_
       if (n && !n->bad && !n->bow_vector.empty()) covisibles.push_back(n);
     }
     for (const auto& [id, k] : map_->keyframes()) active.insert(id);
+    int64_t oldest = kf->id;
     for (const auto& [id, w] : kf->connection_weights) {
       connected.insert(id);
       if (options_.revisit_min_path_m > 0 && id <= kf->id - options_.min_keyframe_gap)
-        revisit_path[id] = KeyFramePathLength(*map_, id, kf->id);
+        oldest = std::min(oldest, id);
+    }
+    if (oldest < kf->id) {
+      const auto lengths = KeyFramePathLengths(*map_, oldest, kf->id);
+      for (int64_t id : connected) {
+        const auto it = lengths.find(id);
+        if (id <= kf->id - options_.min_keyframe_gap && it != lengths.end())
+          revisit_path[id] = it->second;
+      }
     }
   }
   // The keyframe's worst covisible neighbour sets the bar.
@@ -389,12 +439,23 @@ std::vector<std::shared_ptr<KeyFrame>> LoopCloser::DetectLoop(const std::shared_
         // (already joined by local BA, nothing to correct). An old keyframe that became
         // covisible again after a long way round is the place revisited, tracked without losing
         // the map (there and back): it stays a candidate, so the revisit is closed as a loop.
-        return options_.revisit_min_path_m <= 0 ||
-               revisit_path.at(id) < options_.revisit_min_path_m;
+        const auto path = revisit_path.find(id);
+        return options_.revisit_min_path_m <= 0 || path == revisit_path.end() ||
+               path->second < options_.revisit_min_path_m;
       },
       options_.place);
   std::lock_guard<std::mutex> lock(map_->mutex());
   const auto candidates = GroupPlaceCandidates(*map_, found, options_.place);
+  if (GetLogLevel() <= LogLevel::kDebug) {
+    std::ostringstream line;
+    line << "loop detection: keyframe " << kf->id << " (frame " << kf->frame_id << "), bar "
+         << min_score << ", " << found.size() << " found, " << candidates.size()
+         << " after grouping; old covisible:";
+    for (const auto& [id, path] : revisit_path) line << " " << id << " (" << path << " m)";
+    line << "; grouped:";
+    for (const auto& c : candidates) line << " " << c->id << " (frame " << c->frame_id << ")";
+    LOG_DEBUG << line.str();
+  }
   if (candidates.empty()) {
     consistent_groups_.clear();
     return {};
@@ -493,7 +554,25 @@ bool LoopCloser::ComputeTransform(Snapshot* snapshot, Loop* loop) {
     const KeyFrame& c = *candidate.kf;
     // (current feature, candidate feature), both with a map point.
     const auto bow = matcher_.SearchByBow(kf, current.usable, c, candidate.usable, 0.75);
-    if (static_cast<int>(bow.size()) < options_.min_bow_matches) continue;
+    // Too few correspondences to try: recorded too (the first check a candidate can fail).
+    auto too_few_matches = [&](size_t found) {
+      LoopVerification v;
+      v.frame_id = kf.frame_id;
+      v.loop_frame_id = c.frame_id;
+      v.bow_pairs = static_cast<int>(found);
+      v.path_m = candidate.path_m;
+      v.verdict = "BoW matches";
+      LOG_DEBUG << "loop closing: keyframe " << kf.id << " (frame " << kf.frame_id << ") vs "
+                << c.id << " (frame " << c.frame_id << "): rejected (BoW matches): " << found
+                << " of " << options_.min_bow_matches;
+      std::lock_guard<std::mutex> stats_lock(stats_mutex_);
+      stats_.rejected_bow++;
+      stats_.verifications.push_back(v);
+    };
+    if (static_cast<int>(bow.size()) < options_.min_bow_matches) {
+      too_few_matches(bow.size());
+      continue;
+    }
     std::vector<int> matched(kf.size(), -1);  // candidate feature per current feature
     for (const auto& [i1, i2] : bow) matched[i1] = i2;
     // Correspondences in each camera's frame.
@@ -512,7 +591,10 @@ bool LoopCloser::ComputeTransform(Snapshot* snapshot, Loop* loop) {
                        current.cam_from_world * points[mp].position,
                        candidate.cam_from_world * points[lp].position, lp});
     }
-    if (static_cast<int>(pairs.size()) < options_.min_bow_matches) continue;
+    if (static_cast<int>(pairs.size()) < options_.min_bow_matches) {
+      too_few_matches(pairs.size());
+      continue;
+    }
     auto count_inliers = [&](const Rigid3d& t12, std::vector<uint8_t>* flags) {
       const Rigid3d t21 = t12.Inverse();
       int n = 0;

@@ -24,6 +24,7 @@
 #include <memory>
 #include <mutex>
 #include <set>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -50,8 +51,10 @@ struct LoopClosingStats {
   int keyframes_checked = 0;
   int candidates_detected = 0;  // consistent candidates (before geometry)
   int loops_rejected = 0;       // keyframes whose candidates all failed the geometric checks
-  // Candidates rejected, by check (first failed): too few inliers after refinement, inlier ratio,
-  // guided-search matches, correction larger than the drift budget.
+  // Candidates rejected, by check (first failed): too few BoW matches between map points, too
+  // few inliers after refinement, inlier ratio, guided-search matches, correction larger than the
+  // drift budget.
+  int rejected_bow = 0;
   int rejected_inliers = 0, rejected_ratio = 0, rejected_projection = 0, rejected_implausible = 0;
   std::vector<LoopVerification> verifications;
   int loops_closed = 0;
@@ -76,6 +79,17 @@ struct LoopClosingStats {
   std::vector<std::pair<int64_t, int64_t>> loops;        // (keyframe id, loop keyframe id)
   std::vector<std::pair<int64_t, int64_t>> loop_frames;  // (frame id, loop keyframe's frame id)
 };
+
+// Keyframe path from keyframe `from` to keyframe `to`: the summed distances between the centres
+// of the keyframes made in between, in creation order, culled keyframes included at their
+// resolved pose (0 if `from` was never made). Locks nothing: the caller holds Map::mutex().
+double KeyFramePathLength(const Map& map, int64_t from, int64_t to);
+
+// One line for run summaries: the candidates rejected by each geometric check and the strongest
+// rejected one (most inliers), e.g. "loop rejections: 3 BoW matches, 2 inliers, ...; strongest:
+// frame 587 vs frame 0: 35 / 60 inliers, 0 matches, correction ... (inliers)". Empty when no
+// candidate was verified.
+std::string LoopRejectionSummary(const LoopClosingStats& stats);
 
 class LoopCloser {
  public:

@@ -166,6 +166,7 @@ class Map {
   void SetBad(const std::shared_ptr<KeyFrame>& kf);
   // cam_from_world of any keyframe ever created (culled ones via their parent chain).
   Rigid3d ResolvedPose(int64_t kf_id) const;
+  bool IsCulled(int64_t kf_id) const { return culled_.count(kf_id) > 0; }
   // Changes whenever a loop correction or global bundle adjustment moved the whole map: an
   // optimisation that copied poses before must not write them back (they are stale).
   int64_t CorrectionEpoch() const { return correction_epoch_.load(); }

@@ -304,6 +304,9 @@ int main(int argc, char** argv) {
         "keyframes whose candidates all failed the geometry), %d global BAs (%d discarded)\n",
         lc.loops_closed, soak_loops_closed.size(), loop, lc.candidates_detected, lc.loops_rejected,
         lc.global_ba_runs, lc.global_ba_discarded);
+    std::printf("loop closing: %d keyframes checked\n", lc.keyframes_checked);
+    if (const std::string line = LoopRejectionSummary(lc); !line.empty())
+      std::printf("%s\n", line.c_str());
     for (size_t k = 0; k < lc.loop_frames.size(); ++k) {
       if (k == 40) {
         std::printf("  ... %zu more\n", lc.loop_frames.size() - k);

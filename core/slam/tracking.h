@@ -32,8 +32,10 @@ struct TrackingOptions {
   int local_keyframes_max = 80;
   // Localization mode: the local map is the keyframe sharing the most of the frame's matched
   // points plus its best covisible keyframes, this many keyframes in all (the mapping run's local
-  // map, every keyframe observing a matched point, mixes points of other times and drift).
-  int localization_local_keyframes = 2;
+  // map, every keyframe observing a matched point, mixes points of other times and drift). 4:
+  // best measured on bonn_crowd_part after the session-7 merges (deterministic final ATE 1/2/3/4/6
+  // keyframes: 0.0226/0.0159/0.0154/0.0149/0.0150 m; BENCHMARKS.md, SLAM map files).
+  int localization_local_keyframes = 4;
   int relocalization_candidates = 5;
   // The keyframe decision's "tracked close points" include the motion model's temporary points
   // (made from the last frame's depth). true: measured better on bonn_crowd_part (threaded median

@@ -91,17 +91,16 @@ TEST(MapFileBonn, MapThenLocalizeThenExtend) {
   // Localization adds nothing to the map.
   EXPECT_EQ(localization.sizes.keyframes, mapping.sizes.keyframes);
   EXPECT_EQ(localization.sizes.map_points, mapping.sizes.map_points);
-  // The acceptance: localization final ATE <= the mapping run's. Deterministic, localizing
-  // against the reference keyframe and its best covisible (Tracking.localization_local_keyframes):
-  // 0.0140 m final against the mapping run's 0.0146 m (0.96x) and 0.0150 m per frame against
-  // 0.0151 m (0.99x); with every keyframe that sees a matched point (the mapping run's local map)
-  // it was 0.0157 / 0.0169 m (1.08x / 1.12x). After the session-7 merges (loop closing on,
-  // keyframe map-inlier floor, round-3 labels) the same setting gives 0.0159 m final against
-  // 0.0143 m (1.11x; local keyframes 1/3/4/6: 0.0226/0.0154/0.0149/0.0150 m) and 0.0180 per frame
-  // against 0.0180 m: the acceptance (final <= mapping) is not met on main; asserted is what holds,
-  // with a margin: final <= 1.15x, per frame <= 1.05x.
-  EXPECT_LE(ate_localization, 1.15 * ate_mapping);
-  EXPECT_LE(online_localization, 1.05 * online_mapping);
+  // The acceptance: localization ATE <= the mapping run's. On the maps branch of session 7
+  // (2 local keyframes) it held final and per frame (0.96x / 0.99x); after the session-7 merges
+  // (loop closing on, keyframe map-inlier floor, round-3 labels) 4 local keyframes is the best
+  // setting (Tracking.localization_local_keyframes; deterministic, final / per frame: mapping
+  // 0.0143 / 0.0180 m, localization K=4 0.0149 / 0.0169 m, K=2 0.0159 / 0.0180, K=3 0.0154 /
+  // 0.0175, K=6 0.0150 / 0.0177). Per frame (what a robot gets at each frame) it holds: 0.94x,
+  // asserted <= 1.0x. Against the mapping run's final, BA-refined trajectory it is 1.04x (not
+  // met); asserted <= 1.10x, above the K=3..6 spread (1.04-1.08x).
+  EXPECT_LE(ate_localization, 1.10 * ate_mapping);
+  EXPECT_LE(online_localization, online_mapping);
   // A localization run's map does not move: its final trajectory differs from the per-frame one
   // only where a fallback stretch was re-anchored when features returned (the stretch and the
   // weakly held feature frames just before it; measured 22 frames: 19 fallback + 3 before them).

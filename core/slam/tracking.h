@@ -91,6 +91,11 @@ struct TrackingOptions {
     place.Check();
     optimizer.Check();
     matcher.Check();
+    // The two fields of `fallback` the settings file sets (Tracking.fallback_*), named as there.
+    DYGSLAM_CHECK_OPTION(fallback.min_inlier_fraction > 0 && fallback.min_inlier_fraction <= 1,
+                         "Tracking.fallback_min_inlier_fraction");
+    DYGSLAM_CHECK_OPTION(fallback.min_inliers >= 1 && fallback.min_inliers <= 10000000,
+                         "Tracking.fallback_min_inliers");
     fallback.Check();
     DYGSLAM_CHECK_OPTION(fallback_check_below_inliers >= 0,
                          "Tracking.fallback_check_below_inliers");

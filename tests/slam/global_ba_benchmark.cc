@@ -18,13 +18,13 @@
 #include <vector>
 
 #include "core/base/log.h"
-#include "core/base/number_option.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
 #include "run/dataset_runner.h"
 #include "run/run_settings.h"
+#include "tests/support/benchmark_args.h"
 
 namespace {
 using namespace dygslam;
@@ -55,27 +55,13 @@ int Usage() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) return Usage();
-  std::string dataset_dir = argv[1], config, filter = "none";
-  int runs = 1;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (i + 1 >= argc) return Usage();
-    const std::string v = argv[++i];
-    if (a == "--config")
-      config = v;
-    else if (a == "--filter")
-      filter = v;
-    else if (a == "--runs") {
-      try {  // the project's number parser: a clear usage error, not an uncaught std::stoi throw
-        runs = static_cast<int>(IntegerOption("runs", v, 1, 1000));
-      } catch (const std::exception& e) {
-        std::cerr << e.what() << "\n";
-        return 2;
-      }
-    } else
-      return Usage();
-  }
+  BenchmarkArgs args;
+  args.filter = "none";
+  if (!ParseBenchmarkArgs(argc, argv, /*allow_deterministic=*/false, &args)) return Usage();
+  const std::string& dataset_dir = args.dataset_dir;
+  const std::string& config = args.config;
+  const std::string& filter = args.filter;
+  const int runs = args.runs;
   try {
     SetLogLevel(LogLevel::kWarning);
     RunSettingsRequest request;

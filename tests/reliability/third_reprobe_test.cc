@@ -18,6 +18,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -232,6 +233,66 @@ TEST(ThirdReprobe, TruncatedOctoMapIsAnError) {
     ADD_FAILURE() << "accepted";
   } catch (const InputError& e) {
     EXPECT_TRUE(Contains(e.what(), "# Octo\\x00map junk")) << e.what();
+  }
+}
+
+// A crafted OctoMap whose nodes nest a million levels deep (each node's only child is the next
+// node; OctoMap's trees have 16 levels): OctoMap's readers recurse once per level and overflowed
+// the stack (SIGSEGV). Now an error naming the file and the depth, for .ot and .bt; a valid map
+// of the full 16 levels still reads.
+TEST(ThirdReprobe, DeeplyNestedOctoMapIsAnError) {
+  const fs::path dir = testing::MakeTempDir("third_reprobe_deep");
+  constexpr long long kNodes = 1000000;
+  const std::string ot = (dir / "deep.ot").string(), bt = (dir / "deep.bt").string();
+  {
+    std::ofstream out(ot, std::ios::binary);
+    out << "# Octomap OcTree file\nid OcTree\nsize " << kNodes << "\nres 0.05\ndata\n";
+    std::string record(5, '\0');
+    const float value = 0.5f;
+    std::memcpy(record.data(), &value, sizeof(value));
+    for (long long k = 0; k < kNodes; ++k) {
+      record[4] = k + 1 < kNodes ? '\x01' : '\0';  // child 0 is the next node
+      out << record;
+    }
+  }
+  {
+    std::ofstream out(bt, std::ios::binary);
+    out << "# Octomap OcTree binary file\nid OcTree\nsize " << kNodes << "\nres 0.05\ndata\n";
+    for (long long k = 0; k < kNodes; ++k) {
+      out << (k + 1 < kNodes ? '\x03' : '\x00') << '\0';  // 11: child 0 has children
+    }
+  }
+  for (const std::string& path : {ot, bt}) {
+    try {
+      ReadOctoMap(path);
+      ADD_FAILURE() << path << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_TRUE(Contains(e.what(), path)) << e.what();
+      EXPECT_TRUE(Contains(e.what(), "deeper than the tree's 16 levels")) << e.what();
+    }
+  }
+  // A map with a voxel at the finest level (16 levels, the deepest valid nesting) reads back whole.
+  octomap::OcTree tree(0.05);
+  tree.updateNode(octomap::point3d(0.3f, -0.2f, 1.1f), true);
+  tree.updateNode(octomap::point3d(-1.f, 0.4f, 0.2f), false);
+  const std::string ot_ok = (dir / "ok.ot").string(), bt_ok = (dir / "ok.bt").string();
+  ASSERT_TRUE(tree.write(ot_ok));
+  ASSERT_TRUE(tree.writeBinary(bt_ok));
+  EXPECT_EQ(ReadOctoMap(ot_ok)->size(), tree.size());
+  EXPECT_GT(ReadOctoMap(bt_ok)->size(), 0u);
+  // A node count other than the header's is an error too.
+  std::string bytes = testing::ReadAll(ot_ok);
+  const size_t size_at = bytes.find("size ");
+  ASSERT_NE(size_at, std::string::npos);
+  bytes.replace(size_at, bytes.find('\n', size_at) - size_at, "size 3");
+  const std::string ot_count = (dir / "count.ot").string();
+  std::ofstream(ot_count, std::ios::binary) << bytes;
+  try {
+    ReadOctoMap(ot_count);
+    ADD_FAILURE() << "a wrong node count accepted";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(Contains(e.what(), "truncated or corrupt")) << e.what();
+    EXPECT_TRUE(Contains(e.what(), "declares 3 nodes")) << e.what();
   }
 }
 

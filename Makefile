@@ -17,7 +17,11 @@ CMAKE_ARGS ?=
 DEMO_OUT ?= out/demo
 DYGSLAM := $(BUILD_DIR)/apps/dygslam
 ASAN_BUILD_DIR ?= build-asan
-ASAN_CTEST_ARGS ?=
+# The `memory` label (resident-memory slopes of whole runs) is left out under ASan: its quarantine
+# keeps freed blocks (up to 256 MB) resident by design, so RSS grows until the quarantine is full
+# (reliability/PipelineMemory: 0.33 MB/frame under ASan, 0.15 without, over its 360 frames; LeakSanitizer
+# reports no leak). ASAN_CTEST_ARGS='' runs them too.
+ASAN_CTEST_ARGS ?= -LE memory
 # Extra ctest arguments for `make test` (e.g. CTEST_ARGS='-R ^slam/'). No retries: every test must
 # pass on its first run (scripts/run_tests.sh prints passed / failed / skipped / retried).
 CTEST_ARGS ?=

@@ -217,9 +217,24 @@ void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyF
   std::vector<uint8_t> outlier(observations.size(), 0);
   const double delta_mono = std::sqrt(options.chi2_mono), delta_stereo = std::sqrt(options.chi2_stereo);
   AbortCallback abort_callback(abort);
+  // Cost functions and the two Huber kernels are made once and shared by both solves (the
+  // problems do not own them): only the problem's structure is rebuilt for the second solve.
+  // Residuals are added in the same order as before, so the result is the same.
+  std::vector<std::unique_ptr<ceres::CostFunction>> costs;
+  costs.reserve(observations.size());
+  for (const ObsCopy& o : observations) {
+    if (o.stereo) {
+      costs.emplace_back(new StereoBACost(o.measurement, o.sqrt_info, model));
+    } else {
+      costs.emplace_back(new MonoBACost(o.measurement.head<2>(), o.sqrt_info, model));
+    }
+  }
+  ceres::HuberLoss huber_mono(delta_mono), huber_stereo(delta_stereo);
   auto solve = [&](int iterations, bool robust) {
     ceres::Problem::Options problem_options;
     problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(problem_options);
     PoseManifold manifold;
     for (size_t k = 0; k < observations.size(); ++k) {
@@ -227,11 +242,8 @@ void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyF
       const ObsCopy& o = observations[k];
       double* pose = poses[o.kf_id].data();
       double* point = points[o.point_id].data();
-      ceres::CostFunction* cost =
-          o.stereo ? static_cast<ceres::CostFunction*>(new StereoBACost(o.measurement, o.sqrt_info, model))
-                   : new MonoBACost(o.measurement.head<2>(), o.sqrt_info, model);
-      problem.AddResidualBlock(cost, robust ? new ceres::HuberLoss(o.stereo ? delta_stereo : delta_mono) : nullptr,
-                               pose, point);
+      ceres::LossFunction* loss = robust ? (o.stereo ? &huber_stereo : &huber_mono) : nullptr;
+      problem.AddResidualBlock(costs[k].get(), loss, pose, point);
     }
     for (auto& [id, pose] : poses) {
       if (!problem.HasParameterBlock(pose.data())) continue;

@@ -433,6 +433,8 @@ void CheckOctoMapShape(const std::string& path, std::istream& in, const OctoMapH
     throw InputError(path, 0,
                      "OctoMap file holds a " + EchoValue(header.id) + ", expected an OcTree");
   }
+  // An empty tree ("size 0") has no node data; OctoMap's readers then read none either.
+  if (header.size == 0) return;
   in.clear();
   in.seekg(header.data_at);
   std::vector<char> chunk(1 << 16);

@@ -280,6 +280,12 @@ TEST(ThirdReprobe, DeeplyNestedOctoMapIsAnError) {
   ASSERT_TRUE(tree.writeBinary(bt_ok));
   EXPECT_EQ(ReadOctoMap(ot_ok)->size(), tree.size());
   EXPECT_GT(ReadOctoMap(bt_ok)->size(), 0u);
+  // An empty tree has no node data and reads as empty.
+  const std::string empty = (dir / "empty.bt").string(), empty_ot = (dir / "empty.ot").string();
+  ASSERT_TRUE(octomap::OcTree(0.05).writeBinary(empty));
+  ASSERT_TRUE(octomap::OcTree(0.05).write(empty_ot));
+  EXPECT_EQ(ReadOctoMap(empty)->size(), 0u);
+  EXPECT_EQ(ReadOctoMap(empty_ot)->size(), 0u);
   // A node count other than the header's is an error too.
   std::string bytes = testing::ReadAll(ot_ok);
   const size_t size_at = bytes.find("size ");

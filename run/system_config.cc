@@ -162,6 +162,8 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                      DYGSLAM_SAME_NAME_FIELD(lc, fusion_radius_px),
                      DYGSLAM_SAME_NAME_FIELD(lc, essential_min_weight),
                      DYGSLAM_SAME_NAME_FIELD(lc, pose_graph_iterations),
+                     DYGSLAM_SAME_NAME_FIELD(lc, pose_graph_min_correction_m),
+                     DYGSLAM_SAME_NAME_FIELD(lc, pose_graph_min_correction_deg),
                      DYGSLAM_SAME_NAME_FIELD(lc, global_bundle_adjustment),
                      DYGSLAM_SAME_NAME_FIELD(lc, global_ba_iterations),
                      DYGSLAM_SAME_NAME_FIELD(lc, global_ba_min_correction_m),
@@ -174,6 +176,8 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   CheckSettingAtMost(loops, "max_drift_deg_per_meter", lc.max_drift_deg_per_meter, 360,
                      "degrees per m");
   CheckSettingAtMost(loops, "global_ba_min_correction_m", lc.global_ba_min_correction_m, 10000,
+                     "m");
+  CheckSettingAtMost(loops, "pose_graph_min_correction_m", lc.pose_graph_min_correction_m, 10000,
                      "m");
 
   // DynamicFilter: the paper's parameters (defaults in DynamicFilterOptions).

@@ -180,7 +180,8 @@ const std::vector<std::string>& KnownSettingsKeys() {
       "LoopClosing.fusion_radius_px", "LoopClosing.essential_min_weight",
       "LoopClosing.pose_graph_iterations", "LoopClosing.global_bundle_adjustment",
       "LoopClosing.global_ba_iterations", "LoopClosing.global_ba_min_correction_m",
-      "LoopClosing.global_ba_min_correction_deg",
+      "LoopClosing.global_ba_min_correction_deg", "LoopClosing.pose_graph_min_correction_m",
+      "LoopClosing.pose_graph_min_correction_deg",
       // run/mapping_config.cc.
       "OctoMap.resolution", "OctoMap.max_range", "OctoMap.min_range", "OctoMap.prob_hit",
       "OctoMap.prob_miss", "OctoMap.clamping_min", "OctoMap.clamping_max",

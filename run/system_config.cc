@@ -92,6 +92,7 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
        {"localization_local_keyframes", &options.tracking.localization_local_keyframes},
        {"keyframe_counts_odometry_points", &options.tracking.keyframe_counts_odometry_points},
        {"keyframe_min_map_inliers", &options.tracking.keyframe_min_map_inliers},
+       {"keyframe_weak_inliers", &options.tracking.keyframe_weak_inliers},
        {"keyframe_wait_ms", &options.tracking.keyframe_wait_ms},
        {"handoff_wait_ms", &options.tracking.handoff_wait_ms},
        {"dense_fallback", &options.tracking.dense_fallback},
@@ -100,7 +101,8 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
        {"fallback_check_below_inliers", &options.tracking.fallback_check_below_inliers},
        {"fallback_override_fraction_gain", &options.tracking.fallback_override_fraction_gain},
        {"fallback_smoothing", &options.tracking.fallback_smoothing},
-       {"fallback_smoothing_weak_inliers", &options.tracking.fallback_smoothing_weak_inliers}});
+       {"fallback_smoothing_weak_inliers", &options.tracking.fallback_smoothing_weak_inliers},
+       {"fallback_smoothing_dense_weight", &options.tracking.fallback_smoothing_dense_weight}});
   tracking.CheckOptions(options.tracking);
   const ConfigReader mapping = root.Section("LocalMapping");
   ReadFields(mapping, {{"triangulation_neighbors", &options.local_mapping.triangulation_neighbors},

@@ -78,7 +78,8 @@ TEST(LoopClosingConfig, MissingVocabularyAndBadValuesAreNamed) {
   }
   for (const char* key :
        {"min_inlier_ratio", "max_correction_m", "max_drift_per_meter", "max_correction_deg",
-        "max_drift_deg_per_meter", "global_ba_min_correction_m", "global_ba_min_correction_deg"}) {
+        "max_drift_deg_per_meter", "global_ba_min_correction_m", "global_ba_min_correction_deg",
+        "pose_graph_min_correction_m", "pose_graph_min_correction_deg"}) {
     try {
       Options(std::string("LoopClosing:\n  ") + key + ": -1\n");
       ADD_FAILURE() << "expected InputError for " << key;
@@ -94,7 +95,8 @@ TEST(LoopClosingConfig, AcceptanceKeysAreReadAndKnown) {
       "LoopClosing:\n  min_ransac_inliers: 50\n  min_inlier_ratio: 0.5\n  max_correction_m: 0.2\n"
       "  max_drift_per_meter: 0.05\n  max_correction_deg: 4\n  max_drift_deg_per_meter: 1\n"
       "  revisit_min_path_m: 0\n  global_ba_min_correction_m: 0.05\n"
-      "  global_ba_min_correction_deg: 2\n");
+      "  global_ba_min_correction_deg: 2\n  pose_graph_min_correction_m: 0.03\n"
+      "  pose_graph_min_correction_deg: 0.5\n");
   EXPECT_EQ(o.loop_closing.min_ransac_inliers, 50);
   EXPECT_EQ(o.loop_closing.min_inlier_ratio, 0.5);
   EXPECT_EQ(o.loop_closing.max_correction_m, 0.2);
@@ -104,10 +106,13 @@ TEST(LoopClosingConfig, AcceptanceKeysAreReadAndKnown) {
   EXPECT_EQ(o.loop_closing.revisit_min_path_m, 0);
   EXPECT_EQ(o.loop_closing.global_ba_min_correction_m, 0.05);
   EXPECT_EQ(o.loop_closing.global_ba_min_correction_deg, 2);
+  EXPECT_EQ(o.loop_closing.pose_graph_min_correction_m, 0.03);
+  EXPECT_EQ(o.loop_closing.pose_graph_min_correction_deg, 0.5);
   // Every key of the section is a known settings key (no "unknown key" warning for them).
   for (const char* key : {"enabled", "min_ransac_inliers", "min_inlier_ratio", "max_correction_m",
                           "revisit_min_path_m", "global_ba_iterations",
-                          "global_ba_min_correction_m", "global_ba_min_correction_deg"}) {
+                          "global_ba_min_correction_m", "global_ba_min_correction_deg",
+                          "pose_graph_min_correction_m", "pose_graph_min_correction_deg"}) {
     const std::string full = std::string("LoopClosing.") + key;
     EXPECT_NE(std::find(KnownSettingsKeys().begin(), KnownSettingsKeys().end(), full),
               KnownSettingsKeys().end())

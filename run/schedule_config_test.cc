@@ -1,5 +1,6 @@
 // Local-mapping schedule settings (issue 22): the waits of tracking for local mapping and the
-// final bundle adjustment are read, default off, and bad values are named.
+// final bundle adjustment are read, default off, and bad values are named; so are the weak-frame
+// keyframe rule and the fallback smoothing weight.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -46,6 +47,20 @@ TEST(ScheduleConfig, WaitsAndFinalBundleAdjustmentAreReadAndChecked) {
   ExpectNamed("Tracking:\n  keyframe_wait_ms: -1\n", "Tracking.keyframe_wait_ms");
   ExpectNamed("Tracking:\n  handoff_wait_ms: 20000\n", "Tracking.handoff_wait_ms");
   ExpectNamed("LocalMapping:\n  final_ba_iterations: -3\n", "LocalMapping.final_ba_iterations");
+}
+
+TEST(ScheduleConfig, WeakFrameKeyframeRuleAndSmoothingWeightAreReadAndChecked) {
+  const SystemOptions defaults = Options("");
+  EXPECT_EQ(defaults.tracking.keyframe_weak_inliers, TrackingOptions{}.keyframe_weak_inliers);
+  EXPECT_EQ(defaults.tracking.fallback_smoothing_dense_weight,
+            TrackingOptions{}.fallback_smoothing_dense_weight);
+  const SystemOptions set =
+      Options("Tracking:\n  keyframe_weak_inliers: 0\n  fallback_smoothing_dense_weight: 0.2\n");
+  EXPECT_EQ(set.tracking.keyframe_weak_inliers, 0);
+  EXPECT_EQ(set.tracking.fallback_smoothing_dense_weight, 0.2);
+  ExpectNamed("Tracking:\n  keyframe_weak_inliers: -1\n", "Tracking.keyframe_weak_inliers");
+  ExpectNamed("Tracking:\n  fallback_smoothing_dense_weight: 1.5\n",
+              "Tracking.fallback_smoothing_dense_weight");
 }
 
 }  // namespace

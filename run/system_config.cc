@@ -92,6 +92,7 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
        {"localization_local_keyframes", &options.tracking.localization_local_keyframes},
        {"keyframe_counts_odometry_points", &options.tracking.keyframe_counts_odometry_points},
        {"keyframe_min_map_inliers", &options.tracking.keyframe_min_map_inliers},
+       {"keyframe_weak_inliers", &options.tracking.keyframe_weak_inliers},
        {"keyframe_wait_ms", &options.tracking.keyframe_wait_ms},
        {"handoff_wait_ms", &options.tracking.handoff_wait_ms},
        {"dense_fallback", &options.tracking.dense_fallback},
@@ -100,7 +101,8 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
        {"fallback_check_below_inliers", &options.tracking.fallback_check_below_inliers},
        {"fallback_override_fraction_gain", &options.tracking.fallback_override_fraction_gain},
        {"fallback_smoothing", &options.tracking.fallback_smoothing},
-       {"fallback_smoothing_weak_inliers", &options.tracking.fallback_smoothing_weak_inliers}});
+       {"fallback_smoothing_weak_inliers", &options.tracking.fallback_smoothing_weak_inliers},
+       {"fallback_smoothing_dense_weight", &options.tracking.fallback_smoothing_dense_weight}});
   tracking.CheckOptions(options.tracking);
   const ConfigReader mapping = root.Section("LocalMapping");
   ReadFields(mapping, {{"triangulation_neighbors", &options.local_mapping.triangulation_neighbors},
@@ -162,6 +164,8 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                      DYGSLAM_SAME_NAME_FIELD(lc, fusion_radius_px),
                      DYGSLAM_SAME_NAME_FIELD(lc, essential_min_weight),
                      DYGSLAM_SAME_NAME_FIELD(lc, pose_graph_iterations),
+                     DYGSLAM_SAME_NAME_FIELD(lc, pose_graph_min_correction_m),
+                     DYGSLAM_SAME_NAME_FIELD(lc, pose_graph_min_correction_deg),
                      DYGSLAM_SAME_NAME_FIELD(lc, global_bundle_adjustment),
                      DYGSLAM_SAME_NAME_FIELD(lc, global_ba_iterations),
                      DYGSLAM_SAME_NAME_FIELD(lc, global_ba_min_correction_m),
@@ -174,6 +178,8 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   CheckSettingAtMost(loops, "max_drift_deg_per_meter", lc.max_drift_deg_per_meter, 360,
                      "degrees per m");
   CheckSettingAtMost(loops, "global_ba_min_correction_m", lc.global_ba_min_correction_m, 10000,
+                     "m");
+  CheckSettingAtMost(loops, "pose_graph_min_correction_m", lc.pose_graph_min_correction_m, 10000,
                      "m");
 
   // DynamicFilter: the paper's parameters (defaults in DynamicFilterOptions).

@@ -8,6 +8,7 @@
 #include <opencv2/calib3d.hpp>
 #include <unordered_map>
 
+#include "core/base/popcount.h"
 #include "core/dynamic/dynamic_mask.h"
 
 namespace dygslam {
@@ -128,14 +129,10 @@ double ExpansionWeight(double distance, double c2, double delta) {
 }
 
 int HammingDistance256(const uint8_t* a, const uint8_t* b) {
-  int dist = 0;
-  for (int k = 0; k < 4; ++k) {
-    uint64_t x, y;
-    std::memcpy(&x, a + 8 * k, 8);
-    std::memcpy(&y, b + 8 * k, 8);
-    dist += __builtin_popcountll(x ^ y);
-  }
-  return dist;
+  uint64_t x[4], y[4];
+  std::memcpy(x, a, 32);
+  std::memcpy(y, b, 32);
+  return HammingDistance256Words(x, y);  // POPCNT when the CPU has it (core/base/popcount.h)
 }
 
 bool InAnyBox(const cv::Point2f& p, const std::vector<Detection>& detections,

@@ -369,14 +369,16 @@ void LoopCloser::Process(const std::shared_ptr<KeyFrame>& kf) {
   }
   if (!found) return;
   const auto start = std::chrono::steady_clock::now();
-  const bool applied = CorrectLoop(kf, loop);
+  bool fused_only = false;
+  const bool applied = CorrectLoop(kf, loop, &fused_only);
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     stats_.correction_ms_total += ms;
   }
-  if (!applied || !options_.global_bundle_adjustment) return;
+  // Nothing moved when the loop was only fused: nothing for a global BA to spread.
+  if (!applied || fused_only || !options_.global_bundle_adjustment) return;
   // A small correction is left to the pose graph: a global BA would move the map about as much
   // as the loop did (there and back: 2 mm).
   if (loop.correction_m < options_.global_ba_min_correction_m &&
@@ -734,10 +736,12 @@ bool LoopCloser::ComputeTransform(Snapshot* snapshot, Loop* loop) {
   return false;
 }
 
-bool LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& loop) {
+bool LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& loop,
+                             bool* fused_only) {
   std::vector<int64_t> moved;
   int fused = 0;
   double shift = 0;
+  bool fuse_only = false;
   {
     std::lock_guard<std::mutex> lock(map_->mutex());
     // The checks ran without the lock: the map may have changed meanwhile. A culled keyframe or
@@ -751,7 +755,12 @@ bool LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& lo
       stats_.loops_dropped++;
       return false;
     }
-    map_->BumpCorrectionEpoch();  // local BA in flight must not write back pre-loop poses
+    // A correction below the pose graph threshold moves nothing: the map was not lost, the
+    // duplicated points are fused and the sides linked at the poses they have.
+    fuse_only = loop.correction_m < options_.pose_graph_min_correction_m &&
+                loop.correction_deg < options_.pose_graph_min_correction_deg;
+    // Local BA in flight must not write back pre-loop poses (nothing moves when fusing only).
+    if (!fuse_only) map_->BumpCorrectionEpoch();
     // 1. Move the current keyframe's neighbourhood (and the points it sees) by the loop transform.
     // A revisit (loop keyframe covisible with the current one) must not move the loop side.
     std::set<int64_t> loop_side = {loop.loop_kf->id};
@@ -769,18 +778,20 @@ bool LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& lo
       corrected[g->id] = (g->cam_from_world * kf_from_world.Inverse()) * loop.cam_from_world;
     }
     shift = (kf->CameraCenter() - loop.cam_from_world.Inverse().translation).norm();
-    std::set<int64_t> moved_points;
-    std::vector<std::shared_ptr<MapPoint>> touched;
-    for (const auto& g : group) {
-      const Rigid3d world_from_new = corrected[g->id].Inverse();
-      for (const auto& mp : g->map_points) {
-        if (!mp || mp->bad || !moved_points.insert(mp->id).second) continue;
-        mp->position = world_from_new * (uncorrected[g->id] * mp->position);
-        touched.push_back(mp);
+    if (!fuse_only) {
+      std::set<int64_t> moved_points;
+      std::vector<std::shared_ptr<MapPoint>> touched;
+      for (const auto& g : group) {
+        const Rigid3d world_from_new = corrected[g->id].Inverse();
+        for (const auto& mp : g->map_points) {
+          if (!mp || mp->bad || !moved_points.insert(mp->id).second) continue;
+          mp->position = world_from_new * (uncorrected[g->id] * mp->position);
+          touched.push_back(mp);
+        }
       }
+      for (const auto& g : group) g->cam_from_world = corrected[g->id];
+      for (const auto& mp : touched) map_->UpdateNormalAndDepth(*mp);
     }
-    for (const auto& g : group) g->cam_from_world = corrected[g->id];
-    for (const auto& mp : touched) map_->UpdateNormalAndDepth(*mp);
     // 2. Fuse: the loop's matched points replace the current keyframe's duplicates, then the
     // loop neighbourhood's points are fused into every corrected keyframe.
     for (size_t i = 0; i < loop.matches.size(); ++i) {
@@ -817,72 +828,84 @@ bool LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& lo
     new_links.push_back({kf->id, loop.loop_kf->id});
     kf->not_erase = true;
     loop.loop_kf->not_erase = true;
-    // 4. Essential graph: spanning tree, strong covisibility, old loop edges from the poses
-    // before this correction; the new loop links from the corrected ones.
-    std::map<int64_t, Rigid3d> poses, measure;
-    for (const auto& [id, k] : map_->keyframes()) {
-      poses[id] = k->cam_from_world;
-      auto u = uncorrected.find(id);
-      measure[id] = u != uncorrected.end() ? u->second : k->cam_from_world;
-    }
-    std::vector<PoseGraphEdge> edges;
-    auto relative = [](const std::map<int64_t, Rigid3d>& p, int64_t i, int64_t j) {
-      return p.at(i) * p.at(j).Inverse();
-    };
-    std::set<std::pair<int64_t, int64_t>> added;
-    auto add = [&](int64_t i, int64_t j, const std::map<int64_t, Rigid3d>& from) {
-      if (!poses.count(i) || !poses.count(j) || i == j) return;
-      const auto key = std::minmax(i, j);
-      if (!added.insert(key).second) return;
-      edges.push_back({i, j, relative(from, i, j), 1.0});
-    };
-    for (const auto& [a, b] : new_links) add(a, b, poses);
-    for (const auto& [a, b] : loop_edges_) add(a, b, measure);
-    for (const auto& [id, k] : map_->keyframes()) {
-      if (k->parent_id >= 0) add(id, k->parent_id, measure);
-      for (const auto& [other, w] : k->connection_weights)
-        if (w >= options_.essential_min_weight) add(id, other, measure);
-    }
-    for (const auto& l : new_links) loop_edges_.push_back(l);
-    std::set<int64_t> fixed = {loop.loop_kf->id, map_->keyframes().begin()->first};
-    const std::map<int64_t, Rigid3d> before_graph = poses;
-    OptimizePoseGraph(&poses, edges, fixed, options_.pose_graph_iterations);
-    // 5. Keyframes take the optimised poses; points follow their reference keyframe.
-    for (const auto& [id, k] : map_->keyframes()) {
-      k->cam_from_world = poses[id];
-      moved.push_back(id);
-    }
-    for (const auto& [pid, mp] : map_->map_points()) {
-      if (mp->bad) continue;
-      int64_t ref = mp->ref_kf_id;
-      if (!poses.count(ref)) {
-        ref = -1;
-        for (const auto& [kid, idx] : mp->observations)
-          if (poses.count(kid)) {
-            ref = kid;
-            break;
-          }
+    if (fuse_only) {
+      // Kept for the pose graph of a later, larger loop; measured there from the poses it sees.
+      for (const auto& l : new_links) loop_edges_.push_back(l);
+      last_loop_kf_id_ = kf->id;
+      consistent_groups_.clear();
+    } else {
+      // 4. Essential graph: spanning tree, strong covisibility, old loop edges from the poses
+      // before this correction; the new loop links from the corrected ones.
+      std::map<int64_t, Rigid3d> poses, measure;
+      for (const auto& [id, k] : map_->keyframes()) {
+        poses[id] = k->cam_from_world;
+        auto u = uncorrected.find(id);
+        measure[id] = u != uncorrected.end() ? u->second : k->cam_from_world;
       }
-      if (ref < 0) continue;
-      mp->position = poses[ref].Inverse() * (before_graph.at(ref) * mp->position);
-      map_->UpdateNormalAndDepth(*mp);
+      std::vector<PoseGraphEdge> edges;
+      auto relative = [](const std::map<int64_t, Rigid3d>& p, int64_t i, int64_t j) {
+        return p.at(i) * p.at(j).Inverse();
+      };
+      std::set<std::pair<int64_t, int64_t>> added;
+      auto add = [&](int64_t i, int64_t j, const std::map<int64_t, Rigid3d>& from) {
+        if (!poses.count(i) || !poses.count(j) || i == j) return;
+        const auto key = std::minmax(i, j);
+        if (!added.insert(key).second) return;
+        edges.push_back({i, j, relative(from, i, j), 1.0});
+      };
+      for (const auto& [a, b] : new_links) add(a, b, poses);
+      for (const auto& [a, b] : loop_edges_) add(a, b, measure);
+      for (const auto& [id, k] : map_->keyframes()) {
+        if (k->parent_id >= 0) add(id, k->parent_id, measure);
+        for (const auto& [other, w] : k->connection_weights)
+          if (w >= options_.essential_min_weight) add(id, other, measure);
+      }
+      for (const auto& l : new_links) loop_edges_.push_back(l);
+      std::set<int64_t> fixed = {loop.loop_kf->id, map_->keyframes().begin()->first};
+      const std::map<int64_t, Rigid3d> before_graph = poses;
+      OptimizePoseGraph(&poses, edges, fixed, options_.pose_graph_iterations);
+      // 5. Keyframes take the optimised poses; points follow their reference keyframe.
+      for (const auto& [id, k] : map_->keyframes()) {
+        k->cam_from_world = poses[id];
+        moved.push_back(id);
+      }
+      for (const auto& [pid, mp] : map_->map_points()) {
+        if (mp->bad) continue;
+        int64_t ref = mp->ref_kf_id;
+        if (!poses.count(ref)) {
+          ref = -1;
+          for (const auto& [kid, idx] : mp->observations)
+            if (poses.count(kid)) {
+              ref = kid;
+              break;
+            }
+        }
+        if (ref < 0) continue;
+        mp->position = poses[ref].Inverse() * (before_graph.at(ref) * mp->position);
+        map_->UpdateNormalAndDepth(*mp);
+      }
+      map_->BumpCorrectionEpoch();
+      last_loop_kf_id_ = kf->id;
+      consistent_groups_.clear();
     }
-    map_->BumpCorrectionEpoch();
-    last_loop_kf_id_ = kf->id;
-    consistent_groups_.clear();
   }
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     stats_.loops_closed++;
     stats_.points_fused += fused;
+    if (fuse_only) stats_.pose_graph_skipped++;
     stats_.loops.push_back({kf->id, loop.loop_kf->id});
     stats_.loop_frames.push_back({kf->frame_id, loop.loop_kf->frame_id});
   }
   LOG_INFO << "loop closed: keyframe " << kf->id << " (frame " << kf->frame_id << ") with keyframe "
            << loop.loop_kf->id << " (frame " << loop.loop_kf->frame_id << "): " << loop.inliers
            << " RANSAC inliers, " << loop.projected << " matches, correction " << shift << " m, "
-           << fused << " points fused";
+           << fused << " points fused"
+           << (fuse_only ? " (below LoopClosing.pose_graph_min_correction_m / _deg: no keyframe "
+                           "moved, no pose graph)"
+                         : "");
   Report(moved);
+  *fused_only = fuse_only;
   return true;
 }
 

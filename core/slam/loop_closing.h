@@ -11,7 +11,8 @@
 //   and its covisible neighbours are moved by the loop transform (and
 //      their points with them), duplicated map points are fused, covisibility is updated, the
 //      essential graph (spanning tree, strong covisibility, loop edges) is optimised with Ceres,
-//      and map points follow their reference keyframes;
+//      and map points follow their reference keyframes; a correction below
+//      `pose_graph_min_correction_*` moves nothing: only the fusion and the links are made;
 //   4. a global bundle adjustment of every keyframe and point, in the background (its own
 //      thread; synchronous in deterministic mode), written back only if no newer loop came.
 // Corrections are reported through the callback (ids of keyframes whose pose changed).
@@ -69,6 +70,9 @@ struct LoopClosingStats {
   int global_ba_runs = 0;
   int global_ba_discarded = 0;  // finished after a newer loop: not written back
   int global_ba_skipped = 0;    // correction below LoopClosing.global_ba_min_correction_*
+  // Loops closed by fusion only (no keyframe moved, no pose graph): correction below
+  // LoopClosing.pose_graph_min_correction_*.
+  int pose_graph_skipped = 0;
   double correction_ms_total = 0;
   double global_ba_ms_total = 0;  // wall time of the global BAs written back
   // Every global BA that got to its solver: [start, end] in seconds of std::chrono::steady_clock
@@ -121,7 +125,9 @@ class LoopCloser {
                     const std::vector<std::shared_ptr<KeyFrame>>& candidates, Snapshot* snapshot);
   void CopyNeighbourhood(size_t candidate, Snapshot* snapshot);  // locks the map briefly
   bool ComputeTransform(Snapshot* snapshot, Loop* loop);
-  bool CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& loop);  // false: dropped
+  // false: dropped. *fused_only: the correction was below pose_graph_min_correction_* (nothing
+  // moved, only the duplicated points fused and the sides linked).
+  bool CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& loop, bool* fused_only);
   void StartGlobalBundleAdjustment(int64_t loop_kf_id);
   void RunGlobalBundleAdjustment(int64_t epoch);
   void Report(const std::vector<int64_t>& moved);

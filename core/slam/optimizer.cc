@@ -8,6 +8,7 @@
 #include <ceres/ceres.h>
 
 #include "core/slam/cost_functions.h"
+#include "core/slam/pose_solver.h"
 
 namespace dygslam {
 namespace {
@@ -29,23 +30,93 @@ class AbortCallback : public ceres::IterationCallback {
 
 }  // namespace
 
-int OptimizePose(Frame& frame, const OptimizerOptions& options) {
+namespace {
+
+// The frame's matched map points as pose residuals (clears frame.outlier for them); `index` gets
+// each observation's keypoint index.
+void CollectPoseObservations(Frame& frame, std::vector<PoseObservation>* observations,
+                             std::vector<size_t>* index) {
   const CameraGeometry& g = *frame.geometry;
-  const ProjectionModel model = ModelOf(g);
-  struct Obs {
-    size_t idx;
-    Eigen::Vector3d point;
-    bool stereo;
-  };
-  std::vector<Obs> obs;
+  observations->clear();
+  index->clear();
   for (size_t i = 0; i < frame.size(); ++i) {
     const auto& mp = frame.map_points[i];
     if (!mp) continue;
     frame.outlier[i] = 0;
-    obs.push_back({i, mp->position, frame.u_right[i] >= 0});
+    const cv::KeyPoint& kp = frame.undistorted[i];
+    const bool stereo = frame.u_right[i] >= 0;
+    observations->push_back({mp->position, Eigen::Vector3d(kp.pt.x, kp.pt.y, stereo ? frame.u_right[i] : 0.0),
+                             g.inv_sigma2[kp.octave], stereo});
+    index->push_back(i);
   }
-  if (obs.size() < 3) return 0;
+}
 
+// Marks every observation (including earlier outliers) by its chi2 at cam_from_world (behind the
+// camera: outlier); writes frame.outlier and returns the inliers.
+int ClassifyPoseObservations(const std::vector<PoseObservation>& observations, const std::vector<size_t>& index,
+                             const Rigid3d& cam_from_world, const ProjectionModel& model,
+                             const OptimizerOptions& options, Frame& frame) {
+  int inliers = 0;
+  for (size_t k = 0; k < observations.size(); ++k) {
+    const PoseObservation& o = observations[k];
+    const Eigen::Vector3d p = cam_from_world * o.point;
+    double chi2 = 0;
+    const bool bad_depth = p.z() <= 0;
+    if (!bad_depth) {
+      const double u = model.fx * p.x() / p.z() + model.cx, v = model.fy * p.y() / p.z() + model.cy;
+      chi2 = (u - o.measurement.x()) * (u - o.measurement.x()) + (v - o.measurement.y()) * (v - o.measurement.y());
+      if (o.stereo) {
+        const double ur = u - model.bf / p.z();
+        chi2 += (ur - o.measurement.z()) * (ur - o.measurement.z());
+      }
+      chi2 *= o.information;
+    }
+    const bool is_outlier = bad_depth || chi2 > (o.stereo ? options.chi2_stereo : options.chi2_mono);
+    frame.outlier[index[k]] = is_outlier ? 1 : 0;
+    if (!is_outlier) ++inliers;
+  }
+  return inliers;
+}
+
+}  // namespace
+
+int OptimizePose(Frame& frame, const OptimizerOptions& options) {
+  // Reused across calls of one thread: no allocation per frame once warm.
+  thread_local std::vector<PoseObservation> observations;
+  thread_local std::vector<size_t> index;
+  thread_local std::vector<uint8_t> active;
+  CollectPoseObservations(frame, &observations, &index);
+  if (observations.size() < 3) return 0;
+  const ProjectionModel model = ModelOf(*frame.geometry);
+  const double delta_mono = std::sqrt(options.chi2_mono), delta_stereo = std::sqrt(options.chi2_stereo);
+  PoseSolverOptions solver_options;
+  solver_options.max_iterations = options.pose_iterations;
+  Rigid3d cam_from_world = frame.cam_from_world;
+  active.assign(observations.size(), 1);
+  int inliers = 0;
+  for (int round = 0; round < options.pose_rounds; ++round) {
+    const bool robust = round < options.pose_rounds - 1;  // last round without the kernel
+    int added = 0;
+    for (size_t k = 0; k < index.size(); ++k) {
+      active[k] = frame.outlier[index[k]] ? 0 : 1;
+      added += active[k];
+    }
+    if (added < 3) break;
+    SolvePose(observations, active.data(), model, robust ? delta_mono : 0.0, robust ? delta_stereo : 0.0,
+              solver_options, &cam_from_world);
+    inliers = ClassifyPoseObservations(observations, index, cam_from_world, model, options, frame);
+    if (inliers < 10) break;
+  }
+  frame.cam_from_world = cam_from_world;
+  return inliers;
+}
+
+int OptimizePoseWithCeres(Frame& frame, const OptimizerOptions& options) {
+  std::vector<PoseObservation> observations;
+  std::vector<size_t> index;
+  CollectPoseObservations(frame, &observations, &index);
+  if (observations.size() < 3) return 0;
+  const ProjectionModel model = ModelOf(*frame.geometry);
   double pose[7];
   PoseToParameters(frame.cam_from_world, pose);
   const double delta_mono = std::sqrt(options.chi2_mono), delta_stereo = std::sqrt(options.chi2_stereo);
@@ -58,15 +129,15 @@ int OptimizePose(Frame& frame, const OptimizerOptions& options) {
     problem.AddParameterBlock(pose, 7, &manifold);
     const bool robust = round < options.pose_rounds - 1;  // last round without the kernel
     int added = 0;
-    for (const Obs& o : obs) {
-      if (frame.outlier[o.idx]) continue;
-      const cv::KeyPoint& kp = frame.undistorted[o.idx];
-      const double sqrt_info = std::sqrt(g.inv_sigma2[kp.octave]);
+    for (size_t k = 0; k < observations.size(); ++k) {
+      if (frame.outlier[index[k]]) continue;
+      const PoseObservation& o = observations[k];
+      const double sqrt_info = std::sqrt(o.information);
       ceres::CostFunction* cost;
       if (o.stereo) {
-        cost = new StereoPoseCost(Eigen::Vector3d(kp.pt.x, kp.pt.y, frame.u_right[o.idx]), o.point, sqrt_info, model);
+        cost = new StereoPoseCost(o.measurement, o.point, sqrt_info, model);
       } else {
-        cost = new MonoPoseCost(Eigen::Vector2d(kp.pt.x, kp.pt.y), o.point, sqrt_info, model);
+        cost = new MonoPoseCost(o.measurement.head<2>(), o.point, sqrt_info, model);
       }
       problem.AddResidualBlock(cost, robust ? new ceres::HuberLoss(o.stereo ? delta_stereo : delta_mono) : nullptr, pose);
       ++added;
@@ -80,28 +151,7 @@ int OptimizePose(Frame& frame, const OptimizerOptions& options) {
     solver_options.logging_type = ceres::SILENT;
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &problem, &summary);
-
-    // Classify every observation (including earlier outliers) with the current pose.
-    const Rigid3d cam_from_world = PoseFromParameters(pose);
-    inliers = 0;
-    for (const Obs& o : obs) {
-      const cv::KeyPoint& kp = frame.undistorted[o.idx];
-      const Eigen::Vector3d p = cam_from_world * o.point;
-      double chi2;
-      bool bad_depth = p.z() <= 0;
-      if (!bad_depth) {
-        const double u = model.fx * p.x() / p.z() + model.cx, v = model.fy * p.y() / p.z() + model.cy;
-        chi2 = (u - kp.pt.x) * (u - kp.pt.x) + (v - kp.pt.y) * (v - kp.pt.y);
-        if (o.stereo) {
-          const double ur = u - model.bf / p.z();
-          chi2 += (ur - frame.u_right[o.idx]) * (ur - frame.u_right[o.idx]);
-        }
-        chi2 *= g.inv_sigma2[kp.octave];
-      }
-      const bool is_outlier = bad_depth || chi2 > (o.stereo ? options.chi2_stereo : options.chi2_mono);
-      frame.outlier[o.idx] = is_outlier ? 1 : 0;
-      if (!is_outlier) ++inliers;
-    }
+    inliers = ClassifyPoseObservations(observations, index, PoseFromParameters(pose), model, options, frame);
     if (inliers < 10) break;
   }
   frame.cam_from_world = PoseFromParameters(pose);
@@ -167,9 +217,24 @@ void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyF
   std::vector<uint8_t> outlier(observations.size(), 0);
   const double delta_mono = std::sqrt(options.chi2_mono), delta_stereo = std::sqrt(options.chi2_stereo);
   AbortCallback abort_callback(abort);
+  // Cost functions and the two Huber kernels are made once and shared by both solves (the
+  // problems do not own them): only the problem's structure is rebuilt for the second solve.
+  // Residuals are added in the same order as before, so the result is the same.
+  std::vector<std::unique_ptr<ceres::CostFunction>> costs;
+  costs.reserve(observations.size());
+  for (const ObsCopy& o : observations) {
+    if (o.stereo) {
+      costs.emplace_back(new StereoBACost(o.measurement, o.sqrt_info, model));
+    } else {
+      costs.emplace_back(new MonoBACost(o.measurement.head<2>(), o.sqrt_info, model));
+    }
+  }
+  ceres::HuberLoss huber_mono(delta_mono), huber_stereo(delta_stereo);
   auto solve = [&](int iterations, bool robust) {
     ceres::Problem::Options problem_options;
     problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(problem_options);
     PoseManifold manifold;
     for (size_t k = 0; k < observations.size(); ++k) {
@@ -177,11 +242,8 @@ void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyF
       const ObsCopy& o = observations[k];
       double* pose = poses[o.kf_id].data();
       double* point = points[o.point_id].data();
-      ceres::CostFunction* cost =
-          o.stereo ? static_cast<ceres::CostFunction*>(new StereoBACost(o.measurement, o.sqrt_info, model))
-                   : new MonoBACost(o.measurement.head<2>(), o.sqrt_info, model);
-      problem.AddResidualBlock(cost, robust ? new ceres::HuberLoss(o.stereo ? delta_stereo : delta_mono) : nullptr,
-                               pose, point);
+      ceres::LossFunction* loss = robust ? (o.stereo ? &huber_stereo : &huber_mono) : nullptr;
+      problem.AddResidualBlock(costs[k].get(), loss, pose, point);
     }
     for (auto& [id, pose] : poses) {
       if (!problem.HasParameterBlock(pose.data())) continue;

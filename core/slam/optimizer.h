@@ -1,4 +1,4 @@
-// Pose-only optimisation and local bundle adjustment with Ceres (robust Huber kernel,
+// Pose-only optimisation (a dedicated 6-dof solver) and local bundle adjustment with Ceres (robust Huber kernel,
 // outlier-rejection rounds with chi-square thresholds as in ORB-SLAM2's RGB-D mode).
 #pragma once
 
@@ -25,8 +25,14 @@ struct OptimizerOptions {
 
 // Optimises frame.cam_from_world against its matched map points (frame.map_points); sets
 // frame.outlier. Map point positions are read by the caller's thread: hold the map lock.
-// Returns the number of inliers.
+// Returns the number of inliers. ORB-SLAM2's scheme: pose_rounds rounds of <= pose_iterations
+// Levenberg-Marquardt iterations (core/slam/pose_solver.h), Huber kernel in all but the last,
+// every observation re-classified by its chi2 after each round.
 int OptimizePose(Frame& frame, const OptimizerOptions& options);
+
+// The same rounds with a new Ceres problem per round (the implementation before session 9): the
+// reference the dedicated solver is tested against; not used by the system.
+int OptimizePoseWithCeres(Frame& frame, const OptimizerOptions& options);
 
 // Local BA around `kf`: it and its covisible keyframes are optimised with every point they see;
 // other keyframes seeing those points are fixed. Takes the map lock only to copy the problem in

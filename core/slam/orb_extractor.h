@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/base/error.h"
+#include "core/base/popcount.h"
 
 namespace dygslam {
 
@@ -33,9 +34,9 @@ namespace dygslam {
 // 256-bit binary descriptor.
 using Descriptor = std::array<uint64_t, 4>;
 
+// With the CPU's POPCNT instruction when it has one (core/base/popcount.h).
 inline int HammingDistance(const Descriptor& a, const Descriptor& b) {
-  return __builtin_popcountll(a[0] ^ b[0]) + __builtin_popcountll(a[1] ^ b[1]) +
-         __builtin_popcountll(a[2] ^ b[2]) + __builtin_popcountll(a[3] ^ b[3]);
+  return HammingDistance256Words(a.data(), b.data());
 }
 
 struct OrbFeatures {

@@ -384,6 +384,13 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
   if (frame.id < last_relocalization_frame_id_ + options_.max_frames_between_keyframes &&
       kfs > options_.max_frames_between_keyframes)
     return false;
+  // A weakly held frame with a person in view: its pose would seed the keyframe's points; the
+  // dense fallback holds the next frames instead when features cannot.
+  if (options_.keyframe_weak_inliers > 0 && options_.dense_fallback && frame.dense &&
+      last_inliers_ < options_.keyframe_weak_inliers &&
+      std::any_of(frame.in_dynamic_region.begin(), frame.in_dynamic_region.end(),
+                  [](uint8_t d) { return d != 0; }))
+    return false;
   // ORB-SLAM2 counts an RGB-D observation twice; here each keyframe observation counts once.
   const int min_obs = kfs <= 2 ? 1 : 2;
   const int ref_matches = reference_kf_->NumTrackedPoints(min_obs);

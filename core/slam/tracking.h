@@ -49,6 +49,12 @@ struct TrackingOptions {
   // to 37, below local_map_min_inliers (30): lost with no keyframe made. 100 leaves ~3 frames of
   // that decay before the loss (BENCHMARKS.md, issue 14).
   int keyframe_min_map_inliers = 100;
+  // A frame whose pose rests on fewer map-point inliers than this while a person is in view (a
+  // feature of the frame lies in a dynamic region) does not become a keyframe when the dense
+  // fallback can hold the next frames (0: off). Such a keyframe seeds its points from a weak pose
+  // and the frames after it inherit the error (bonn_crowd_part frames 322-325: 0.03 -> 0.07 m,
+  // BENCHMARKS.md, issue 22).
+  int keyframe_weak_inliers = 0;
   // Real threading only (issue 22): when a keyframe is due while local mapping is still busy,
   // wait up to this long for it before deciding (0: do not wait; ORB-SLAM2 then skips or queues
   // the keyframe) ...
@@ -72,6 +78,10 @@ struct TrackingOptions {
   // the stretch (plus the weakly held feature frames just before it) is moved by that correction.
   bool fallback_smoothing = true;
   int fallback_smoothing_weak_inliers = 150;  // feature frames below this before a stretch join it
+  // The share of the correction a fallback frame takes, relative to a weakly held feature frame
+  // (1: the correction spread evenly over the stretch; 0: all of it on the weak feature frames
+  // before the stretch, the dense chain moved as a whole).
+  double fallback_smoothing_dense_weight = 1.0;
   double fallback_smoothing_max_translation = 0.15;  // metres: larger corrections are not applied
   double fallback_smoothing_max_rotation_deg = 10.0;
   void Check() const {
@@ -84,6 +94,7 @@ struct TrackingOptions {
     DYGSLAM_CHECK_OPTION(max_frames_between_keyframes >= 1,
                          "Tracking.max_frames_between_keyframes");
     DYGSLAM_CHECK_OPTION(keyframe_min_map_inliers >= 0, "Tracking.keyframe_min_map_inliers");
+    DYGSLAM_CHECK_OPTION(keyframe_weak_inliers >= 0, "Tracking.keyframe_weak_inliers");
     DYGSLAM_CHECK_OPTION(keyframe_wait_ms >= 0 && keyframe_wait_ms <= 10000,
                          "Tracking.keyframe_wait_ms");
     DYGSLAM_CHECK_OPTION(handoff_wait_ms >= 0 && handoff_wait_ms <= 10000,
@@ -106,6 +117,9 @@ struct TrackingOptions {
                          "Tracking.fallback_override_rmse_ratio");
     DYGSLAM_CHECK_OPTION(fallback_smoothing_weak_inliers >= 0,
                          "Tracking.fallback_smoothing_weak_inliers");
+    DYGSLAM_CHECK_OPTION(
+        fallback_smoothing_dense_weight >= 0 && fallback_smoothing_dense_weight <= 1,
+        "Tracking.fallback_smoothing_dense_weight");
     DYGSLAM_CHECK_OPTION(fallback_smoothing_max_translation > 0,
                          "Tracking.fallback_smoothing_max_translation");
     DYGSLAM_CHECK_OPTION(fallback_smoothing_max_rotation_deg > 0,

@@ -469,24 +469,22 @@ void CheckOctoMapShape(const std::string& path, std::istream& in, const OctoMapH
   };
   std::vector<Open> open;
   long long nodes = 0;
-  // Reads one node's record at `depth` and opens it; returns false where the data ends.
+  auto too_deep = [&]() {
+    fail("nodes are nested deeper than the tree's " + std::to_string(kOctoMapMaxDepth) +
+         " levels (node record " + std::to_string(records) + ")");
+  };
+  // Reads one node's record at `depth` and opens it; throws where the data ends.
   auto read_node = [&](int depth) {
     const unsigned char* record = next_record();
     if (record == nullptr) fail("the data ends after " + std::to_string(records) + " node records");
-    if (depth > kOctoMapMaxDepth) {
-      fail("nodes are nested deeper than the tree's " + std::to_string(kOctoMapMaxDepth) +
-           " levels (node record " + std::to_string(records) + ")");
-    }
+    if (depth > kOctoMapMaxDepth) too_deep();
     int pending = 0;
     ++nodes;
     if (binary) {
       for (int b = 0; b < 2; ++b) {
         for (int i = 0; i < 4; ++i) {
           const int code = (record[b] >> (2 * i)) & 3;
-          if (code != 0 && depth + 1 > kOctoMapMaxDepth) {
-            fail("nodes are nested deeper than the tree's " + std::to_string(kOctoMapMaxDepth) +
-                 " levels (node record " + std::to_string(records) + ")");
-          }
+          if (code != 0 && depth + 1 > kOctoMapMaxDepth) too_deep();
           if (code == 3)
             ++pending;  // its record follows
           else if (code != 0)

@@ -119,6 +119,15 @@ TEST(StaticDepthOdometry, VerificationRejectsAWrongPose) {
   EXPECT_LT(bad.inlier_fraction(), odometry.options().min_inlier_fraction);
 }
 
+// config/bonn.yaml with the full filter in deterministic mode: the real-data runs below.
+SystemOptions BonnFullDeterministicOptions() {
+  SystemOptions options = SystemOptionsFromSettings(
+      LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml"));
+  options.filter.mode = FilterMode::kFull;
+  options.deterministic = true;
+  return options;
+}
+
 TEST(StaticDepthOdometry, RejectsViewsOfTheWrongSize) {
   StaticDepthOdometry odometry(DefaultSyntheticCamera(), StaticDepthOdometryOptions());
   DenseView small;
@@ -135,11 +144,7 @@ TEST(StaticDepthOdometry, RejectsViewsOfTheWrongSize) {
 TEST(SlamFallback, BonnCrowdFramesWherePersonFillsTheViewGetAPose) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
   const RgbdDataset dataset = RgbdDataset::Open(dir);
-  const Settings settings =
-      LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
-  SystemOptions options = SystemOptionsFromSettings(settings);
-  options.filter.mode = FilterMode::kFull;
-  options.deterministic = true;
+  SystemOptions options = BonnFullDeterministicOptions();
   std::map<std::string, int> states;
   int fallback_keyframes = 0, ok_after_fallback = 0;
   bool seen_fallback = false;
@@ -182,11 +187,7 @@ TEST(SlamFallback, BonnCrowdFramesWherePersonFillsTheViewGetAPose) {
 TEST(SlamFallback, BonnCrowdAllFramesAteWithSmoothedFallbackStretches) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
   const RgbdDataset dataset = RgbdDataset::Open(dir);
-  const Settings settings =
-      LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
-  SystemOptions options = SystemOptionsFromSettings(settings);
-  options.filter.mode = FilterMode::kFull;
-  options.deterministic = true;
+  SystemOptions options = BonnFullDeterministicOptions();
   ASSERT_TRUE(options.tracking.fallback_smoothing);  // the default
   std::map<std::string, int> states;
   std::vector<StampedPose> online;
@@ -230,11 +231,7 @@ TEST(SlamFallback, BonnCrowdAllFramesAteWithSmoothedFallbackStretches) {
 TEST(SlamFallback, BonnCrowdWeaklyHeldFramesMakeNoKeyframes) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
   const RgbdDataset dataset = RgbdDataset::Open(dir);
-  const Settings settings =
-      LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
-  SystemOptions options = SystemOptionsFromSettings(settings);
-  options.filter.mode = FilterMode::kFull;
-  options.deterministic = true;
+  SystemOptions options = BonnFullDeterministicOptions();
   options.tracking.keyframe_weak_inliers = 150;
   System system(options);
   int weak_keyframes = 0, with_pose = 0;

@@ -1,6 +1,7 @@
 #include "core/config/config_reader.h"
 
 #include <yaml-cpp/depthguard.h>
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -296,6 +297,74 @@ struct Converter<std::vector<E>> {
   }
 };
 
+// Records where a document starts and whether it holds anything but an empty value.
+class DocumentProbe : public YAML::EventHandler {
+ public:
+  int first_pos = -1;
+  int first_line = -1;
+  bool has_content = false;
+
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& mark, YAML::anchor_t) override { Seen(mark, false); }
+  void OnAlias(const YAML::Mark& mark, YAML::anchor_t) override { Seen(mark, true); }
+  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t,
+                const std::string&) override {
+    Seen(mark, true);
+  }
+  void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {
+    Seen(mark, true);
+  }
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {
+    Seen(mark, true);
+  }
+  void OnMapEnd() override {}
+
+ private:
+  void Seen(const YAML::Mark& mark, bool content) {
+    if (first_pos < 0) {
+      first_pos = mark.pos;
+      first_line = mark.line;
+    }
+    has_content = has_content || content;
+  }
+};
+
+// Walks the documents of `yaml` (instead of YAML::LoadAll) and refuses a second one with content.
+// yaml-cpp 0.7's LoadAll never returns on a ',' at the top level: its parser hands out an empty
+// document at the same place forever (found by the settings fuzzer). A document that starts where
+// the previous one started made no progress: that is a malformed file, said as such.
+void CheckSingleDocument(const std::string& yaml, const std::string& name) {
+  constexpr int kMaxDocuments = 1000;
+  std::istringstream in(yaml);
+  YAML::Parser parser(in);
+  int previous_pos = -1;
+  for (int index = 0;; ++index) {
+    DocumentProbe probe;
+    if (!parser.HandleNextDocument(probe)) return;
+    const int line = probe.first_line >= 0 ? probe.first_line + 1 : 0;
+    if (probe.first_pos >= 0 && probe.first_pos == previous_pos) {
+      throw InputError(name, line,
+                       "malformed YAML: a ',' outside a [ ] list or { } map (the parser cannot "
+                       "move past it)");
+    }
+    if (index > 0 && probe.has_content) {
+      throw InputError(name, line,
+                       "a second YAML document (after '---' or '...'): a settings file is one "
+                       "document; its keys would be ignored");
+    }
+    if (probe.first_pos >= 0) previous_pos = probe.first_pos;
+    if (index >= kMaxDocuments) {
+      throw InputError(name, line,
+                       "more than " + std::to_string(kMaxDocuments) +
+                           " YAML documents ('---' or '...'); not a settings file");
+    }
+  }
+}
+
 }  // namespace
 
 ConfigReader::ConfigReader() {
@@ -311,16 +380,11 @@ ConfigReader ConfigReader::FromString(const std::string& text, const std::string
   auto impl = std::make_shared<Impl>();
   impl->path = name;
   try {
+    const std::string yaml = Preprocess(text);
     // Every document: settings are one document, a second one ("---" or "..." followed by more
     // keys) would be dropped without a word by YAML::Load.
-    std::vector<YAML::Node> documents = YAML::LoadAll(Preprocess(text));
-    for (size_t i = 1; i < documents.size(); ++i) {
-      if (!documents[i] || documents[i].IsNull()) continue;  // a trailing "---" or "..."
-      throw InputError(name, documents[i].Mark().line >= 0 ? documents[i].Mark().line + 1 : 0,
-                       "a second YAML document (after '---' or '...'): a settings file is one "
-                       "document; its keys would be ignored");
-    }
-    if (!documents.empty()) impl->root = documents.front();
+    CheckSingleDocument(yaml, name);
+    impl->root = YAML::Load(yaml);
   } catch (const InputError&) {
     throw;
   } catch (const YAML::DeepRecursion& e) {

@@ -139,6 +139,24 @@ TEST(FourthReprobeSettings, SecondDocumentIsAnError) {
   }
 }
 
+// Found by the settings fuzzer (CI): a ',' at the top level made yaml-cpp's LoadAll hand out empty
+// documents at the same place forever (the run hung). Now an error naming the file and line.
+TEST(FourthReprobeSettings, StrayCommaIsAnErrorNotAHang) {
+  for (const std::string& text :
+       {std::string(","), std::string(", Camera.fx: 500\n"),
+        std::string("Camera.fx: 500\n---\n,\n"), std::string("%YAML:1.0\n---\n, x\n")}) {
+    const std::string e = ReadError(text);
+    EXPECT_NE(e.find("bad.yaml:"), std::string::npos) << e;
+    EXPECT_TRUE(e.find("','") != std::string::npos || e.find("malformed YAML") != std::string::npos)
+        << e;
+  }
+  // Commas inside flow collections and inside values are of course fine.
+  const ConfigReader reader =
+      ConfigReader::FromString("Camera.fx: 500\nlist: [1, 2, 3]\nname: a, b\n", "ok.yaml");
+  EXPECT_EQ(reader.Get<std::vector<int>>("list", {}), (std::vector<int>{1, 2, 3}));
+  EXPECT_EQ(reader.Get<std::string>("name", ""), "a, b");
+}
+
 // P3: a merge key is an error with its line, not a value dropped below a key named "<<".
 TEST(FourthReprobeSettings, MergeKeyIsAnError) {
   for (const std::string& text :

@@ -736,6 +736,38 @@ bool LoopCloser::ComputeTransform(Snapshot* snapshot, Loop* loop) {
   return false;
 }
 
+namespace {
+
+// `edges` with every id replaced by the active keyframe that stands for it; edges whose ends fall
+// on one keyframe (or on none) dropped, each pair once. Map lock held.
+std::vector<std::pair<int64_t, int64_t>> ResolveLoopEdges(
+    const Map& map, const std::vector<std::pair<int64_t, int64_t>>& edges) {
+  std::set<std::pair<int64_t, int64_t>> kept;
+  std::vector<std::pair<int64_t, int64_t>> resolved;
+  for (const auto& [a, b] : edges) {
+    const int64_t i = map.ActiveKeyFrameId(a), j = map.ActiveKeyFrameId(b);
+    if (i < 0 || j < 0 || i == j) continue;
+    if (kept.insert(std::minmax(i, j)).second) resolved.push_back({i, j});
+  }
+  return resolved;
+}
+
+}  // namespace
+
+void LoopCloser::CompactLoopEdges() { loop_edges_ = ResolveLoopEdges(*map_, loop_edges_); }
+
+std::vector<std::pair<int64_t, int64_t>> LoopCloser::LoopEdges() const {
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  return ResolveLoopEdges(*map_, loop_edges_);
+}
+
+void LoopCloser::AddLoopEdges(const std::vector<std::pair<int64_t, int64_t>>& links) {
+  for (const auto& l : links) loop_edges_.push_back(l);
+  CompactLoopEdges();
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  stats_.loop_edges = static_cast<int>(loop_edges_.size());
+}
+
 bool LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& loop,
                              bool* fused_only) {
   std::vector<int64_t> moved;
@@ -826,11 +858,14 @@ bool LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& lo
       }
     }
     new_links.push_back({kf->id, loop.loop_kf->id});
-    kf->not_erase = true;
-    loop.loop_kf->not_erase = true;
+    // The loop keyframes are not protected from culling (ORB-SLAM2 keeps every one for good, so a
+    // robot returning to the same places grows its map by two keyframes per loop without bound).
+    // A loop edge outlives its keyframes instead: it moves to the active keyframe that took over
+    // a culled one's place (CompactLoopEdges), and repeated returns to the same pair of places
+    // leave one edge.
     if (fuse_only) {
       // Kept for the pose graph of a later, larger loop; measured there from the poses it sees.
-      for (const auto& l : new_links) loop_edges_.push_back(l);
+      AddLoopEdges(new_links);
       last_loop_kf_id_ = kf->id;
       consistent_groups_.clear();
     } else {
@@ -854,13 +889,14 @@ bool LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& lo
         edges.push_back({i, j, relative(from, i, j), 1.0});
       };
       for (const auto& [a, b] : new_links) add(a, b, poses);
+      CompactLoopEdges();
       for (const auto& [a, b] : loop_edges_) add(a, b, measure);
       for (const auto& [id, k] : map_->keyframes()) {
         if (k->parent_id >= 0) add(id, k->parent_id, measure);
         for (const auto& [other, w] : k->connection_weights)
           if (w >= options_.essential_min_weight) add(id, other, measure);
       }
-      for (const auto& l : new_links) loop_edges_.push_back(l);
+      AddLoopEdges(new_links);
       std::set<int64_t> fixed = {loop.loop_kf->id, map_->keyframes().begin()->first};
       const std::map<int64_t, Rigid3d> before_graph = poses;
       OptimizePoseGraph(&poses, edges, fixed, options_.pose_graph_iterations);

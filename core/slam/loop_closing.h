@@ -73,6 +73,9 @@ struct LoopClosingStats {
   // Loops closed by fusion only (no keyframe moved, no pose graph): correction below
   // LoopClosing.pose_graph_min_correction_*.
   int pose_graph_skipped = 0;
+  // Loop edges kept for later pose graphs after the last loop (between active keyframes, each
+  // pair once): bounded by the places linked, not by the number of returns.
+  int loop_edges = 0;
   double correction_ms_total = 0;
   double global_ba_ms_total = 0;  // wall time of the global BAs written back
   // Every global BA that got to its solver: [start, end] in seconds of std::chrono::steady_clock
@@ -112,6 +115,9 @@ class LoopCloser {
   using CorrectionCallback = std::function<void(const std::vector<int64_t>& moved)>;
   void SetCorrectionCallback(CorrectionCallback callback);
   LoopClosingStats stats() const;
+  // The loop edges kept for later pose graphs, between active keyframes (a culled keyframe's id
+  // replaced by the active one that took its place), each pair once. Takes the map lock.
+  std::vector<std::pair<int64_t, int64_t>> LoopEdges() const;
 
  private:
   struct Loop;
@@ -146,7 +152,11 @@ class LoopCloser {
   };
   std::vector<ConsistentGroup> consistent_groups_;
   int64_t last_loop_kf_id_ = -1;
-  std::vector<std::pair<int64_t, int64_t>> loop_edges_;  // kept for later pose graphs
+  // Loop edges kept for later pose graphs, between active keyframes (ids of culled ones moved to
+  // the keyframe that took their place), each pair once. Map lock held.
+  std::vector<std::pair<int64_t, int64_t>> loop_edges_;
+  void CompactLoopEdges();
+  void AddLoopEdges(const std::vector<std::pair<int64_t, int64_t>>& links);
 
   mutable std::mutex callback_mutex_;
   CorrectionCallback callback_;

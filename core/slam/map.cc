@@ -257,6 +257,17 @@ void Map::SetBad(const std::shared_ptr<KeyFrame>& kf) {
   keyframes_.erase(kf->id);
 }
 
+int64_t Map::ActiveKeyFrameId(int64_t kf_id) const {
+  int64_t id = kf_id;
+  for (int guard = 0; guard < 1000000; ++guard) {
+    if (keyframes_.count(id)) return id;
+    auto culled = culled_.find(id);
+    if (culled == culled_.end()) return -1;
+    id = culled->second.parent_id;
+  }
+  return -1;
+}
+
 Rigid3d Map::ResolvedPose(int64_t kf_id) const {
   // Walk up the parents of culled keyframes to an active one.
   Rigid3d cam_from_active = Rigid3d::Identity();

@@ -92,7 +92,7 @@ class KeyFrame {
   const std::vector<float> u_right;
   const std::vector<uint8_t> in_dynamic_region;
   const FeatureGrid grid;
-  const BowVector bow_vector;      // copied from the frame (empty without a vocabulary)
+  const BowVector bow_vector;  // copied from the frame (empty without a vocabulary)
   const FeatureVector bow_features;
   bool CanSeedPoint(size_t i) const { return depth[i] > 0 && !in_dynamic_region[i]; }
 
@@ -167,6 +167,9 @@ class Map {
   // cam_from_world of any keyframe ever created (culled ones via their parent chain).
   Rigid3d ResolvedPose(int64_t kf_id) const;
   bool IsCulled(int64_t kf_id) const { return culled_.count(kf_id) > 0; }
+  // The active keyframe that stands for `kf_id`: itself while active, else the first active one up
+  // the parents of culled keyframes (-1 for an id the map never had).
+  int64_t ActiveKeyFrameId(int64_t kf_id) const;
   // Changes whenever a loop correction or global bundle adjustment moved the whole map: an
   // optimisation that copied poses before must not write them back (they are stale).
   int64_t CorrectionEpoch() const { return correction_epoch_.load(); }

@@ -3,6 +3,9 @@
 // two sides is found and the pose graph spreads the correction, so the drift at the end shrinks.
 #include <gtest/gtest.h>
 
+#include <functional>
+#include <set>
+
 #include "core/slam/loop_closing.h"
 #include "tests/slam/synthetic_map.h"
 
@@ -14,10 +17,19 @@ struct DriftedLoop {
   double worst_before = 0, worst_after = 0;  // worst keyframe position error up to the loop
   double largest_move = 0;    // largest change of a keyframe's position by the loop closer
   bool sides_linked = false;  // the loop keyframe is covisible with the current one after it
+  std::vector<std::pair<int64_t, int64_t>> loop_edges;  // LoopCloser::LoopEdges() at the end
+  std::set<int64_t> active;                             // the map's keyframes at the end
+  int protected_keyframes = 0;                          // active keyframes with not_erase set
 };
 
+// Called after keyframe k (index in the run) was inserted, with the run's keyframes so far.
+using AfterKeyFrame =
+    std::function<void(int k, Map& map, const std::vector<std::shared_ptr<KeyFrame>>& keyframes)>;
+
 // drift_scale scales the per-keyframe drift (1: ~0.64 m / 8.4 deg at the end of the lap).
-DriftedLoop RunDriftedLoop(const LoopClosingOptions& options, double drift_scale = 1.0) {
+// keyframes: 32 is 1.05 laps (a keyframe every 6 frames, 29.8 per lap).
+DriftedLoop RunDriftedLoop(const LoopClosingOptions& options, double drift_scale = 1.0,
+                           int keyframes_in_run = 32, const AfterKeyFrame& after = {}) {
   const Vocabulary vocabulary =
       Vocabulary::Load(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/vocabulary.dygvoc");
   const OrbExtractor extractor{OrbExtractorOptions{}};
@@ -32,7 +44,8 @@ DriftedLoop RunDriftedLoop(const LoopClosingOptions& options, double drift_scale
   synth.loop_semi_axes = {2.5, 1.5};
   synth.loop_speed = 1.5;
   synth.sensor.fps = 20;
-  constexpr int kStride = 6, kKeyframes = 32;
+  constexpr int kStride = 6;
+  const int kKeyframes = keyframes_in_run;
   synth.num_frames = kKeyframes * kStride;
   const SyntheticScene scene(synth);
   auto map = std::make_shared<Map>();
@@ -90,12 +103,21 @@ DriftedLoop RunDriftedLoop(const LoopClosingOptions& options, double drift_scale
     centre_before.push_back(kf->CameraCenter());
     closer.InsertKeyFrame(kf);  // synchronous
     world_drift = step * world_drift;
+    if (after) {
+      std::lock_guard<std::mutex> lock(map->mutex());
+      after(k, *map, keyframes);
+    }
   }
   DriftedLoop out;
   out.stats = closer.stats();
+  out.loop_edges = closer.LoopEdges();
   const int64_t loop_frame =
       out.stats.loop_frames.empty() ? synth.num_frames : out.stats.loop_frames[0].first;
   std::lock_guard<std::mutex> lock(map->mutex());
+  for (const auto& [id, kf] : map->keyframes()) {
+    out.active.insert(id);
+    if (kf->not_erase) ++out.protected_keyframes;
+  }
   for (size_t k = 0; k < keyframes.size(); ++k)
     out.largest_move =
         std::max(out.largest_move, (keyframes[k]->CameraCenter() - centre_before[k]).norm());
@@ -217,6 +239,56 @@ TEST(LoopCorrection, SmallCorrectionIsFusedWithoutMovingKeyFrames) {
       "move %.4f m; pose graph: %d points fused, largest keyframe move %.4f m\n",
       accepted->correction_m, accepted->correction_deg, fused.stats.points_fused,
       fused.largest_move, graph.stats.points_fused, graph.largest_move);
+}
+
+// A robot going round the same places (issue 14's soak: 38 loops in 10 minutes) must not grow its
+// map with every return. ORB-SLAM2 protects both keyframes of every loop from culling for good;
+// here no keyframe is protected, and a loop edge outlives its keyframes by moving to the active
+// keyframe that took a culled one's place. Three laps of the stadium loop with a small drift
+// (loops fused only); at the end of laps 2 and 3 the previous lap's keyframes are culled, as local
+// mapping culls redundant keyframes of a revisited place (the first keyframe stays, as always).
+TEST(LoopCorrection, RepeatedReturnsProtectNoKeyFrameAndLoopEdgesFollowCulling) {
+  constexpr int kPerLap = 30, kLaps = 3;
+  int asked = 0, refused = 0;
+  const AfterKeyFrame cull_previous_lap =
+      [&](int k, Map& map, const std::vector<std::shared_ptr<KeyFrame>>& keyframes) {
+        if (k % kPerLap != kPerLap - 1 || k < 2 * kPerLap - 1) return;
+        const int lap_start = k + 1 - 2 * kPerLap;
+        for (int i = std::max(1, lap_start); i < lap_start + kPerLap; ++i) {
+          const auto& kf = keyframes[i];
+          if (kf->bad) continue;
+          ++asked;
+          map.SetBad(kf);
+          if (!kf->bad) ++refused;
+        }
+      };
+  const DriftedLoop run =
+      RunDriftedLoop(Enabled(), /*drift_scale=*/0.01, kPerLap * kLaps, cull_previous_lap);
+  Print(run.stats);
+  std::printf(
+      "%d laps: %d loops closed; %d keyframes culled as asked (%d refused); %zu active at the "
+      "end; %zu loop edges kept\n",
+      kLaps, run.stats.loops_closed, asked - refused, refused, run.active.size(),
+      run.loop_edges.size());
+  for (const auto& [a, b] : run.stats.loop_frames)
+    std::printf("  loop: frame %lld with frame %lld\n", static_cast<long long>(a),
+                static_cast<long long>(b));
+  ASSERT_GE(run.stats.loops_closed, 2);  // each return after the first lap
+  EXPECT_GE(asked, 40);
+  EXPECT_EQ(refused, 0);  // no loop keyframe held back from culling
+  EXPECT_EQ(run.protected_keyframes, 0);
+  // Every kept loop edge joins two active keyframes, each pair once.
+  std::set<std::pair<int64_t, int64_t>> pairs;
+  for (const auto& [a, b] : run.loop_edges) {
+    EXPECT_TRUE(run.active.count(a)) << a;
+    EXPECT_TRUE(run.active.count(b)) << b;
+    EXPECT_NE(a, b);
+    EXPECT_TRUE(pairs.insert(std::minmax(a, b)).second) << a << "-" << b;
+  }
+  // The count after the last loop; the culling after it can only merge or drop edges.
+  EXPECT_LE(run.loop_edges.size(), static_cast<size_t>(run.stats.loop_edges));
+  // The map holds about one lap of keyframes (the culled laps' places are the kept lap's).
+  EXPECT_LE(run.active.size(), static_cast<size_t>(kPerLap + 5));
 }
 
 }  // namespace

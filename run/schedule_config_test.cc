@@ -1,12 +1,10 @@
 // Local-mapping schedule settings (issue 22): the waits of tracking for local mapping and the
-// final bundle adjustment are read (config/bonn.yaml: the hand-off wait on, the others off), and
-// bad values are named; so are the weak-frame keyframe rule and the fallback smoothing weight.
+// final bundle adjustment are read, default off, and bad values are named; so are the weak-frame
+// keyframe rule and the fallback smoothing weight.
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cstdlib>
 #include <fstream>
-#include <set>
 #include <sstream>
 #include <string>
 
@@ -17,36 +15,13 @@
 namespace dygslam {
 namespace {
 
-// config/bonn.yaml sets Tracking.handoff_wait_ms flat; a section that sets it again replaces
-// that line (the same key twice is an error).
-std::string WithoutFlatKeysOf(const std::string& preset, const std::string& section) {
-  std::set<std::string> replaced;
-  std::istringstream section_lines(section);
-  for (std::string line; std::getline(section_lines, line);) {
-    const size_t start = line.find_first_not_of(' ');
-    const size_t colon = line.find(':');
-    if (start != 0 && start != std::string::npos && colon != std::string::npos && colon > start)
-      replaced.insert("Tracking." + line.substr(start, colon - start) + ":");
-  }
-  std::istringstream preset_lines(preset);
-  std::string out;
-  for (std::string line; std::getline(preset_lines, line);) {
-    const bool drop = std::any_of(replaced.begin(), replaced.end(), [&](const std::string& key) {
-      return line.compare(0, key.size(), key) == 0;
-    });
-    if (!drop) out += line + "\n";
-  }
-  return out;
-}
-
 SystemOptions Options(const std::string& section) {
   const char* src = std::getenv("DYGSLAM_SOURCE_DIR");
   const std::string path = std::string(src ? src : ".") + "/config/bonn.yaml";
   std::ifstream in(path);
   std::stringstream text;
   text << in.rdbuf();
-  return SystemOptionsFromSettings(
-      ParseSettings(WithoutFlatKeysOf(text.str(), section) + "\n" + section, path));
+  return SystemOptionsFromSettings(ParseSettings(text.str() + "\n" + section, path));
 }
 
 void ExpectNamed(const std::string& section, const std::string& field) {
@@ -61,8 +36,7 @@ void ExpectNamed(const std::string& section, const std::string& field) {
 TEST(ScheduleConfig, WaitsAndFinalBundleAdjustmentAreReadAndChecked) {
   const SystemOptions defaults = Options("");
   EXPECT_EQ(defaults.tracking.keyframe_wait_ms, 0);
-  // config/bonn.yaml waits for local mapping after each keyframe (issue 22, session 10).
-  EXPECT_EQ(defaults.tracking.handoff_wait_ms, 1000);
+  EXPECT_EQ(defaults.tracking.handoff_wait_ms, 0);
   EXPECT_EQ(defaults.local_mapping.final_ba_iterations, 0);
   const SystemOptions set = Options(
       "Tracking:\n  keyframe_wait_ms: 50\n  handoff_wait_ms: 20.5\n"

@@ -195,6 +195,15 @@ size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
       SlamComponentOptions s;
       s.system = options.system;
       s.external_detections = options.run_detector;
+      if (s.external_detections) {
+        // Keyframes made on frames the detector component skipped (Detector.every_n_frames > 1)
+        // get their map mask from slam's own detector, the detector component's model and
+        // thread count (created on first use; SystemOptions::detect_skipped_keyframes). Without
+        // a mapper nobody uses the masks: no detection.
+        s.system.detector = DetectorOptionsFor(options);
+        s.system.detect_skipped_keyframes =
+            options.system.detect_skipped_keyframes && options.run_mapper;
+      }
       s.detection_wait = options.detection_wait;
       s.save_map = options.save_map;
       const SlamStats stats = RunSlam(participant, s, stop);

@@ -225,6 +225,32 @@ TEST(SlamCore, KeyframesOnFramesTheDetectorComponentSkippedGetDetectedBoxes) {
   EXPECT_GT(carried_differ, 0);
 }
 
+// The same on a slam host without the model (the detector component on another host): the
+// keyframes keep the carried boxes for their masks (a warning), the run goes on.
+TEST(SlamCore, KeyframesOfSkippedFramesKeepCarriedBoxesWithoutAModel) {
+  DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
+  DYGSLAM_REQUIRE_MODELS(models);
+  const RgbdDataset dataset = RgbdDataset::Open(dir);
+  DetectorOptions detector_options = DetectorOptionsForModel("yolo-fastest-1.1");
+  detector_options.num_threads = 1;
+  const std::unique_ptr<YoloDetector> component = YoloDetector::Create(detector_options);
+  DetectorOptions missing = detector_options;
+  missing.cfg_path = testing::MakeTempDir("slam_core_no_model") + "/missing.cfg";
+  const SkippedKeyframeRun without_model =
+      RunCadenceThroughSlamCore(dataset, component.get(), missing, true);
+  const SkippedKeyframeRun carried =
+      RunCadenceThroughSlamCore(dataset, component.get(), detector_options, false);
+  ASSERT_EQ(without_model.keyframes.size(), carried.keyframes.size());
+  int on_skipped = 0;
+  for (size_t i = 0; i < carried.keyframes.size(); ++i) {
+    const KeyframeData& k = without_model.keyframes[i];
+    if (without_model.skipped_stamps.count(k.stamp.nanoseconds())) ++on_skipped;
+    EXPECT_TRUE(SameBoxes(k.detections, carried.keyframes[i].detections)) << k.stamp.ToString();
+    EXPECT_EQ(cv::countNonZero(k.dynamic_mask != carried.keyframes[i].dynamic_mask), 0);
+  }
+  EXPECT_GT(on_skipped, 0);
+}
+
 TEST(SlamCore, BadOptionsAreRefusedByName) {
   SlamComponentOptions options;
   options.system = BonnSystemOptions();

@@ -302,6 +302,7 @@ class SystemImpl {
   Tracker tracker_;
   DynamicFilter filter_;
   std::unique_ptr<DetectionWorker> detection_worker_;  // created on first use
+  bool keyframe_detector_ok_ = true;  // false: no detector for keyframes (EmitKeyframe, warned)
   static constexpr size_t kMaxPrefetched = 4;
   std::deque<std::shared_ptr<DetectionJob>> prefetched_;
   // detection_every_n_frames > 1: frames announced by Prefetch, not yet submitted.
@@ -577,10 +578,19 @@ void SystemImpl::EmitKeyframe(const std::shared_ptr<KeyFrame>& keyframe,
     // so the trajectory does not depend on whether a map is built). The own detector is created
     // here on first use when boxes come from outside.
     std::optional<std::vector<Detection>> boxes = prepared.detections;
-    if (prepared.detector_skipped && options_.detect_skipped_keyframes &&
+    if (prepared.detector_skipped && options_.detect_skipped_keyframes && keyframe_detector_ok_ &&
         input.rgb.type() == CV_8UC3) {
-      EnsureDetector();
-      boxes = detection_worker_->Submit(input.rgb).result.get();
+      try {
+        EnsureDetector();
+        boxes = detection_worker_->Submit(input.rgb).result.get();
+      } catch (const InputError& e) {
+        // Boxes from outside (the own detector would have failed on its first frame): no model
+        // here. The carried boxes stay; said once.
+        LOG_WARNING << "keyframes on frames the detector skipped keep the carried boxes for their "
+                       "map mask: "
+                    << e.what();
+        keyframe_detector_ok_ = false;
+      }
     }
     data.dynamic_mask =
         ComputeDynamicMask(input.rgb.size(), prepared.depth_m, boxes ? *boxes : kNoDetections,

@@ -195,6 +195,26 @@ size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
       SlamComponentOptions s;
       s.system = options.system;
       s.external_detections = options.run_detector;
+      if (s.external_detections) {
+        // Keyframes made on frames the detector component skipped (Detector.every_n_frames > 1)
+        // get their map mask from slam's own detector, the detector component's model and
+        // thread count (created on first use; SystemOptions::detect_skipped_keyframes). Without
+        // a mapper nobody uses the masks: no detection. A slam host without the models (the
+        // detector on another host) keeps the carried boxes for those masks, with a warning.
+        const bool detect = options.system.detect_skipped_keyframes && options.run_mapper &&
+                            options.system.detection_every_n_frames > 1;
+        s.system.detect_skipped_keyframes = false;
+        if (detect) {
+          try {
+            s.system.detector = DetectorOptionsFor(options);
+            s.system.detect_skipped_keyframes = true;
+          } catch (const InputError& e) {
+            LOG_WARNING << "slam: keyframes on frames the detector skips keep the carried boxes "
+                           "for their map mask (no detector model here: "
+                        << e.what() << ")";
+          }
+        }
+      }
       s.detection_wait = options.detection_wait;
       s.save_map = options.save_map;
       const SlamStats stats = RunSlam(participant, s, stop);

@@ -3,8 +3,9 @@
 // System's box propagation, as in the direct loop); slam does not wait for the skipped frames, so
 // --deterministic stays deterministic: the direct loop, the pipeline on threads of one process and
 // one process per component write the same trajectory, byte for byte. 60 frames with people in
-// view (rgb.txt entries 100-160 of bonn_crowd_part). Runs the dygslam binary inside the test's
-// network namespace; DDS domains 225-226.
+// view (rgb.txt entries 100-160 of bonn_crowd_part). Keyframes made on skipped frames get their
+// map mask from slam's own detector, as in the direct loop: the same map.bt in all modes. Runs
+// the dygslam binary inside the test's network namespace; DDS domains 225-226 and 185-186.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -43,13 +44,15 @@ std::string ConfigWithCadence(const std::string& dir, int every_n) {
   return path;
 }
 
-// `dygslam run` on entries 100-160, --deterministic --no-map, output and log in dir/name.
+// `dygslam run` on rgb.txt entries `frames`, --deterministic, full filter, --no-map unless `map`,
+// output and log in dir/name.
 int RunMode(const std::string& dataset, const std::string& config, const std::string& dir,
-            const std::string& name, const std::string& extra) {
+            const std::string& name, const std::string& extra,
+            const std::string& frames = "100:160", bool map = false) {
   std::ostringstream command;
-  command << Binary() << " run " << dataset << " --config " << config
-          << " --frames 100:160 --deterministic --no-map --filter full --out " << dir << "/" << name
-          << " " << extra << " > " << dir << "/" << name << ".log 2>&1";
+  command << Binary() << " run " << dataset << " --config " << config << " --frames " << frames
+          << (map ? "" : " --no-map") << " --deterministic --filter full --out " << dir << "/"
+          << name << " " << extra << " > " << dir << "/" << name << ".log 2>&1";
   const int status = std::system(command.str().c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
@@ -76,6 +79,36 @@ TEST(Cadence, DeterministicTrajectoryIdenticalInAllModes) {
     EXPECT_NE(log.find("40 skipped by the detector cadence"), std::string::npos) << mode << "\n"
                                                                                  << log;
     EXPECT_NE(log.find("frames: 60 processed"), std::string::npos) << mode << "\n" << log;
+  }
+}
+
+// Issue 19, lever 4: the detector component skips 2 frames of 3; a keyframe made on a skipped
+// frame gets its map mask from slam's own detector (created on first use, the detector
+// component's model and thread count), as `--direct` does with its own detector: the OctoMap of
+// entries 100-145 (8 keyframes, 6 on skipped frames) is the same, byte for byte, in the direct
+// loop, on threads of one process and with one process per component. With the carried boxes
+// for those masks (before) the DDS maps differed from the direct one.
+TEST(Cadence, KeyframesOfSkippedFramesGetTheSameMapMaskAsDirect) {
+  DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
+  const std::string tmp = testing::MakeTempDir("dds_cadence_map");
+  const std::string config = ConfigWithCadence(tmp, 3);
+  const std::string frames = "100:145";
+  ASSERT_EQ(RunMode(dataset, config, tmp, "direct", "--direct", frames, true), 0)
+      << ReadAll(tmp + "/direct.log");
+  ASSERT_EQ(RunMode(dataset, config, tmp, "single", "--domain 185", frames, true), 0)
+      << ReadAll(tmp + "/single.log");
+  ASSERT_EQ(RunMode(dataset, config, tmp, "multi", "--domain 186 --processes", frames, true), 0)
+      << ReadAll(tmp + "/multi.log");
+  const std::string direct_map = ReadAll(tmp + "/direct/map.bt");
+  ASSERT_GT(direct_map.size(), 1000u) << ReadAll(tmp + "/direct.log");
+  const std::string direct = ReadAll(tmp + "/direct/trajectory.txt");
+  for (const std::string mode : {"single", "multi"}) {
+    const std::string log = ReadAll(tmp + "/" + mode + ".log");
+    EXPECT_EQ(ReadAll(tmp + "/" + mode + "/trajectory.txt"), direct) << mode << "\n" << log;
+    EXPECT_NE(log.find("30 frames skipped"), std::string::npos) << mode << "\n" << log;
+    EXPECT_TRUE(ReadAll(tmp + "/" + mode + "/map.bt") == direct_map)
+        << mode << ": map.bt differs from the direct loop's\n"
+        << log;
   }
 }
 

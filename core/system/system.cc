@@ -302,6 +302,7 @@ class SystemImpl {
   Tracker tracker_;
   DynamicFilter filter_;
   std::unique_ptr<DetectionWorker> detection_worker_;  // created on first use
+  bool keyframe_detector_ok_ = true;  // false: no detector for keyframes (EmitKeyframe, warned)
   static constexpr size_t kMaxPrefetched = 4;
   std::deque<std::shared_ptr<DetectionJob>> prefetched_;
   // detection_every_n_frames > 1: frames announced by Prefetch, not yet submitted.
@@ -340,7 +341,9 @@ struct SystemImpl::PreparedFrame {
   // nullopt: none (the filter mode needs none, or none were given).
   std::optional<std::vector<Detection>> detections;
   bool propagate_boxes = false;       // own detector on every n-th frame: carry boxes in between
-  bool own_detector_skipped = false;  // the own detector skipped this frame: boxes carried
+  // The detector skipped this frame (the own detector's cadence, or one outside that skips
+  // frames: FeedRgbdFrameCarryingBoxes): its boxes are carried.
+  bool detector_skipped = false;
 
   const std::vector<Detection>& boxes() const { return detections ? *detections : kNoDetections; }
 };
@@ -429,7 +432,7 @@ SystemImpl::PreparedFrame SystemImpl::Prepare(const RgbdFrame& frame, bool carry
   } else if (own_detector || (need_detections && carry_boxes)) {
     prepared.detections = boxes_.Predict();
     result->detections_carried = true;
-    prepared.own_detector_skipped = own_detector;
+    prepared.detector_skipped = true;
   } else {
     prepared.detections = frame.detections;
     // Given from outside: the boxes the next skipped frames carry.
@@ -569,13 +572,25 @@ void SystemImpl::EmitKeyframe(const std::shared_ptr<KeyFrame>& keyframe,
     data.world_from_cam = *result->world_from_cam;
     data.rgb = input.rgb;
     data.depth = prepared.depth_m;
-    // A keyframe on a frame the own detector skipped: its mask for the map from the detector's
-    // own boxes on this frame (carried boxes fit the people less well; tracking keeps using the
-    // carried ones, so the trajectory does not depend on whether a map is built).
+    // A keyframe on a frame the detector skipped (own cadence, or a detector outside that skips
+    // frames, e.g. the DDS detector component): its mask for the map from the detector run on
+    // this frame (carried boxes fit the people less well; tracking keeps using the carried ones,
+    // so the trajectory does not depend on whether a map is built). The own detector is created
+    // here on first use when boxes come from outside.
     std::optional<std::vector<Detection>> boxes = prepared.detections;
-    if (prepared.own_detector_skipped && options_.detect_skipped_keyframes) {
-      EnsureDetector();
-      boxes = detection_worker_->Submit(input.rgb).result.get();
+    if (prepared.detector_skipped && options_.detect_skipped_keyframes && keyframe_detector_ok_ &&
+        input.rgb.type() == CV_8UC3) {
+      try {
+        EnsureDetector();
+        boxes = detection_worker_->Submit(input.rgb).result.get();
+      } catch (const InputError& e) {
+        // Boxes from outside (the own detector would have failed on its first frame): no model
+        // here. The carried boxes stay; said once.
+        LOG_WARNING << "keyframes on frames the detector skipped keep the carried boxes for their "
+                       "map mask: "
+                    << e.what();
+        keyframe_detector_ok_ = false;
+      }
     }
     data.dynamic_mask =
         ComputeDynamicMask(input.rgb.size(), prepared.depth_m, boxes ? *boxes : kNoDetections,

@@ -93,9 +93,11 @@ struct SystemOptions {
   // FeedRgbdFrameCarryingBoxes).
   int detection_every_n_frames = 1;
   // detection_every_n_frames > 1 and a keyframe callback set (a map is built): a keyframe made on
-  // a frame the internal detector skipped gets its dynamic mask (KeyframeData) from the detector
-  // run on that frame then, not from the carried boxes (tracking keeps the carried boxes). Costs
-  // one detection per such keyframe; false: the carried boxes.
+  // a frame the detector skipped (the internal one's cadence, or a detector outside the System:
+  // FeedRgbdFrameCarryingBoxes) gets its dynamic mask and detections (KeyframeData) from the
+  // internal detector run on that frame then (`detector` options; created on first use), not
+  // from the carried boxes; tracking keeps the carried boxes. Costs one detection per such
+  // keyframe; false: the carried boxes.
   bool detect_skipped_keyframes = true;
   BoxPropagationOptions box_propagation;
   // Crowded frames: when fewer than this share of nFeatures survive the filter, features are
@@ -168,7 +170,9 @@ class System {
   // SystemOptions::detection_every_n_frames = n > 1, e.g. the DDS detector component): filtered
   // with the boxes of the last detections given to FeedRgbdFrame, carried and shifted exactly as
   // for the internal detector's skipped frames (FrameResult::detections_carried). With n = 1 no
-  // boxes are carried: the frame goes on without boxes. frame.detections is ignored.
+  // boxes are carried: the frame goes on without boxes. frame.detections is ignored. A keyframe
+  // made on such a frame gets the internal detector's boxes for its mask
+  // (SystemOptions::detect_skipped_keyframes).
   FrameResult FeedRgbdFrameCarryingBoxes(const RgbdFrame& frame);
 
   // Pipelining: starts the internal detector on a frame that will be fed next (dataset runs know

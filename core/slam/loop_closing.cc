@@ -1,6 +1,9 @@
 #include "core/slam/loop_closing.h"
 
 #include <ceres/ceres.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -945,6 +948,19 @@ bool LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& lo
   return true;
 }
 
+namespace {
+
+// A global BA allocates the whole map's problem at once (tens of MB, in its thread's malloc arena)
+// and frees it at the end; glibc keeps freed arena pages resident. The 30-minute soak saw RSS step
+// up 18 MB around its one global BA while the heap in use stayed flat: hand the pages back.
+void ReleaseFreedMemory() {
+#ifdef __GLIBC__
+  malloc_trim(0);
+#endif
+}
+
+}  // namespace
+
 void LoopCloser::StartGlobalBundleAdjustment(int64_t loop_kf_id) {
   const int64_t epoch = map_->CorrectionEpoch();
   std::lock_guard<std::mutex> lock(global_ba_mutex_);
@@ -955,9 +971,13 @@ void LoopCloser::StartGlobalBundleAdjustment(int64_t loop_kf_id) {
   global_ba_abort_ = false;
   if (!threaded_) {
     RunGlobalBundleAdjustment(epoch);
+    ReleaseFreedMemory();
     return;
   }
-  global_ba_thread_ = std::thread([this, epoch] { RunGlobalBundleAdjustment(epoch); });
+  global_ba_thread_ = std::thread([this, epoch] {
+    RunGlobalBundleAdjustment(epoch);
+    ReleaseFreedMemory();
+  });
 }
 
 void LoopCloser::RunGlobalBundleAdjustment(int64_t epoch) {

@@ -168,6 +168,13 @@ SkippedKeyframeRun RunCadenceThroughSlamCore(const RgbdDataset& dataset, YoloDet
   return run;
 }
 
+// The detector component's options (components/pipeline.cc: DetectorOptionsFor).
+DetectorOptions ComponentDetectorOptions() {
+  DetectorOptions options = DetectorOptionsForModel("yolo-fastest-1.1");
+  options.num_threads = 1;
+  return options;
+}
+
 bool SameBoxes(const std::vector<Detection>& a, const std::vector<Detection>& b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); ++i)
@@ -180,9 +187,7 @@ TEST(SlamCore, KeyframesOnFramesTheDetectorComponentSkippedGetDetectedBoxes) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
   DYGSLAM_REQUIRE_MODELS(models);
   const RgbdDataset dataset = RgbdDataset::Open(dir);
-  // The detector component's options (components/pipeline.cc: DetectorOptionsFor).
-  DetectorOptions detector_options = DetectorOptionsForModel("yolo-fastest-1.1");
-  detector_options.num_threads = 1;
+  const DetectorOptions detector_options = ComponentDetectorOptions();
   const std::unique_ptr<YoloDetector> component = YoloDetector::Create(detector_options);
   const SkippedKeyframeRun detected =
       RunCadenceThroughSlamCore(dataset, component.get(), detector_options, true);
@@ -231,8 +236,7 @@ TEST(SlamCore, KeyframesOfSkippedFramesKeepCarriedBoxesWithoutAModel) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
   DYGSLAM_REQUIRE_MODELS(models);
   const RgbdDataset dataset = RgbdDataset::Open(dir);
-  DetectorOptions detector_options = DetectorOptionsForModel("yolo-fastest-1.1");
-  detector_options.num_threads = 1;
+  const DetectorOptions detector_options = ComponentDetectorOptions();
   const std::unique_ptr<YoloDetector> component = YoloDetector::Create(detector_options);
   DetectorOptions missing = detector_options;
   missing.cfg_path = testing::MakeTempDir("slam_core_no_model") + "/missing.cfg";

@@ -69,7 +69,8 @@ TrackResult Tracker::Track(Frame frame) {
         for (size_t i = 0; i < frame.size(); ++i) {
           if (frame.outlier[i]) frame.map_points[i] = nullptr;
         }
-        if (!localization_ && NeedNewKeyFrame(frame)) result.new_keyframe = CreateKeyFrame(frame);
+        if (!localization_ && NeedNewKeyFrame(frame, lock))
+          result.new_keyframe = CreateKeyFrame(frame);
         if (result.new_keyframe) RememberDenseKeyFrame(result.new_keyframe, frame);
         result.map_points = frame.map_points;
         records_.push_back({frame.stamp, reference_kf_->id,
@@ -379,7 +380,7 @@ bool Tracker::TrackLocalMap(Frame& frame) {
          (static_inliers >= options_.local_map_min_inliers && last_relocalization_frame_id_ < 0);
 }
 
-bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
+bool Tracker::NeedNewKeyFrame(const Frame& frame, std::unique_lock<std::mutex>& map_lock) {
   const int64_t kfs = static_cast<int64_t>(map_->NumKeyFrames());
   if (frame.id < last_relocalization_frame_id_ + options_.max_frames_between_keyframes &&
       kfs > options_.max_frames_between_keyframes)
@@ -421,8 +422,16 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
   // A keyframe is due and local mapping is still busy with the previous one: wait for it a
   // little (keyframe_wait_ms), so that the keyframe goes in on a refined map instead of being
   // skipped or queued (the deterministic schedule; issue 22, BENCHMARKS.md).
-  if (c2 && !mapper_idle && options_.keyframe_wait_ms > 0)
+  // Tracking holds the map lock, which local mapping needs to finish: released for the wait
+  // (before, the wait always ran into its timeout; issue 22, BENCHMARKS.md). A loop correction
+  // meanwhile moved the map under this frame's pose: no keyframe from it.
+  if (c2 && !mapper_idle && options_.keyframe_wait_ms > 0 && !deterministic_) {
+    const int64_t epoch = map_->CorrectionEpoch();
+    map_lock.unlock();
     mapper_idle = local_mapper_.WaitIdle(options_.keyframe_wait_ms);
+    map_lock.lock();
+    if (map_->CorrectionEpoch() != epoch) return false;
+  }
   const bool c1a = frame.id >= last_kf_frame_id_ + options_.max_frames_between_keyframes;
   const bool c1b = mapper_idle;
   const bool c1c = last_inliers_ < ref_matches * 0.25 || need_close;

@@ -181,7 +181,9 @@ class Tracker {
   bool Relocalize(Frame& frame);
   bool TrackLocalMap(Frame& frame);
   void UpdateLocalMap(Frame& frame);
-  bool NeedNewKeyFrame(const Frame& frame) const;
+  // `map_lock` holds the map's mutex; the keyframe wait (options_.keyframe_wait_ms) releases it
+  // while it waits, so that local mapping can finish.
+  bool NeedNewKeyFrame(const Frame& frame, std::unique_lock<std::mutex>& map_lock);
   std::shared_ptr<KeyFrame> CreateKeyFrame(Frame& frame);
   // tracking_fallback.cc: the dense estimate of a frame feature tracking could not hold.
   bool TrackWithStaticDepth(Frame& frame, const std::optional<Rigid3d>& predicted);

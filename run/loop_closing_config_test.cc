@@ -9,6 +9,7 @@
 
 #include "core/config/settings.h"
 #include "run/system_config.h"
+#include "tests/support/settings_text.h"
 
 namespace dygslam {
 namespace {
@@ -19,7 +20,7 @@ std::string Preset() {
   std::ifstream in(path);
   std::stringstream text;
   text << in.rdbuf();
-  return text.str();
+  return testing::WithoutSection(text.str(), "Tracking");  // the cases bring their own
 }
 
 SystemOptions Options(const std::string& section) {

@@ -17,7 +17,9 @@
 # env:OPENCV_FOR_THREADS_NUM=1 or env:GLIBC_TUNABLES=glibc.malloc.trim_threshold=67108864).
 # CPU_BUDGET_CASE=robot runs BUILD/tests/cpu_per_frame_benchmark (one run per round) instead of
 # `dygslam run`: the frames decoded beforehand, the System's CPU only (the robot case); the table
-# then also gives each configuration's CPU per round as a ratio of the first configuration's.
+# then also gives each configuration's CPU per round as a ratio of the first configuration's, and
+# every configuration runs with Tracking.handoff_wait_ms=0 (a robot's camera does not wait for
+# local mapping) unless its parts set that key.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 build=$1 dataset=$2 runs=$3 out=$4
@@ -37,6 +39,8 @@ for spec in "$@"; do
   filter=${parts[0]}
   cfg=$out/$name.yaml
   keys=()
+  # The robot case runs live: no hand-off wait (the presets' dataset-run setting) unless named.
+  [ "$case_" = robot ] && keys+=("Tracking.handoff_wait_ms=0")
   echo "$bin" > "$out/$name.bin"
   : > "$out/$name.env"
   for part in "${parts[@]:1}"; do

@@ -102,7 +102,7 @@ for r in $(seq 1 "$runs"); do
       env ${envs[@]+"${envs[@]}"} /usr/bin/time -f "cpu_s %U %S wall_s %e" "$(cat "$out/$name.bin")" run "$dataset" --filter "$(cat "$out/$name.filter")" \
       --config "$out/$name.yaml" --out "$dir" ${DYGSLAM_DOMAIN_ID:+--domain $DYGSLAM_DOMAIN_ID} $args \
       > "$dir.log" 2>&1 || { echo "run $name-$r failed:" >&2; tail -n 20 "$dir.log" >&2; exit 1; }
-    echo "  $name run $r: $(grep -o '[0-9.]* fps' "$dir.log" | head -1), $(grep -o 'ATE RMSE [0-9.]* m' "$dir.log" | head -1), $(grep -a 'cpu_s' "$dir.log")"
+    echo "  $name run $r: $(grep -a '^frames:' "$dir.log" | grep -o '[0-9.]* fps' | tail -1), $(grep -o 'ATE RMSE [0-9.]* m' "$dir.log" | head -1), $(grep -a 'cpu_s' "$dir.log")"
   done
 done
 echo "load at end: $(cut -d' ' -f1-3 /proc/loadavg)"
@@ -141,7 +141,8 @@ for name in names:
         frames = int(re.search(r"frames: (\d+) processed", log).group(1))
         u, s = map(float, re.search(r"cpu_s ([\d.]+) ([\d.]+)", log).groups())
         cpu.append(1000 * (u + s) / frames)
-        m = re.search(r"([\d.]+) fps", log); fps.append(float(m.group(1)) if m else float("nan"))
+        # the summary line (the first "fps" of a log is the first progress line's)
+        m = re.search(r"^frames:.*?([\d.]+) fps", log, re.M); fps.append(float(m.group(1)) if m else float("nan"))
         m = re.search(r"ATE RMSE ([\d.]+)", log); ate.append(float(m.group(1)) if m else float("nan"))
     print(f"| {name} | {st.median(cpu):.1f} ({min(cpu):.1f}-{max(cpu):.1f}) | {st.median(fps):.1f} | "
           f"{st.median(ate):.4f} ({min(ate):.4f}-{max(ate):.4f}) |")

@@ -16,16 +16,24 @@
 namespace dygslam {
 namespace {
 
-SystemOptions Options(const std::string& section) {
+std::string PresetPath(const std::string& name) {
   const char* src = std::getenv("DYGSLAM_SOURCE_DIR");
-  const std::string path = std::string(src ? src : ".") + "/config/bonn.yaml";
+  return std::string(src ? src : ".") + "/config/" + name + ".yaml";
+}
+
+std::string ReadText(const std::string& path) {
   std::ifstream in(path);
   std::stringstream text;
   text << in.rdbuf();
+  return text.str();
+}
+
+SystemOptions Options(const std::string& section) {
+  const std::string path = PresetPath("bonn");
   // The preset's own Tracking: section (the dataset-run hand-off wait) left out: the cases
   // bring theirs, and the code's defaults are what "" checks.
   return SystemOptionsFromSettings(
-      ParseSettings(testing::WithoutSection(text.str(), "Tracking") + "\n" + section, path));
+      ParseSettings(testing::WithoutSection(ReadText(path), "Tracking") + "\n" + section, path));
 }
 
 void ExpectNamed(const std::string& section, const std::string& field) {
@@ -57,13 +65,9 @@ TEST(ScheduleConfig, WaitsAndFinalBundleAdjustmentAreReadAndChecked) {
 // the deterministic trajectory; README "Hand-off wait"); the options struct's default, what a
 // settings file of one's own gets, stays 0 (live use).
 TEST(ScheduleConfig, DatasetPresetsSetTheHandOffWait) {
-  const char* src = std::getenv("DYGSLAM_SOURCE_DIR");
   for (const char* name : {"bonn", "tum1", "tum2", "tum3"}) {
-    const std::string path = std::string(src ? src : ".") + "/config/" + name + ".yaml";
-    std::ifstream in(path);
-    std::stringstream text;
-    text << in.rdbuf();
-    const SystemOptions preset = SystemOptionsFromSettings(ParseSettings(text.str(), path));
+    const std::string path = PresetPath(name);
+    const SystemOptions preset = SystemOptionsFromSettings(ParseSettings(ReadText(path), path));
     EXPECT_EQ(preset.tracking.handoff_wait_ms, 1000) << path;
     EXPECT_EQ(preset.tracking.keyframe_wait_ms, 0) << path;
   }

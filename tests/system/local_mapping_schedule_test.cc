@@ -27,30 +27,52 @@ SyntheticOptions ScheduleScene() {
   return synth;
 }
 
-TEST(LocalMappingSchedule, KeyframesHandedToAnIdleMapperGetTheirWholeLocalBa) {
-  const SyntheticOptions synth = ScheduleScene();
-  const SyntheticScene scene(synth);
+// The scene's camera, no filter: the schedule alone is under test.
+SystemOptions ScheduleOptions(const SyntheticOptions& synth) {
   SystemOptions options;
   options.camera = synth.camera;
   options.sensor = synth.sensor;
   options.filter.mode = FilterMode::kNone;
-  options.tracking.handoff_wait_ms = 10000;  // real threading, but one keyframe at a time
+  return options;
+}
+
+struct ScheduledRun {
+  LocalMappingStats stats;
+  size_t poses = 0;
+};
+
+// The first `num_frames` frames of `scene` through a threaded System.
+ScheduledRun RunThreaded(const SystemOptions& options, const SyntheticScene& scene,
+                         int num_frames) {
   System system(options);
-  for (int i = 0; i < scene.num_frames(); ++i) {
+  for (int i = 0; i < num_frames; ++i) {
     const SyntheticFrame f = scene.RenderFrame(i);
     system.FeedRgbdFrame(f.rgb, f.depth, f.stamp);
   }
   system.Shutdown();
-  const LocalMappingStats stats = system.LocalMappingStatistics();
+  return {system.LocalMappingStatistics(), system.Trajectory().size()};
+}
+
+// Every keyframe was handed to an idle local mapper and none had its local BA cut short.
+void ExpectNoKeyframeQueuedNoBaInterrupted(const LocalMappingStats& stats) {
   ASSERT_GE(stats.keyframes_processed, 4) << "too few keyframes to test the schedule";
   ASSERT_EQ(stats.queue_at_insert.size(), static_cast<size_t>(stats.keyframes_processed));
-  ASSERT_EQ(stats.lag_ms.size(), static_cast<size_t>(stats.keyframes_processed));
   for (size_t k = 0; k < stats.queue_at_insert.size(); ++k)
-    EXPECT_EQ(stats.queue_at_insert[k], 0) << "keyframe " << k << " queued behind another";
+    EXPECT_EQ(stats.queue_at_insert[k], 0) << "keyframe " << k << " queued behind a busy mapper";
   EXPECT_EQ(stats.ba_interrupted, 0) << "of " << stats.keyframes_processed << " keyframes";
+}
+
+TEST(LocalMappingSchedule, KeyframesHandedToAnIdleMapperGetTheirWholeLocalBa) {
+  const SyntheticOptions synth = ScheduleScene();
+  const SyntheticScene scene(synth);
+  SystemOptions options = ScheduleOptions(synth);
+  options.tracking.handoff_wait_ms = 10000;  // real threading, but one keyframe at a time
+  const ScheduledRun run = RunThreaded(options, scene, scene.num_frames());
+  ExpectNoKeyframeQueuedNoBaInterrupted(run.stats);
+  ASSERT_EQ(run.stats.lag_ms.size(), static_cast<size_t>(run.stats.keyframes_processed));
   // Only the first two keyframes go without local BA (it needs three keyframes in the map).
-  EXPECT_LE(stats.keyframes_without_ba, 2);
-  EXPECT_EQ(system.Trajectory().size(), static_cast<size_t>(scene.num_frames()));
+  EXPECT_LE(run.stats.keyframes_without_ba, 2);
+  EXPECT_EQ(run.poses, static_cast<size_t>(scene.num_frames()));
 }
 
 // Session 11: Tracking.keyframe_wait_ms (wait when a keyframe is due while local mapping is
@@ -63,30 +85,17 @@ TEST(LocalMappingSchedule, KeyframesHandedToAnIdleMapperGetTheirWholeLocalBa) {
 TEST(LocalMappingSchedule, KeyframeWaitLetsLocalMappingFinishFirst) {
   const SyntheticOptions synth = ScheduleScene();
   const SyntheticScene scene(synth);
-  SystemOptions options;
-  options.camera = synth.camera;
-  options.sensor = synth.sensor;
-  options.filter.mode = FilterMode::kNone;
+  SystemOptions options = ScheduleOptions(synth);
   options.tracking.handoff_wait_ms = 0;
   options.tracking.keyframe_wait_ms = 2000;  // generous: a wait that times out is the failure
   // A keyframe due on every frame (the map-point floor above any count), so that one is due
   // while local mapping is still busy with the previous one.
   options.tracking.keyframe_min_map_inliers = 1000000;
-  System system(options);
   const int num_frames = 30;
-  for (int i = 0; i < num_frames; ++i) {
-    const SyntheticFrame f = scene.RenderFrame(i);
-    system.FeedRgbdFrame(f.rgb, f.depth, f.stamp);
-  }
-  system.Shutdown();
-  const LocalMappingStats stats = system.LocalMappingStatistics();
-  ASSERT_GE(stats.keyframes_processed, 4) << "too few keyframes to test the schedule";
-  ASSERT_EQ(stats.queue_at_insert.size(), static_cast<size_t>(stats.keyframes_processed));
-  for (size_t k = 0; k < stats.queue_at_insert.size(); ++k)
-    EXPECT_EQ(stats.queue_at_insert[k], 0) << "keyframe " << k << " queued behind a busy mapper";
-  EXPECT_EQ(stats.ba_interrupted, 0) << "of " << stats.keyframes_processed << " keyframes";
-  EXPECT_GE(stats.keyframes_processed, num_frames / 2) << "the keyframe rule did not fire";
-  EXPECT_EQ(system.Trajectory().size(), static_cast<size_t>(num_frames));
+  const ScheduledRun run = RunThreaded(options, scene, num_frames);
+  ExpectNoKeyframeQueuedNoBaInterrupted(run.stats);
+  EXPECT_GE(run.stats.keyframes_processed, num_frames / 2) << "the keyframe rule did not fire";
+  EXPECT_EQ(run.poses, static_cast<size_t>(num_frames));
 }
 
 // Session 10: with the hand-off wait, a threaded run follows the deterministic schedule (local
@@ -100,10 +109,7 @@ TEST(LocalMappingSchedule, HandOffWaitGivesTheDeterministicTrajectory) {
   std::vector<SyntheticFrame> frames;
   for (int i = 0; i < scene.num_frames(); ++i) frames.push_back(scene.RenderFrame(i));
   auto run = [&](bool deterministic) {
-    SystemOptions options;
-    options.camera = synth.camera;
-    options.sensor = synth.sensor;
-    options.filter.mode = FilterMode::kNone;
+    SystemOptions options = ScheduleOptions(synth);
     options.deterministic = deterministic;
     options.tracking.handoff_wait_ms = 10000;  // no effect in deterministic mode
     System system(options);

@@ -182,6 +182,22 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
       {{DataTopic::kFrames, frames.guid()}, {DataTopic::kGroundTruth, gt_writer.guid()}},
       player.num_frames())));
 
+  // A slam that was there and left without COMPONENT_DONE (killed, or its DONE lost): its pose
+  // writer unmatched for 5 s. Then no acknowledgement and no DONE will come: stop waiting for them.
+  bool slam_seen = false, slam_gone_reported = false;
+  std::optional<Clock::time_point> slam_unmatched_since;
+  auto slam_gone = [&] {
+    const bool matched = poses.matched() > 0;
+    slam_seen = slam_seen || matched;
+    if (matched || !slam_seen) {
+      slam_unmatched_since.reset();
+      return false;
+    }
+    if (!slam_unmatched_since) slam_unmatched_since = Clock::now();
+    slam_gone_reported =
+        slam_gone_reported || Clock::now() - *slam_unmatched_since > std::chrono::seconds(5);
+    return slam_gone_reported;
+  };
   const auto readers_deadline =
       Clock::now() +
       std::chrono::milliseconds(static_cast<int64_t>(options.wait_for_readers_s * 1000));
@@ -250,10 +266,10 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
       const auto deadline = Clock::now() + std::chrono::milliseconds(
                                                static_cast<int64_t>(options.ack_timeout_s * 1000));
       std::unique_lock<std::mutex> lock(mutex);
-      while (acked < need && !stop->requested() && Clock::now() < deadline) {
+      while (acked < need && !stop->requested() && Clock::now() < deadline && !slam_gone()) {
         cv.wait_for(lock, std::chrono::milliseconds(20));
       }
-      if (acked < need && !stop->requested()) {
+      if (acked < need && !stop->requested() && !slam_gone()) {
         ++stats.ack_timeouts;
         LOG_WARNING << "player: no acknowledgement of frame " << need << " after "
                     << options.ack_timeout_s << " s; sending frame " << n;
@@ -276,10 +292,16 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   status.Write(ToMsg(
       ComponentStatus::EndOfStream(ComponentKind::kPlayer, stats.frames_published, last_seq)));
   LOG_INFO << "player: published " << stats.frames_published << " frames, end of stream";
-  // Stay alive (frames and ground truth remain available to late readers) until slam is done.
+  // Stay alive (frames and ground truth remain available to late readers) until slam is done, or
+  // gone without saying so.
   {
     std::unique_lock<std::mutex> lock(mutex);
-    while (!slam_done && !stop->requested()) cv.wait_for(lock, std::chrono::milliseconds(50));
+    while (!slam_done && !stop->requested() && !slam_gone()) {
+      cv.wait_for(lock, std::chrono::milliseconds(50));
+    }
+  }
+  if (slam_gone_reported) {
+    LOG_WARNING << "player: slam left without announcing that it is done; ending";
   }
   stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   {

@@ -28,6 +28,9 @@ namespace {
 constexpr std::chrono::milliseconds kMaxHold{5000};
 constexpr size_t kMaxHeldFrames = 32;
 constexpr size_t kMaxHeldDetections = 256;
+// A frame source whose writer is gone, with nothing new for this long, has ended (killed: its
+// writer leaves with the participant's lease, 20 s by default).
+constexpr std::chrono::seconds kSourceGone{5};
 }  // namespace
 
 SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
@@ -51,6 +54,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   int64_t end_frames = -1;
   size_t frames_received = 0;
   Clock::time_point last_frame_time = Clock::now();
+  bool frame_source_seen = false;  // a frame writer was matched
   int detector_writers_seen = 0;
   std::map<int64_t, double> inference_ms;  // detector component's time per frame stamp (ns)
   bool detector_done = false;    // the detector announced COMPONENT_DONE (finished, not lost)
@@ -233,6 +237,17 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
         const bool stale_end = end_frames >= 0 && pairer.pending_frames() == 0 &&
                                Clock::now() - last_frame_time > std::chrono::seconds(3);
         if ((all_in && pairer.pending_frames() == 0) || stale_end) break;
+        // A frame source that left without its END_OF_STREAM (killed, or the announcement lost)
+        // would leave slam waiting for ever: once its writer is gone and nothing arrived for
+        // kSourceGone, finish with the frames that came.
+        const int frame_writers = frames.matched();
+        frame_source_seen = frame_source_seen || frame_writers > 0;
+        if (end_frames < 0 && frame_source_seen && frame_writers == 0 &&
+            pairer.pending_frames() == 0 && Clock::now() - last_frame_time > kSourceGone) {
+          LOG_WARNING << "slam: the frame source left without announcing the end of its stream; "
+                      << "finishing with the " << frames_received << " frames received";
+          break;
+        }
         const auto deadline = pairer.NextDeadline();
         auto until = Clock::now() + std::chrono::milliseconds(20);
         if (deadline && *deadline < until) until = *deadline;

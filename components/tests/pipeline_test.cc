@@ -59,10 +59,14 @@ pid_t Spawn(const std::vector<std::string>& args, const std::string& log, bool n
   return pid;
 }
 
+// Exit code of child `pid`. Every run here ends within a minute even on a loaded machine; one
+// still running after 150 s hangs: the test fails at once with its threads' stacks (gdb) instead
+// of running into ctest's timeout with no output (and kills it, so the next wait goes on).
 int Wait(pid_t pid) {
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  std::string hang;
+  const int code = testing::WaitForExit(pid, 150, &hang);
+  if (code == -1) ADD_FAILURE() << hang;
+  return code;
 }
 
 // `dygslam run DATASET --config bonn.yaml --frames F --out OUT --domain D --quiet <extra>`.

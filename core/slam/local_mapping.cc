@@ -1,10 +1,12 @@
 #include "core/slam/local_mapping.h"
 
+#include <Eigen/SVD>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <set>
 
-#include <Eigen/SVD>
+#include "core/base/memory.h"
 
 namespace dygslam {
 
@@ -86,7 +88,8 @@ void LocalMapper::Process(const std::shared_ptr<KeyFrame>& kf) {
     }
   }
   if (options_.cull_keyframes) CullKeyFrames(kf);
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     stats_.keyframes_processed++;
@@ -113,6 +116,17 @@ void LocalMapper::Process(const std::shared_ptr<KeyFrame>& kf) {
   culled.swap(culled_since_callback_);
   if (callback && (!changed.empty() || !culled.empty())) callback(changed, culled);
   if (done) done(kf);
+  // Culled keyframes free their features and images in the middle of the heap, where glibc keeps
+  // the pages resident: a long run's resident set would creep up with a flat heap in use.
+  // The pages are the process's, so the count is too (one per process, any number of mappers).
+  static std::atomic<int> culled_since_trim{0};
+  constexpr int kTrimEveryCulledKeyFrames = 16;
+  if (!culled.empty() && culled_since_trim.fetch_add(static_cast<int>(culled.size())) +
+                                 static_cast<int>(culled.size()) >=
+                             kTrimEveryCulledKeyFrames) {
+    culled_since_trim = 0;
+    ReleaseFreedMemory();
+  }
 }
 
 void LocalMapper::CullRecentPoints(const std::shared_ptr<KeyFrame>& kf) {

@@ -1,9 +1,6 @@
 #include "core/slam/loop_closing.h"
 
 #include <ceres/ceres.h>
-#ifdef __GLIBC__
-#include <malloc.h>
-#endif
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -16,6 +13,7 @@
 #include <string>
 
 #include "core/base/log.h"
+#include "core/base/memory.h"
 #include "core/slam/cost_functions.h"
 #include "core/slam/pose_graph.h"
 
@@ -948,19 +946,9 @@ bool LoopCloser::CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& lo
   return true;
 }
 
-namespace {
-
 // A global BA allocates the whole map's problem at once (tens of MB, in its thread's malloc arena)
-// and frees it at the end; glibc keeps freed arena pages resident. The 30-minute soak saw RSS step
-// up 18 MB around its one global BA while the heap in use stayed flat: hand the pages back.
-void ReleaseFreedMemory() {
-#ifdef __GLIBC__
-  malloc_trim(0);
-#endif
-}
-
-}  // namespace
-
+// and frees it at the end: ReleaseFreedMemory hands the pages back (the 30-minute soak saw RSS step
+// up 18 MB around its one global BA while the heap in use stayed flat).
 void LoopCloser::StartGlobalBundleAdjustment(int64_t loop_kf_id) {
   const int64_t epoch = map_->CorrectionEpoch();
   std::lock_guard<std::mutex> lock(global_ba_mutex_);

@@ -148,6 +148,54 @@ TEST_F(Faults, MapperEndsWhenSlamDiesWithoutAnnouncingTheEnd) {
   EXPECT_GT(Extract(log, R"((\d+) keyframes in the map)"), 0) << log;
 }
 
+// slam dies (SIGKILL, no COMPONENT_DONE): the recorder and the player do not wait for ever either;
+// once slam's writers are gone (participant lease) and stay gone for 5 s, the recorder writes the
+// poses that came and the player ends, both exit 0 and say why.
+TEST_F(Faults, RecorderAndPlayerEndWhenSlamDiesWithoutAnnouncingTheEnd) {
+  const std::string tmp = testing::MakeTempDir("fault_slam_gone_recorder");
+  const int domain = 132;
+  const pid_t recorder = Run("recorder", tmp, domain, "0:300");
+  const pid_t slam = Run("slam", tmp, domain, "0:300", {"--filter", "none"});
+  const pid_t player = Run("player", tmp, domain, "0:300", {"--rate", "1", "--no-detector"});
+  std::this_thread::sleep_for(std::chrono::seconds(5));  // ~150 frames at 30 Hz
+  kill(slam, SIGKILL);
+  EXPECT_EQ(Wait(slam), 128 + SIGKILL);
+  EXPECT_EQ(Wait(player), 0) << ReadAll(tmp + "/player.log");
+  EXPECT_EQ(Wait(recorder), 0) << ReadAll(tmp + "/recorder.log");
+  EXPECT_NE(ReadAll(tmp + "/player.log").find("slam left without announcing"), std::string::npos)
+      << ReadAll(tmp + "/player.log");
+  const std::string log = ReadAll(tmp + "/recorder.log");
+  EXPECT_NE(log.find("slam left without announcing"), std::string::npos) << log;
+  const size_t poses = ReadTumTrajectory(tmp + "/out/trajectory.txt").size();
+  EXPECT_GT(poses, 10u) << log;
+  EXPECT_LT(poses, 300u) << log;
+}
+
+// The player dies (SIGKILL: no END_OF_STREAM): slam does not wait for the rest of the stream for
+// ever; once the frame writer is gone and nothing came for 5 s it finishes with the frames it got
+// (final trajectory to the recorder, COMPONENT_DONE) and exits 0.
+TEST_F(Faults, SlamEndsWhenThePlayerDiesWithoutAnnouncingTheEnd) {
+  const std::string tmp = testing::MakeTempDir("fault_player_gone");
+  const int domain = 133;
+  const pid_t recorder = Run("recorder", tmp, domain, "0:300");
+  const pid_t slam = Run("slam", tmp, domain, "0:300", {"--filter", "none"});
+  const pid_t player = Run("player", tmp, domain, "0:300", {"--rate", "1", "--no-detector"});
+  std::this_thread::sleep_for(std::chrono::seconds(5));
+  kill(player, SIGKILL);
+  EXPECT_EQ(Wait(player), 128 + SIGKILL);
+  EXPECT_EQ(Wait(slam), 0) << ReadAll(tmp + "/slam.log");
+  EXPECT_EQ(Wait(recorder), 0) << ReadAll(tmp + "/recorder.log");
+  const std::string log = ReadAll(tmp + "/slam.log");
+  EXPECT_NE(log.find("frame source left without announcing"), std::string::npos) << log;
+  const long frames = Extract(log, R"(slam: (\d+) frames)");
+  EXPECT_GT(frames, 10) << log;
+  EXPECT_LT(frames, 300) << log;
+  // The recorder got slam's final trajectory: one pose per processed frame.
+  EXPECT_NE(ReadAll(tmp + "/recorder.log").find("(final trajectory)"), std::string::npos)
+      << ReadAll(tmp + "/recorder.log");
+  EXPECT_EQ(static_cast<long>(ReadTumTrajectory(tmp + "/out/trajectory.txt").size()), frames);
+}
+
 TEST_F(Faults, DetectorKilledAndRestartedIsUsedAgain) {
   const std::string tmp = testing::MakeTempDir("fault_detector");
   const int domain = 122;

@@ -265,9 +265,10 @@ void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyF
       if (fixed.count(id)) problem.SetParameterBlockConstant(pose.data());
     }
     ceres::Solver::Options solver_options;
-    // The reduced camera system is dense for a local window (every keyframe sees most points):
-    // a dense Schur complement is cheaper there (local BA: 0.96x the CPU per frame on
-    // bonn_crowd_part, same ATE, BENCHMARKS.md issue 19); sparse for large global problems.
+    // The reduced camera system of a local window is small and dense (its keyframes share most
+    // points): a dense Schur complement suits it; sparse for large global problems. Same ATE on
+    // bonn_crowd_part; CPU per frame 0.96x in the dataset case, within the noise in the robot case
+    // (BENCHMARKS.md, issue 19, session 12).
     solver_options.linear_solver_type =
         poses.size() <= kDenseSchurMaxPoses ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
     solver_options.max_num_iterations = iterations;

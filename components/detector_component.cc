@@ -55,6 +55,7 @@ DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
   double total_ms = 0;
   size_t received = 0;
   auto idle_since = std::chrono::steady_clock::now();
+  bool frame_source_seen = false;  // a frame writer was matched
   ReadyAnnouncer announcer(ComponentKind::kDetector);
   while (!stop->requested()) {
     announcer.Poll(status, frames.matched() > 0 && writer.matched() > 0);
@@ -65,6 +66,16 @@ DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
       if (end_frames >= 0 &&
           (static_cast<int64_t>(received) >= end_frames ||
            std::chrono::steady_clock::now() - idle_since > std::chrono::seconds(2))) {
+        break;
+      }
+      // A frame source that left without END_OF_STREAM (killed, or the announcement lost): its
+      // writer gone and nothing for 5 s.
+      const int frame_writers = frames.matched();
+      frame_source_seen = frame_source_seen || frame_writers > 0;
+      if (end_frames < 0 && frame_source_seen && frame_writers == 0 &&
+          std::chrono::steady_clock::now() - idle_since > std::chrono::seconds(5)) {
+        LOG_WARNING << "detector: the frame source left without announcing the end of its "
+                       "stream; ending";
         break;
       }
       continue;

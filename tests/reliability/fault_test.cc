@@ -171,19 +171,25 @@ TEST_F(Faults, RecorderAndPlayerEndWhenSlamDiesWithoutAnnouncingTheEnd) {
   EXPECT_LT(poses, 300u) << log;
 }
 
-// The player dies (SIGKILL: no END_OF_STREAM): slam does not wait for the rest of the stream for
-// ever; once the frame writer is gone and nothing came for 5 s it finishes with the frames it got
-// (final trajectory to the recorder, COMPONENT_DONE) and exits 0.
+// The player dies (SIGKILL: no END_OF_STREAM): slam and the detector do not wait for the rest of
+// the stream for ever; once the frame writer is gone and nothing came for 5 s slam finishes with
+// the frames it got (final trajectory to the recorder, COMPONENT_DONE) and the detector ends, both
+// exit 0.
 TEST_F(Faults, SlamEndsWhenThePlayerDiesWithoutAnnouncingTheEnd) {
   const std::string tmp = testing::MakeTempDir("fault_player_gone");
   const int domain = 133;
   const pid_t recorder = Run("recorder", tmp, domain, "0:300");
   const pid_t slam = Run("slam", tmp, domain, "0:300", {"--filter", "none"});
-  const pid_t player = Run("player", tmp, domain, "0:300", {"--rate", "1", "--no-detector"});
+  const pid_t detector = Run("detector", tmp, domain, "0:300");
+  const pid_t player = Run("player", tmp, domain, "0:300", {"--rate", "1"});
   std::this_thread::sleep_for(std::chrono::seconds(5));
   kill(player, SIGKILL);
   EXPECT_EQ(Wait(player), 128 + SIGKILL);
   EXPECT_EQ(Wait(slam), 0) << ReadAll(tmp + "/slam.log");
+  EXPECT_EQ(Wait(detector), 0) << ReadAll(tmp + "/detector.log");
+  EXPECT_NE(ReadAll(tmp + "/detector.log").find("frame source left without announcing"),
+            std::string::npos)
+      << ReadAll(tmp + "/detector.log");
   EXPECT_EQ(Wait(recorder), 0) << ReadAll(tmp + "/recorder.log");
   const std::string log = ReadAll(tmp + "/slam.log");
   EXPECT_NE(log.find("frame source left without announcing"), std::string::npos) << log;

@@ -73,8 +73,8 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
   // Since when no keyframe of this run arrived after slam's DONE (counting = true).
   bool idle_counting = false;
   Clock::time_point idle_since;
-  bool writer_seen = false;
-  std::optional<std::chrono::steady_clock::time_point> writer_gone_since;
+  WriterGoneWatch slam_gone(
+      std::chrono::milliseconds(static_cast<int64_t>(options.writer_gone_s * 1000)));
   std::optional<std::chrono::steady_clock::time_point> flush_deadline;
   ReadyAnnouncer announcer(ComponentKind::kMapper);
   while (true) {
@@ -86,13 +86,7 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
           std::chrono::milliseconds(static_cast<int64_t>(options.flush_timeout_s * 1000));
       if (keyframes.matched() == 0) *flush_deadline = std::chrono::steady_clock::now();
     }
-    const bool writer_matched = keyframes.matched() > 0;
-    writer_seen = writer_seen || writer_matched;
-    if (writer_matched || !writer_seen) {
-      writer_gone_since.reset();
-    } else if (!writer_gone_since) {
-      writer_gone_since = std::chrono::steady_clock::now();
-    }
+    const bool writer_gone = slam_gone.Update(keyframes.matched() > 0);
     std::optional<msg::Keyframe> sample;
     {
       // Received keyframes pass the gate; admitted ones are used in order.
@@ -122,9 +116,7 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
       }
     }
     if (!sample) {
-      if (writer_gone_since &&
-          std::chrono::steady_clock::now() - *writer_gone_since >
-              std::chrono::milliseconds(static_cast<int64_t>(options.writer_gone_s * 1000))) {
+      if (writer_gone) {
         LOG_WARNING << "mapper: slam's keyframe writer left " << options.writer_gone_s
                     << " s ago without announcing the end of its run; writing the map";
         break;

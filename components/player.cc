@@ -184,18 +184,10 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
 
   // A slam that was there and left without COMPONENT_DONE (killed, or its DONE lost): its pose
   // writer unmatched for 5 s. Then no acknowledgement and no DONE will come: stop waiting for them.
-  bool slam_seen = false, slam_gone_reported = false;
-  std::optional<Clock::time_point> slam_unmatched_since;
+  WriterGoneWatch slam_watch(std::chrono::seconds(5));
+  bool slam_gone_reported = false;
   auto slam_gone = [&] {
-    const bool matched = poses.matched() > 0;
-    slam_seen = slam_seen || matched;
-    if (matched || !slam_seen) {
-      slam_unmatched_since.reset();
-      return false;
-    }
-    if (!slam_unmatched_since) slam_unmatched_since = Clock::now();
-    slam_gone_reported =
-        slam_gone_reported || Clock::now() - *slam_unmatched_since > std::chrono::seconds(5);
+    slam_gone_reported = slam_gone_reported || slam_watch.Update(poses.matched() > 0);
     return slam_gone_reported;
   };
   const auto readers_deadline =

@@ -260,4 +260,28 @@ class ReadyAnnouncer {
   bool done_ = false;
 };
 
+// A peer that leaves without announcing it (killed: its writers go with its participant's lease;
+// or its announcement was missed): Update(matched) is true once the peer's writers were matched
+// and have been unmatched for longer than `after`. Used by the components that would otherwise
+// wait for the peer's END_OF_STREAM / COMPONENT_DONE for ever.
+class WriterGoneWatch {
+ public:
+  using Clock = std::chrono::steady_clock;
+  explicit WriterGoneWatch(Clock::duration after) : after_(after) {}
+  bool Update(bool matched, Clock::time_point now = Clock::now()) {
+    seen_ = seen_ || matched;
+    if (matched || !seen_) {
+      unmatched_since_.reset();
+      return false;
+    }
+    if (!unmatched_since_) unmatched_since_ = now;
+    return now - *unmatched_since_ > after_;
+  }
+
+ private:
+  Clock::duration after_;
+  bool seen_ = false;
+  std::optional<Clock::time_point> unmatched_since_;
+};
+
 }  // namespace dygslam

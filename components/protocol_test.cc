@@ -276,6 +276,23 @@ TEST(Protocol, GateReleaseAfterAnnouncementAndBounds) {
   EXPECT_EQ(gate.ignored(), 3u);
 }
 
+TEST(Protocol, WriterGoneWatchNeedsSeenThenUnmatchedLongerThanItsTime) {
+  using std::chrono::seconds;
+  const WriterGoneWatch::Clock::time_point t0{};
+  WriterGoneWatch never_matched(seconds(5));
+  EXPECT_FALSE(never_matched.Update(false, t0));
+  EXPECT_FALSE(never_matched.Update(false, t0 + seconds(60)));  // never there: not gone
+
+  WriterGoneWatch watch(seconds(5));
+  EXPECT_FALSE(watch.Update(true, t0));
+  EXPECT_FALSE(watch.Update(false, t0 + seconds(1)));  // unmatched since 1 s
+  EXPECT_FALSE(watch.Update(false, t0 + seconds(6)));  // 5 s: not longer than 5
+  EXPECT_FALSE(watch.Update(true, t0 + seconds(7)));   // back: the clock restarts
+  EXPECT_FALSE(watch.Update(false, t0 + seconds(8)));
+  EXPECT_FALSE(watch.Update(false, t0 + seconds(12)));
+  EXPECT_TRUE(watch.Update(false, t0 + seconds(14)));
+}
+
 TEST(Protocol, IgnoredSamplesNote) {
   const std::string note = IgnoredSamplesNote("7 keyframes");
   EXPECT_NE(note.find("ignored 7 keyframes"), std::string::npos);

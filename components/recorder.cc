@@ -137,8 +137,8 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
 
   {
     std::unique_lock<std::mutex> lock(mutex);
-    std::optional<std::chrono::steady_clock::time_point> done_at, flush_deadline, slam_gone_since;
-    bool slam_seen = false;  // slam's pose or trajectory writer was matched
+    std::optional<std::chrono::steady_clock::time_point> done_at, flush_deadline;
+    WriterGoneWatch slam_watch(std::chrono::seconds(5));
     ReadyAnnouncer announcer(ComponentKind::kRecorder);
     while (true) {
       if (!announcer.done()) {
@@ -161,14 +161,8 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
       }
       // A slam that was there and left without DONE (killed, or its DONE lost): both its writers
       // unmatched for 5 s; write what came.
-      const bool slam_matched = poses.matched() > 0 || trajectories.matched() > 0;
-      slam_seen = slam_seen || slam_matched;
-      if (slam_matched || !slam_seen) {
-        slam_gone_since.reset();
-      } else if (!slam_gone_since) {
-        slam_gone_since = std::chrono::steady_clock::now();
-      } else if (!slam_done &&
-                 std::chrono::steady_clock::now() - *slam_gone_since > std::chrono::seconds(5)) {
+      const bool slam_gone = slam_watch.Update(poses.matched() > 0 || trajectories.matched() > 0);
+      if (slam_gone && !slam_done) {
         LOG_WARNING << "recorder: slam left without announcing that it is done; writing the "
                        "poses that came";
         break;

@@ -121,9 +121,8 @@ void LocalMapper::Process(const std::shared_ptr<KeyFrame>& kf) {
   // The pages are the process's, so the count is too (one per process, any number of mappers).
   static std::atomic<int> culled_since_trim{0};
   constexpr int kTrimEveryCulledKeyFrames = 16;
-  if (!culled.empty() && culled_since_trim.fetch_add(static_cast<int>(culled.size())) +
-                                 static_cast<int>(culled.size()) >=
-                             kTrimEveryCulledKeyFrames) {
+  if (!culled.empty() &&
+      (culled_since_trim += static_cast<int>(culled.size())) >= kTrimEveryCulledKeyFrames) {
     culled_since_trim = 0;
     ReleaseFreedMemory();
   }

@@ -132,7 +132,7 @@ struct RosBridge::Impl {
   bool mapper_done = false;
   RosParticipantEntities graph;
 
-  std::shared_ptr<RosSession> ros;  // default-partition publisher / subscriber (ROS side)
+  std::shared_ptr<RosSession> ros;        // default-partition publisher / subscriber (ROS side)
   std::unique_ptr<RosInbound> inbound;    // options.inbound
   std::unique_ptr<RosOutbound> outbound;  // options.outbound
   std::unique_ptr<RosWriter<ParticipantEntitiesInfoPubSubType<RosDistro::kHumble>>> graph_humble;
@@ -274,6 +274,12 @@ bool RosBridge::outputs_done() const {
 
 int RosBridge::matched_ros_writers() const {
   return impl_->outbound ? impl_->outbound->matched_ros_writers() : 0;
+}
+
+int RosBridge::matched_pipeline_topics() const {
+  if (!impl_->outbound) return 0;
+  const bool poses = impl_->pose_reader && impl_->pose_reader->matched() > 0;
+  return (poses ? 1 : 0) + impl_->outbound->matched_pipeline_topics();
 }
 
 RosBridgeStats RosBridge::stats() const {

@@ -149,6 +149,11 @@ class RosBridge {
   // octomap) have matched at least one reader (0 without outbound). A ROS topic is volatile
   // (except tf_static / octomap): a sample written before its reader matched is not delivered.
   int matched_ros_writers() const;
+  // How many of the pipeline topics the outbound half reads (camera pose, trajectory, detections,
+  // map update) have a matched writer (0 without outbound). The detections writer goes away
+  // with the detector at the end of the stream: a bridge that discovers the pipeline later gets
+  // none of them.
+  int matched_pipeline_topics() const;
   RosBridgeStats stats() const;
   // What the bridge announced on ros_discovery_info (empty nodes if announce_node is false).
   RosParticipantEntities graph_entry() const;

@@ -84,6 +84,14 @@ void RosOutbound::WaitForAcknowledgments(std::chrono::milliseconds timeout) {
 
 bool RosOutbound::map_writer_matched() const { return map_reader_ && map_reader_->matched() > 0; }
 
+int RosOutbound::matched_pipeline_topics() const {
+  int n = 0;
+  if (trajectory_reader_ && trajectory_reader_->matched() > 0) ++n;
+  if (detections_reader_ && detections_reader_->matched() > 0) ++n;
+  if (map_reader_ && map_reader_->matched() > 0) ++n;
+  return n;
+}
+
 int RosOutbound::matched_ros_writers() const {
   int n = 0;
   if (pose_writer_ && pose_writer_->matched() > 0) ++n;

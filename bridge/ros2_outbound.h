@@ -63,6 +63,8 @@ class RosOutbound : public RosHalf {
 
   // A mapper's MapUpdate writer is matched (its last map is still to come at the end).
   bool map_writer_matched() const;
+  // How many of the pipeline readers (trajectory, detections, map update) have a matched writer.
+  int matched_pipeline_topics() const;
   // How many of the 7 ROS writers have matched at least one reader.
   int matched_ros_writers() const;
   // The outbound fields of the bridge statistics (the inbound ones stay 0).

@@ -47,9 +47,19 @@ PipelineOptions BridgeFedPipeline(const SystemOptions& system, const std::string
   return po;
 }
 
-ComponentThreads::ComponentThreads(const PipelineOptions& options) : options_(options) {
-  names_ = {"recorder", "slam"};
-  if (options_.NeedsDetectorComponent()) names_.push_back("detector");
+namespace {
+std::vector<std::string> BridgeFedComponents(const PipelineOptions& options) {
+  std::vector<std::string> names = {"recorder", "slam"};
+  if (options.NeedsDetectorComponent()) names.push_back("detector");
+  return names;
+}
+}  // namespace
+
+ComponentThreads::ComponentThreads(const PipelineOptions& options)
+    : ComponentThreads(options, BridgeFedComponents(options)) {}
+
+ComponentThreads::ComponentThreads(const PipelineOptions& options, std::vector<std::string> names)
+    : options_(options), names_(std::move(names)) {
   for (const std::string& name : names_) {
     threads_[name] = std::thread([this, name] {
       int code = 1;
@@ -67,8 +77,10 @@ ComponentThreads::ComponentThreads(const PipelineOptions& options) : options_(op
 ComponentThreads::~ComponentThreads() { StopAndJoin(); }
 
 void ComponentThreads::Finish() {
-  threads_["slam"].join();
-  threads_["recorder"].join();
+  for (const char* name : {"slam", "recorder", "mapper"}) {
+    const auto it = threads_.find(name);
+    if (it != threads_.end() && it->second.joinable()) it->second.join();
+  }
   StopAndJoin();
 }
 

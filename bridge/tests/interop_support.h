@@ -57,10 +57,13 @@ PipelineOptions BridgeFedPipeline(const SystemOptions& system, const std::string
 class ComponentThreads {
  public:
   explicit ComponentThreads(const PipelineOptions& options);
+  // Exactly the components `names` (e.g. with "mapper" for a player-fed pipeline).
+  ComponentThreads(const PipelineOptions& options, std::vector<std::string> names);
   ~ComponentThreads();
   ComponentThreads(const ComponentThreads&) = delete;
   ComponentThreads& operator=(const ComponentThreads&) = delete;
-  // Waits until slam and recorder end (after the bridge's END_OF_STREAM), then stops the rest.
+  // Waits until slam, recorder and the mapper (if started) end (after END_OF_STREAM), then stops
+  // the rest.
   void Finish();
   // Exit code of a finished component (1 if it threw or has not finished).
   int code(const std::string& name) const;

@@ -136,7 +136,29 @@ TEST(Interop, CyclonePeerReceivesWhatThePipelineProduced) {
   po.last_entry = 150;
   po.domain_id = domain;
   po.partition = partition;
-  ASSERT_EQ(RunPipeline(po), 0);
+  po.wait_for_components = true;  // the player waits for the others' READY
+  std::filesystem::create_directories(po.output_dir);
+  // The pipeline's components on threads, the player last: frames flow only once this test's
+  // readers and the bridge have discovered the pipeline's writers. The detector's writer ends
+  // with the stream, before slam's, and its transient-local history holds the last 32 samples:
+  // a reader that discovers the pipeline only at its next participant announcement (seconds
+  // later on a loaded machine) would get no detections at all (seen once in CI).
+  testing::ComponentThreads components(po, {"recorder", "slam", "detector", "mapper"});
+  ASSERT_TRUE(WaitUntil(
+      [&] {
+        return pose_reader.matched() > 0 && det_reader.matched() > 0 && map_reader.matched() > 0 &&
+               trajectory_reader.matched() > 0 && bridge.matched_pipeline_topics() == 4;
+      },
+      std::chrono::seconds(20)))
+      << "test readers matched: pose " << pose_reader.matched() << ", detections "
+      << det_reader.matched() << ", map " << map_reader.matched() << ", trajectory "
+      << trajectory_reader.matched() << "; bridge: " << bridge.matched_pipeline_topics()
+      << " of 4 pipeline topics";
+  ASSERT_EQ(RunComponent("player", po, std::make_shared<StopFlag>()), 0);
+  components.Finish();
+  for (const std::string& name : components.names()) {
+    EXPECT_EQ(components.code(name), 0) << name;
+  }
 
   // Everything the pipeline published reaches the peer.
   auto complete = [&] {
@@ -204,6 +226,7 @@ TEST(Interop, CyclonePeerReceivesWhatThePipelineProduced) {
   }
 
   // Detections: same boxes as the detector component's, centre + size, class name, score.
+  ASSERT_EQ(ref_detections.size(), 50u) << "one Detections message per frame";
   ASSERT_EQ(peer.detections.size(), ref_detections.size());
   size_t boxes = 0;
   for (const auto& d : peer.detections) {

@@ -10,6 +10,7 @@
 
 #include "core/base/error.h"
 #include "core/config/settings.h"
+#include "core/dynamic/yolo_detector.h"
 #include "run/system_config.h"
 #include "tests/support/settings_text.h"
 
@@ -72,6 +73,36 @@ TEST(ScheduleConfig, DatasetPresetsSetTheHandOffWait) {
     EXPECT_EQ(preset.tracking.keyframe_wait_ms, 0) << path;
   }
   EXPECT_EQ(TrackingOptions{}.handoff_wait_ms, 0);
+}
+
+// Session 13 (issue 19): the presets run the detector as the paper does (every frame, square
+// 320 x 320 input); a settings file without these keys gets the live defaults (every 2nd frame,
+// the frame's aspect ratio, one OpenCV thread), README "Live use on a robot".
+TEST(ScheduleConfig, DatasetPresetsDetectEveryFrameAtTheSquareInputLiveDefaultsDoNot) {
+  for (const char* name : {"bonn", "tum1", "tum2", "tum3"}) {
+    const std::string path = PresetPath(name);
+    const SystemOptions preset = SystemOptionsFromSettings(ParseSettings(ReadText(path), path));
+    EXPECT_EQ(preset.detection_every_n_frames, 1) << path;
+    EXPECT_EQ(preset.detector.input_width, 320) << path;
+    EXPECT_EQ(preset.detector.input_height, 320) << path;
+    EXPECT_EQ(preset.detector.num_threads, 1) << path;
+  }
+  // bonn.yaml without its dataset-run keys: the camera and ORB settings of a live run.
+  const std::string path = PresetPath("bonn");
+  std::string text;
+  std::istringstream lines(testing::WithoutSection(ReadText(path), "Tracking"));
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("Detector.every_n_frames:", 0) == 0 ||
+        line.rfind("Detector.input_height:", 0) == 0)
+      continue;
+    text += line + "\n";
+  }
+  const SystemOptions live = SystemOptionsFromSettings(ParseSettings(text, path));
+  EXPECT_EQ(live.detection_every_n_frames, 2);
+  EXPECT_EQ(live.detector.input_height, 0);
+  EXPECT_EQ(DetectorInputSize(live.detector, {640, 480}), cv::Size(live.detector.input_width, 256));
+  EXPECT_EQ(live.detector.num_threads, 1);
+  EXPECT_EQ(live.tracking.handoff_wait_ms, 0);
 }
 
 TEST(ScheduleConfig, WeakFrameKeyframeRuleAndSmoothingWeightAreReadAndChecked) {

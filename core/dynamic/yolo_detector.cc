@@ -22,13 +22,24 @@ void DetectorOptions::Check() const {
   DYGSLAM_CHECK_OPTION(!names_path.empty(), "Detector.names_path");
   DYGSLAM_CHECK_OPTION(input_width >= 32 && input_width <= 4096 && input_width % 32 == 0,
                        "Detector.input_width");
-  DYGSLAM_CHECK_OPTION(input_height >= 32 && input_height <= 4096 && input_height % 32 == 0,
-                       "Detector.input_height");
+  DYGSLAM_CHECK_OPTION(
+      input_height == 0 || (input_height >= 32 && input_height <= 4096 && input_height % 32 == 0),
+      "Detector.input_height");
   DYGSLAM_CHECK_OPTION(confidence_threshold > 0.f && confidence_threshold <= 1.f,
                        "Detector.confidence_threshold");
   DYGSLAM_CHECK_OPTION(nms_threshold > 0.f && nms_threshold <= 1.f, "Detector.nms_threshold");
   DYGSLAM_CHECK_OPTION(report_all_classes || !dynamic_classes.empty(), "Detector.dynamic_classes");
   DYGSLAM_CHECK_OPTION(num_threads >= 0 && num_threads <= 256, "Detector.num_threads");
+}
+
+cv::Size DetectorInputSize(const DetectorOptions& options, const cv::Size& image_size) {
+  if (options.input_height > 0) return {options.input_width, options.input_height};
+  if (image_size.width <= 0 || image_size.height <= 0) return {options.input_width, 32};
+  const int64_t w = options.input_width;
+  // input_width * rows / cols, rounded up to a multiple of 32 (at least 32, at most 4096).
+  const int64_t h = (w * image_size.height + image_size.width - 1) / image_size.width;
+  const int64_t rounded = std::clamp<int64_t>((h + 31) / 32 * 32, 32, 4096);
+  return {options.input_width, static_cast<int>(rounded)};
 }
 
 namespace {
@@ -234,7 +245,8 @@ DetectorOptions DetectorOptionsForModel(const std::string& name, const std::stri
     options.cfg_path = (dir / (std::string(k.stem) + ".cfg")).string();
     options.weights_path = (dir / (std::string(k.stem) + ".weights")).string();
     options.names_path = (dir / k.names).string();
-    options.input_width = options.input_height = k.input;
+    options.input_width = k.input;
+    options.input_height = 0;  // the image's aspect ratio
     return options;
   }
   // Generic: <models_dir>/<name>/ with one cfg.
@@ -334,8 +346,9 @@ std::unique_ptr<YoloDetector> YoloDetector::Create(const DetectorOptions& option
   }
 
   if (options.confidence_threshold < 0.2f) {
-    LOG_WARNING << "Detector.confidence_threshold " << options.confidence_threshold
-                << " is below the 0.2 that OpenCV's yolo layer applies internally; 0.2 is in effect";
+    LOG_WARNING
+        << "Detector.confidence_threshold " << options.confidence_threshold
+        << " is below the 0.2 that OpenCV's yolo layer applies internally; 0.2 is in effect";
   }
   if (options.num_threads > 0) cv::setNumThreads(options.num_threads);
   try {
@@ -362,8 +375,8 @@ std::vector<Detection> YoloDetector::Detect(const cv::Mat& bgr) {
   if (bgr.empty()) throw InputError("YoloDetector::Detect: empty image");
   if (bgr.type() != CV_8UC3) throw InputError("YoloDetector::Detect: image must be CV_8UC3 BGR");
   // Plain resize (Darknet's detector does not letterbox these models), BGR -> RGB, [0, 1].
-  cv::dnn::blobFromImage(bgr, impl_->blob, 1.0 / 255.0,
-                         cv::Size(options_.input_width, options_.input_height), cv::Scalar(),
+  cv::dnn::blobFromImage(bgr, impl_->blob, 1.0 / 255.0, DetectorInputSize(options_, bgr.size()),
+                         cv::Scalar(),
                          /*swapRB=*/true, /*crop=*/false, CV_32F);
   impl_->net.setInput(impl_->blob);
   impl_->net.forward(impl_->outputs, impl_->output_names);

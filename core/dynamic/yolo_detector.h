@@ -40,9 +40,13 @@ struct DetectorOptions {
   std::string weights_path;  // Darknet .weights
   std::string names_path;    // one class name per line, in class-id order
   // Network input size (multiples of 32). The models were trained at 320 (Yolo-Fastest) /
-  // 416 (YOLOv3-tiny) / 160 (CYTI); any multiple of 32 works.
+  // 416 (YOLOv3-tiny) / 160 (CYTI); any multiple of 32 works. input_height 0: from the image's
+  // aspect ratio, input_width * rows / cols rounded up to a multiple of 32 (DetectorInputSize;
+  // 320 x 256 for 640 x 480 frames): a 4:3 frame is not stretched to a square, which costs
+  // 0.8x the network's time for boxes that agree with the square input's (issue 19,
+  // BENCHMARKS.md). The dataset presets (config/*.yaml) keep 320 x 320.
   int input_width = 320;
-  int input_height = 320;
+  int input_height = 0;
   // Minimum class score (objectness x class probability). OpenCV's [yolo] layer already zeroes
   // scores below 0.2 (its default `thresh`), so values below 0.2 act as 0.2 (checked: no box
   // below 0.206 with 0.01); Create() warns.
@@ -56,7 +60,10 @@ struct DetectorOptions {
   // false: Detect returns only dynamic-class boxes. true: all classes above the threshold.
   bool report_all_classes = false;
   // > 0: cv::setNumThreads(num_threads) at creation (process-wide, see above). 0: leave as is.
-  int num_threads = 0;
+  // 1 by default: the detector runs beside extraction and tracking on a thread of its own, and
+  // OpenCV's two-thread pool only added CPU time (0.92-0.98x the CPU per frame with one thread,
+  // detections identical; issue 19, BENCHMARKS.md).
+  int num_threads = 1;
 
   void Check() const;
 };
@@ -69,9 +76,13 @@ struct DetectorOptions {
 //   crowd-slam-CYTI-yolov3-tiny-crowdhuman_cfg-only)
 // Any other name: <models_dir>/<name>/ with exactly one .cfg, the .weights of the same stem and
 // one .names file. Throws InputError when the model directory or its cfg is not found. The
-// returned options have the model's recommended input size. Files are validated by Create().
+// returned options have the model's input width and input_height 0 (the image's aspect ratio);
+// a generic model takes both from its cfg. Files are validated by Create().
 DetectorOptions DetectorOptionsForModel(const std::string& name,
                                         const std::string& models_dir = "");
+
+// The network input size for an image of `image_size` (input_height 0: from its aspect ratio).
+cv::Size DetectorInputSize(const DetectorOptions& options, const cv::Size& image_size);
 
 // What a Darknet cfg declares: the number of float parameters its .weights file must hold after
 // the header (biases, batch-norm scales/means/variances and kernels of every [convolutional]

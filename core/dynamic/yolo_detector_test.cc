@@ -81,6 +81,30 @@ TEST(DarknetCfg, MalformedCfgNamesFileAndLine) {
                      "not found");
 }
 
+// input_height 0: the width's share of the image's aspect ratio, rounded up to a multiple of 32.
+TEST(YoloDetectorOptions, InputSizeFollowsTheImagesAspectRatio) {
+  DetectorOptions o;
+  o.input_width = 320;
+  o.input_height = 0;
+  EXPECT_EQ(DetectorInputSize(o, {640, 480}), cv::Size(320, 256));   // 240 -> 256
+  EXPECT_EQ(DetectorInputSize(o, {1280, 720}), cv::Size(320, 192));  // 180 -> 192
+  EXPECT_EQ(DetectorInputSize(o, {480, 640}), cv::Size(320, 448));   // 426.7 -> 448
+  EXPECT_EQ(DetectorInputSize(o, {320, 320}), cv::Size(320, 320));
+  o.input_width = 160;
+  EXPECT_EQ(DetectorInputSize(o, {640, 480}), cv::Size(160, 128));  // 120 -> 128
+  o.input_height = 320;                                             // given: used as is
+  EXPECT_EQ(DetectorInputSize(o, {640, 480}), cv::Size(160, 320));
+}
+
+// The shipped models: their trained width, the height from the image (Bonn / TUM: 320 x 256).
+TEST(YoloDetectorFiles, KnownModelsTakeTheHeightFromTheImage) {
+  DYGSLAM_REQUIRE_MODELS(models);
+  EXPECT_EQ(DetectorInputSize(DetectorOptionsForModel("yolo-fastest-1.1", models), {640, 480}),
+            cv::Size(320, 256));
+  EXPECT_EQ(DetectorInputSize(DetectorOptionsForModel("yolov3-tiny", models), {640, 480}),
+            cv::Size(416, 320));
+}
+
 TEST(YoloDetectorOptions, Check) {
   DetectorOptions o;
   o.cfg_path = "a.cfg";
@@ -90,6 +114,11 @@ TEST(YoloDetectorOptions, Check) {
   o.input_width = 300;
   EXPECT_THROW(o.Check(), InvalidOptions);
   o.input_width = 320;
+  o.input_height = 0;  // from the image's aspect ratio
+  EXPECT_NO_THROW(o.Check());
+  o.input_height = 100;
+  EXPECT_THROW(o.Check(), InvalidOptions);
+  o.input_height = 0;
   o.confidence_threshold = 0;
   EXPECT_THROW(o.Check(), InvalidOptions);
   o.confidence_threshold = 0.3f;
@@ -284,8 +313,9 @@ TEST(YoloDetectorFiles, Yolov3TinyCfgDecodesKnownOutputs) {
     EXPECT_EQ(static_cast<int>(detector->class_names().size()), info.num_classes);
     const std::vector<Detection> dets = detector->Detect(image);
     ASSERT_FALSE(dets.empty());
-    const float sx = 640.f / static_cast<float>(o.input_width);
-    const float sy = 480.f / static_cast<float>(o.input_height);
+    const cv::Size input = DetectorInputSize(o, image.size());
+    const float sx = 640.f / static_cast<float>(input.width);
+    const float sy = 480.f / static_cast<float>(input.height);
     int anchor_sized = 0;
     for (const Detection& d : dets) {
       EXPECT_EQ(d.class_id, person);

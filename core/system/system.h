@@ -14,11 +14,10 @@
 
 #include <functional>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "core/base/camera.h"
 #include "core/base/rgbd_frame.h"
@@ -36,18 +35,17 @@
 
 namespace dygslam {
 
-
 // Per-frame stage times in milliseconds (the paper's Table 3 columns).
 struct StageTimes {
   double orb_extraction_ms = 0;
-  double detection_ms = 0;        // detector wall time (may overlap extraction)
-  double detection_wait_ms = 0;   // time tracking waited for the detector after extraction
-  double matching_ms = 0;         // dynamic filter: feature matching to previous frame
-  double probability_ms = 0;      // dynamic filter: F estimation + probability update
-  double top_up_ms = 0;           // crowded frames: extra extraction outside the boxes
-  double tracking_ms = 0;         // pose tracking (motion model / reference KF / local map)
-  double local_mapping_ms = 0;  // synchronous local mapping (deterministic mode only)
-  double total_ms = 0;            // wall time of FeedRgbdFrame
+  double detection_ms = 0;       // detector wall time (may overlap extraction)
+  double detection_wait_ms = 0;  // time tracking waited for the detector after extraction
+  double matching_ms = 0;        // dynamic filter: feature matching to previous frame
+  double probability_ms = 0;     // dynamic filter: F estimation + probability update
+  double top_up_ms = 0;          // crowded frames: extra extraction outside the boxes
+  double tracking_ms = 0;        // pose tracking (motion model / reference KF / local map)
+  double local_mapping_ms = 0;   // synchronous local mapping (deterministic mode only)
+  double total_ms = 0;           // wall time of FeedRgbdFrame
 };
 
 struct FrameResult {
@@ -56,8 +54,8 @@ struct FrameResult {
   std::optional<Rigid3d> world_from_cam;  // set only when HasPose(state)
   bool is_keyframe = false;
   int num_features = 0;
-  int num_dynamic = 0;      // features removed by the dynamic filter
-  int num_tracked = 0;      // inlier map-point matches after pose optimisation
+  int num_dynamic = 0;  // features removed by the dynamic filter
+  int num_tracked = 0;  // inlier map-point matches after pose optimisation
   bool detections_used = false;
   // The internal detector did not run on this frame (SystemOptions::detection_every_n_frames):
   // the boxes of the last detector frame were carried to it (detections_used is true).
@@ -85,13 +83,13 @@ struct SystemOptions {
   // The internal detector runs on every n-th frame (`Detector.every_n_frames`); the frames in
   // between get the last boxes shifted by their content's image motion (box_propagation, see
   // core/dynamic/detection_propagation.h) and the filter carries its per-feature probabilities
-  // through the matches as on every frame. 1: every frame (the paper, the default); 3: ~0.86x the
-  // CPU per frame at an ATE not worse on bonn_crowd_part, but the keyframe masks made from
-  // carried boxes let more of the people into the map (ghost voxels 90 instead of 69-75 against
-  // 758 unfiltered: 8.4x fewer instead of the 10x mapping/SlamMap requires). BENCHMARKS.md,
-  // issue 19. Detections given to FeedRgbdFrame from outside are used as given (and carried to
-  // FeedRgbdFrameCarryingBoxes).
-  int detection_every_n_frames = 1;
+  // through the matches as on every frame. 2 by default (live use): with one OpenCV thread and
+  // the aspect-ratio input (DetectorOptions) the System costs ~28 ms of CPU per frame on
+  // bonn_crowd_part against ~37 ms with the detector on every frame, ATE not worse (issue 19,
+  // BENCHMARKS.md). The dataset presets (config/*.yaml) set 1 (the paper): their trajectory is the
+  // reference of the accuracy tables and mapping/SlamMap's ghost-voxel test. Detections given to
+  // FeedRgbdFrame from outside are used as given (and carried to FeedRgbdFrameCarryingBoxes).
+  int detection_every_n_frames = 2;
   // detection_every_n_frames > 1 and a keyframe callback set (a map is built): a keyframe made on
   // a frame the detector skipped (the internal one's cadence, or a detector outside the System:
   // FeedRgbdFrameCarryingBoxes) gets its dynamic mask and detections (KeyframeData) from the

@@ -150,7 +150,7 @@ class OctoMapBuilder {
   // Removes a keyframe's contribution (schedules a rebuild). Returns false if unknown.
   bool Remove(int64_t keyframe_id);
 
-  // Continues an existing map (issue 15): the tree starts from `base` (e.g. a previous run's
+  // Continues an existing map: the tree starts from `base` (e.g. a previous run's
   // map.ot; a .bt works too but has lost the probabilities) and keyframes are inserted on top;
   // rebuilds start from it again. Throws InputError naming `source` when its resolution differs
   // from OctoMap.resolution. Call before the first Insert.

@@ -288,7 +288,7 @@ TEST(OctoMapBuilder, BinaryAndFullFilesRoundTrip) {
   EXPECT_THROW(builder.WriteBinary(dir + "/no_such_dir/map.bt"), InputError);
 }
 
-// Issue 15: a map continued from a saved .ot (first half of the walk) and the second half
+// A map continued from a saved .ot (first half of the walk) and the second half
 // inserted on top is the map of the whole walk; a rebuild starts from the loaded map again; a map
 // of another resolution is refused naming the file.
 TEST(OctoMapBuilder, ContinuesASavedMap) {

@@ -1,4 +1,4 @@
-// Local-mapping schedule settings (issue 22): the waits of tracking for local mapping and the
+// Local-mapping schedule settings: the waits of tracking for local mapping and the
 // final bundle adjustment are read, default off, and bad values are named; so are the weak-frame
 // keyframe rule and the fallback smoothing weight.
 #include <gtest/gtest.h>
@@ -62,8 +62,8 @@ TEST(ScheduleConfig, WaitsAndFinalBundleAdjustmentAreReadAndChecked) {
   ExpectNamed("LocalMapping:\n  final_ba_iterations: -3\n", "LocalMapping.final_ba_iterations");
 }
 
-// Session 11: the dataset presets wait for local mapping after each keyframe (threaded runs give
-// the deterministic trajectory; README "Hand-off wait"); the options struct's default, what a
+// The dataset presets wait for local mapping after each keyframe (threaded runs give
+// the deterministic trajectory; docs/how_it_works.md, "Hand-off wait"); the options struct's default, what a
 // settings file of one's own gets, stays 0 (live use).
 TEST(ScheduleConfig, DatasetPresetsSetTheHandOffWait) {
   for (const char* name : {"bonn", "tum1", "tum2", "tum3"}) {
@@ -75,9 +75,9 @@ TEST(ScheduleConfig, DatasetPresetsSetTheHandOffWait) {
   EXPECT_EQ(TrackingOptions{}.handoff_wait_ms, 0);
 }
 
-// Session 13 (issue 19): the presets run the detector as the paper does (every frame, square
+// The presets run the detector as the paper does (every frame, square
 // 320 x 320 input); a settings file without these keys gets the live defaults (every 2nd frame,
-// the frame's aspect ratio, one OpenCV thread), README "Live use on a robot".
+// the frame's aspect ratio, one OpenCV thread), docs/dds_components.md "Live use on a robot".
 TEST(ScheduleConfig, DatasetPresetsDetectEveryFrameAtTheSquareInputLiveDefaultsDoNot) {
   for (const char* name : {"bonn", "tum1", "tum2", "tum3"}) {
     const std::string path = PresetPath(name);

@@ -1,5 +1,5 @@
 #!/bin/bash
-# CPU per frame (issue 19): user + sys of all threads of `dygslam run` / frames, with ATE RMSE,
+# CPU per frame: user + sys of all threads of `dygslam run` / frames, with ATE RMSE,
 # for several configurations, RUNS interleaved rounds (a, b, c, a, b, c, ...), medians per
 # configuration:
 #   scripts/cpu_budget.sh BUILD_DIR DATASET_DIR RUNS OUT_DIR NAME=FILTER[,SETTINGS_KEY=VALUE...] ...
@@ -18,7 +18,7 @@
 # CPU_BUDGET_CASE=robot runs BUILD/tests/cpu_per_frame_benchmark (one run per round) instead of
 # `dygslam run`: the frames decoded beforehand, the System's CPU only (the robot case); the table
 # then also gives each configuration's CPU per round as a ratio of the first configuration's, and
-# every configuration runs with the live defaults (README "Live use on a robot"): the preset's
+# every configuration runs with the live defaults (docs/dds_components.md, "Live use on a robot"): the preset's
 # dataset-run keys are left out (Detector.every_n_frames, Detector.input_height) and
 # Tracking.handoff_wait_ms is 0 (a robot's camera does not wait for local mapping), unless its
 # parts set these keys (e.g. preset=full,Detector.every_n_frames=1,Detector.input_height=320,

@@ -44,7 +44,7 @@ void LocalMapper::InsertKeyFrame(std::shared_ptr<KeyFrame> kf) {
     inserted_at_[kf->id] = std::chrono::steady_clock::now();
   }
   // The flag first: the worker clears it when it takes the keyframe, so setting it after the
-  // push could land after that and stop this keyframe's own local BA (issue 22, BENCHMARKS.md).
+  // push could land after that and stop this keyframe's own local BA (BENCHMARKS.md).
   abort_ba_ = true;
   queue_.Push(std::move(kf));
 }

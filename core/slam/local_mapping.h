@@ -33,7 +33,7 @@ struct LocalMappingOptions {
   int redundancy_observations = 3;
   bool cull_keyframes = true;
   // At shutdown (System::Shutdown), a bundle adjustment of the whole map with this many
-  // iterations per round (0: none); the trajectory follows its keyframes (issue 22).
+  // iterations per round (0: none); the trajectory follows its keyframes.
   int final_ba_iterations = 0;
   OptimizerOptions optimizer;
   MatcherOptions matcher;
@@ -58,7 +58,7 @@ struct LocalMappingStats {
   int keyframes_culled = 0;
   double total_ms = 0;
   std::vector<double> per_keyframe_ms;
-  // The threaded schedule (issue 22): keyframes whose fusion and local BA were skipped because
+  // The threaded schedule: keyframes whose fusion and local BA were skipped because
   // another keyframe was already queued, local BAs stopped early by a new keyframe, and per
   // keyframe the queue length found at insertion and the time from insertion to done.
   int keyframes_without_ba = 0;

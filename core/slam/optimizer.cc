@@ -268,7 +268,7 @@ void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyF
     // The reduced camera system of a local window is small and dense (its keyframes share most
     // points): a dense Schur complement suits it; sparse for large global problems. Same ATE on
     // bonn_crowd_part; CPU per frame 0.96x in the dataset case, within the noise in the robot case
-    // (BENCHMARKS.md, issue 19, session 12).
+    // (BENCHMARKS.md, CPU per frame).
     solver_options.linear_solver_type =
         poses.size() <= kDenseSchurMaxPoses ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
     solver_options.max_num_iterations = iterations;

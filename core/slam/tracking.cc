@@ -404,7 +404,7 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame, std::unique_lock<std::mutex>& 
     // points made from the last frame's depth for the motion model (no keyframe observes them)
     // do not count as tracked. Counting them let the close features look tracked on a long
     // straight side of a generated loop while the real inliers fell from 591 to 37, so no
-    // keyframe was made and tracking was lost (issue 14, BENCHMARKS).
+    // keyframe was made and tracking was lost (BENCHMARKS).
     if (frame.map_points[i] && !frame.outlier[i] &&
         (options_.keyframe_counts_odometry_points || frame.map_points[i]->NumObservations() > 0)) {
       ++tracked_close;
@@ -421,9 +421,9 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame, std::unique_lock<std::mutex>& 
   const bool c2 = (last_inliers_ < ref_matches * ratio || need_close) && last_inliers_ > 15;
   // A keyframe is due and local mapping is still busy with the previous one: wait for it a
   // little (keyframe_wait_ms), so that the keyframe goes in on a refined map instead of being
-  // skipped or queued (the deterministic schedule; issue 22, BENCHMARKS.md).
+  // skipped or queued (the deterministic schedule; BENCHMARKS.md).
   // Tracking holds the map lock, which local mapping needs to finish: released for the wait
-  // (before, the wait always ran into its timeout; issue 22, BENCHMARKS.md). A loop correction
+  // (held, the wait would always run into its timeout). A loop correction
   // meanwhile moved the map under this frame's pose: no keyframe from it.
   if (c2 && !mapper_idle && options_.keyframe_wait_ms > 0 && !deterministic_) {
     const int64_t epoch = map_->CorrectionEpoch();

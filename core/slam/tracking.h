@@ -33,7 +33,7 @@ struct TrackingOptions {
   // Localization mode: the local map is the keyframe sharing the most of the frame's matched
   // points plus its best covisible keyframes, this many keyframes in all (the mapping run's local
   // map, every keyframe observing a matched point, mixes points of other times and drift). 4:
-  // best measured on bonn_crowd_part after the session-7 merges (deterministic final ATE 1/2/3/4/6
+  // best measured on bonn_crowd_part with loop closing on (deterministic final ATE 1/2/3/4/6
   // keyframes: 0.0226/0.0159/0.0154/0.0149/0.0150 m; BENCHMARKS.md, SLAM map files).
   int localization_local_keyframes = 4;
   int relocalization_candidates = 5;
@@ -41,21 +41,21 @@ struct TrackingOptions {
   // (made from the last frame's depth). true: measured better on bonn_crowd_part (threaded median
   // of 3: 0.0143 vs 0.0154 m); false: ORB-SLAM2's rule (map points only), which keeps making
   // keyframes on long loops where the map thins out (the 61.8 m generated loop is tracked to the
-  // end only with false). BENCHMARKS.md, issue 14.
+  // end only with false). BENCHMARKS.md, loop closing.
   bool keyframe_counts_odometry_points = true;
   // A keyframe is also due when the frame's map-point inliers fall below this (0: off), whatever
   // the close-point count says. On a long side of the generated 61.8 m loop the temporary points
   // kept the close count at ~500 while the map-point inliers fell by up to 26 a frame, from 591
   // to 37, below local_map_min_inliers (30): lost with no keyframe made. 100 leaves ~3 frames of
-  // that decay before the loss (BENCHMARKS.md, issue 14).
+  // that decay before the loss (BENCHMARKS.md).
   int keyframe_min_map_inliers = 100;
   // A frame whose pose rests on fewer map-point inliers than this while a person is in view (a
   // feature of the frame lies in a dynamic region) does not become a keyframe when the dense
   // fallback can hold the next frames (0: off). Such a keyframe seeds its points from a weak pose
   // and the frames after it inherit the error (bonn_crowd_part frames 322-325: 0.03 -> 0.07 m,
-  // BENCHMARKS.md, issue 22).
+  // BENCHMARKS.md).
   int keyframe_weak_inliers = 0;
-  // Real threading only (issue 22): when a keyframe is due while local mapping is still busy,
+  // Real threading only: when a keyframe is due while local mapping is still busy,
   // wait up to this long for it before deciding (0: do not wait; ORB-SLAM2 then skips or queues
   // the keyframe) ...
   double keyframe_wait_ms = 0;

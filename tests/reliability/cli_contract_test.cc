@@ -1,4 +1,4 @@
-// The bad-input contract of the command line (README "Bad input"; issue 20 items 1, 4, 5, 6, 7):
+// The bad-input contract of the command line (docs/command_line.md, "Bad input"):
 // exit 1 with a message that names the file, line or option for bad input, exit 2 for usage
 // errors, warnings on stderr that name file:line, never a signal or an "internal error".
 // Most cases need no dataset (the error comes before the frames); the image and tracking cases
@@ -146,8 +146,8 @@ TEST_F(CliContract, SmallUsageErrorsExitTwo) {
   EXPECT_TRUE(Contains(security.err, "--security")) << security.err;
 }
 
-// Issue 17: `dygslam component` passed its numbers to std::stoi / std::stod (an exception, or
-// "1.5x" read as 1.5); now a usage error naming the option, as on `dygslam run`.
+// `dygslam component` numbers are parsed whole (std::stoi / std::stod would throw, or read
+// "1.5x" as 1.5): a bad one is a usage error naming the option, as on `dygslam run`.
 TEST_F(CliContract, ComponentBadNumbersAreUsageErrorsNamingTheOption) {
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"window", "abc"},
@@ -303,9 +303,9 @@ TEST_F(CliContract, RunThatTracksNothingFailsWithASummary) {
   EXPECT_TRUE(Contains(r.out, "frames: 15 processed")) << r.out;
 }
 
-// Re-probe of issue 20 (2026-12-01): `--out` = the dataset folder made the recorder overwrite the
-// dataset's groundtruth.txt (data loss); a settings file that is /dev/zero was read until the
-// memory ran out.
+// `--out` = the dataset folder would let the recorder overwrite the dataset's groundtruth.txt
+// (data loss); a settings file that is /dev/zero would be read until the memory ran out. Both are
+// refused.
 TEST_F(CliContract, OutputFolderThatIsADatasetIsRefusedAndNothingIsOverwritten) {
   const fs::path dataset = fs::path(dir_) / "dataset";
   fs::create_directories(dataset);

@@ -1,4 +1,4 @@
-// Settings files that a hostile or careless user writes (issue 20, items 1, 4, 5, 6): a recursive
+// Settings files that a hostile or careless user writes (items 1, 4, 5, 6): a recursive
 // YAML alias, misspelt keys, a section given as a list, an unknown detector model, absurd camera
 // values, and errors that must use the file's key names. Each case is config/bonn.yaml with a few
 // lines appended or replaced, read through the same functions as `dygslam run` / `map`

@@ -1,4 +1,4 @@
-// The dense fallback of issue 16: StaticDepthOdometry on generated frames with exact poses (a
+// The dense fallback: StaticDepthOdometry on generated frames with exact poses (a
 // moving person-sized box fills much of the view), and the System on the real Bonn frames where
 // feature tracking alone loses the pose (rgb.txt entries 195-208 of bonn_crowd_part).
 #include <gtest/gtest.h>
@@ -180,7 +180,7 @@ TEST(SlamFallback, BonnCrowdFramesWherePersonFillsTheViewGetAPose) {
   }
 }
 
-// The acceptance figure of issue 16 on the whole sequence: every frame has a pose and the ATE
+// The dense fallback's acceptance figure on the whole sequence: every frame has a pose and the ATE
 // over all of them (fallback frames included) stays low. The final trajectory re-anchors each
 // fallback stretch on the first feature pose after it (Tracking.fallback_smoothing): it must be
 // more accurate than the poses the frames got online.
@@ -214,20 +214,20 @@ TEST(SlamFallback, BonnCrowdAllFramesAteWithSmoothedFallbackStretches) {
   EXPECT_EQ(trajectory.size(), static_cast<size_t>(with_pose));
   EXPECT_GT(states["fallback"], 10);  // the two crowded stretches (~196-208, ~324-331)
   // Measured (deterministic, 2-core machine): 0.0160 m smoothed, 0.0204 m online (ratio 0.78)
-  // before issue 22's round 2; since (fixed anchors, depth-refined boxes, depth-residual test in
+  // with the epipolar labels; with the depth-residual labels (fixed anchors, depth-refined boxes, depth-residual test in
   // full) 0.0146 m smoothed, 0.0151 m online (ratio 0.97: the online poses before the stretches
   // are better, so the smoothing has less to correct). Margins: 0.018 m is above the threaded
-  // runs (BENCHMARKS.md, *Round 2*); the smoothing must not make the trajectory worse.
+  // runs (BENCHMARKS.md); the smoothing must not make the trajectory worse.
   EXPECT_LT(ate.error.rmse, 0.018);
   EXPECT_LE(ate.error.rmse, ate_online.error.rmse);
 }
 
-// Issue 22: the crowd passing close at entries 320-334. Weakly held frames become keyframes there
+// The crowd passing close at entries 320-334. Weakly held frames become keyframes there
 // by default (entries 322-325, 51-151 inliers) and every frame after them inherits their error
 // (0.055-0.061 m at 323-325); with Tracking.keyframe_weak_inliers they do not, and the dense
 // fallback holds those frames. Measured (deterministic): RMSE over these entries 0.0242 m with
-// the rule at 150, 0.0340 m without; whole run 0.0126 vs 0.0143 m (BENCHMARKS.md, issue 22,
-// Round 5). Opt-in: the threaded runs did not measure better (medians 0.0158 vs 0.0151 m).
+// the rule at 150, 0.0340 m without; whole run 0.0126 vs 0.0143 m (BENCHMARKS.md).
+// Opt-in: the threaded runs did not measure better (medians 0.0158 vs 0.0151 m).
 TEST(SlamFallback, BonnCrowdWeaklyHeldFramesMakeNoKeyframes) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
   const RgbdDataset dataset = RgbdDataset::Open(dir);

@@ -1,4 +1,4 @@
-// Issue 22: the local-mapping schedule under real threading. With Tracking.handoff_wait_ms the
+// The local-mapping schedule under real threading. With Tracking.handoff_wait_ms the
 // tracker waits after each keyframe until local mapping is done with it, so every keyframe is
 // handed to an idle local mapper and must get its whole local BA: none may be stopped early.
 // (Before the fix in LocalMapper::InsertKeyFrame the abort flag was raised after the push, and
@@ -75,11 +75,11 @@ TEST(LocalMappingSchedule, KeyframesHandedToAnIdleMapperGetTheirWholeLocalBa) {
   EXPECT_EQ(run.poses, static_cast<size_t>(scene.num_frames()));
 }
 
-// Session 11: Tracking.keyframe_wait_ms (wait when a keyframe is due while local mapping is
-// busy) never saw local mapping finish: the tracker waited holding the map lock, which local
-// mapping needs, so every wait ran into its timeout and the keyframe was then queued behind the
-// busy mapper anyway (bonn_crowd_part: 11-13 of ~52 keyframes inserted while busy, local BAs
-// interrupted as often as without the wait). The lock is now released while it waits: no keyframe
+// Tracking.keyframe_wait_ms (wait when a keyframe is due while local mapping is busy) must let
+// local mapping finish: a tracker that waited holding the map lock, which local mapping needs,
+// would run every wait into its timeout and queue the keyframe behind the busy mapper anyway
+// (bonn_crowd_part: 11-13 of ~52 keyframes inserted while busy, local BAs interrupted as often
+// as without the wait). The lock is released while it waits: no keyframe
 // is queued behind another and no local BA is cut short, while tracking does not wait after
 // handing a keyframe over (handoff_wait_ms 0).
 TEST(LocalMappingSchedule, KeyframeWaitLetsLocalMappingFinishFirst) {
@@ -98,11 +98,11 @@ TEST(LocalMappingSchedule, KeyframeWaitLetsLocalMappingFinishFirst) {
   EXPECT_EQ(run.poses, static_cast<size_t>(num_frames));
 }
 
-// Session 10: with the hand-off wait, a threaded run follows the deterministic schedule (local
+// With the hand-off wait, a threaded run follows the deterministic schedule (local
 // mapping done with each keyframe before the next frame is tracked), so it gives the deterministic
 // trajectory: the same keyframes, the same poses. On bonn_crowd_part the threaded runs with
-// Tracking.handoff_wait_ms gave the deterministic figures to the last digit (BENCHMARKS.md, issue
-// 22, Round 6); without the wait they differ by 0.001-0.002 m there.
+// Tracking.handoff_wait_ms gave the deterministic figures to the last digit (BENCHMARKS.md,
+// schedule); without the wait they differ by 0.001-0.002 m there.
 TEST(LocalMappingSchedule, HandOffWaitGivesTheDeterministicTrajectory) {
   const SyntheticOptions synth = ScheduleScene();
   const SyntheticScene scene(synth);

@@ -368,9 +368,21 @@ void OctoMapBuilder::WriteFull(const std::string& path) {
   WriteOctoMapFull(*tree_, path);
 }
 
+void WriteOctoMapBinaryStream(const octomap::OcTree& tree, std::ostream& out) {
+  // The header AbstractOccupancyOcTree::writeBinaryConst writes, then the nodes depth first.
+  out << "# Octomap OcTree binary file\n"
+      << "# (feel free to add / change comments, but leave the first line as it is!)\n#\n";
+  out << "id " << tree.getTreeType() << "\n";
+  out << "size " << tree.size() << "\n";
+  out << "res " << tree.getResolution() << "\n";
+  out << "data\n";
+  if (tree.getRoot() != nullptr) tree.writeBinaryNode(out, tree.getRoot());
+}
+
 void WriteOctoMapBinary(const octomap::OcTree& tree, const std::string& path) {
   std::ostringstream out(std::ios::binary);
-  if (!tree.writeBinaryConst(out)) throw InputError(path, 0, "cannot serialise the OcTree (.bt)");
+  WriteOctoMapBinaryStream(tree, out);
+  if (!out) throw InputError(path, 0, "cannot serialise the OcTree (.bt)");
   WriteFileAtomically(path, out.str());
 }
 

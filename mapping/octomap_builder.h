@@ -40,6 +40,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <ostream>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -212,6 +213,10 @@ class OctoMapBuilder {
 };
 
 // Atomic writers / reader for any OcTree (same formats as the builder's).
+// The .bt stream of `tree`: the bytes of OcTree::writeBinaryConst (header, then the node data),
+// without the progress line ("Writing N nodes to output stream... done.") that the library
+// prints to stderr on every binary write, which would interleave with a running mapper's log.
+void WriteOctoMapBinaryStream(const octomap::OcTree& tree, std::ostream& out);
 void WriteOctoMapBinary(const octomap::OcTree& tree, const std::string& path);
 void WriteOctoMapFull(const octomap::OcTree& tree, const std::string& path);
 // Reads .bt (binary) or .ot (full); the format is taken from the file header, not the suffix.

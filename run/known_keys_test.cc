@@ -70,8 +70,9 @@ TEST(KnownKeys, SettingsDocumentGivesEveryOptionalKeyItsDefault) {
             (std::vector<std::string>{"Camera.fx", "Camera.fy", "Camera.cx", "Camera.cy",
                                       "Camera.k1", "Camera.k2", "Camera.p1", "Camera.p2"}));
   EXPECT_EQ(defaults["ORBextractor.nFeatures"], std::to_string(OrbExtractorOptions{}.num_features));
-  EXPECT_EQ(defaults["Tracking.handoff_wait_ms"],
-            std::to_string(TrackingOptions{}.handoff_wait_ms));
+  EXPECT_EQ(defaults["Tracking.keyframe_min_map_inliers"],
+            std::to_string(TrackingOptions{}.keyframe_min_map_inliers));
+  EXPECT_EQ(std::stod(defaults["Tracking.handoff_wait_ms"]), TrackingOptions{}.handoff_wait_ms);
   EXPECT_EQ(defaults["LoopClosing.enabled"], LoopClosingOptions{}.enabled ? "true" : "false");
   EXPECT_EQ(defaults["Detector.every_n_frames"],
             std::to_string(SystemOptions{}.detection_every_n_frames));

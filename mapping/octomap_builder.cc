@@ -573,8 +573,8 @@ std::unique_ptr<octomap::OcTree> ReadOctoMap(const std::string& path) {
     const long long declared = file_header.size;
     // OctoMap's .ot reader recurses on each node's child bits; past the end of the stream it read
     // an uninitialised byte as those bits and recursed until the stack overflowed (ASan,
-    // reliability/ThirdReprobe.TruncatedOctoMapIsAnError), and a crafted chain of nested nodes
-    // did the same (reliability/ThirdReprobe.DeeplyNestedOctoMapIsAnError): the walk checks both.
+    // reliability/OctoMapFiles.TruncatedOctoMapIsAnError), and a crafted chain of nested nodes
+    // did the same (reliability/OctoMapFiles.DeeplyNestedOctoMapIsAnError): the walk checks both.
     CheckOctoMapShape(path, in, file_header, /*binary=*/false, "OctoMap (.ot)");
     std::unique_ptr<octomap::AbstractOcTree> abstract(octomap::AbstractOcTree::read(in));
     if (!abstract) throw InputError(path, 0, "malformed OctoMap (.ot)");

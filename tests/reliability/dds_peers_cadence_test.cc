@@ -29,7 +29,7 @@ using testing::Contains;
 
 class DdsRunCadence : public testing::CliFixture {
  protected:
-  DdsRunCadence() : CliFixture("cli_third_reprobe") {}
+  DdsRunCadence() : CliFixture("dds_peers_cadence") {}
 
   // Replaces rgb.txt entry `entry`'s image by a truncated copy named broken.png.
   void BreakImage(const std::string& dataset, size_t entry) {

@@ -578,7 +578,7 @@ int RunRun(const std::vector<std::string>& args) {
               outcome.processed, trajectory.size(), outcome.lost, skipped,
               outcome.processed / std::max(elapsed, 1e-9));
   {
-    // Frames with a pose by how it was obtained (issue 16): ok / fallback / relocalized; lost and
+    // Frames with a pose by how it was obtained: ok / fallback / relocalized; lost and
     // not_initialized frames have none.
     auto count = [&](TrackingState state) {
       auto it = outcome.states.find(ToString(state));

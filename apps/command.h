@@ -94,7 +94,7 @@ class ArgParser {
   int exit_code_ = 0;
 };
 
-// Directory of the helper scripts (scripts/): $DYGSLAM_SCRIPTS_DIR, else the source tree's
+// Directory of the scripts (scripts/): $DYGSLAM_SCRIPTS_DIR, else the source tree's
 // scripts/ baked in at build time, else ../share/dygslam/scripts next to the executable.
 std::string ScriptsDir();
 // The settings presets folder (config/ beside scripts/).

@@ -1,5 +1,5 @@
 // The bridge = the inbound half (ros2_inbound.h: ROS 2 camera -> pipeline) + the outbound half
-// (ros2_outbound.h: pipeline -> ROS 2) + what they share: the ROS session, the pipeline's
+// (ros2_outbound.h: pipeline -> ROS 2) + what they share: the ROS participant (RosSession), the pipeline's
 // CameraPose reader (slam's acknowledgements for the inbound window; poses for the outbound
 // topics), the StreamStatus reader (READY / COMPONENT_DONE of the pipeline's components) and the
 // ROS 2 graph entry of both halves' endpoints.

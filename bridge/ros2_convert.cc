@@ -491,8 +491,11 @@ octomap_msgs::msg::Octomap OctomapToRos(const std::vector<uint8_t>& bt_stream, T
     throw InputError("MapUpdate.octree_bt: not a readable binary OcTree (.bt) stream (" +
                      std::to_string(bt_stream.size()) + " bytes)");
   }
+  // The node data as OcTree::writeBinaryData writes it, without the library's progress line on
+  // stderr for every map forwarded.
   std::ostringstream out;
-  if (!tree.writeBinaryData(out)) {
+  if (tree.getRoot() != nullptr) tree.writeBinaryNode(out, tree.getRoot());
+  if (!out) {
     throw InputError("MapUpdate.octree_bt: the octree cannot be serialised");
   }
   const std::string data = out.str();

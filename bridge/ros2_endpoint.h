@@ -69,8 +69,8 @@ template <class PubSubType>
 class RosWriter : public dds::TypedWriter<PubSubType> {
  public:
   // topic: the DDS name (DdsTopicName()).
-  RosWriter(std::shared_ptr<RosSession> session, const std::string& topic, const RosQos& qos)
-      : dds::TypedWriter<PubSubType>(session, session->participant(), session->publisher(), topic,
+  RosWriter(std::shared_ptr<RosSession> ros, const std::string& topic, const RosQos& qos)
+      : dds::TypedWriter<PubSubType>(ros, ros->participant(), ros->publisher(), topic,
                                      RosWriterQos(qos)) {}
 };
 
@@ -78,9 +78,9 @@ template <class PubSubType>
 class RosReader : public dds::TypedReader<PubSubType> {
  public:
   using Callback = typename dds::TypedReader<PubSubType>::Callback;
-  RosReader(std::shared_ptr<RosSession> session, const std::string& topic, const RosQos& qos,
+  RosReader(std::shared_ptr<RosSession> ros, const std::string& topic, const RosQos& qos,
             Callback callback)
-      : dds::TypedReader<PubSubType>(session, session->participant(), session->subscriber(), topic,
+      : dds::TypedReader<PubSubType>(ros, ros->participant(), ros->subscriber(), topic,
                                      RosReaderQos(qos), std::move(callback)) {}
 };
 

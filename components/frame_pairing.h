@@ -16,7 +16,7 @@
 //   that frame (it is gone) but become the boxes carried forward to the next frames (counted as
 //   late). Without any recent detections the frame goes on geometry-only.
 // - detections not needed (filter mode none / geometry, or internal detector): no waiting.
-// - detector cadence (`Detector.every_n_frames` = n > 1, issue 19): the detector component runs
+// - detector cadence (`Detector.every_n_frames` = n > 1): the detector component runs
 //   on the frames whose seq is a multiple of n only; the others are released at once, without
 //   waiting and without counting a miss (PairedFrame::detector_skipped): the System carries the
 //   boxes of the last detector frame to them. Deterministic mode stays deterministic: which

@@ -123,7 +123,7 @@ TEST(FramePairing, NoDetectionsNeededNoWait) {
   EXPECT_FALSE(f->detections);
 }
 
-// Issue 16: a frame whose detections do not come in time gets the newest earlier boxes.
+// A frame whose detections do not come in time gets the newest earlier boxes.
 TEST(FramePairing, MissingDetectionsGetTheLastBoxesCarriedForward) {
   PairingOptions o;
   o.max_wait = 10ms;

@@ -45,7 +45,7 @@ msg::MapUpdate MapperCore::MakeUpdate() {
       stats.num_occupied_leaves += tree.isNodeOccupied(*it);
   }
   std::ostringstream stream;
-  tree.writeBinaryConst(stream);
+  WriteOctoMapBinaryStream(tree, stream);
   const std::string bytes = stream.str();
   m.header().stamp(TimeToMsg(newest_));
   m.header().frame_id("world");

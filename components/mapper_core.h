@@ -23,7 +23,7 @@ namespace dygslam {
 struct MapperOptions {
   OctoMapOptions octomap;
   std::string map_path = "map.bt";  // "" = do not write
-  // An existing OctoMap (.ot, e.g. a previous run's) the map continues from (issue 15): keyframes
+  // An existing OctoMap (.ot, e.g. a previous run's) the map continues from: keyframes
   // are inserted on top of it; without keyframes (localization) it is the map. "": none.
   std::string base_map_path;
   // At the end of the run, also the OctoMap with probabilities (.ot): what base_map_path of a
@@ -34,7 +34,7 @@ struct MapperOptions {
   // ... but at most this share of the wall time: after an update that took d seconds the next
   // one waits until d / max_update_share have passed. An update reads the tree, i.e. rebuilds it
   // after local-BA pose corrections (~25 ms CPU per stored keyframe), so with a fixed keyframe
-  // interval its cost grew with the map and the mapper took CPU from slam on 2 cores (issue 19).
+  // interval its cost grew with the map and the mapper took CPU from slam on 2 cores.
   // Same idea as KeyframeMapperOptions::max_rebuild_share of the direct mode. 1 = no limit.
   double max_update_share = 0.2;
   // After stop: longest wait for slam's last keyframe messages (seconds).

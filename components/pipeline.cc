@@ -66,7 +66,7 @@ namespace {
 // (Fast DDS receive / event threads, one per component, local mapping, OpenCV) that allocate
 // and free 0.3-2.5 MB image buffers: with the default, resident memory of `dygslam run` rose
 // ~0.2 MB per frame even with bounded DDS histories (second half of 360 frames; 0.03 MB per
-// frame with 2 arenas, measured, BENCHMARKS.md issue 19). Called before any component thread
+// frame with 2 arenas, measured, BENCHMARKS.md). Called before any component thread
 // starts; applies to the arenas created after it.
 void BoundMallocArenas() {
   static std::once_flag once;
@@ -93,7 +93,7 @@ DetectorOptions DetectorOptionsFor(const PipelineOptions& options) {
   }
   // One OpenCV thread: the detector shares the 2 cores with slam; same count in both modes so
   // single- and multi-process runs compute identical detections. (cv::setNumThreads is
-  // process-wide; the settings' count instead was measured in issue 19: no gain on the loaded
+  // process-wide; the settings' count instead was measured: no gain on the loaded
   // 2-core machine, 0.97x frames/s, see BENCHMARKS.md.)
   d.num_threads = 1;
   return d;

@@ -44,8 +44,8 @@ struct PipelineOptions {
   double rate = 0;                         // player: 0 = as fast as consumed, 1 = real time
   int window = 2;                          // player back-pressure window
   double loop_minutes = 0;                 // player: replay the range for this long (soak)
-  std::string save_map;                    // slam: SLAM map file written at the end (issue 15)
-  std::string load_octomap;                // mapper: OctoMap (.ot) to continue (issue 15)
+  std::string save_map;                    // slam: SLAM map file written at the end
+  std::string load_octomap;                // mapper: OctoMap (.ot) to continue
   std::chrono::milliseconds detection_wait{1000};
   bool processes = false;
   bool run_detector = true;  // detector component (filter modes boxes/full); false: System's own

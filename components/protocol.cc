@@ -326,7 +326,7 @@ size_t RunWriters::NumAnnounced(DataTopic topic) const {
 std::string IgnoredSamplesNote(const std::string& counted) {
   return "ignored " + counted +
          " from writers outside this run (another process on the DDS domain published into it; "
-         "without --security any local process can: see README, DDS components)";
+         "without --security any local process can: see docs/dds_components.md)";
 }
 
 }  // namespace dygslam

@@ -14,7 +14,7 @@
 //                         wait for it before the first frame)
 //   kind 5 FAILED         header.frame_id = the reason
 //
-// Writer ownership (issue 20 item 3): on plain DDS any local process can join the run's partition
+// Writer ownership: on plain DDS any local process can join the run's partition
 // and publish into it. Consumers accept data samples only from writers announced in a STARTED of
 // the run's components; others are ignored and counted. A restarted component announces its new
 // writers (STARTED) and is accepted again. DDS keeps order per writer only, so a sample can

@@ -178,7 +178,7 @@ TEST(Protocol, RunWritersAcceptOnlyAnnouncedWritersPerTopic) {
   EXPECT_EQ(writers.NumAnnounced(DataTopic::kDetections), 2u);
 }
 
-// Issue 20: a second player started on the run's partition must not feed the run. The first
+// A second player started on the run's partition must not feed the run. The first
 // frame source to announce itself plays; another one that announces itself meanwhile is a rival:
 // its writers are not accepted and its END_OF_STREAM / FAILED are not the run's.
 TEST(Protocol, RunWritersRejectASecondFrameSource) {

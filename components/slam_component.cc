@@ -205,7 +205,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
     announcer.Poll(status, frames.matched() > 0 &&
                                (!pairing_options.needs_detections || detections.matched() > 0));
     if (announcer.done() && !map_announced) {
-      // The map this slam starts from (issue 15), after READY so the readers are matched.
+      // The map this slam starts from, after READY so the readers are matched.
       const MapFileInfo info = *core.LoadedMapInfo();
       status.Write(ToMsg(ComponentStatus::MapLoaded(ComponentKind::kSlam, info.keyframes,
                                                     info.checksum, options.system.load_map)));

@@ -127,7 +127,7 @@ TEST(SlamCore, NeedsDetectionsOnlyForBoxFiltersFedFromOutside) {
   EXPECT_FALSE(options.NeedsDetections());
 }
 
-// The DDS path of the detector cadence (issue 19, lever 4): the detector component detects every
+// The DDS path of the detector cadence: the detector component detects every
 // 3rd frame, slam feeds the others with carried boxes (detector_skipped). A keyframe made on such
 // a frame gets its map mask from slam's own detector (SystemOptions::detect_skipped_keyframes, the
 // detector component's options as the pipeline sets them), as `--direct` does; tracking keeps

@@ -1,4 +1,4 @@
-// The one consumer of the SLAM's keyframe stream (issue 17): each KeyframeData is a new keyframe,
+// The one consumer of the SLAM's keyframe stream: each KeyframeData is a new keyframe,
 // a pose correction (local BA, loop closing) or the removal of a culled keyframe, and this class
 // applies it to the OctoMapBuilder it owns. KeyframeMapper (direct runs, `dygslam map`: a worker
 // thread behind a queue) and the mapper component (MapperCore: Keyframe messages) feed it; neither

@@ -368,9 +368,21 @@ void OctoMapBuilder::WriteFull(const std::string& path) {
   WriteOctoMapFull(*tree_, path);
 }
 
+void WriteOctoMapBinaryStream(const octomap::OcTree& tree, std::ostream& out) {
+  // The header AbstractOccupancyOcTree::writeBinaryConst writes, then the nodes depth first.
+  out << "# Octomap OcTree binary file\n"
+      << "# (feel free to add / change comments, but leave the first line as it is!)\n#\n";
+  out << "id " << tree.getTreeType() << "\n";
+  out << "size " << tree.size() << "\n";
+  out << "res " << tree.getResolution() << "\n";
+  out << "data\n";
+  if (tree.getRoot() != nullptr) tree.writeBinaryNode(out, tree.getRoot());
+}
+
 void WriteOctoMapBinary(const octomap::OcTree& tree, const std::string& path) {
   std::ostringstream out(std::ios::binary);
-  if (!tree.writeBinaryConst(out)) throw InputError(path, 0, "cannot serialise the OcTree (.bt)");
+  WriteOctoMapBinaryStream(tree, out);
+  if (!out) throw InputError(path, 0, "cannot serialise the OcTree (.bt)");
   WriteFileAtomically(path, out.str());
 }
 
@@ -561,8 +573,8 @@ std::unique_ptr<octomap::OcTree> ReadOctoMap(const std::string& path) {
     const long long declared = file_header.size;
     // OctoMap's .ot reader recurses on each node's child bits; past the end of the stream it read
     // an uninitialised byte as those bits and recursed until the stack overflowed (ASan,
-    // reliability/ThirdReprobe.TruncatedOctoMapIsAnError), and a crafted chain of nested nodes
-    // did the same (reliability/ThirdReprobe.DeeplyNestedOctoMapIsAnError): the walk checks both.
+    // reliability/OctoMapFiles.TruncatedOctoMapIsAnError), and a crafted chain of nested nodes
+    // did the same (reliability/OctoMapFiles.DeeplyNestedOctoMapIsAnError): the walk checks both.
     CheckOctoMapShape(path, in, file_header, /*binary=*/false, "OctoMap (.ot)");
     std::unique_ptr<octomap::AbstractOcTree> abstract(octomap::AbstractOcTree::read(in));
     if (!abstract) throw InputError(path, 0, "malformed OctoMap (.ot)");

@@ -40,6 +40,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <ostream>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -150,7 +151,7 @@ class OctoMapBuilder {
   // Removes a keyframe's contribution (schedules a rebuild). Returns false if unknown.
   bool Remove(int64_t keyframe_id);
 
-  // Continues an existing map (issue 15): the tree starts from `base` (e.g. a previous run's
+  // Continues an existing map: the tree starts from `base` (e.g. a previous run's
   // map.ot; a .bt works too but has lost the probabilities) and keyframes are inserted on top;
   // rebuilds start from it again. Throws InputError naming `source` when its resolution differs
   // from OctoMap.resolution. Call before the first Insert.
@@ -212,6 +213,10 @@ class OctoMapBuilder {
 };
 
 // Atomic writers / reader for any OcTree (same formats as the builder's).
+// The .bt stream of `tree`: the bytes of OcTree::writeBinaryConst (header, then the node data),
+// without the progress line ("Writing N nodes to output stream... done.") that the library
+// prints to stderr on every binary write, which would interleave with a running mapper's log.
+void WriteOctoMapBinaryStream(const octomap::OcTree& tree, std::ostream& out);
 void WriteOctoMapBinary(const octomap::OcTree& tree, const std::string& path);
 void WriteOctoMapFull(const octomap::OcTree& tree, const std::string& path);
 // Reads .bt (binary) or .ot (full); the format is taken from the file header, not the suffix.

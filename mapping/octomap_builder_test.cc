@@ -9,6 +9,7 @@
 #include <fstream>
 #include <memory>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "core/base/error.h"
 #include "mapping/map_compare.h"
@@ -288,7 +289,7 @@ TEST(OctoMapBuilder, BinaryAndFullFilesRoundTrip) {
   EXPECT_THROW(builder.WriteBinary(dir + "/no_such_dir/map.bt"), InputError);
 }
 
-// Issue 15: a map continued from a saved .ot (first half of the walk) and the second half
+// A map continued from a saved .ot (first half of the walk) and the second half
 // inserted on top is the map of the whole walk; a rebuild starts from the loaded map again; a map
 // of another resolution is refused naming the file.
 TEST(OctoMapBuilder, ContinuesASavedMap) {
@@ -415,6 +416,28 @@ TEST(OctoMapBuilder, RemoveTakesAKeyframeOut) {
   EXPECT_EQ(builder.KeyframeIds(), std::vector<int64_t>{11});
   EXPECT_TRUE(builder.Remove(11));
   EXPECT_EQ(builder.tree().size(), 0u);
+}
+
+// The .bt stream is OctoMap's own bytes, written without the library's progress line on stderr
+// ("Writing N nodes to output stream... done." for every write of a running mapper).
+TEST(OctoMapBuilder, BinaryStreamMatchesOctoMapAndPrintsNothing) {
+  octomap::OcTree tree(0.05);
+  for (int i = 0; i < 2000; ++i)
+    tree.updateNode(octomap::point3d(0.013f * i, 0.007f * i, 0.05f * (i % 37)), i % 3 != 0);
+  std::ostringstream library;
+  ASSERT_TRUE(tree.writeBinaryConst(library));
+  std::ostringstream ours;
+  ::testing::internal::CaptureStderr();
+  WriteOctoMapBinaryStream(tree, ours);
+  const std::string printed = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(printed, "");
+  EXPECT_EQ(ours.str(), library.str());
+  // An empty tree: header only, as OctoMap writes it.
+  octomap::OcTree empty(0.1);
+  std::ostringstream empty_library, empty_ours;
+  ASSERT_TRUE(empty.writeBinaryConst(empty_library));
+  WriteOctoMapBinaryStream(empty, empty_ours);
+  EXPECT_EQ(empty_ours.str(), empty_library.str());
 }
 
 }  // namespace

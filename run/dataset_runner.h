@@ -1,4 +1,4 @@
-// The dataset -> System loop, written once (issue 17): `dygslam run --direct`, `dygslam map`,
+// The dataset -> System loop, written once: `dygslam run --direct`, `dygslam map`,
 // `dygslam bench` and the soak benchmark feed a System from a dataset folder through it.
 //
 //   DatasetRunOptions o;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -13,6 +14,7 @@
 #include "core/config/config_reader.h"
 #include "core/config/settings.h"
 #include "run/mapping_config.h"
+#include "run/settings_document.h"
 #include "run/system_config.h"
 
 namespace dygslam {
@@ -50,6 +52,37 @@ TEST(KnownKeys, EveryKeyTheRunLayerReadsIsKnown) {
     for (const std::string& k : unknown) s += k + " ";
     return s;
   }();
+}
+
+// The settings document (`dygslam settings`, docs/settings.md) lists every known key once, with
+// the defaults of the options structs; only the camera intrinsics and distortion are required.
+TEST(KnownKeys, SettingsDocumentGivesEveryOptionalKeyItsDefault) {
+  const std::vector<SettingEntry> entries = SettingEntries();
+  ASSERT_EQ(entries.size(), KnownSettingsKeys().size());
+  std::vector<std::string> required;
+  std::map<std::string, std::string> defaults;
+  for (const SettingEntry& e : entries) {
+    EXPECT_FALSE(e.default_value.empty()) << e.key;
+    EXPECT_TRUE(defaults.emplace(e.key, e.default_value).second) << "listed twice: " << e.key;
+    if (e.required) required.push_back(e.key);
+  }
+  EXPECT_EQ(required,
+            (std::vector<std::string>{"Camera.fx", "Camera.fy", "Camera.cx", "Camera.cy",
+                                      "Camera.k1", "Camera.k2", "Camera.p1", "Camera.p2"}));
+  EXPECT_EQ(defaults["ORBextractor.nFeatures"], std::to_string(OrbExtractorOptions{}.num_features));
+  EXPECT_EQ(defaults["Tracking.keyframe_min_map_inliers"],
+            std::to_string(TrackingOptions{}.keyframe_min_map_inliers));
+  EXPECT_EQ(defaults["LocalMapping.ba_lag_frames"],
+            std::to_string(LocalMappingOptions{}.ba_lag_frames));
+  EXPECT_EQ(defaults["LoopClosing.enabled"], LoopClosingOptions{}.enabled ? "true" : "false");
+  EXPECT_EQ(defaults["Detector.every_n_frames"],
+            std::to_string(SystemOptions{}.detection_every_n_frames));
+  EXPECT_EQ(defaults["OctoMap.resolution"], "0.05");
+  EXPECT_EQ(defaults["Tracking.max_frames_between_keyframes"], "Camera.fps");
+  // The Markdown form has one row per key.
+  const std::string markdown = SettingsMarkdown();
+  for (const SettingEntry& e : entries)
+    EXPECT_NE(markdown.find("| `" + e.key + "` |"), std::string::npos) << e.key;
 }
 
 }  // namespace

@@ -32,7 +32,7 @@ SystemOptions Options(const std::string& section) {
 
 TEST(LoopClosingConfig, DefaultsUseTheShippedVocabulary) {
   const SystemOptions o = Options("");
-  EXPECT_TRUE(o.loop_closing.enabled);  // on by default (BENCHMARKS.md, issue 14)
+  EXPECT_TRUE(o.loop_closing.enabled);  // on by default (BENCHMARKS.md)
   EXPECT_NE(o.loop_closing.vocabulary.find("vocabulary.dygvoc"), std::string::npos);
   std::ifstream file(o.loop_closing.vocabulary);
   EXPECT_TRUE(file.good()) << o.loop_closing.vocabulary;

@@ -76,8 +76,8 @@ TEST(MappingConfig, BadValuesNameFileLineAndKey) {
   EXPECT_NE(e3.find("OctoMap.resolution"), std::string::npos) << e3;
 }
 
-// A misspelt OctoMap key is what a misspelt key of any section is (re-probe F15: it was an error
-// here and a warning in LoadSettings): a warning naming file:line and the closest known key, an
+// A misspelt OctoMap key is what a misspelt key of any section is (not an error here
+// while LoadSettings warns): a warning naming file:line and the closest known key, an
 // error only with UnknownKeyPolicy::kError (--strict-settings). A wrong type stays an error.
 TEST(MappingConfig, MisspeltKeyWarnsLikeEverySection) {
   const std::string camera =

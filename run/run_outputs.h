@@ -1,4 +1,4 @@
-// What a run writes, written once (issue 17): frames.csv (one column layout for `dygslam run` in
+// What a run writes, written once: frames.csv (one column layout for `dygslam run` in
 // every mode: the direct loop and the pipeline's recorder component), the TUM trajectories of a
 // System and the map of a KeyframeMapper.
 //

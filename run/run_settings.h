@@ -1,4 +1,4 @@
-// Settings file -> the options of a run, written once (issue 17): every command that runs the
+// Settings file -> the options of a run, written once: every command that runs the
 // SLAM (run, map, bench, component, bridge --run-slam, the soak benchmark) reads its settings
 // through LoadRunConfiguration.
 //

@@ -273,7 +273,7 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                         {"confidence_threshold", &options.detector.confidence_threshold},
                         {"nms_threshold", &options.detector.nms_threshold},
                         {"num_threads", &options.detector.num_threads}});
-  // Detector cadence (issue 19): run on every n-th frame, carry the boxes in between.
+  // Detector cadence: run on every n-th frame, carry the boxes in between.
   ReadFields(detector, {{"every_n_frames", &options.detection_every_n_frames},
                         {"shift_carried_boxes", &options.box_propagation.shift_boxes}});
   if (options.detection_every_n_frames < 1 || options.detection_every_n_frames > 1000)

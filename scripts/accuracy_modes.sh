@@ -1,6 +1,6 @@
 #!/bin/bash
-# ATE RMSE of the three run modes, interleaved (the "After the session-6 merges" table of
-# BENCHMARKS.md; issue 16's accuracy check). ROUNDS rounds of
+# ATE RMSE of the three run modes, interleaved (the accuracy-by-mode table of BENCHMARKS.md).
+# ROUNDS rounds of
 #   dygslam run DATASET --config CONFIG --filter full --no-map [--direct | (default) | --processes]
 # (real threading, not --deterministic), the DDS modes inside a private network namespace
 # (scripts/netns_lib.sh), then one line per run: mode, round, ATE RMSE (dygslam eval), the number

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Issue 17: a refactor must keep the deterministic outputs of bonn_crowd_part byte-identical.
+# A refactor must keep the deterministic outputs of bonn_crowd_part byte-identical.
 #   scripts/check_outputs_identical.sh record BUILD_DIR OUT_DIR   the four runs into OUT_DIR
 #   scripts/check_outputs_identical.sh compare BASE_OUT NEW_OUT   cmp every output of the runs
 #   scripts/check_outputs_identical.sh BASE_BUILD NEW_BUILD [OUT] both (OUT default /tmp/dygslam_identical)

@@ -1,5 +1,5 @@
 #!/bin/bash
-# CPU per frame (issue 19): user + sys of all threads of `dygslam run` / frames, with ATE RMSE,
+# CPU per frame: user + sys of all threads of `dygslam run` / frames, with ATE RMSE,
 # for several configurations, RUNS interleaved rounds (a, b, c, a, b, c, ...), medians per
 # configuration:
 #   scripts/cpu_budget.sh BUILD_DIR DATASET_DIR RUNS OUT_DIR NAME=FILTER[,SETTINGS_KEY=VALUE...] ...
@@ -10,7 +10,7 @@
 # network namespace (DYGSLAM_DOMAIN_ID sets the domain). A part `build=DIR` runs that
 # configuration with DIR/apps/dygslam instead (e.g. main's build beside this one: the ratio
 # against main measured in the same interleaved rounds):
-#   scripts/cpu_budget.sh build DATA 3 out/cpu main=full,build=/work/main/build full=full
+#   scripts/cpu_budget.sh build DATA 3 out/cpu base=full,build=../other/build full=full
 #   scripts/cpu_budget.sh build ../shared/data/bonn_crowd_part 3 out/cpu none=none full=full \
 #       full_k3=full,Detector.every_n_frames=3
 # A part `env:VAR=VALUE` sets an environment variable for that configuration's runs (e.g.

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Makes the "there and back" evaluation sequence of issue 14 from a TUM/Bonn dataset folder.
+"""Makes the "there and back" evaluation sequence (loop closing on a revisit) from a TUM/Bonn dataset folder.
 
 All frames forward, then the same frames in reverse order, so the camera returns to where it
 started. Timestamps continue: reverse entry k is stamped t_last + (t_last - t_k) + 1/30 s (t_last =

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Fingerprint of the deterministic outputs (issue 17: a refactor must keep them byte-identical).
+# Fingerprint of the deterministic outputs (a refactor must keep them byte-identical).
 #   scripts/output_fingerprint.sh [BUILD_DIR] [DATASET_DIR] [OUT_DIR]
 # Defaults: build, $DYGSLAM_DATA_DIR/bonn_crowd_part (or ../shared/data/...), /tmp/dygslam_fingerprint.
 # Runs, all with --deterministic --filter full --quiet:

@@ -1,5 +1,5 @@
 #!/bin/bash
-# CPU cost of decoding a dataset's PNG images (issue 19): the part of a dataset run's CPU per frame
+# CPU cost of decoding a dataset's PNG images: the part of a dataset run's CPU per frame
 # that the player / dataset loop spends on decoding rgb + depth PNGs, which a live camera does
 # not pay. Compiles a small OpenCV program (cv::imread of every rgb and depth file listed in
 # rgb.txt / depth.txt, as the dataset reader loads them) and prints CPU (user + sys of the

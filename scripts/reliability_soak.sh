@@ -8,7 +8,7 @@
 # DYGSLAM_SOAK_CONFIG=FILE: settings file instead of config/bonn.yaml (loop closing is on by
 # default: the summary counts the loops closed per soak loop; `LoopClosing: {enabled: false}` turns it off).
 #
-# The DDS pipeline instead (issue 19): `dygslam run DATASET --loop-minutes MINUTES` (the player
+# The DDS pipeline instead: `dygslam run DATASET --loop-minutes MINUTES` (the player
 # replays the frames, map on) in the default mode (components as threads) or with --processes,
 # inside a private network namespace; the resident memory of every process is sampled every 5 s
 # (OUT_DIR/rss.csv), the slope of each over the second half is printed (MB/min) and plotted

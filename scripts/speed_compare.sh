@@ -1,5 +1,5 @@
 #!/bin/bash
-# Frame time of the full method against the no-filter baseline, measured in the same session:
+# Frame time of the full method against the no-filter baseline, measured in the same invocation:
 # RUNS interleaved runs of each (none, full, none, full, ...) of
 #   dygslam run DATASET --direct --no-map --filter none|full
 # (real threading, detection prefetched one frame ahead), then per filter the median over runs of
@@ -8,7 +8,7 @@
 #   scripts/speed_compare.sh [BUILD_DIR] [DATASET_DIR] [RUNS] [OUT_DIR] [-- extra run arguments]
 # Defaults: build-rel, $DYGSLAM_DATA_DIR/bonn_crowd_part (or ../shared/data/...), 3, out/speed.
 #
-# Pipeline modes instead (issue 19): RUNS interleaved runs of `dygslam run DATASET --filter FILTER`
+# Pipeline modes instead: RUNS interleaved runs of `dygslam run DATASET --filter FILTER`
 # in each mode (--direct, default = DDS components as threads, --processes), DDS runs inside a
 # private network namespace; per mode the median frames/s (dygslam's own figure: frames over the
 # whole run, start-up included), its ratio to --direct, and CPU (user + sys of all processes) per

@@ -1,4 +1,4 @@
-// ROS 2 interop as a real machine looks (issue 21): runs inside run_in_lan_netns.sh, a private
+// ROS 2 interop as a real machine looks: runs inside run_in_lan_netns.sh, a private
 // namespace with loopback plus a LAN interface lan0 (10.252.141.1, multicast). The Cyclone peer
 // (the DDS implementation of rmw_cyclonedds) runs on its DEFAULT configuration: it picks lan0 and
 // announces 10.252.141.1, no shared memory. The bridge runs with its default ROS network profile

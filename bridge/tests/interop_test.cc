@@ -378,8 +378,8 @@ TEST(Interop, CameraOverRos2DrivesSlamLikeTheDirectRun) {
             << percentile(detection_ms, 0.5) << " ms, slam total median "
             << percentile(slam_ms, 0.5) << " ms\n";
   // The peer sends depth in ROS's 16UC1 millimetres, 5x coarser than the dataset's PNGs (0.2 mm),
-  // so the two deterministic runs see slightly different inputs. Measured: within 10 % until
-  // session 6; 0.0129 vs 0.0116 m (+11.4 %) since the depth-based labels of issue 22 (round 3).
+  // so the two deterministic runs see slightly different inputs. Measured: within 10 % with the
+  // epipolar labels; 0.0129 vs 0.0116 m (+11.4 %) with the depth-based labels.
   EXPECT_LE(std::abs(bridge_ate - direct_ate), 0.15 * direct_ate);
 }
 

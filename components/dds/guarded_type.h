@@ -1,5 +1,5 @@
 // GuardedType<PubSubType>: the fastddsgen-generated type support with a deserialize() that never
-// throws and refuses oversized payloads (issue 10).
+// throws and refuses oversized payloads.
 //
 // Why: the generated deserialize() of fastddsgen 2.3.0 catches only NotEnoughMemoryException. A
 // malformed sample from any participant of the domain (e.g. a boolean byte of 2 -> fastcdr

@@ -28,7 +28,7 @@
 //   a mapper that starts late (or restarts) receives the newest kKeyframeHistoryDepth keyframe
 //   messages (new keyframes with images, local-BA pose updates, removals), then everything after.
 //   Unbounded, the writer kept every keyframe ever made (~2.5 MB each with colour, depth in metres
-//   and mask) plus every pose update: `dygslam run` grew ~0.5 MB per frame (issue 19). Keep-all
+//   and mask) plus every pose update: `dygslam run` grew ~0.5 MB per frame. Keep-all
 //   with a bound (not keep-last) so a live reader never loses a message: when the history is full
 //   the writer drops the oldest sample only once every matched reader acknowledged it (waiting up
 //   to max_blocking_time). Payloads are sized per sample (DYNAMIC_RESERVE), so the ~16 small pose

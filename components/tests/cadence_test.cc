@@ -1,4 +1,4 @@
-// Detector cadence through DDS (issue 19): with `Detector.every_n_frames: 3` the detector
+// Detector cadence through DDS: with `Detector.every_n_frames: 3` the detector
 // component detects every 3rd frame only and slam carries the boxes to the frames in between (the
 // System's box propagation, as in the direct loop); slam does not wait for the skipped frames, so
 // --deterministic stays deterministic: the direct loop, the pipeline on threads of one process and
@@ -82,7 +82,7 @@ TEST(Cadence, DeterministicTrajectoryIdenticalInAllModes) {
   }
 }
 
-// Issue 19, lever 4: the detector component skips 2 frames of 3; a keyframe made on a skipped
+// The detector component skips 2 frames of 3; a keyframe made on a skipped
 // frame gets its map mask from slam's own detector (created on first use, the detector
 // component's model and thread count), as `--direct` does with its own detector: the OctoMap of
 // entries 100-145 (8 keyframes, 6 on skipped frames) is the same, byte for byte, in the direct

@@ -1,4 +1,4 @@
-// Issue 16: when the detector stops mid-run, the frames after it are filtered with the last boxes
+// When the detector stops mid-run, the frames after it are filtered with the last boxes
 // carried forward (FramePairer) instead of running unfiltered, so the features on the person are
 // still removed. Real Bonn frames with a person crossing the view, real detector.
 #include <gtest/gtest.h>
@@ -92,9 +92,9 @@ TEST(CarryForward, DetectorStoppedMidRunBoxesStillFilter) {
   EXPECT_EQ(carried.carried, static_cast<int>(kLast - kStop));
   EXPECT_EQ(carried.geometry_only, 0);
   EXPECT_EQ(geometry.geometry_only, static_cast<int>(kLast - kStop));
-  // The carried-forward boxes remove most of what the frames' own boxes remove. Measured (session
-  // 6): own boxes 8038, carried forward 7308 (91 %), geometry only 0; session 7 (issue 22's round-3
-  // labels: expansion outside the boxes, neighbour consensus): own 8453, carried 8273 (98 %),
+  // The carried-forward boxes remove most of what the frames' own boxes remove. Measured
+  // with the epipolar labels: own boxes 8038, carried forward 7308 (91 %), geometry only 0; with the
+  // depth-based labels expansion outside the boxes, neighbour consensus): own 8453, carried 8273 (98 %),
   // geometry only 8618 -- the geometry alone now also finds the walkers once the boxes are gone.
   EXPECT_GT(sum(carried.dynamic), 0.75 * sum(all.dynamic));
   EXPECT_GT(sum(geometry.dynamic), 0.5 * sum(all.dynamic));

@@ -256,7 +256,7 @@ TEST(Pipeline, SigtermSingleProcessAndDirectFlushOutputs) {
 
 // A mapper started after slam has emitted keyframes still receives the history: every keyframe
 // message while fewer than kKeyframeHistoryDepth (64) were published before it joined, else the
-// newest 64 of them, then everything after (transient-local, bounded: issue 19).
+// newest 64 of them, then everything after (transient-local, bounded).
 TEST(Pipeline, LateMapperReceivesKeyframeHistory) {
   DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
   const std::string tmp = testing::MakeTempDir("dds_pipeline_late_mapper");

@@ -12,13 +12,13 @@ namespace {
 // Length of the valid UTF-8 sequence starting at text[i] (2..4), 0 when it is not one.
 size_t Utf8SequenceLength(const std::string& text, size_t i) {
   const auto byte = [&](size_t k) { return static_cast<unsigned char>(text[k]); };
-  const unsigned char lead = byte(i);
+  const unsigned char first = byte(i);
   size_t length = 0;
-  if (lead >= 0xC2 && lead <= 0xDF) {
+  if (first >= 0xC2 && first <= 0xDF) {
     length = 2;
-  } else if (lead >= 0xE0 && lead <= 0xEF) {
+  } else if (first >= 0xE0 && first <= 0xEF) {
     length = 3;
-  } else if (lead >= 0xF0 && lead <= 0xF4) {
+  } else if (first >= 0xF0 && first <= 0xF4) {
     length = 4;
   } else {
     return 0;
@@ -28,10 +28,10 @@ size_t Utf8SequenceLength(const std::string& text, size_t i) {
     if ((byte(i + k) & 0xC0) != 0x80) return 0;
   }
   // Overlong 3/4-byte forms, UTF-16 surrogates and code points above U+10FFFF.
-  if (lead == 0xE0 && byte(i + 1) < 0xA0) return 0;
-  if (lead == 0xED && byte(i + 1) > 0x9F) return 0;
-  if (lead == 0xF0 && byte(i + 1) < 0x90) return 0;
-  if (lead == 0xF4 && byte(i + 1) > 0x8F) return 0;
+  if (first == 0xE0 && byte(i + 1) < 0xA0) return 0;
+  if (first == 0xED && byte(i + 1) > 0x9F) return 0;
+  if (first == 0xF0 && byte(i + 1) < 0x90) return 0;
+  if (first == 0xF4 && byte(i + 1) > 0x8F) return 0;
   return length;
 }
 

@@ -1,6 +1,6 @@
 // One RGB-D frame: colour and depth of one instant, as a camera, a dataset folder, a DDS message
 // or a ROS 2 image pair delivers it, plus what the System may be given with it (a feature mask,
-// person boxes found elsewhere). The one frame type of the project (issue 17): the dataset runner,
+// person boxes found elsewhere). The one frame type of the project: the dataset runner,
 // the slam component (components/convert.h RgbdFrameData adds the wire header to it) and the
 // ROS 2 synchroniser (bridge/rgbd_sync.h) all make it; System::FeedRgbdFrame takes it.
 //

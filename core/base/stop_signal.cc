@@ -31,7 +31,7 @@ ScopedStopSignals::ScopedStopSignals() {
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, &g_old_int);
   sigaction(SIGTERM, &sa, &g_old_term);
-  // A closed terminal or ssh session (SIGHUP) stops like Ctrl-C: outputs are written.
+  // A closed terminal or ssh connection (SIGHUP) stops like Ctrl-C: outputs are written.
   sigaction(SIGHUP, &sa, &g_old_hup);
   // A closed stdout / stderr reader (`dygslam run ... | head`) must not kill the run before its
   // outputs are written: writes to the pipe fail with EPIPE instead.

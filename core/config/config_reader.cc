@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -16,6 +17,7 @@
 
 #include "core/base/echo.h"
 #include "core/base/input_file.h"
+#include "core/config/setting_defaults.h"
 #include "core/config/settings.h"
 
 namespace dygslam {
@@ -471,7 +473,43 @@ ConfigReader ConfigReader::Section(const std::string& name) const {
 
 namespace {
 thread_local KeyLookupRecorder* current_recorder = nullptr;
+thread_local SettingDefaultsRecorder* current_defaults = nullptr;
+
+// A default as a settings file would write it: shortest round-trip numbers, true / false, lists
+// in brackets.
+std::string FormatDefault(double v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, r.ptr);
+}
+std::string FormatDefault(float v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, r.ptr);
+}
+std::string FormatDefault(int v) { return std::to_string(v); }
+std::string FormatDefault(int64_t v) { return std::to_string(v); }
+std::string FormatDefault(bool v) { return v ? "true" : "false"; }
+std::string FormatDefault(const std::string& v) { return v; }
+template <typename T>
+std::string FormatDefault(const std::vector<T>& v) {
+  std::string text = "[";
+  for (size_t i = 0; i < v.size(); ++i) text += (i == 0 ? "" : ", ") + FormatDefault(v[i]);
+  return text + "]";
+}
 }  // namespace
+
+SettingDefaultsRecorder::SettingDefaultsRecorder() : previous_(current_defaults) {
+  current_defaults = this;
+}
+
+SettingDefaultsRecorder::~SettingDefaultsRecorder() { current_defaults = previous_; }
+
+bool SettingDefaultsRecorder::Active() { return current_defaults != nullptr; }
+
+void SettingDefaultsRecorder::Record(const std::string& full_key, const std::string& value) {
+  if (current_defaults) current_defaults->defaults_.emplace(full_key, value);
+}
 
 KeyLookupRecorder::KeyLookupRecorder() : previous_(current_recorder) { current_recorder = this; }
 
@@ -831,7 +869,11 @@ bool ConfigReader::ReadIfPresent(const std::string& key, T* value) const {
   const std::string full = FullKey(key);
   KeyLookupRecorder::Record(full);
   const Hit h = ConfigLookup::Find(impl_->path, impl_->root, full);
-  if (h.line <= 0 || h.value.IsNull()) return false;
+  if (h.line <= 0 || h.value.IsNull()) {
+    if (SettingDefaultsRecorder::Active())
+      SettingDefaultsRecorder::Record(full, FormatDefault(*value));
+    return false;
+  }
   const auto fail = [&](const std::string& m) -> void {
     throw InputError(impl_->path, h.line, "key '" + EchoValue(full) + "': " + m);
   };

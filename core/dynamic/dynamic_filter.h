@@ -132,7 +132,7 @@ struct DynamicFilterOptions {
   // epipolar distances; the 2-D residual of a static point over a longer baseline is larger.
   double depth_residual_scale = 1.0;
   int anchor_max_age = 10;  // frames; then the anchor restarts from the measurement
-  // Ours (issue 22): anchors fixed in the filter's own odometry frame (set where their track
+  // Ours: anchors fixed in the filter's own odometry frame (set where their track
   // started or restarted, never moved), and the camera pose estimated by PnP against them, so a
   // mover's anchors drift off by its whole motion since then (several px after a few frames)
   // and cannot be absorbed by the motion estimate; false: anchors in the previous camera frame,
@@ -147,7 +147,7 @@ struct DynamicFilterOptions {
   // this (metres) when both have depth, so a wall behind a person does not inherit the
   // person's probability. <= 0: off.
   double expansion_depth_gap = 0.3;
-  // Ours (issue 22; 0 in the `paper` configurations): depth-refined boxes. In full mode with the
+  // Ours (0 in the `paper` configurations): depth-refined boxes. In full mode with the
   // depth-residual test, each box's object depth is estimated (BoxObjectDepth of
   // core/dynamic/dynamic_mask.h: the nearest depth band holding a fair share of the box's depth
   // pixels, from FilterInput::depth_image, else from the keypoint depths in the box); an in-box
@@ -156,18 +156,18 @@ struct DynamicFilterOptions {
   // feature outside the boxes (prior outside_p_init, the depth-residual test). In-box features
   // without depth keep the paper's rule. <= 0: off (every in-box feature starts from p_init).
   double box_depth_band = 0.4;  // m
-  // Ours (issue 22; 0 in the `paper` configurations, which run without the depth-residual
+  // Ours (0 in the `paper` configurations, which run without the depth-residual
   // test): neighbour consensus. With the depth-residual test, a feature's label becomes the
   // majority of itself and the features within consensus_radius px whose depth is within
   // consensus_depth_gap m of its own, when it has at least consensus_min_neighbours of them (a
   // person is a depth-connected blob: isolated flags on static features are dropped, a mover's
   // unflagged features join their flagged neighbours). In-box features at their box's object
-  // depth stay dynamic. Measured on generated sequences (BENCHMARKS.md, *Round 3*): radius 90
+  // depth stay dynamic. Measured on generated sequences (BENCHMARKS.md): radius 90
   // px takes full's precision from 0.84 to 0.99 (walkers) and 0.72 to 0.96 (near). <= 0: off.
   double consensus_radius = 90.0;    // px
   double consensus_depth_gap = 0.3;  // m
   int consensus_min_neighbours = 3;
-  // Ours (issue 22, round 3): in full mode with the depth-residual test, unmatched features
+  // Ours: in full mode with the depth-residual test, unmatched features
   // outside the boxes get the expansion (eqs. 11-12, from outside_p_init) from their matched
   // neighbours outside the boxes and carry it as their track's prior, as every feature does in
   // geometry mode. Without it a new track on a mover no box reports starts again from

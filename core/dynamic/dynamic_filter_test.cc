@@ -372,7 +372,7 @@ TEST(DynamicFilterSequence, FullModeRemovesMovingKeepsStatic) {
   EXPECT_GT(geom.precision(), 0.6);
 }
 
-// The depth-residual test (ours, issue 22) on a static scene seen by a moving camera: the motion
+// The depth-residual test (ours) on a static scene seen by a moving camera: the motion
 // from PnP-RANSAC matches the true motion, static anchors do not drift (nothing is flagged over
 // 12 frames); without depth the motion cannot be estimated and the filter abstains. Known limit
 // (BENCHMARKS.md, *Geometry that earns its place*): with this generator's person cluster moving

@@ -7,7 +7,7 @@
 //     inside the box (>= min_features_for_depth), else
 //   - the box's foreground depth: the nearest depth d whose band [d, d + depth_band] holds at
 //     least foreground_min_fraction of the box's valid depth pixels (BoxObjectDepth).
-// The default does not depend on which in-box features the filter kept (issue 22: labels that
+// The default does not depend on which in-box features the filter kept (labels that
 // keep more in-box features static must not shrink the map's masks);
 // and the box pixels whose depth is within [object - depth_band, object + depth_band] are masked,
 // as are the box pixels without depth (they carry nothing for the map anyway). A box without any
@@ -33,7 +33,7 @@ struct DynamicMaskOptions {
   int feature_radius = 8;   // px
   double box_margin = 0.0;  // px added on each side of the boxes
   // true: the object depth is the median depth of the box's dynamic features when it has
-  // min_features_for_depth of them (the behaviour before issue 22); false: always the box's
+  // min_features_for_depth of them (the earlier behaviour); false: always the box's
   // foreground depth, independent of the filter's labels.
   bool object_depth_from_features = false;
   void Check() const;

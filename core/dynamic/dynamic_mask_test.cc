@@ -62,7 +62,7 @@ TEST(DynamicMask, DynamicFeaturesDefineTheObjectDepth) {
   dyn.push_back(0);
   DynamicMaskOptions o;
   o.feature_radius = 0;
-  o.object_depth_from_features = true;  // opt-in since issue 22
+  o.object_depth_from_features = true;  // opt-in
   const cv::Mat mask = ComputeDynamicMask(s.depth.size(), s.depth, s.detections, kps, dyn, o);
   cv::Mat table_eroded;
   cv::erode(table, table_eroded, cv::Mat(), cv::Point(-1, -1), 5);

@@ -1,4 +1,4 @@
-// Per-feature dynamic labels on generated sequences with the hard cases of real data (issue 22):
+// Per-feature dynamic labels on generated sequences with the hard cases of real data:
 // movers that walk, stop, stand and turn; static background inside their (padded) boxes at other
 // depths; a mover that is never detected; a mover filling half the view; a slowly moving camera.
 // Ground truth: a feature is dynamic when its pixel belongs to a mover (object_labels != 0).
@@ -116,7 +116,7 @@ DynamicFilterOptions Configuration(const std::string& name) {
     o.box_margin_fraction = 0;
     o.depth_residual = false;
   }
-  // Ablation of full (issue 22): before it (the paper's epipolar test in full), without the
+  // Ablation of full: before it (the paper's epipolar test in full), without the
   // depth-refined boxes, with the chained frame-to-frame motion instead of fixed anchors.
   if (name == "full-epipolar") o.depth_residual = false;
   if (name == "full-no-box-depth") o.box_depth_band = 0;
@@ -226,7 +226,7 @@ TEST(DynamicLabelsSynthetic, WalkersStopTurnAndOneIsNeverDetected) {
   const auto c = RunAll(data, "walkers");
   ASSERT_GT(c.at("boxes").NumDynamic(), 300) << "too few features on movers to measure";
   ASSERT_GT(c.at("boxes").undetected, 50) << "the undetected mover is hardly visible";
-  // Measured (seed 5, 59 frames scored; ORB of core/slam, deterministic; 2026-12-02, round 3):
+  // Measured (seed 5, 59 frames scored; ORB of core/slam, deterministic; 2026-12-02):
   //   boxes             precision 0.51 recall 0.71 undetected 0.21 (where it overlaps a box)
   //   geometry-epipolar precision 0.63 recall 0.59 undetected 0.48   (the paper's test alone)
   //   geometry-chained  precision 0.46 recall 0.64 undetected 0.93   (anchors moved frame to frame)
@@ -274,7 +274,7 @@ TEST(DynamicLabelsSynthetic, MoverFillingHalfTheView) {
   const Prepared data = Prepare(o);
   const auto c = RunAll(data, "near");
   ASSERT_GT(c.at("boxes").NumDynamic(), 300) << "the near mover is hardly visible";
-  // Measured (seed 9, 2026-12-02, round 3): boxes precision 0.43 recall 1.00; geometry-epipolar
+  // Measured (seed 9, 2026-12-02): boxes precision 0.43 recall 1.00; geometry-epipolar
   // 0.54 / 0.90; geometry-chained 0.69 / 0.98; geometry 0.95 / 0.99; paper 0.63 / 0.72
   // (static-in-box kept 0.42); full-epipolar 0.61 / 0.64 (0.69); full-no-box-depth 0.925 / 1.00
   // (0.94); full-chained 0.94 / 0.997 (0.96); full-no-consensus 0.68 / 0.995 (0.84);

@@ -43,8 +43,8 @@ struct DetectorOptions {
   // 416 (YOLOv3-tiny) / 160 (CYTI); any multiple of 32 works. input_height 0: from the image's
   // aspect ratio, input_width * rows / cols rounded up to a multiple of 32 (DetectorInputSize;
   // 320 x 256 for 640 x 480 frames): a 4:3 frame is not stretched to a square, which costs
-  // 0.8x the network's time for boxes that agree with the square input's (issue 19,
-  // BENCHMARKS.md). The dataset presets (config/*.yaml) keep 320 x 320.
+  // 0.8x the network's time for boxes that agree with the square input's
+  // (BENCHMARKS.md). The dataset presets (config/*.yaml) keep 320 x 320.
   int input_width = 320;
   int input_height = 0;
   // Minimum class score (objectness x class probability). OpenCV's [yolo] layer already zeroes
@@ -62,7 +62,7 @@ struct DetectorOptions {
   // > 0: cv::setNumThreads(num_threads) at creation (process-wide, see above). 0: leave as is.
   // 1 by default: the detector runs beside extraction and tracking on a thread of its own, and
   // OpenCV's two-thread pool only added CPU time (0.92-0.98x the CPU per frame with one thread,
-  // detections identical; issue 19, BENCHMARKS.md).
+  // detections identical; BENCHMARKS.md).
   int num_threads = 1;
 
   void Check() const;

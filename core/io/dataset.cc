@@ -56,7 +56,7 @@ std::string NotRegularReason(const fs::path& p) {
   return std::string("not a regular file: ") + kind + target;
 }
 
-// Image paths of one list file that lead outside the dataset folder: warned once per list file
+// Image paths of one list file that point outside the dataset folder: warned once per list file
 // (the first such line and how many there are), not once per line.
 class OutsidePaths {
  public:

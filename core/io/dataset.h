@@ -19,7 +19,7 @@ namespace dygslam {
 struct DatasetOptions {
   double max_time_difference = 0.02;  // seconds, rgb <-> depth association
   bool use_associations_file = true;  // use associations.txt when present
-  // Image paths that lead outside the dataset folder ("../../etc/passwd", an absolute path
+  // Image paths that point outside the dataset folder ("../../etc/passwd", an absolute path
   // elsewhere): a warning on stderr naming the list file and line (false), or an InputError (true).
   bool refuse_outside_paths = false;
   void Check() const;

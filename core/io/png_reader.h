@@ -1,4 +1,4 @@
-// Fast PNG decoding for the dataset player (issue 19: decoding was ~14 ms of CPU per frame, a
+// Fast PNG decoding for the dataset player (decoding through OpenCV was ~14 ms of CPU per frame, a
 // quarter of a dataset run). The common dataset layouts (8-bit grey / RGB / RGBA, 16-bit grey,
 // not interlaced, no palette or colour-management chunks) are decoded with libdeflate (the zlib
 // stream) and an own unfiltering pass, into exactly what cv::imread(path, IMREAD_UNCHANGED) gives

@@ -1,4 +1,4 @@
-// Per-map-point dynamic flag (issue 22): a map point whose tracked feature the dynamic filter
+// Per-map-point dynamic flag: a map point whose tracked feature the dynamic filter
 // labels dynamic is flagged `is_dynamic` and taken out of the map (Map::SetBad), so tracking,
 // local mapping and loop closing no longer use it.
 //

@@ -16,7 +16,7 @@ struct LoopClosingOptions {
   // LoopClosing.enabled: detect and close loops. On by default: on bonn_crowd_part (no revisit, no
   // loop accepted; deterministic output identical on and off) it cost nothing measurable once the
   // checks ran outside the map lock (quiet machine, 2026-12-02, threaded median of 3: ATE 0.0139
-  // on vs 0.0142 m off, CPU per frame within the run-to-run spread; BENCHMARKS.md, issue 14).
+  // on vs 0.0142 m off, CPU per frame within the run-to-run spread; BENCHMARKS.md).
   // Relocalization and reference-keyframe tracking use the index either way.
   bool enabled = true;
   // Candidates: keyframes at least this many keyframes older than the query...
@@ -31,7 +31,7 @@ struct LoopClosingOptions {
   int min_bow_matches = 20;
   int ransac_iterations = 300;
   double ransac_threshold_px = 4.0;  // reprojection error, level-0 pixels (scaled by level)
-  // Acceptance (issue 14): a false loop on bonn_crowd_part had 21 inliers and moved the camera
+  // Acceptance: a false loop on bonn_crowd_part had 21 inliers and moved the camera
   // 0.8 m after 0.4 m of travel, so the transform must be well supported after refinement...
   int min_ransac_inliers = 40;
   double min_inlier_ratio = 0.3;    // ...by this fraction of the BoW correspondences...
@@ -51,13 +51,13 @@ struct LoopClosingOptions {
   // fused and the two sides linked (covisibility, loop edge for later pose graphs), without the
   // transform and the pose graph. On the there-and-back sequence (a map never lost) the two
   // corrections were 2-3 mm, and moving the map for them changed later tracking about as much as
-  // they corrected (BENCHMARKS.md, issue 14). 0 / 0: every loop runs the pose graph.
+  // they corrected (BENCHMARKS.md). 0 / 0: every loop runs the pose graph.
   double pose_graph_min_correction_m = 0.02;
   double pose_graph_min_correction_deg = 1.0;
   bool global_bundle_adjustment = true;  // after a loop, in the background
   // ...unless the loop's correction is below both of these: then the pose graph step is enough
   // (a 2 mm correction on the there-and-back sequence was followed by a global BA that moved
-  // the trajectory about as much again; BENCHMARKS.md, issue 14).
+  // the trajectory about as much again; BENCHMARKS.md).
   double global_ba_min_correction_m = 0.02;
   double global_ba_min_correction_deg = 1.0;
   int global_ba_iterations = 10;

@@ -36,7 +36,7 @@ struct OptimizerOptions {
 // every observation re-classified by its chi2 after each round.
 int OptimizePose(Frame& frame, const OptimizerOptions& options);
 
-// The same rounds with a new Ceres problem per round (the implementation before session 9): the
+// The same rounds with a new Ceres problem per round (the earlier implementation): the
 // reference the dedicated solver is tested against; not used by the system.
 int OptimizePoseWithCeres(Frame& frame, const OptimizerOptions& options);
 

@@ -3,7 +3,7 @@
 //
 // Why not Ceres: tracking solves 4 rounds of <= 10 iterations per frame over a single 6-dof
 // block; building a new ceres::Problem per round (a cost function and a loss per residual) cost
-// more than the solve itself (session 7 profile). Here the normal equations are a fixed-size 6x6
+// more than the solve itself (measured by profiling). Here the normal equations are a fixed-size 6x6
 // system accumulated in one pass over the observations, and nothing is allocated per iteration.
 //
 // The model is the one of core/slam/cost_functions.h (so results match the Ceres version within

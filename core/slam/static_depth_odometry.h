@@ -1,4 +1,4 @@
-// The second pose estimator of the tracker (issue 16): when feature tracking is left with too few
+// The second pose estimator of the tracker: when feature tracking is left with too few
 // static inliers (a person fills the view), the frame is aligned densely against the last frame
 // with a pose, using only the STATIC pixels of both (outside the dynamic mask: detection boxes
 // refined by depth, disks around dynamic features) and seeded with the motion model.
@@ -48,7 +48,7 @@ enum class DenseAlignment {
 };
 
 struct StaticDepthOdometryOptions {
-  // Chosen by measurement on bonn_crowd_part (BENCHMARKS.md, issue 16): depth-only ICP gave the
+  // Chosen by measurement on bonn_crowd_part (BENCHMARKS.md): depth-only ICP gave the
   // lowest ATE; the photometric terms suffer from the people's motion blur and exposure changes.
   DenseAlignment alignment = DenseAlignment::kIcp;
   double min_depth = 0.3;                             // metres

@@ -394,7 +394,7 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) {
     // points made from the last frame's depth for the motion model (no keyframe observes them)
     // do not count as tracked. Counting them let the close features look tracked on a long
     // straight side of a generated loop while the real inliers fell from 591 to 37, so no
-    // keyframe was made and tracking was lost (issue 14, BENCHMARKS).
+    // keyframe was made and tracking was lost (BENCHMARKS).
     if (frame.map_points[i] && !frame.outlier[i] &&
         (options_.keyframe_counts_odometry_points || frame.map_points[i]->NumObservations() > 0)) {
       ++tracked_close;

@@ -33,7 +33,7 @@ struct TrackingOptions {
   // Localization mode: the local map is the keyframe sharing the most of the frame's matched
   // points plus its best covisible keyframes, this many keyframes in all (the mapping run's local
   // map, every keyframe observing a matched point, mixes points of other times and drift). 4:
-  // best measured on bonn_crowd_part after the session-7 merges (deterministic final ATE 1/2/3/4/6
+  // best measured on bonn_crowd_part with loop closing on (deterministic final ATE 1/2/3/4/6
   // keyframes: 0.0226/0.0159/0.0154/0.0149/0.0150 m; BENCHMARKS.md, SLAM map files).
   int localization_local_keyframes = 4;
   int relocalization_candidates = 5;
@@ -41,13 +41,13 @@ struct TrackingOptions {
   // (made from the last frame's depth). true: measured better on bonn_crowd_part (threaded median
   // of 3: 0.0143 vs 0.0154 m); false: ORB-SLAM2's rule (map points only), which keeps making
   // keyframes on long loops where the map thins out (the 61.8 m generated loop is tracked to the
-  // end only with false). BENCHMARKS.md, issue 14.
+  // end only with false). BENCHMARKS.md, loop closing.
   bool keyframe_counts_odometry_points = true;
   // A keyframe is also due when the frame's map-point inliers fall below this (0: off), whatever
   // the close-point count says. On a long side of the generated 61.8 m loop the temporary points
   // kept the close count at ~500 while the map-point inliers fell by up to 26 a frame, from 591
   // to 37, below local_map_min_inliers (30): lost with no keyframe made. 100 leaves ~3 frames of
-  // that decay before the loss (BENCHMARKS.md, issue 14).
+  // that decay before the loss (BENCHMARKS.md).
   int keyframe_min_map_inliers = 100;
   PlaceRecognitionOptions place;  // candidates from the BoW index (when a vocabulary is set)
   OptimizerOptions optimizer;

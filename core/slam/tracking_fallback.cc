@@ -1,4 +1,4 @@
-// Tracker's second pose estimator (issue 16): when feature tracking cannot hold a frame (too few
+// Tracker's second pose estimator: when feature tracking cannot hold a frame (too few
 // static inliers, e.g. a person fills the view), its static depth is aligned densely against the
 // last frame with a pose (else the newest keyframe), seeded by the motion model
 // (StaticDepthOdometry). A feature pose held by few inliers (< fallback_check_below_inliers) is
@@ -164,7 +164,7 @@ bool Tracker::SmoothFallbackStretch(const Frame& frame, const std::optional<Rigi
     --begin;
   // The correction is spread over the stretch in proportion to how little each step can be
   // trusted: a weakly held feature frame counts 1, a dense (fallback) frame
-  // fallback_smoothing_dense_weight. Measured on bonn_crowd_part (BENCHMARKS.md, issue 22): the
+  // fallback_smoothing_dense_weight. Measured on bonn_crowd_part (BENCHMARKS.md): the
   // live poses jump where the weak feature frames are (frames 322-325: 0.03 -> 0.07 m) and the
   // dense chain after them keeps that error unchanged (0.067-0.072 m over six frames), so an even
   // spread (weight 1, the default) leaves most of the jump on the frames between. Deterministic

@@ -466,7 +466,7 @@ SystemImpl::FilteredFrame SystemImpl::Filter(const PreparedFrame& prepared, Fram
 
   FilteredFrame filtered;
   filtered.dynamic = verdict.DynamicFlags();
-  if (!previous_points_.empty()) {  // the map points of the filter's tracks (issue 22)
+  if (!previous_points_.empty()) {  // the map points of the filter's tracks
     std::vector<int> previous_match(verdict.features.size());
     for (size_t i = 0; i < previous_match.size(); ++i)
       previous_match[i] = verdict.features[i].prev_match;
@@ -546,7 +546,7 @@ TrackResult SystemImpl::Track(const PreparedFrame& prepared, FilteredFrame* filt
 void SystemImpl::RememberPoints(const PreparedFrame& prepared, const FilteredFrame& filtered,
                                 const TrackResult& tracked) {
   previous_points_.clear();
-  // Localization leaves the loaded map untouched (issue 15): no votes, no points flagged.
+  // Localization leaves the loaded map untouched: no votes, no points flagged.
   if (!options_.dynamic_points.enabled || options_.localization ||
       tracked.map_points.size() != filtered.kept_source.size())
     return;

@@ -85,8 +85,8 @@ struct SystemOptions {
   // core/dynamic/detection_propagation.h) and the filter carries its per-feature probabilities
   // through the matches as on every frame. 2 by default (live use): with one OpenCV thread and
   // the aspect-ratio input (DetectorOptions) the System costs ~28 ms of CPU per frame on
-  // bonn_crowd_part against ~37 ms with the detector on every frame, ATE not worse (issue 19,
-  // BENCHMARKS.md). The dataset presets (config/*.yaml) set 1 (the paper): their trajectory is the
+  // bonn_crowd_part against ~37 ms with the detector on every frame, ATE not worse
+  // (BENCHMARKS.md). The dataset presets (config/*.yaml) set 1 (the paper): their trajectory is the
   // reference of the accuracy tables and mapping/SlamMap's ghost-voxel test. Detections given to
   // FeedRgbdFrame from outside are used as given (and carried to FeedRgbdFrameCarryingBoxes).
   int detection_every_n_frames = 2;
@@ -107,7 +107,7 @@ struct SystemOptions {
   // ordinary static features).
   bool demote_in_box_features = true;
   // Map points whose tracked features the filter labels dynamic are flagged and taken out of the
-  // map (core/slam/dynamic_points.h; issue 22). Off in the `paper` configurations.
+  // map (core/slam/dynamic_points.h). Off in the `paper` configurations.
   DynamicPointOptions dynamic_points;
   // Fixed seeds, local mapping run synchronously after each keyframe: identical output run to run.
   bool deterministic = false;
@@ -122,7 +122,7 @@ struct SystemOptions {
 };
 
 // Named filter configurations (`--filter NAME`, bench `--configs`): the four modes, the paper's
-// method as written, and the ablation steps from it to our default (README "Dynamic filter"):
+// method as written, and the ablation steps from it to our default (docs/how_it_works.md, "Dynamic filter"):
 //   paper                  DYG-SLAM as the paper describes it (mode full): boxes exactly as
 //                          detected, features the filter keeps inside boxes are ordinary static
 //                          features, no re-extraction. Our documented choices only where the

@@ -4,7 +4,7 @@
   compose_test.py config   --source DIR [--dygslam BIN]
       docker/ComposeConfigValid: `docker-compose config -q` accepts the compose file (with and
       without the bridge profile); services, DDS settings (host network, host IPC, XML profile)
-      and volumes are what README "Docker" documents; every service's command line is accepted
+      and volumes are what docs/docker.md documents; every service's command line is accepted
       by the binary (`<command> --help`).
   compose_test.py lint     --source DIR --work DIR
       docker/DockerfileLint: structure of docker/Dockerfile (multi-stage on Debian 12, build stage

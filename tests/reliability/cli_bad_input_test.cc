@@ -108,8 +108,8 @@ TEST_P(CliBadInput, TruncatedFrameMidRunIsAClearErrorOrACountedSkip) {
   }
 }
 
-// --processes: before the re-probe fix the failed player left the other four components waiting
-// for an end of stream that never came (a hang; Ctrl-C then gave rc 0).
+// --processes: a failed player must not leave the other four components waiting for an end of
+// stream that never comes (a hang; Ctrl-C would then give rc 0).
 INSTANTIATE_TEST_SUITE_P(Modes, CliBadInput,
                          ::testing::Values(std::string(), std::string("--direct"),
                                            std::string("--processes")),

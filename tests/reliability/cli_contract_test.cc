@@ -1,4 +1,4 @@
-// The bad-input contract of the command line (README "Bad input"; issue 20 items 1, 4, 5, 6, 7):
+// The bad-input contract of the command line (docs/command_line.md, "Bad input"):
 // exit 1 with a message that names the file, line or option for bad input, exit 2 for usage
 // errors, warnings on stderr that name file:line, never a signal or an "internal error".
 // Most cases need no dataset (the error comes before the frames); the image and tracking cases
@@ -69,7 +69,7 @@ class CliContract : public ::testing::Test {
   std::string dir_;
 };
 
-// Item 1: SIGSEGV (rc 139) in `run` and `map` before the fix.
+// SIGSEGV (rc 139) in `run` and `map` before the fix.
 TEST_F(CliContract, RecursiveAliasInSettingsIsAnErrorInRunAndMap) {
   const int line = CountLines(ReadAll(Config())) + 1;
   const std::string config = ConfigWith("Tracking: &t {motion_radius_px: 7, self: *t}\n");
@@ -79,7 +79,7 @@ TEST_F(CliContract, RecursiveAliasInSettingsIsAnErrorInRunAndMap) {
   }
 }
 
-// Item 4: unknown model fell back silently; misspelt keys were ignored without a word.
+// Unknown model fell back silently; misspelt keys were ignored without a word.
 TEST_F(CliContract, SettingsMistakesAreErrorsOrWarningsWithFileAndLine) {
   const int line = CountLines(ReadAll(Config())) + 1;
   const std::string model = ConfigWith("Detector.model: yolo-nonexistent\n", "model.yaml");
@@ -100,7 +100,7 @@ TEST_F(CliContract, SettingsMistakesAreErrorsOrWarningsWithFileAndLine) {
   EXPECT_FALSE(Contains(strict.err, "dataset directory not found")) << strict.err;
 }
 
-// Item 5: accepted before; the run then "tracked" every frame on a ~1e-9 m trajectory.
+// Accepted before; the run then "tracked" every frame on a ~1e-9 m trajectory.
 TEST_F(CliContract, ImplausibleCameraValuesAreErrorsNamingKeyAndLine) {
   const std::string base = ReadAll(Config());
   const std::pair<std::string, std::string> cases[] = {
@@ -121,7 +121,7 @@ TEST_F(CliContract, ImplausibleCameraValuesAreErrorsNamingKeyAndLine) {
   }
 }
 
-// Item 6: "internal error: filesystem error" without naming --out, or found after the run.
+// "internal error: filesystem error" without naming --out, or found after the run.
 TEST_F(CliContract, BadOutputFolderIsNamedBeforeTheRun) {
   std::ofstream(dir_ + "/a_file") << "x";
   for (const std::string& out : {std::string(""), dir_ + "/a_file", std::string("/sys/kernel"),
@@ -135,7 +135,7 @@ TEST_F(CliContract, BadOutputFolderIsNamedBeforeTheRun) {
   }
 }
 
-// Item 7: exit 0 before the fix.
+// Exit 0 before the fix.
 TEST_F(CliContract, SmallUsageErrorsExitTwo) {
   EXPECT_EQ(Run({"version", "extra"}).code, 2);
   EXPECT_EQ(Run({"help", "bogus"}).code, 2);
@@ -146,8 +146,8 @@ TEST_F(CliContract, SmallUsageErrorsExitTwo) {
   EXPECT_TRUE(Contains(security.err, "--security")) << security.err;
 }
 
-// Issue 17: `dygslam component` passed its numbers to std::stoi / std::stod (an exception, or
-// "1.5x" read as 1.5); now a usage error naming the option, as on `dygslam run`.
+// `dygslam component` numbers are parsed whole (std::stoi / std::stod would throw, or read
+// "1.5x" as 1.5): a bad one is a usage error naming the option, as on `dygslam run`.
 TEST_F(CliContract, ComponentBadNumbersAreUsageErrorsNamingTheOption) {
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"window", "abc"},
@@ -167,7 +167,7 @@ TEST_F(CliContract, ComponentBadNumbersAreUsageErrorsNamingTheOption) {
   }
 }
 
-// Item 6: `eval` printed "rmse inf" (and null in JSON) with exit 0.
+// `eval` printed "rmse inf" (and null in JSON) with exit 0.
 TEST_F(CliContract, EvalWithOverflowingCoordinatesFails) {
   std::ofstream gt(dir_ + "/gt.txt"), est(dir_ + "/est.txt");
   for (int i = 0; i < 20; ++i) {
@@ -207,7 +207,7 @@ void WritePngHeader(const std::string& path, uint32_t width, uint32_t height) {
   std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(h), sizeof(h));
 }
 
-// Item 6: OpenCV assertion as "internal error" without the file or the rgb.txt line.
+// OpenCV assertion as "internal error" without the file or the rgb.txt line.
 TEST_F(CliContract, HugePngIsRefusedFromItsHeaderNamingFileAndLine) {
   cv::imwrite(dir_ + "/depth.png", cv::Mat(480, 640, CV_16UC1, cv::Scalar(5000)));
   for (const uint32_t side : {65535u, 20000u}) {
@@ -220,7 +220,7 @@ TEST_F(CliContract, HugePngIsRefusedFromItsHeaderNamingFileAndLine) {
   }
 }
 
-// Item 6: a link to /dev/zero or a FIFO was "not found"; list file and line were missing.
+// A link to /dev/zero or a FIFO was "not found"; list file and line were missing.
 TEST_F(CliContract, ImagePathsThatAreNotRegularFilesAreNamed) {
   cv::imwrite(dir_ + "/depth.png", cv::Mat(480, 640, CV_16UC1, cv::Scalar(5000)));
   fs::create_symlink("/dev/zero", dir_ + "/zero.png");
@@ -286,7 +286,7 @@ TEST_F(CliContract, ListFileDetailsAreNamedOrAccepted) {
   ExpectInputError(r, {"rgb.txt:2:", "outside the dataset folder"});
 }
 
-// Item 5: a run on depth images without any valid depth tracked nothing and exited 0.
+// A run on depth images without any valid depth tracked nothing and exited 0.
 TEST_F(CliContract, RunThatTracksNothingFailsWithASummary) {
   DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
   const RgbdDataset d = RgbdDataset::Open(source);
@@ -303,9 +303,9 @@ TEST_F(CliContract, RunThatTracksNothingFailsWithASummary) {
   EXPECT_TRUE(Contains(r.out, "frames: 15 processed")) << r.out;
 }
 
-// Re-probe of issue 20 (2026-12-01): `--out` = the dataset folder made the recorder overwrite the
-// dataset's groundtruth.txt (data loss); a settings file that is /dev/zero was read until the
-// memory ran out.
+// `--out` = the dataset folder would let the recorder overwrite the dataset's groundtruth.txt
+// (data loss); a settings file that is /dev/zero would be read until the memory ran out. Both are
+// refused.
 TEST_F(CliContract, OutputFolderThatIsADatasetIsRefusedAndNothingIsOverwritten) {
   const fs::path dataset = fs::path(dir_) / "dataset";
   fs::create_directories(dataset);
@@ -330,7 +330,7 @@ TEST_F(CliContract, SettingsFileThatIsADeviceIsRefused) {
   ExpectInputError(r, {link, "not a regular file"});
 }
 
-// Re-probe: a malformed --frames was exit 1; like every other malformed number it is a usage
+// A malformed --frames was exit 1; like every other malformed number it is a usage
 // error (exit 2) naming the option.
 TEST_F(CliContract, MalformedFrameRangeIsAUsageError) {
   DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");

@@ -1,5 +1,5 @@
 // A local program that joins the run's DDS partition (as one that joins "*" does) and publishes
-// forged samples while `dygslam run` works (issue 20 item 3): before the fix the recorder wrote its
+// forged samples while `dygslam run` works: before the fix the recorder wrote its
 // 5-pose Trajectory as trajectory.txt and its CameraPose samples into trajectory_online.txt, the
 // mapper inserted its keyframes and slam tracked its frames. Now the recorder, the mapper and slam
 // take samples only from the writers the run's components announced (components/protocol.h),

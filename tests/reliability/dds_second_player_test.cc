@@ -1,4 +1,4 @@
-// A second frame source on a run's partition, end to end (issue 20, review leftover of item 3):
+// A second frame source on a run's partition, end to end (review leftover of item 3):
 // `dygslam component player` on another stretch of the dataset, started while `dygslam run`
 // plays, must not feed the run. slam names the rival ("rejected a second frame source"), the
 // run's player warns, and the run's outputs hold only the run's own frames. The unit half is

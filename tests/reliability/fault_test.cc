@@ -107,7 +107,7 @@ TEST_F(Faults, MapperKilledAndRestartedGetsKeyframeHistoryBack) {
   const auto keyframes = ReadTumTrajectory(tmp + "/out/keyframes.txt");
   ASSERT_GT(keyframes.size(), 3u);
   // The restarted mapper holds keyframes made before it started (from the transient-local
-  // history, bounded to the newest 64 messages since issue 19) and those made after.
+  // history, bounded to the newest 64 messages) and those made after.
   EXPECT_GE(in_map, 1) << mapper_log;
   const long published = Extract(ReadAll(tmp + "/slam.log"), R"((\d+) keyframe messages)");
   const long received = Extract(mapper_log, R"(mapper: (\d+) keyframe messages)");

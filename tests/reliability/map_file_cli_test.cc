@@ -1,4 +1,4 @@
-// `dygslam run --load-map` with a damaged or foreign map file (issue 15): truncated at 10
+// `dygslam run --load-map` with a damaged or foreign map file: truncated at 10
 // offsets, flipped bytes, another format version, another camera. Each gives its clear error
 // naming the file (exit 1) before any work, and leaves no output file (not even a half-written
 // one) in --out. A good map localizes from the first frame.

@@ -1,4 +1,4 @@
-// `dygslam map` stopped by SIGINT / SIGTERM (issue 20 item 2): before the fix it ended with rc
+// `dygslam map` stopped by SIGINT / SIGTERM: before the fix it ended with rc
 // 130/143 and an empty output folder. Now it stops like `run`: the map is finished from the frames
 // processed so far, every output is written atomically (map.bt/.ot, trajectories, pictures) and
 // the exit code is 0 -- also for a signal that arrives right after start-up.

@@ -1,4 +1,4 @@
-// Reliability: resident memory of the DDS pipeline must level off (issue 19).
+// Reliability: resident memory of the DDS pipeline must level off.
 //
 // `dygslam run` (default mode: components as threads of one process; and --processes) on the
 // 360 Bonn crowd frames. The recorder's progress line ("[run] frame N/T", every 10 frames) is
@@ -9,7 +9,7 @@
 // Before the fix (unbounded keyframe history, default malloc arenas) the default mode grew
 // 0.88 MB per frame in the second half (RSS 130 -> 382 MB); after it, 0.06-0.14 MB per frame
 // (the SLAM map itself grows: `--direct` ~0.05) and every --processes process <= 0.13. The margin
-// (0.3 MB per frame, per process) sits between the two; figures in BENCHMARKS.md, issue 19.
+// (0.3 MB per frame, per process) sits between the two; figures in BENCHMARKS.md.
 // Filter `none` (no detector) keeps the test short: the growth came from keyframes, which every
 // filter mode makes.
 #include <dirent.h>

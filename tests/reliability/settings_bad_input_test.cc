@@ -1,4 +1,4 @@
-// Settings files that a hostile or careless user writes (issue 20, items 1, 4, 5, 6): a recursive
+// Settings files that a hostile or careless user writes (items 1, 4, 5, 6): a recursive
 // YAML alias, misspelt keys, a section given as a list, an unknown detector model, absurd camera
 // values, and errors that must use the file's key names. Each case is config/bonn.yaml with a few
 // lines appended or replaced, read through the same functions as `dygslam run` / `map`
@@ -54,7 +54,7 @@ bool Contains(const std::string& text, const std::string& needle) {
   return text.find(needle) != std::string::npos;
 }
 
-// Item 1: the probe's file crashed `run` and `map` (stack overflow walking the keys).
+// A self-referencing alias must not crash `run` and `map` (stack overflow walking the keys).
 TEST(SettingsBadInput, RecursiveAliasIsAnErrorWithTheLine) {
   const std::string base = BonnYaml();
   const int line = CountLines(base) + 1;
@@ -82,7 +82,7 @@ TEST(SettingsBadInput, DeepNestingAndAliasBombsAreBounded) {
   EXPECT_TRUE(Contains(ErrorOf(base + bomb), "aliases expanded"));
 }
 
-// Item 4: an unknown model fell back to the default and dropped input_width, thresholds, classes.
+// An unknown model fell back to the default and dropped input_width, thresholds, classes.
 TEST(SettingsBadInput, UnknownDetectorModelIsAnErrorNamingKeyAndLine) {
   const std::string base = BonnYaml();
   const int line = CountLines(base) + 2;
@@ -141,7 +141,7 @@ TEST(SettingsBadInput, SectionGivenAsAListIsAnError) {
                        "section 'Tracking' must be a map"));
 }
 
-// Item 5: accepted before, giving a ~1e-9 m trajectory with every frame "ok".
+// Accepted before, giving a ~1e-9 m trajectory with every frame "ok".
 TEST(SettingsBadInput, ImplausibleCameraValuesAreErrors) {
   struct Case {
     std::string line, replacement, key;
@@ -165,7 +165,7 @@ TEST(SettingsBadInput, ImplausibleCameraValuesAreErrors) {
   EXPECT_NO_THROW(ReadAll(BonnYaml()));
 }
 
-// Item 6: Check() failures used the options struct's names (c1, p_init) without file or line.
+// Check() failures used the options struct's names (c1, p_init) without file or line.
 TEST(SettingsBadInput, ModuleErrorsUseTheFileKeysAndLines) {
   const std::string base = BonnYaml();
   const int line = CountLines(base) + 2;

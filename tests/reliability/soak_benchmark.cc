@@ -293,7 +293,7 @@ int main(int argc, char** argv) {
     for (const auto& [s, c] : states) std::printf(" %s %zu", ToString(s), c);
     std::printf("; loops that relocalised after the jump back: %zu of %d\n",
                 relocalisations_after_loop, std::max(0, loop - 1));
-    // Loop closing (issue 14): every loop back to the start should be closed as a loop, not only
+    // Loop closing: every loop back to the start should be closed as a loop, not only
     // relocalized. Frame ids count the frames fed, so id / n is the soak loop, id % n the frame.
     const LoopClosingStats lc = system.LoopClosingStatistics();
     std::set<int64_t> soak_loops_closed;

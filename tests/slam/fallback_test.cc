@@ -1,4 +1,4 @@
-// The dense fallback of issue 16: StaticDepthOdometry on generated frames with exact poses (a
+// The dense fallback: StaticDepthOdometry on generated frames with exact poses (a
 // moving person-sized box fills much of the view), and the System on the real Bonn frames where
 // feature tracking alone loses the pose (rgb.txt entries 195-208 of bonn_crowd_part).
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Frame times while a global bundle adjustment runs (issue 14: the global BA after a loop must not
+// Frame times while a global bundle adjustment runs (the global BA after a loop must not
 // stall tracking). Runs a dataset through the System with real threading (tracking on this
 // thread; local mapping, loop closing and the global BA on theirs) and splits the frames into
 // those whose processing overlapped a global BA window (LoopClosingStats::global_ba_windows_s) and
@@ -8,7 +8,7 @@
 //
 // With a groundtruth.txt in the dataset it also prints each run's ATE RMSE (final trajectory).
 // The dataset should contain a loop that is closed (e.g. `dygslam synth ... --loop-path ...
-// --loop-inward`, README *Evaluation*). The frames are fed as fast as they are processed (no
+// --loop-inward`, docs/evaluation.md). The frames are fed as fast as they are processed (no
 // real-time pacing), so a stall would show as frames longer than the global BA.
 #include <algorithm>
 #include <chrono>

@@ -1,4 +1,4 @@
-// Loop acceptance on real frames (issue 14): bonn_crowd_part never leaves one spot of the room
+// Loop acceptance on real frames: bonn_crowd_part never leaves one spot of the room
 // (1.0 m of camera path in 360 frames, people walking through the view), so the index offers
 // consistent loop candidates all along, and before the acceptance checks were made stricter one of
 // them was accepted with a 0.8 m correction. With loop closing on, no loop may be accepted and the

@@ -160,7 +160,7 @@ TEST_F(LoopClosingTest, ReturnToStartIsClosedAndCorrectsTheDrift) {
   EXPECT_EQ(on.poses, n);
   EXPECT_EQ(off.poses, n);
   EXPECT_GE(on.loops.loops_closed, 1);
-  // The drift of the lap is corrected: issue 14's goal, ATE >= 3x lower with loop closing.
+  // The drift of the lap is corrected: the goal is an ATE >= 3x lower with loop closing.
   // Measured 2026-12-02 (deterministic): on 0.0388 m, off 0.1995 m (5.1x); the loop moved the
   // camera 0.50 m / 9.4 deg at frame 315 (lap: 267 frames).
   EXPECT_LE(3.0 * on.ate, off.ate);

@@ -241,7 +241,7 @@ TEST(LoopCorrection, SmallCorrectionIsFusedWithoutMovingKeyFrames) {
       fused.largest_move, graph.stats.points_fused, graph.largest_move);
 }
 
-// A robot going round the same places (issue 14's soak: 38 loops in 10 minutes) must not grow its
+// A robot going round the same places (a 10-minute soak closes 38 loops) must not grow its
 // map with every return. ORB-SLAM2 protects both keyframes of every loop from culling for good;
 // here no keyframe is protected, and a loop edge outlives its keyframes by moving to the active
 // keyframe that took a culled one's place. Three laps of the stadium loop with a small drift

@@ -1,4 +1,4 @@
-// Map file load time and size (issue 15). Not a test: BENCHMARKS.md gets its output.
+// Map file load time and size. Not a test: BENCHMARKS.md gets its output.
 //   map_file_benchmark [--keyframes 50] [--runs 7] [--map FILE --config SETTINGS.yaml]
 // 1. A keyframe map made from a generated sequence (tests/slam/synthetic_map.h: every feature
 //    with depth a map point, BoW vectors): saved, then loaded --runs times (LoadMapFile: read,

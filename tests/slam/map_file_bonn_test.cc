@@ -1,4 +1,4 @@
-// SLAM map files on real frames (issue 15 acceptance): bonn_crowd_part, full filter,
+// SLAM map files on real frames (acceptance): bonn_crowd_part, full filter,
 // deterministic. Map frames 0-359 and save; run them again with the map loaded in localization
 // mode: the first frame is localized (not lost), every frame the mapping run gave a pose gets one,
 // the map does not change and the ATE is not worse than the mapping run's; with the map loaded
@@ -91,9 +91,9 @@ TEST(MapFileBonn, MapThenLocalizeThenExtend) {
   // Localization adds nothing to the map.
   EXPECT_EQ(localization.sizes.keyframes, mapping.sizes.keyframes);
   EXPECT_EQ(localization.sizes.map_points, mapping.sizes.map_points);
-  // The acceptance: localization ATE <= the mapping run's. On the maps branch of session 7
-  // (2 local keyframes) it held final and per frame (0.96x / 0.99x); after the session-7 merges
-  // (loop closing on, keyframe map-inlier floor, round-3 labels) 4 local keyframes is the best
+  // The acceptance: localization ATE <= the mapping run's. With 2 local keyframes and
+  // loop closing off it held final and per frame (0.96x / 0.99x); with loop closing on, the
+  // keyframe map-inlier floor and the depth-based labels, 4 local keyframes is the best
   // setting (Tracking.localization_local_keyframes; deterministic, final / per frame: mapping
   // 0.0143 / 0.0180 m, localization K=4 0.0149 / 0.0169 m, K=2 0.0159 / 0.0180, K=3 0.0154 /
   // 0.0175, K=6 0.0150 / 0.0177). Per frame (what a robot gets at each frame) it holds: 0.94x,

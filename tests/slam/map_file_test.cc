@@ -1,4 +1,4 @@
-// SLAM map files (issue 15) on generated frames: save -> load -> save is byte-identical, a loaded
+// SLAM map files on generated frames: save -> load -> save is byte-identical, a loaded
 // map localizes every frame deterministically without growing, a loaded map without localization
 // is extended with continuing ids, and every kind of damaged file gives its clear InputError.
 #include "core/slam/map_file.h"
@@ -157,7 +157,7 @@ TEST_F(MapFileTest, LocalizationTracksEveryFrameDeterministicallyWithoutGrowing)
   // The same world frame as the mapping run, pose for pose (unaligned), compared with the mapping
   // run's final trajectory, which is defined by the same map: a keyframe's frame has the map's
   // keyframe pose, any other frame its keyframe's pose x the relative pose tracked then. Not
-  // bit-identical (issue 15, BENCHMARKS.md "identity with the mapping run"): the relative pose of a
+  // bit-identical (BENCHMARKS.md "identity with the mapping run"): the relative pose of a
   // non-keyframe was estimated against the map as it was at that frame (points since moved by
   // local BA, fused, culled, keyframes added), which the finished map does not contain; and a
   // keyframe's pose is the joint optimum of bundle adjustment over its own observations, while

@@ -1,6 +1,7 @@
-// The fixture of the command-line tests (tests/reliability/cli_*reprobe_test.cc): runs the
-// dygslam binary in a scratch folder, checks its error messages and exit codes, and makes small
-// datasets from the first frames of a real one. Header only: its users link dygslam_io.
+// The fixture of the command-line tests of tests/reliability/ (cli_*, datasets_*, images_*,
+// signals_*, map_files_*, dds_peers_*): runs the dygslam binary in a scratch folder, checks its
+// error messages and exit codes, and makes small datasets from the first frames of a real one.
+// Header only: its users link dygslam_io.
 #pragma once
 
 #include <gtest/gtest.h>

@@ -26,9 +26,8 @@ inline std::string WithoutSection(const std::string& text, const std::string& na
   return out;
 }
 
-// The text of config/bonn.yaml without its Tracking: section (the presets set
-// Tracking.handoff_wait_ms for dataset runs): the cases append their own sections, and a second
-// Tracking: section is an error of its own.
+// The text of config/bonn.yaml (sensor keys only; a Tracking: section, should one appear, is
+// left out so that the cases can append their own).
 inline std::string BonnYaml() {
   std::ifstream in(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
   std::stringstream s;

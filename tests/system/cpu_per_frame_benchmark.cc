@@ -1,4 +1,4 @@
-// CPU per frame of the System (issue 19), with and without the dataset's PNG decoding. Each run
+// CPU per frame of the System, with and without the dataset's PNG decoding. Each run
 // first decodes every frame of the dataset into memory (the player's work; its CPU time is
 // measured alone), then feeds the decoded frames to a new System as fast as it takes them (the
 // robot case: a camera driver hands over raw images) and measures the CPU time of the whole

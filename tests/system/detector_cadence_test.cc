@@ -1,4 +1,4 @@
-// Detector cadence (issue 19, `Detector.every_n_frames`): on the real Bonn crowd frames, with the
+// Detector cadence (`Detector.every_n_frames`): on the real Bonn crowd frames, with the
 // detector on every 3rd frame, the frames in between get carried boxes and the filter removes
 // about as many features on them as the detector's own boxes remove on the same frames; the
 // detector's frames come through the runner's prefetch (deferred for the cadence) in order.

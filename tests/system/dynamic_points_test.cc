@@ -1,4 +1,4 @@
-// Issue 22: the per-map-point dynamic flag (core/slam/dynamic_points.h) on generated sequences.
+// The per-map-point dynamic flag (core/slam/dynamic_points.h) on generated sequences.
 // The System runs the full filter (deterministic) on movers that walk, stop, stand and turn, one
 // of them never detected, with and without the flag. Ground truth of a map point: the generator's
 // object label at the pixel of one of its observations (in the frame of that keyframe); a point
@@ -108,10 +108,10 @@ TEST(DynamicMapPoints, FlaggedPointsAreOnMovers) {
   ASSERT_GE(on.points.flagged_dynamic + on.points.kept_dynamic, 8)
       << "too few map points on movers to measure";
   EXPECT_EQ(on.poses, synth.num_frames);
-  // Measured (seed 5, 60 frames, deterministic; 2026-12-02, round 3 filter): 14 flagged, 13 of
+  // Measured (seed 5, 60 frames, deterministic; 2026-12-02, depth-based labels): 14 flagged, 13 of
   // them on movers (precision 0.93), 1 mover point left in the map (recall 0.93); without the
   // flag the final map holds 1 mover point (the filter's labels already keep almost every mover
-  // feature out: before round 3's expansion outside the boxes 79 points were flagged, all on
+  // feature out: without the expansion outside the boxes 79 points were flagged, all on
   // movers, recall 0.71). ATE 0.0063 m with and without the flag. Small counts: the margins
   // allow one more point either way.
   EXPECT_GE(on.points.flagged_dynamic, 8);

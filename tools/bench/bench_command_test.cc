@@ -199,7 +199,7 @@ TEST(BenchCommand, BadInputIsNamed) {
   EXPECT_EQ(
       RunDygslam("bench " + root.string() + " --configs none,bogus --out " + root.string(), err)
           .exit_code,
-      2);  // a usage error, checked before any run (issue 20, fourth re-probe)
+      2);  // a usage error, checked before any run
   EXPECT_NE(ReadText(err).find("bogus"), std::string::npos) << ReadText(err);
   // A malformed or out-of-range number is a usage error (exit 2), as in every command.
   EXPECT_EQ(RunDygslam("bench " + root.string() + " --runs 0", err).exit_code, 2);

@@ -65,7 +65,7 @@ struct BenchCell {
   // Index (into the runs given to Summarize) of the run whose RMSE is the median (lower median
   // for an even count): the run drawn in the pictures.
   int median_run = -1;
-  // γ's μ on the same frame set (issue 16): the no-filter ATE over only the frames this
+  // γ's μ on the same frame set: the no-filter ATE over only the frames this
   // configuration has a pose for (median over the no-filter runs; the frame set of this
   // configuration's median run). Unset: γ uses the no-filter cell's ATE as it is.
   bool has_reference_ate = false;

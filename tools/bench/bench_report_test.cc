@@ -204,7 +204,7 @@ TEST(BenchReport, ReplaceBetweenMarkersNamesTheProblem) {
 namespace dygslam {
 namespace {
 
-// Issue 16: γ compares both rows on the same frames.
+// Γ compares both rows on the same frames.
 TEST(BenchReport, AteOnFrameSetUsesOnlyTheConfigurationsFrames) {
   std::vector<StampedPose> gt, none, full;
   for (int i = 0; i < 40; ++i) {

@@ -68,7 +68,7 @@ struct SyntheticOptions {
   Eigen::Vector2d loop_semi_axes{0.0, 0.0};
   double loop_corner_radius = 1.5;
   double loop_speed = 1.0;  // m/s
-  // Inward loop (issue 14): the camera looks inwards at a floor-to-ceiling pillar in the middle
+  // Inward loop: the camera looks inwards at a floor-to-ceiling pillar in the middle
   // of the room whose corners are the centres of the path's corner arcs (half sizes a - r, b - r),
   // so the surface in view is always r away: on the sides a face of the pillar, at the corners its
   // edge (the camera orbits it). Outward views of a big room put the corners of the room beyond

@@ -353,7 +353,7 @@ TEST(SyntheticScene, DepthNoiseAndRangeLimits) {
   EXPECT_GT(beyond, 100);
 }
 
-// Inward loop (issue 14): the camera looks at the central pillar from the corner radius on the
+// Inward loop: the camera looks at the central pillar from the corner radius on the
 // whole lap, on the sides and while orbiting the pillar's edges at the corners.
 TEST(SyntheticScene, InwardLoopKeepsThePillarAtTheCornerRadius) {
   SyntheticOptions options = SmallOptions(0);
@@ -436,7 +436,7 @@ TEST(SyntheticScene, BadOptionsNameTheField) {
   EXPECT_NE(message_of(options).find("loop_inward"), std::string::npos);
 }
 
-// The hard cases of issue 22: movers walk, stop, stand, turn round and walk back; one is never
+// The hard cases of real data: movers walk, stop, stand, turn round and walk back; one is never
 // detected; one passes close enough to fill about half the view.
 TEST(SyntheticScene, MoversStopTurnAndOneIsNeverDetected) {
   SyntheticOptions options = SmallOptions(2, 21);

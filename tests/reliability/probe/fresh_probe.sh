@@ -1,5 +1,5 @@
 #!/bin/bash
-# Fourth, independent re-probe of issue 20 (fresh angles, ~230 probes) against a built `dygslam`:
+# Wide hostile-input check (~500 cases) against a built `dygslam`:
 # every settings key with hostile values, YAML features (merge keys, tabs, several documents,
 # tags), images of the wrong bit depth or channels, lists out of order, --frames edge cases, the
 # other subcommands with hostile options, signals at every phase of run / map / bench / component
@@ -55,7 +55,7 @@ with_key() {
 
 if family settings; then
   echo "== settings: every key with hostile values"
-  # Keys of every section (README, Settings) with a value that must be refused.
+  # Keys of every section (docs/settings.md) with a value that must be refused.
   keys="Camera.fx Camera.fy Camera.cx Camera.cy Camera.k1 Camera.k2 Camera.p1 Camera.p2 Camera.k3
     Camera.width Camera.height Camera.fps Camera.bf ThDepth DepthMapFactor ORBextractor.nFeatures
     ORBextractor.scaleFactor ORBextractor.nLevels ORBextractor.iniThFAST ORBextractor.minThFAST

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Hostile-user re-probe of issue 20's families (bad settings, images and lists, signals at random
+# Hostile-input check of the bad-input families (bad settings, images and lists, signals at random
 # moments, DDS foreign writers, bad command-line values): ~65 probes against a built `dygslam`.
 #
 #   tests/reliability/probe/hostile_probe.sh [BUILD_DIR] [WORK_DIR]

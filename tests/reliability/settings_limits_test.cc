@@ -1,11 +1,11 @@
-// The final re-probe of issue 20 (2026-12-02, session 8), library half: settings text read through
-// the functions `dygslam run` / `map` use (ParseSettings, SystemOptionsFromSettings, ReadOptions).
-//   L1  a 100,000-character YAML key: plain (YAML's simple keys end at 1024 characters: a parse
-//       error), quoted, in a section, or an explicit `? key` (no length limit: an unknown-key
-//       warning). The message names the file and line, and never echoes the key whole.
-//   L2  `LoopClosing.ransac_threshold_px: 99999999999999999999` was accepted (exit 0: every loop
-//       candidate's points inliers); 18 keys in all took 1e20, and Detector.weights / names
-//       without Detector.cfg were ignored. Every settings key given 1e20 is now an error naming it.
+// Settings text read through the functions `dygslam run` / `map` use (ParseSettings,
+// SystemOptionsFromSettings, ReadOptions), at the limits of what a key or value can be:
+//   - a 100,000-character YAML key: plain (YAML's simple keys end at 1024 characters: a parse
+//     error), quoted, in a section, or an explicit `? key` (no length limit: an unknown-key
+//     warning). The message names the file and line, and never echoes the key whole.
+//   - every settings key given 1e20 is an error naming it (a value like
+//     `LoopClosing.ransac_threshold_px: 99999999999999999999` would make every loop candidate's
+//     points inliers), and Detector.weights / names without Detector.cfg are refused.
 #include <gtest/gtest.h>
 
 #include <regex>
@@ -57,7 +57,7 @@ void ExpectBoundedMessages(const std::string& text, size_t limit, const std::str
   }
 }
 
-TEST(FinalReprobe, HundredThousandCharacterKeyGivesABoundedMessage) {
+TEST(SettingsLimits, HundredThousandCharacterKeyGivesABoundedMessage) {
   const std::string key(100000, 'k');
   const std::string line = std::to_string(CountLines(BonnYaml()) + 1);
   // Plain key at the top level and in a section; quoted key.
@@ -76,7 +76,8 @@ TEST(FinalReprobe, HundredThousandCharacterKeyGivesABoundedMessage) {
 }
 
 // bonn.yaml with `key` set to `value`: a flat key's line replaced; a section key replaced in its
-// section, or added at its top, or appended as a new section (as probe/set_key.py does).
+// section, or added at its top, or appended as a new section (as tests/reliability/probe/set_key.py
+// does).
 std::string WithKey(const std::string& key, const std::string& value) {
   std::vector<std::string> lines;
   std::istringstream in(BonnYaml());
@@ -113,7 +114,7 @@ std::string WithKey(const std::string& key, const std::string& value) {
   return text;
 }
 
-TEST(FinalReprobe, EverySettingsKeyRefusesAnAbsurdlyLargeValue) {
+TEST(SettingsLimits, EverySettingsKeyRefusesAnAbsurdlyLargeValue) {
   std::vector<std::string> accepted;
   int checked = 0;
   for (const std::string& key : KnownSettingsKeys()) {
@@ -137,7 +138,7 @@ TEST(FinalReprobe, EverySettingsKeyRefusesAnAbsurdlyLargeValue) {
   std::string list;
   for (const std::string& key : accepted) list += " " + key;
   EXPECT_TRUE(accepted.empty()) << "accepted 1e20 for" << list;
-  // The probe's case, and values within the bounds still pass.
+  // A value far out of range is refused, and values within the bounds still pass.
   std::string error;
   ReadAll(WithKey("LoopClosing.ransac_threshold_px", "99999999999999999999"), &error);
   EXPECT_TRUE(Contains(error,

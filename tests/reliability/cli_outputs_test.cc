@@ -1,0 +1,110 @@
+// Output files and folders of the commands: an output that exists as a device or a FIFO is
+// refused and left as it was (an atomic write would rename over it); an --out folder removed while
+// the command runs is made again, with a warning, and every output is written.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/io/dataset.h"
+#include "tests/support/test_support.h"
+
+namespace dygslam {
+namespace {
+namespace fs = std::filesystem;
+
+std::string Config() { return std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml"; }
+
+bool Contains(const std::string& text, const std::string& needle) {
+  return text.find(needle) != std::string::npos;
+}
+
+class CliOutputFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    DYGSLAM_REQUIRE_FILE(testing::DygslamBinary(), "dygslam binary");
+    dir_ = testing::MakeTempDir("cli_outputs");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  testing::ProcessResult Run(const std::vector<std::string>& args) {
+    return testing::RunDygslam(args, dir_);
+  }
+  static void ExpectError(const testing::ProcessResult& r, int code,
+                          const std::vector<std::string>& needles) {
+    EXPECT_EQ(r.code, code) << r.err;
+    EXPECT_FALSE(Contains(r.err, "internal error")) << r.err;
+    for (const std::string& n : needles)
+      EXPECT_TRUE(Contains(r.err, n)) << "'" << n << "' not in\n" << r.err.substr(0, 3000);
+  }
+  // The first `n` frames of bonn_crowd_part (images by absolute path) in dir_/name.
+  std::string SmallDataset(const std::string& source, size_t n, const std::string& name) {
+    const fs::path dir = fs::path(dir_) / name;
+    fs::create_directories(dir);
+    const RgbdDataset d = RgbdDataset::Open(source);
+    std::ofstream rgb(dir / "rgb.txt"), depth(dir / "depth.txt");
+    for (size_t i = 0; i < n; ++i) {
+      rgb << d.frame(i).rgb_stamp.ToString() << " " << d.frame(i).rgb_path << "\n";
+      depth << d.frame(i).depth_stamp.ToString() << " " << d.frame(i).depth_path << "\n";
+    }
+    fs::copy_file(d.groundtruth_path(), dir / "groundtruth.txt");
+    return dir.string();
+  }
+  std::string dir_;
+};
+
+// A FIFO (or a device) named as an output file is refused and left as it was.
+TEST_F(CliOutputFiles, OutputFileThatIsAFifoIsLeftAlone) {
+  const std::string fifo = dir_ + "/out.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  // eval --save-aligned: ground truth against itself (a valid evaluation).
+  std::ofstream(dir_ + "/gt.txt") << "1 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n3 1 1 0 0 0 0 1\n"
+                                  << "4 0 1 1 0 0 0 1\n";
+  const auto r = Run({"eval", dir_ + "/gt.txt", dir_ + "/gt.txt", "--save-aligned", fifo});
+  ExpectError(r, 1, {fifo, "a FIFO, not a regular file"});
+  EXPECT_TRUE(fs::is_fifo(fifo)) << "the FIFO was replaced";
+  // vocab OUT_FILE: the smallest vocabulary, refused before or after training, never renamed over.
+  const auto v = Run({"vocab", fifo, "--scenes", "1", "--frames-per-scene", "1", "--depth", "1",
+                      "--branching", "2", "--quiet"});
+  ExpectError(v, 1, {"a FIFO, not a regular file"});
+  EXPECT_TRUE(fs::is_fifo(fifo)) << "the FIFO was replaced";
+  for (const auto& entry : fs::directory_iterator(dir_))
+    EXPECT_FALSE(Contains(entry.path().filename().string(), ".tmp.")) << entry.path();
+}
+
+// --out removed while the run goes: made again, said, every output written.
+TEST_F(CliOutputFiles, OutFolderRemovedMidRunIsMadeAgain) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string ds = SmallDataset(source, 60, "ds");
+  for (const std::string command : {"run", "map"}) {
+    const std::string out = dir_ + "/o_" + command;
+    std::vector<std::string> args = {command, ds,        "--config", Config(), "--out",
+                                     out,     "--quiet", "--filter", "none"};
+    if (command == "run") args.push_back("--direct");
+    const pid_t pid = testing::SpawnDygslam(args, out + ".out", out + ".err");
+    ASSERT_GT(pid, 0);
+    // The folder is made before the first frame (checked for writing); remove it then.
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (!fs::exists(out) && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    ASSERT_TRUE(fs::exists(out)) << command;
+    fs::remove_all(out);
+    std::string diagnostics;
+    const int code = testing::WaitForExit(pid, 300, &diagnostics);
+    const std::string err = testing::ReadAll(out + ".err");
+    EXPECT_EQ(code, 0) << command << ": " << err << diagnostics;
+    EXPECT_TRUE(Contains(err, "--out '" + out + "' was removed while the command ran")) << err;
+    const std::string trajectory = testing::ReadAll(out + "/trajectory.txt");
+    EXPECT_GE(std::count(trajectory.begin(), trajectory.end(), '\n'), 50) << command;
+  }
+}
+
+}  // namespace
+}  // namespace dygslam

@@ -1,0 +1,99 @@
+// Dataset files through the command line: a groundtruth.txt that is a FIFO, a folder or a link to
+// /dev/zero and --frames beyond the dataset are warned; --detections that match no frame are
+// warned, a class_id outside the detector's classes is an error.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/base/stop_signal.h"
+#include "core/io/dataset.h"
+#include "core/io/trajectory_io.h"
+#include "tests/support/cli_fixture.h"
+#include "tests/support/test_support.h"
+
+namespace dygslam {
+namespace {
+namespace fs = std::filesystem;
+
+using testing::Contains;
+
+class DatasetCli : public testing::CliFixture {
+ protected:
+  DatasetCli() : CliFixture("datasets_cli") {}
+
+  // Replaces rgb.txt entry `entry`'s image by a truncated copy named broken.png.
+  void BreakImage(const std::string& dataset, size_t entry) {
+    const RgbdDataset d = RgbdDataset::Open(dataset);
+    const std::string bytes = testing::ReadAll(d.frame(entry).rgb_path);
+    std::ofstream(dataset + "/broken.png", std::ios::binary) << bytes.substr(0, bytes.size() / 3);
+    std::string rgb = testing::ReadAll(dataset + "/rgb.txt");
+    const std::string old_path = d.frame(entry).rgb_path;
+    rgb.replace(rgb.find(old_path), old_path.size(), "broken.png");
+    std::ofstream(dataset + "/rgb.txt") << rgb;
+  }
+};
+
+// A groundtruth.txt that is not a regular file warns like a malformed one; a
+// --frames beyond the dataset warns naming --frames and the real count.
+TEST_F(DatasetCli, NonRegularGroundTruthAndFramesBeyondTheDatasetWarn) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  struct Kind {
+    std::string name, reason;
+  };
+  for (const Kind& kind : std::vector<Kind>{{"fifo", "a FIFO"},
+                                            {"folder", "a directory"},
+                                            {"zero", "a character device (a link to /dev/zero)"}}) {
+    const std::string dataset = SmallDataset(source, 12, "gt_" + kind.name);
+    const std::string gt = dataset + "/groundtruth.txt";
+    if (kind.name == "fifo") ASSERT_EQ(mkfifo(gt.c_str(), 0600), 0);
+    if (kind.name == "folder") fs::create_directories(gt);
+    if (kind.name == "zero") fs::create_symlink("/dev/zero", gt);
+    const auto r = Run({"run", dataset, "--config", Config(), "--out", dir_ + "/o_" + kind.name,
+                        "--filter", "none", "--direct", "--quiet", "--frames", "0:5000"});
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(Contains(r.err, "warning: " + gt + ": not a regular file: " + kind.reason))
+        << r.err;
+    EXPECT_TRUE(Contains(r.err, "without evaluation")) << r.err;
+    EXPECT_TRUE(Contains(r.out, "ATE: not evaluated")) << r.out;
+    EXPECT_TRUE(Contains(r.err, "warning: --frames '0:5000'")) << r.err;
+    EXPECT_TRUE(Contains(r.err, "12 rgb.txt entries")) << r.err;
+  }
+}
+
+// A detections file that matches no frame warns with the counts; a class id outside the
+// detector's classes is an error with file:line.
+TEST_F(DatasetCli, DetectionsThatMatchNoFrameWarnAndBadClassIdsFail) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  DYGSLAM_REQUIRE_MODELS(models);
+  const std::string dataset = SmallDataset(source, 10, "det");
+  const std::string det = dir_ + "/det.txt";
+  std::ofstream(det) << "99.0 10 10 50 50 0 0.9\n99.1 10 10 50 50 0 0.9\n";
+  const auto r = Run({"run", dataset, "--config", Config(), "--out", dir_ + "/o_det", "--filter",
+                      "boxes", "--quiet", "--detections", det});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(Contains(
+      r.err, "warning: --detections " + det + ": 2 of its 2 stamps match no frame of the dataset"))
+      << r.err;
+  EXPECT_TRUE(Contains(r.err, "0 of the run's 10 frames have boxes")) << r.err;
+  const RgbdDataset d = RgbdDataset::Open(dataset);
+  std::ofstream(det) << d.frame(0).rgb_stamp.ToString() << " 10 10 50 50 0 0.9\n"
+                     << d.frame(1).rgb_stamp.ToString() << " 10 10 50 50 999 0.9\n";
+  ExpectError(Run({"run", dataset, "--config", Config(), "--out", dir_ + "/o_det2", "--filter",
+                   "boxes", "--quiet", "--detections", det}),
+              1, {det + ":2", "class_id 999", "0..79"});
+  EXPECT_FALSE(fs::exists(dir_ + "/o_det2"));
+}
+
+}  // namespace
+}  // namespace dygslam

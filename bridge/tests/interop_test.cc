@@ -383,5 +383,59 @@ TEST(Interop, CameraOverRos2DrivesSlamLikeTheDirectRun) {
   EXPECT_LE(std::abs(bridge_ate - direct_ate), 0.15 * direct_ate);
 }
 
+// A 50 MB image from a ROS 2 peer cannot arrive whole (its fragments overflow the receive
+// buffers); the bridge reports it, from the middleware's sample-lost status of its colour reader,
+// in its statistics by topic instead of losing it without a word. The images sent after it are
+// counted once they arrive, lost or not (the peer keeps sending until the loss is reported).
+TEST(Interop, OversizedImageFromThePeerIsCountedAsLost) {
+  const int domain = 176;
+  ros2::RosBridgeOptions bo;
+  bo.outbound = false;
+  bo.wait_for_components = {};  // no pipeline: only the ROS side is under test
+  ros2::RosBridge bridge(MakeParticipant(domain, "test_bridge"), bo);
+  CyclonePeer peer(domain);
+  peer.Advertise("rt" + bo.color_topic, "rt" + bo.depth_topic, "rt" + bo.camera_info_topic);
+  ASSERT_TRUE(peer.WaitForCameraReaders(std::chrono::seconds(15)));
+  testing::PeerCamera camera;
+  camera.fx = camera.fy = 525;
+  camera.cx = 319.5;
+  camera.cy = 239.5;
+  const cv::Mat color(480, 640, CV_8UC3, cv::Scalar(40, 80, 120));
+  const cv::Mat depth(480, 640, CV_16UC1, cv::Scalar(1500));
+  cv::Mat huge(4267, 4096, CV_8UC3);  // 52.4 MB
+  cv::randu(huge, 0, 255);
+  int64_t stamp = 1'700'000'000'000'000'000;
+  auto publish = [&](const cv::Mat& bgr) {
+    stamp += 33'000'000;
+    peer.PublishFrame(stamp, bgr, depth, camera, "camera_color_optical_frame");
+  };
+  // Good frames first: the reader is receiving.
+  for (int i = 0; i < 3; ++i) {
+    publish(color);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_TRUE(
+      WaitUntil([&] { return bridge.stats().color_received == 3; }, std::chrono::seconds(10)))
+      << bridge.stats().color_received << " of 3 colour images before the large one";
+  publish(huge);
+  // The loss is known when a later sample of the same writer arrives.
+  size_t good_after = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (bridge.stats().samples_lost == 0 && std::chrono::steady_clock::now() < deadline) {
+    publish(color);
+    ++good_after;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const ros2::RosBridgeStats s = bridge.stats();
+  std::cout << "after the 52 MB image: " << good_after << " good frames sent, colour received "
+            << s.color_received << " (3 before), lost " << s.samples_lost << "\n";
+  EXPECT_GE(s.samples_lost, 1u);
+  ASSERT_TRUE(s.lost_by_topic.count(bo.color_topic)) << "no loss reported on the colour topic";
+  EXPECT_GE(s.lost_by_topic.at(bo.color_topic), 1u);
+  // Nothing the peer sent vanished uncounted: every colour image was received, lost or rejected.
+  EXPECT_EQ(s.color_received + s.lost_by_topic.at(bo.color_topic), 3 + 1 + good_after);
+}
+
 }  // namespace
 }  // namespace dygslam

@@ -210,24 +210,22 @@ TEST(SlamFallback, BonnCrowdAllFramesAteWithSmoothedFallbackStretches) {
             << " poses " << ate.error.rmse << " m (online poses " << ate_online.error.rmse
             << " m)\n";
   const int with_pose = states["ok"] + states["fallback"] + states["relocalized"];
-  EXPECT_GE(with_pose, static_cast<int>(0.995 * dataset.size()));
+  // The promise: every frame has a pose (measured 360 of 360, deterministic: spread 0).
+  EXPECT_EQ(with_pose, static_cast<int>(dataset.size()));
   EXPECT_EQ(trajectory.size(), static_cast<size_t>(with_pose));
   EXPECT_GT(states["fallback"], 10);  // the two crowded stretches (~196-208, ~324-331)
-  // Measured (deterministic, 2-core machine): 0.0160 m smoothed, 0.0204 m online (ratio 0.78)
-  // before issue 22's round 2; since (fixed anchors, depth-refined boxes, depth-residual test in
-  // full) 0.0146 m smoothed, 0.0151 m online (ratio 0.97: the online poses before the stretches
-  // are better, so the smoothing has less to correct). Margins: 0.018 m is above the threaded
-  // runs (BENCHMARKS.md, *Round 2*); the smoothing must not make the trajectory worse.
-  EXPECT_LT(ate.error.rmse, 0.018);
+  // Measured (deterministic, spread 0 run to run): 0.0133 m smoothed, 0.0155 m online. Limit:
+  // the figure + 3 x the spread of this ATE under neutral changes (+-0.0007 m), below the
+  // method's acceptance of 0.020 m; the smoothing must not make the trajectory worse.
+  EXPECT_LT(ate.error.rmse, 0.0154);
   EXPECT_LE(ate.error.rmse, ate_online.error.rmse);
 }
 
-// Issue 22: the crowd passing close at entries 320-334. Weakly held frames become keyframes there
-// by default (entries 322-325, 51-151 inliers) and every frame after them inherits their error
-// (0.055-0.061 m at 323-325); with Tracking.keyframe_weak_inliers they do not, and the dense
-// fallback holds those frames. Measured (deterministic): RMSE over these entries 0.0242 m with
-// the rule at 150, 0.0340 m without; whole run 0.0126 vs 0.0143 m (BENCHMARKS.md, issue 22,
-// Round 5). Opt-in: the threaded runs did not measure better (medians 0.0158 vs 0.0151 m).
+// The crowd passing close at entries 320-334: with Tracking.keyframe_weak_inliers (opt-in) frames
+// held by few inliers while people are in view make no keyframe, and the dense fallback holds
+// them. Measured (deterministic, spread 0 run to run): RMSE over these entries 0.0282 m with the
+// rule at 150, whole run 0.0131 m. Without the rule (the default) the same run measures 0.0229 m
+// over these entries and 0.0133 m whole: the rule no longer improves this stretch.
 TEST(SlamFallback, BonnCrowdWeaklyHeldFramesMakeNoKeyframes) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
   const RgbdDataset dataset = RgbdDataset::Open(dir);
@@ -264,9 +262,11 @@ TEST(SlamFallback, BonnCrowdWeaklyHeldFramesMakeNoKeyframes) {
             << stretch_rmse << " m, whole run " << ate.error.rmse << " m\n";
   EXPECT_EQ(with_pose, static_cast<int>(dataset.size()));
   EXPECT_EQ(weak_keyframes, 0);
-  // Margins between the two measurements (0.0242 / 0.0340 m; 0.0126 / 0.0143 m).
-  EXPECT_LT(stretch_rmse, 0.029);
-  EXPECT_LT(ate.error.rmse, 0.0135);
+  // Limits: the measured figure + 3 x the spread of the whole-run ATE under neutral changes
+  // (+-0.0007 m): 0.0131 + 0.0021 m. The 15-frame stretch moves more than the whole run; its
+  // spread is not measured: 10 % (0.0028 m) above its figure.
+  EXPECT_LT(stretch_rmse, 0.031);
+  EXPECT_LT(ate.error.rmse, 0.0152);
 }
 
 }  // namespace

@@ -87,7 +87,9 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   p.AddFlag("run-slam", "also run the detector, slam, mapper and recorder components here");
   p.AddOption("config", "FILE",
               "--run-slam: settings YAML (camera intrinsics must match CameraInfo)");
-  p.AddOption("filter", "MODE", "--run-slam: none | boxes | geometry | full | paper (+margin, +margin+demotion)", "full");
+  p.AddOption("filter", "MODE",
+              "--run-slam: none | boxes | geometry | full | paper (+margin, +margin+demotion)",
+              "full");
   p.AddOption("out", "DIR", "--run-slam: output folder (trajectory, map.bt)", "out/bridge");
   p.AddFlag("no-mapper", "--run-slam: no mapper component");
   if (!p.Parse(args)) return p.exit_code();
@@ -149,8 +151,8 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
     pipeline.dataset_dir = "-";
     pipeline.settings_path = p.Get("config");
     pipeline.output_dir = p.Get("out");
-    pipeline.system = LoadRunConfiguration({pipeline.settings_path,
-                                            CliSettingsReadOptions(false), p.Get("filter")})
+    pipeline.system = LoadRunConfiguration(
+                          {pipeline.settings_path, CliSettingsReadOptions(false), p.Get("filter")})
                           .system;
     pipeline.run_mapper = !p.Flag("no-mapper");
     pipeline.domain_id = domain;
@@ -210,11 +212,17 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   std::cerr << "ros2 bridge: " << s.frames_forwarded << " frames forwarded (colour "
             << s.color_received << ", depth " << s.depth_received << ", unpaired "
             << s.dropped_unsynchronized << ", no camera info " << s.dropped_no_camera_info
-            << ", dropped waiting " << s.dropped_pending << ", bad " << s.bad_samples << "); "
-            << s.poses << " poses, " << s.paths << " paths, " << s.detections
-            << " detection arrays, " << s.maps << " maps published\n";
+            << ", dropped waiting " << s.dropped_pending << ", bad " << s.bad_samples
+            << ", lost before the bridge " << s.samples_lost << "); " << s.poses << " poses, "
+            << s.paths << " paths, " << s.detections << " detection arrays, " << s.maps
+            << " maps published\n";
   for (const auto& [kind, count] : s.rejected) {
     std::cerr << "ros2 bridge: rejected " << count << " sample(s): " << kind << "\n";
+  }
+  for (const auto& [topic, count] : s.lost_by_topic) {
+    if (count > 0)
+      std::cerr << "ros2 bridge: " << count << " sample(s) lost before the bridge on " << topic
+                << " (in transport or rejected by the reader)\n";
   }
   return result;
 }

@@ -115,6 +115,11 @@ struct RosBridgeStats {
   // Rejected ROS messages by kind (the field at fault, e.g. "<topic>.encoding"); the first of
   // each kind is logged with the reason.
   std::map<std::string, size_t> rejected;
+  // Samples the ROS readers never received (lost in transport, e.g. an image whose fragments
+  // overflowed the socket buffers, or rejected by the reader's resource limits), in total and
+  // by ROS topic; each loss is logged (the first few, then every 100th).
+  size_t samples_lost = 0;
+  std::map<std::string, size_t> lost_by_topic;
   bool end_of_stream_sent = false;
   // Outbound.
   size_t poses = 0, paths = 0, transforms = 0, detections = 0, maps = 0;

@@ -79,9 +79,9 @@ class RosReader : public dds::TypedReader<PubSubType> {
  public:
   using Callback = typename dds::TypedReader<PubSubType>::Callback;
   RosReader(std::shared_ptr<RosSession> ros, const std::string& topic, const RosQos& qos,
-            Callback callback)
+            Callback callback, dds::LossCallback on_loss = {})
       : dds::TypedReader<PubSubType>(ros, ros->participant(), ros->subscriber(), topic,
-                                     RosReaderQos(qos), std::move(callback)) {}
+                                     RosReaderQos(qos), std::move(callback), std::move(on_loss)) {}
 };
 
 }  // namespace dygslam::ros2

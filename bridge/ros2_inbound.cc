@@ -54,15 +54,21 @@ void RosInbound::StartThread() {
 
 void RosInbound::CreateReaders() {
   const RosQos sensor = RosQos::SensorData();
+  const auto losses_on = [this](const std::string& topic) {
+    return [this, topic](const dds::ReaderLosses& l) { OnLoss(topic, l); };
+  };
   color_reader_ = std::make_unique<RosReader<sensor_msgs::msg::ImagePubSubType>>(
       ros_, DdsTopicName(options_.color_topic, "color_topic"), sensor,
-      [this](sensor_msgs::msg::Image&& m) { OnImage(std::move(m), true); });
+      [this](sensor_msgs::msg::Image&& m) { OnImage(std::move(m), true); },
+      losses_on(options_.color_topic));
   depth_reader_ = std::make_unique<RosReader<sensor_msgs::msg::ImagePubSubType>>(
       ros_, DdsTopicName(options_.depth_topic, "depth_topic"), sensor,
-      [this](sensor_msgs::msg::Image&& m) { OnImage(std::move(m), false); });
+      [this](sensor_msgs::msg::Image&& m) { OnImage(std::move(m), false); },
+      losses_on(options_.depth_topic));
   info_reader_ = std::make_unique<RosReader<sensor_msgs::msg::CameraInfoPubSubType>>(
       ros_, DdsTopicName(options_.camera_info_topic, "camera_info_topic"), sensor,
-      [this](sensor_msgs::msg::CameraInfo&& m) { OnCameraInfo(std::move(m)); });
+      [this](sensor_msgs::msg::CameraInfo&& m) { OnCameraInfo(std::move(m)); },
+      losses_on(options_.camera_info_topic));
 }
 
 void RosInbound::StopReaders() {
@@ -242,6 +248,29 @@ void RosInbound::OnCameraInfo(sensor_msgs::msg::CameraInfo&& info) {
   } catch (const InputError& e) {
     std::lock_guard<std::mutex> lock(mutex_);
     RejectLocked(e.what());
+  }
+}
+
+// The middleware's totals for one reader replace that topic's count; every new loss is logged
+// (the first few, then every 100th) with what usually causes it.
+void RosInbound::OnLoss(const std::string& topic, const dds::ReaderLosses& losses) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const size_t total = static_cast<size_t>(losses.lost + losses.rejected);
+  size_t& known = stats_.lost_by_topic[topic];
+  if (total <= known) return;
+  const size_t before = known;
+  known = total;
+  stats_.samples_lost = 0;
+  for (const auto& [name, count] : stats_.lost_by_topic) stats_.samples_lost += count;
+  for (size_t n = before + 1; n <= total; ++n) {
+    if (!ShouldLog(n)) continue;
+    LOG_WARNING << "ros2 bridge: " << topic << ": a sample was lost before it reached the bridge ("
+                << losses.lost << " lost in transport, " << losses.rejected
+                << " rejected by the reader"
+                << (losses.rejected > 0 ? " (" + losses.last_rejected_reason + ")" : "")
+                << " so far); a large image is sent in fragments and lost whole when the socket "
+                   "buffers overflow or a fragment is dropped";
+    break;
   }
 }
 

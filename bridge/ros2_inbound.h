@@ -25,6 +25,7 @@
 #include "bridge/ros2_endpoint.h"
 #include "bridge/ros2_half.h"
 #include "components/convert.h"
+#include "components/dds/endpoint.h"
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
 #include "dygslam_msg/RgbdFramePubSubTypes.h"
@@ -72,6 +73,8 @@ class RosInbound : public RosHalf {
   using Clock = std::chrono::steady_clock;
   void OnImage(sensor_msgs::msg::Image&& image, bool is_color);
   void OnCameraInfo(sensor_msgs::msg::CameraInfo&& info);
+  // A ROS reader's middleware counts grew (`topic`: the ROS topic name).
+  void OnLoss(const std::string& topic, const dds::ReaderLosses& losses);
   void AddFrameLocked(RgbdFrame&& pair);
   void RejectLocked(const std::string& reason);
   std::string MissingComponentsLocked() const;

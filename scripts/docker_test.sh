@@ -12,14 +12,17 @@
 #   5. checks the outputs: trajectory.txt (>= 90 % of the frames), a non-empty map.bt with the
 #      OctoMap header, eval.json with ATE RMSE <= MAX_ATE m.
 # Environment: DYGSLAM_DATA_DIR / DYGSLAM_MODELS_DIR (default ../shared/{data,models}),
-#   DOCKER_TEST_FRAMES (100), DOCKER_TEST_MAX_ATE (0.02), DOCKER_TEST_WORK (build/docker-test),
+#   DOCKER_TEST_FRAMES (100), DOCKER_TEST_MAX_ATE (0.016), DOCKER_TEST_WORK (build/docker-test),
 #   DOCKER_TEST_CACHE (~/.cache/dygslam-docker: debootstrap root filesystem tarball).
 # Exit 0 pass, 1 fail (the failing step is named). Every step prints its duration.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 FRAMES=${DOCKER_TEST_FRAMES:-100}
-MAX_ATE=${DOCKER_TEST_MAX_ATE:-0.02}
+# The same 100-frame pipeline outside Docker (`dygslam run DATA --config config/bonn.yaml --filter
+# full --frames 0:100`, DDS components, not deterministic): ATE 0.0116-0.0139 m over 5 runs
+# (median 0.0116). Limit: the largest + the range (0.0023 m).
+MAX_ATE=${DOCKER_TEST_MAX_ATE:-0.016}
 WORK=${DOCKER_TEST_WORK:-$ROOT/build/docker-test}
 CACHE=${DOCKER_TEST_CACHE:-$HOME/.cache/dygslam-docker}
 DATA_DIR=${DYGSLAM_DATA_DIR:-$ROOT/../shared/data}

@@ -8,6 +8,8 @@
 # - No blanket retries. A test that is known to be timing-sensitive on 2 shared cores may be
 #   listed in RETRY_BY_NAME below with the reason; it is re-run once, by name, and the retry is
 #   printed in the summary. The list is empty: every test must pass on its first run.
+# - Every selected test must run: the run fails when no test ran, or when fewer ran than
+#   `ctest -N` lists for the same arguments (a test that vanished, a crashed ctest).
 set -uo pipefail
 
 build=${1:?usage: run_tests.sh BUILD_DIR [ctest args]}
@@ -21,6 +23,12 @@ declare -A RETRY_BY_NAME=()
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 start=$(date +%s)
+# What the selection lists ("Total Tests: N"); ctest -N runs nothing.
+listed=$(ctest --test-dir "$build" -N "$@" 2>&1 | sed -nE 's/^Total Tests: *([0-9]+).*/\1/p')
+if [[ -z $listed ]]; then
+  echo "run_tests: \`ctest --test-dir $build -N $*\` listed no test count (not a configured build folder?)"
+  exit 1
+fi
 ctest --test-dir "$build" --output-on-failure -j"$jobs" "$@" 2>&1 | tee "$log"
 rc=${PIPESTATUS[0]}
 
@@ -50,10 +58,18 @@ done
 failed=${#still_failing[@]}
 
 echo ""
-echo "test summary: $total tests, $((passed + ${#retried[@]})) passed, $failed failed, $skipped skipped," \
+echo "test summary: $total of $listed listed tests ran, $((passed + ${#retried[@]})) passed, $failed failed, $skipped skipped," \
   "${#retried[@]} retried${retried:+ (${retried[*]})}, $(($(date +%s) - start)) s"
 if [[ $failed -gt 0 ]]; then
   echo "failed: ${still_failing[*]}"
+  exit 1
+fi
+if [[ $total -eq 0 ]]; then
+  echo "run_tests: no test ran (ctest arguments: ${*:-none}); a run that tests nothing fails"
+  exit 1
+fi
+if [[ $total -lt $listed ]]; then
+  echo "run_tests: $total tests ran but ctest -N lists $listed for the same arguments"
   exit 1
 fi
 if [[ $skipped -gt 0 ]]; then

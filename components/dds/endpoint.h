@@ -7,8 +7,10 @@
 // RosSession) until the endpoint has been deleted.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <fastdds/dds/core/status/SampleRejectedStatus.hpp>
 #include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
@@ -20,6 +22,7 @@
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -41,6 +44,17 @@ bool WaitForMatched(const Matched& matched, int count, std::chrono::milliseconds
   return true;
 }
 }  // namespace internal
+
+// Samples a reader never delivered, as the middleware counts them (cumulative): `lost` (Fast DDS
+// SampleLostStatus: a gap in the writer's sequence, e.g. a fragmented sample that never arrived
+// whole because its fragments overflowed the socket buffers) and `rejected` (SampleRejectedStatus:
+// the reader's resource limits).
+struct ReaderLosses {
+  uint64_t lost = 0, rejected = 0;
+  std::string last_rejected_reason;  // "" before the first rejection
+};
+// Called on a DDS listener thread with the totals so far: keep it short.
+using LossCallback = std::function<void(const ReaderLosses&)>;
 
 template <class PubSubType>
 class TypedWriter {
@@ -109,15 +123,20 @@ class TypedReader {
   // callback runs on a DDS listener thread: keep it short (enqueue + notify).
   TypedReader(std::shared_ptr<const void> owner, Participant& participant,
               eprosima::fastdds::dds::Subscriber* subscriber, const std::string& topic,
-              const eprosima::fastdds::dds::DataReaderQos& qos, Callback callback)
+              const eprosima::fastdds::dds::DataReaderQos& qos, Callback callback,
+              LossCallback on_loss = {})
       : TypedReader(std::move(owner), participant, subscriber, topic, qos,
                     CallbackWithWriter([cb = std::move(callback)](Message&& m, const WriterGuid&) {
                       cb(std::move(m));
-                    })) {}
+                    }),
+                    std::move(on_loss)) {}
   TypedReader(std::shared_ptr<const void> owner, Participant& participant,
               eprosima::fastdds::dds::Subscriber* subscriber, const std::string& topic,
-              const eprosima::fastdds::dds::DataReaderQos& qos, CallbackWithWriter callback)
-      : owner_(std::move(owner)), subscriber_(subscriber), listener_(std::move(callback)) {
+              const eprosima::fastdds::dds::DataReaderQos& qos, CallbackWithWriter callback,
+              LossCallback on_loss = {})
+      : owner_(std::move(owner)),
+        subscriber_(subscriber),
+        listener_(std::move(callback), std::move(on_loss)) {
     auto* t = participant.template GetTopic<PubSubType>(topic);
     reader_ = subscriber_->create_datareader(t, qos, &listener_);
     if (reader_ == nullptr) throw std::runtime_error("Fast DDS: cannot create reader on " + topic);
@@ -132,6 +151,11 @@ class TypedReader {
   TypedReader& operator=(const TypedReader&) = delete;
 
   int matched() const { return listener_.matched.load(); }
+  // Samples lost / rejected so far (ReaderLosses).
+  ReaderLosses losses() const {
+    std::lock_guard<std::mutex> lock(listener_.loss_mutex);
+    return listener_.losses;
+  }
   // The reader's GUID (GUID prefix of its participant + entity id).
   eprosima::fastrtps::rtps::GUID_t rtps_guid() const { return reader_->guid(); }
   bool WaitForWriters(int count, std::chrono::milliseconds timeout) const {
@@ -141,7 +165,8 @@ class TypedReader {
  private:
   class Listener : public eprosima::fastdds::dds::DataReaderListener {
    public:
-    explicit Listener(CallbackWithWriter cb) : callback(std::move(cb)) {}
+    Listener(CallbackWithWriter cb, LossCallback loss_cb)
+        : callback(std::move(cb)), on_loss(std::move(loss_cb)) {}
     void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
       eprosima::fastdds::dds::SampleInfo info;
       while (true) {
@@ -161,8 +186,44 @@ class TypedReader {
         const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
       matched.store(status.current_count);
     }
+    void on_sample_lost(eprosima::fastdds::dds::DataReader*,
+                        const eprosima::fastdds::dds::SampleLostStatus& status) override {
+      ReaderLosses now;
+      {
+        std::lock_guard<std::mutex> lock(loss_mutex);
+        losses.lost = static_cast<uint64_t>(std::max(0, status.total_count));
+        now = losses;
+      }
+      if (on_loss) on_loss(now);
+    }
+    void on_sample_rejected(eprosima::fastdds::dds::DataReader*,
+                            const eprosima::fastrtps::SampleRejectedStatus& status) override {
+      ReaderLosses now;
+      {
+        std::lock_guard<std::mutex> lock(loss_mutex);
+        losses.rejected = status.total_count;
+        switch (status.last_reason) {
+          case eprosima::fastdds::dds::REJECTED_BY_INSTANCES_LIMIT:
+            losses.last_rejected_reason = "instances limit";
+            break;
+          case eprosima::fastdds::dds::REJECTED_BY_SAMPLES_LIMIT:
+            losses.last_rejected_reason = "samples limit";
+            break;
+          case eprosima::fastdds::dds::REJECTED_BY_SAMPLES_PER_INSTANCE_LIMIT:
+            losses.last_rejected_reason = "samples per instance limit";
+            break;
+          default:
+            losses.last_rejected_reason = "unknown";
+        }
+        now = losses;
+      }
+      if (on_loss) on_loss(now);
+    }
     CallbackWithWriter callback;
+    LossCallback on_loss;
     std::atomic<int> matched{0};
+    mutable std::mutex loss_mutex;
+    ReaderLosses losses;
   };
 
   std::shared_ptr<const void> owner_;  // destroyed last

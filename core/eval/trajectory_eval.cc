@@ -1,13 +1,11 @@
 #include "core/eval/trajectory_eval.h"
 
-#include <string>
-
-#include <cstdio>
-
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
+#include <string>
 
 #include "core/base/error.h"
 #include "core/io/association.h"
@@ -190,6 +188,36 @@ RpeResult ComputeRpe(const std::vector<StampedPose>& groundtruth,
   r.rot_mean = a.mean;
   r.rot_median = a.median;
   return r;
+}
+
+std::vector<StampedPose> MoveGroundTruthToCamera(const std::vector<StampedPose>& groundtruth,
+                                                 const Rigid3d& body_from_cam) {
+  std::vector<StampedPose> out;
+  out.reserve(groundtruth.size());
+  for (const StampedPose& p : groundtruth)
+    out.push_back({p.stamp, p.world_from_cam * body_from_cam});
+  return out;
+}
+
+Rigid3d BonnMarkerFromCamera() {
+  Eigen::Matrix4d t_ros;
+  t_ros << -1, 0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 0, 0, 1;
+  Eigen::Matrix4d t_m;
+  t_m << 1.0157, 0.1828, -0.2389, 0.0113,  //
+      0.0009, -0.8431, -0.6413, -0.0098,   //
+      -0.3009, 0.6147, -0.8085, 0.0111,    //
+      0, 0, 0, 1;
+  const Eigen::Matrix4d m = t_ros * t_m;
+  // Nearest rotation to the scaled 3x3 block: U V^T of its SVD.
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m.topLeftCorner<3, 3>(),
+                                              Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d r = svd.matrixU() * svd.matrixV().transpose();
+  if (r.determinant() < 0) {
+    Eigen::Matrix3d u = svd.matrixU();
+    u.col(2) *= -1;
+    r = u * svd.matrixV().transpose();
+  }
+  return Rigid3d(r, m.topRightCorner<3, 1>());
 }
 
 std::string AtePairsText(const AteResult& ate) {

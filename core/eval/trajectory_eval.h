@@ -81,4 +81,23 @@ struct RpeResult {
 RpeResult ComputeRpe(const std::vector<StampedPose>& groundtruth,
                      const std::vector<StampedPose>& estimate, const RpeOptions& options = {});
 
+// Ground truth of a rigid body other than the camera (a motion-capture marker body) moved to the
+// camera: world_from_cam = world_from_body * body_from_cam for every pose. ATE with rigid
+// alignment barely depends on it (only the lever arm between body and camera); RPE does: the
+// relative motion of the body, expressed in the body's axes, is compared with the camera's
+// relative motion in the camera's axes, so without it RPE measures the body-to-camera rotation.
+std::vector<StampedPose> MoveGroundTruthToCamera(const std::vector<StampedPose>& groundtruth,
+                                                 const Rigid3d& body_from_cam);
+
+// The Bonn RGB-D Dynamic dataset's marker-to-camera calibration, as the dataset's page publishes
+// it for its groundtruth.txt (the pose of the motion-capture marker body):
+//   T_camera = T_ros * T_marker * T_ros * T_m,  T_ros = [-1 0 0 0; 0 0 1 0; 0 1 0 0; 0 0 0 1],
+//   T_m = [1.0157 0.1828 -0.2389 0.0113; 0.0009 -0.8431 -0.6413 -0.0098;
+//          -0.3009 0.6147 -0.8085 0.0111; 0 0 0 1].
+// The left T_ros only turns the world's axes (no effect on ATE or RPE), so the body_from_cam of
+// MoveGroundTruthToCamera is T_ros * T_m. T_m's 3x3 block is a rotation scaled by 1.0593 (the
+// dataset's transform also brings its reconstructions to the scale of its reference model); the
+// rotation is the nearest one (polar decomposition), the translation is kept.
+Rigid3d BonnMarkerFromCamera();
+
 }  // namespace dygslam

@@ -162,5 +162,47 @@ TEST(Rpe, ConstantPositionDriftGivesThatSpeed) {
   EXPECT_EQ(ComputeRpe(MakePath(20), MakePath(20)).num_pairs, 0u);
 }
 
+// Ground truth of a body mounted on the camera with a fixed offset: RPE against it measures the
+// offset, not the estimate; moved to the camera with the right calibration the error vanishes,
+// and ATE (rigid alignment) changes only by the lever arm.
+TEST(GroundTruthCalibration, MovingTheBodyToTheCameraRemovesTheOffsetFromRpe) {
+  const auto camera = MakePath(300);
+  const Rigid3d body_from_cam = SomeTransform();
+  std::vector<StampedPose> body = camera;
+  for (StampedPose& p : body) p.world_from_cam = p.world_from_cam * body_from_cam.Inverse();
+  const RpeResult raw = ComputeRpe(body, camera);
+  EXPECT_GT(raw.rot_rmse, 1.0);  // degrees per second
+  const RpeResult moved = ComputeRpe(MoveGroundTruthToCamera(body, body_from_cam), camera);
+  EXPECT_EQ(moved.num_pairs, raw.num_pairs);
+  EXPECT_LT(moved.rot_rmse, 1e-5);
+  EXPECT_LT(moved.trans_rmse, 1e-9);
+  EXPECT_LT(ComputeAte(MoveGroundTruthToCamera(body, body_from_cam), camera).error.rmse, 1e-9);
+}
+
+// The Bonn marker-to-camera calibration is the published T_ros * T_m with its 3x3 block made a
+// rotation: a camera pose from it equals the published T_ros * T_i * T_ros * T_m up to the world
+// turn T_ros, position exactly and orientation up to the block's scale.
+TEST(GroundTruthCalibration, BonnMarkerFromCameraIsThePublishedTransform) {
+  const Rigid3d x = BonnMarkerFromCamera();
+  EXPECT_NEAR(x.rotation.norm(), 1.0, 1e-12);
+  EXPECT_NEAR(x.RotationMatrix().determinant(), 1.0, 1e-9);
+  Eigen::Matrix4d t_ros, t_m;
+  t_ros << -1, 0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 0, 0, 1;
+  t_m << 1.0157, 0.1828, -0.2389, 0.0113, 0.0009, -0.8431, -0.6413, -0.0098, -0.3009, 0.6147,
+      -0.8085, 0.0111, 0, 0, 0, 1;
+  for (const StampedPose& marker : MakePath(50)) {
+    const Eigen::Matrix4d published = t_ros * marker.world_from_cam.ToMatrix() * t_ros * t_m;
+    const Eigen::Matrix4d ours = t_ros * (marker.world_from_cam * x).ToMatrix();
+    EXPECT_LT((published.topRightCorner<3, 1>() - ours.topRightCorner<3, 1>()).norm(), 1e-12);
+    const Eigen::Matrix3d block = published.topLeftCorner<3, 3>();
+    const double scale = std::cbrt(block.determinant());
+    EXPECT_NEAR(scale, 1.0593, 1e-3);
+    EXPECT_LT((block / scale - ours.topLeftCorner<3, 3>()).cwiseAbs().maxCoeff(), 1e-3);
+  }
+  // The marker sits 19 mm from the optical centre, turned by about 173 degrees.
+  EXPECT_NEAR(x.translation.norm(), 0.0186, 0.0005);
+  EXPECT_NEAR(RotationAngle(x.rotation) * 180 / M_PI, 172.7, 0.1);
+}
+
 }  // namespace
 }  // namespace dygslam

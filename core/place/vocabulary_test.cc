@@ -109,7 +109,10 @@ TEST_F(VocabularyTest, SameViewScoresHigherThanOtherScene) {
   // 0.15 (3.5-5x). Margin: same > 2.5x either.
   EXPECT_GT(same, 2.5 * other_scene) << same << " vs " << other_scene;
   EXPECT_GT(same, 2.5 * other_view) << same << " vs " << other_view;
-  EXPECT_GE(other_scene, 0.0);
+  // Unrelated images share few words in absolute terms too (a vocabulary with too few or too
+  // coarse words scores every pair alike; one word scores 1.0). Deterministic (shipped vocabulary,
+  // generated images): 0.11 on every run; bound at twice that.
+  EXPECT_LT(other_scene, 0.22) << other_scene;
   std::printf("score same view %.3f, other scene %.3f, other view %.3f\n", same, other_scene,
               other_view);
 }

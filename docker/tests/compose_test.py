@@ -610,7 +610,7 @@ def cmd_run(a):
             report = json.load(f)
         print("ATE RMSE %.4f m over %d pairs" % (report["ate_rmse"], report["pairs"]))
         expect(report["pairs"] >= 0.9 * a.frames, "eval.json: pairs cover the frames")
-        expect(report["ate_rmse"] < a.max_ate, "eval.json: ATE RMSE %.4f m < %.2f m" %
+        expect(report["ate_rmse"] < a.max_ate, "eval.json: ATE RMSE %.4f m < %.3f m" %
                (report["ate_rmse"], a.max_ate))
     txt = os.path.join(out, "eval.txt")
     expect(os.path.isfile(txt) and "ATE" in open(txt).read(), "out/eval.txt written")
@@ -644,7 +644,10 @@ def main():
     ap.add_argument("--frames", type=int, default=150)
     ap.add_argument("--domain", type=int, default=197)
     ap.add_argument("--timeout", type=int, default=150)
-    ap.add_argument("--max-ate", type=float, default=0.10)
+    # The same pipeline on frames 0:150 (`dygslam run --processes --frames 0:150`, bonn.yaml,
+    # full): ATE 0.0119-0.0120 m over 4 runs; on 0:100 with the components on threads
+    # 0.0116-0.0139 m over 5 runs. Limit: 0.0120 m + the larger range (0.0023 m).
+    ap.add_argument("--max-ate", type=float, default=0.015)
     a = ap.parse_args()
     a.source = os.path.realpath(a.source)
     if a.check == "config":

@@ -228,10 +228,10 @@ TEST(SlamFallback, BonnCrowdAllFramesAteWithSmoothedFallbackStretches) {
   EXPECT_EQ(with_pose, static_cast<int>(dataset.size()));
   EXPECT_EQ(smoothed.trajectory.size(), static_cast<size_t>(with_pose));
   EXPECT_GT(smoothed.states["fallback"], 10);  // the two crowded stretches (~196-208, ~324-331)
-  // Measured with the shipped defaults (deterministic, equal to threaded runs): 0.0146 m final,
-  // 0.0144 m online. The figure moves by about +-0.0007 m under changes that should not matter
-  // (BENCHMARKS.md); 0.016 m is that spread twice above the measurement.
-  EXPECT_LT(smoothed.ate.error.rmse, 0.016);
+  // Measured with the shipped defaults (deterministic, equal to threaded runs; spread 0 run to
+  // run): 0.0146 m final, 0.0144 m online. Limit: the figure + 3 x the spread of this ATE under
+  // neutral changes (+-0.0007 m).
+  EXPECT_LT(smoothed.ate.error.rmse, 0.0167);
   EXPECT_LE(smoothed.ate.error.rmse, plain.ate.error.rmse);
 }
 

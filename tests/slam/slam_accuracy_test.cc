@@ -169,7 +169,8 @@ TEST(SlamAccuracy, DeterministicModeIsRepeatable) {
   }
 }
 
-// The dynamic filter's acceptance figure: full method <= 2 cm and >= 10x better than no filter.
+// The shipped defaults on real data (config/bonn.yaml holds the sensor only; deterministic runs
+// equal threaded ones): full method within its measured figure and >= 10x better than no filter.
 TEST(DynamicFilterAccuracy, BonnCrowdFullMethod) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
   const auto gt = ReadTumTrajectory(dir + "/groundtruth.txt");
@@ -179,11 +180,14 @@ TEST(DynamicFilterAccuracy, BonnCrowdFullMethod) {
   const AteResult ate_full = ComputeAte(gt, full.trajectory);
   std::cout << "bonn_crowd_part 360 frames: ATE none " << ate_none << " m, full " << ate_full.error.rmse << " m ("
             << ate_full.num_pairs << " tracked, " << full.lost << " lost)\n";
-  EXPECT_LE(ate_full.error.rmse, 0.020);
+  // Measured 0.0146 m (spread 0 run to run); limit: + 3 x the spread of this ATE under neutral
+  // changes (+-0.0007 m).
+  EXPECT_LE(ate_full.error.rmse, 0.0167);
   EXPECT_GE(ate_none / ate_full.error.rmse, 10.0);
-  // Deterministic runs track 340 of 360 frames (2026-12-01); the margin of 10 frames absorbs
-  // floating-point differences between machines, not a regression of the tracker.
-  EXPECT_GE(ate_full.num_pairs, 330u);
+  // Every frame gets a pose (feature tracking, else the dense fallback): 360 of 360 with a pose,
+  // 0 lost, in every deterministic run (spread 0).
+  EXPECT_EQ(ate_full.num_pairs, 360u);
+  EXPECT_EQ(full.lost, 0);
 }
 
 }  // namespace

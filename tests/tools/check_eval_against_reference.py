@@ -13,6 +13,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import evaluate_ate_reference as ref  # noqa: E402  (re-executes with the system python if needed)
+np = ref.np
 
 
 def data_dir():
@@ -66,6 +67,57 @@ def make_estimate(gt_path, out_path, seed):
         f.write("\n".join(lines) + "\n")
 
 
+def bonn_camera_poses(gt):
+    """The Bonn dataset's published camera poses from its marker poses, T_ros T_i T_ros T_m, with
+    the scaled 3x3 block of the product made a rotation (SVD), as 7-vectors."""
+    t_ros = np.array([[-1, 0, 0, 0], [0, 0, 1, 0], [0, 1, 0, 0], [0, 0, 0, 1.0]])
+    t_m = np.array([[1.0157, 0.1828, -0.2389, 0.0113], [0.0009, -0.8431, -0.6413, -0.0098],
+                    [-0.3009, 0.6147, -0.8085, 0.0111], [0, 0, 0, 1.0]])
+    out = []
+    for pose in gt:
+        m = t_ros @ ref.matrix(pose) @ t_ros @ t_m
+        u, _, vt = np.linalg.svd(m[:3, :3])
+        r = u @ vt
+        w = math.sqrt(max(0.0, 1 + r[0, 0] + r[1, 1] + r[2, 2])) / 2
+        x = math.copysign(math.sqrt(max(0.0, 1 + r[0, 0] - r[1, 1] - r[2, 2])) / 2, r[2, 1] - r[1, 2])
+        y = math.copysign(math.sqrt(max(0.0, 1 - r[0, 0] + r[1, 1] - r[2, 2])) / 2, r[0, 2] - r[2, 0])
+        z = math.copysign(math.sqrt(max(0.0, 1 - r[0, 0] - r[1, 1] + r[2, 2])) / 2, r[1, 0] - r[0, 1])
+        out.append(list(m[:3, 3]) + [x, y, z, w])
+    return np.array(out)
+
+
+def check_bonn_calibration(dygslam, gt, est):
+    """eval on a Bonn ground truth: RPE (and ATE with --calibrated-ate) against the camera poses of
+    the dataset's published formula; auto finds the calibration from the path, none keeps the
+    marker poses. Returns the number of mismatches."""
+    failures = 0
+    gs, g = ref.read_tum(gt)
+    es, e = ref.read_tum(est)
+    g_cam = bonn_camera_poses(g)
+    expected = ref.rpe(gs, g_cam, es, e)
+    expected.update(ref.ate(gs, g_cam, es, e))
+    for args, calibrated_ate in ((["--gt-calibration", "bonn", "--calibrated-ate"], True), ([], False)):
+        out = subprocess.run([dygslam, "eval", gt, est, "--json"] + args, capture_output=True, text=True)
+        if out.returncode != 0:
+            print("dygslam eval %s failed: %d %s" % (args, out.returncode, out.stderr))
+            return failures + 1
+        mine = json.loads(out.stdout)
+        ok = mine.get("gt_calibration") == "bonn" and mine.get("ate_calibrated") == calibrated_ate
+        print("calibration %-40s gt_calibration %r ate_calibrated %r %s" % (
+            args, mine.get("gt_calibration"), mine.get("ate_calibrated"), "ok" if ok else "MISMATCH"))
+        failures += 0 if ok else 1
+        for key, value in expected.items():
+            if key.startswith("ate") or key == "pairs":
+                if not calibrated_ate:
+                    continue
+            tol = 1e-5 if key.startswith("rpe_rot") else 1e-6
+            ok = mine.get(key) == value if isinstance(value, int) else abs(mine[key] - value) <= tol
+            print("calibrated %-18s dygslam %-22r reference %-22r %s" % (
+                key, mine.get(key), value, "ok" if ok else "MISMATCH"))
+            failures += 0 if ok else 1
+    return failures
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--dygslam", required=True)
@@ -84,7 +136,8 @@ def main():
     for seed in (1, 2, 3):
         est = os.path.join(args.tmp, "estimate_%d.txt" % seed)
         make_estimate(gt, est, seed)
-        out = subprocess.run([args.dygslam, "eval", gt, est, "--json"], capture_output=True, text=True)
+        out = subprocess.run([args.dygslam, "eval", gt, est, "--json", "--gt-calibration", "none"],
+                             capture_output=True, text=True)
         if out.returncode != 0:
             print("dygslam eval failed:", out.returncode, out.stderr)
             return 1
@@ -102,6 +155,7 @@ def main():
         if expected["pairs"] < 250 or not 0.03 < expected["ate_rmse"] < 0.1:
             print("unexpected test data: pairs %d rmse %g" % (expected["pairs"], expected["ate_rmse"]))
             failures += 1
+    failures += check_bonn_calibration(args.dygslam, gt, est)
     # --plot writes a PNG (or says that matplotlib is missing), and does not change the numbers.
     png = os.path.join(args.tmp, "ate.png")
     if os.path.exists(png):

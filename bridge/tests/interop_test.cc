@@ -226,7 +226,10 @@ TEST(Interop, CyclonePeerReceivesWhatThePipelineProduced) {
   }
 
   // Detections: same boxes as the detector component's, centre + size, class name, score.
-  ASSERT_EQ(ref_detections.size(), 50u) << "one Detections message per frame";
+  // One Detections message per frame the detector runs on (Detector.every_n_frames).
+  const size_t every_n = static_cast<size_t>(po.system.detection_every_n_frames);
+  ASSERT_EQ(ref_detections.size(), (50u + every_n - 1) / every_n)
+      << "one Detections message per detector frame";
   ASSERT_EQ(peer.detections.size(), ref_detections.size());
   size_t boxes = 0;
   for (const auto& d : peer.detections) {
@@ -377,12 +380,11 @@ TEST(Interop, CameraOverRos2DrivesSlamLikeTheDirectRun) {
             << " ms, p90 " << percentile(round_trip_ms, 0.9) << " ms; detector inference median "
             << percentile(detection_ms, 0.5) << " ms, slam total median "
             << percentile(slam_ms, 0.5) << " ms\n";
-  // Measured (deterministic, identical in 2 runs): direct 0.01158 m, through the bridge
-  // 0.01291 m (+0.00134 m, +11.6 %), so the 10 % of the acceptance does not hold. It is not the
-  // depth's rounding to whole millimetres (16UC1): the direct run on depth rounded so gives the
-  // same 0.01158 m, and so does the DDS pipeline fed by the player. Limit: the measured
-  // difference + the spread of the ATE under neutral changes (+-0.0007 m).
-  EXPECT_LE(std::abs(bridge_ate - direct_ate), 0.0013 + 0.0007);
+  // The acceptance: through the bridge no more than 10 % worse than the direct run. Measured with
+  // the shipped defaults: direct 0.0133 m, through the bridge 0.0105 m (0.79x). The two inputs
+  // differ (the peer's 16UC1 millimetre depth and its camera info), so the two runs are not the
+  // same trajectory; the bridge path is held to the direct run's figure, not to its poses.
+  EXPECT_LE(bridge_ate, 1.10 * direct_ate);
 }
 
 // A 50 MB image from a ROS 2 peer cannot arrive whole (its fragments overflow the receive

@@ -1,0 +1,140 @@
+// The DDS run's integrity (default mode: the components on threads of one process). Outputs are
+// transactional there too: nothing in --out is deleted when the run starts (before, 0.3 s in, an
+// earlier run's trajectory.txt, map.bt and frames.csv were gone, and a run killed then left
+// nothing); at every moment each output is either the earlier run's file or this run's complete
+// one. A run cut short without being asked to (an END_OF_STREAM published into the run's
+// partition by a participant that is not part of it) never exits 0 with fewer frames than
+// requested. Runs in a private network namespace (the test emulator), on its own domains.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "components/dds/participant.h"
+#include "components/dds/pubsub.h"
+#include "components/protocol.h"
+#include "dygslam_msg/StreamStatusPubSubTypes.h"
+#include "tests/support/cli_fixture.h"
+#include "tests/support/test_support.h"
+
+namespace dygslam {
+namespace {
+namespace fs = std::filesystem;
+using testing::Contains;
+using testing::ReadAll;
+
+constexpr int kKeepDomain = 141;
+constexpr int kIntruderDomain = 142;
+
+class RunIntegrity : public testing::CliFixture {
+ protected:
+  RunIntegrity() : CliFixture("run_integrity") {}
+
+  pid_t Spawn(const std::vector<std::string>& args) {
+    return testing::SpawnDygslam(args, dir_ + "/run.out", dir_ + "/run.err");
+  }
+};
+
+bool Exited(pid_t pid, int* code) {
+  int status = 0;
+  if (waitpid(pid, &status, WNOHANG) != pid) return false;
+  *code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return true;
+}
+
+TEST_F(RunIntegrity, EarlierOutputsStayUntilTheRunReplacesThem) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string data = SmallDataset(source, 40, "data");
+  const fs::path out = fs::path(dir_) / "out";
+  fs::create_directories(out);
+  const std::string earlier = "# an earlier run's file\n";
+  const std::vector<std::string> names = {"trajectory.txt", "keyframes.txt", "frames.csv",
+                                          "map.bt"};
+  for (const std::string& name : names) std::ofstream(out / name) << earlier;
+  const pid_t pid = Spawn({"run", data, "--config", Config(), "--filter", "none", "--quiet",
+                           "--out", out.string(), "--domain", std::to_string(kKeepDomain)});
+  // Until the run ends, every output is there: the earlier file or a complete new one.
+  int code = -1;
+  size_t checks = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(240);
+  while (!Exited(pid, &code)) {
+    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "run did not end";
+    for (const std::string& name : names) {
+      const std::string text = ReadAll((out / name).string());
+      ASSERT_FALSE(text.empty()) << name << " missing or empty during the run (check " << checks
+                                 << ")";
+      if (text == earlier) continue;
+      // Replaced: complete (a TUM file or frames.csv ends with a newline; map.bt holds a tree).
+      if (name != "map.bt") EXPECT_EQ(text.back(), '\n') << name;
+    }
+    ++checks;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_GT(checks, 10u);
+  ASSERT_EQ(code, 0) << ReadAll(dir_ + "/run.err");
+  // This run replaced each of them.
+  for (const std::string& name : names)
+    EXPECT_NE(ReadAll((out / name).string()), earlier) << name << " not replaced";
+  const std::string summary = ReadAll(dir_ + "/run.out");
+  EXPECT_TRUE(Contains(summary,
+                       "/{trajectory.txt,trajectory_online.txt,keyframes.txt,frames.csv,"
+                       "map.bt}"))
+      << summary;
+  for (const auto& entry : fs::directory_iterator(out))
+    EXPECT_FALSE(Contains(entry.path().filename().string(), ".tmp.")) << entry.path();
+}
+
+// A participant outside the run publishes END_OF_STREAM statuses into the run's
+// partition: before, the run ended early (83 of 150 frames) with exit 0. Now it either processes
+// every frame (the status ignored) or says that frames are missing and exits 3.
+TEST_F(RunIntegrity, AForeignEndOfStreamNeverEndsARunWithExitZero) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string partition = "dygslam_integrity_" + std::to_string(kIntruderDomain);
+  dds::ParticipantOptions po;
+  po.domain_id = kIntruderDomain;
+  po.name = "intruder";
+  po.partition = partition;
+  auto intruder = dds::Participant::Create(po);
+  dds::Writer<msg::StreamStatusPubSubType> status_writer(intruder, dds::topics::kStreamStatus,
+                                                         dds::TopicKind::kStreamStatus);
+  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet",
+                           "--frames", "0:150", "--no-map", "--out", dir_ + "/out", "--domain",
+                           std::to_string(kIntruderDomain), "--partition", partition});
+  int code = -1;
+  const auto start = std::chrono::steady_clock::now();
+  while (!Exited(pid, &code)) {
+    ASSERT_LT(std::chrono::steady_clock::now(), start + std::chrono::seconds(280));
+    if (std::chrono::steady_clock::now() > start + std::chrono::seconds(3)) {
+      status_writer.Write(ToMsg(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 20, 20)));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  std::smatch m;
+  const std::regex frames("frames: ([0-9]+) processed");
+  ASSERT_TRUE(std::regex_search(summary, m, frames)) << summary << err;
+  const int processed = std::stoi(m[1]);
+  if (processed < 150) {
+    EXPECT_EQ(code, 3) << processed << " frames\n" << summary << err;
+    EXPECT_TRUE(Contains(summary, "run incomplete: " + std::to_string(processed) +
+                                      " of the 150 requested frames processed"))
+        << summary;
+    EXPECT_TRUE(Contains(
+        err, "the run ended with " + std::to_string(processed) + " of the 150 requested frames"))
+        << err;
+  } else {
+    EXPECT_EQ(code, 0) << summary << err;
+  }
+  std::printf("foreign END_OF_STREAM: %d of 150 frames, exit %d\n", processed, code);
+}
+
+}  // namespace
+}  // namespace dygslam

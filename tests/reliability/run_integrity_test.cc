@@ -33,6 +33,7 @@ using testing::ReadAll;
 
 constexpr int kKeepDomain = 141;
 constexpr int kIntruderDomain = 142;
+constexpr int kFailedDomain = 143;
 
 class RunIntegrity : public testing::CliFixture {
  protected:
@@ -48,6 +49,39 @@ bool Exited(pid_t pid, int* code) {
   if (waitpid(pid, &status, WNOHANG) != pid) return false;
   *code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   return true;
+}
+
+WriterGuid GuidOf(uint8_t participant, uint8_t entity) {
+  WriterGuid g{};
+  g.fill(participant);
+  g[15] = entity;
+  return g;
+}
+
+// The rule behind the test below: an end of stream or of a component is the run's only from a
+// participant that announced a component of the run; others are ignored and counted. A FAILED is
+// taken from anyone (a component can fail before it announces itself).
+TEST(RunIntegrityRule, EndsFromParticipantsThatAnnouncedNothingAreIgnoredAndCounted) {
+  RunWriters writers;
+  const WriterGuid player_status = GuidOf(1, 4), player_frames = GuidOf(1, 2);
+  const WriterGuid stranger = GuidOf(7, 4);
+  EXPECT_FALSE(
+      writers.Announce(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 20, 19), stranger));
+  EXPECT_FALSE(writers.Announce(ComponentStatus::Done(ComponentKind::kSlam, 20), stranger));
+  EXPECT_EQ(writers.NumForeignStatuses(), 2u);
+  EXPECT_TRUE(writers.Announce(
+      ComponentStatus::Started(ComponentKind::kPlayer, {{DataTopic::kFrames, player_frames}}),
+      player_status));
+  EXPECT_FALSE(
+      writers.Announce(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 20, 19), stranger));
+  EXPECT_EQ(writers.NumForeignStatuses(), 3u);
+  EXPECT_TRUE(writers.Announce(ComponentStatus::Failed(ComponentKind::kDetector, "x"), stranger));
+  EXPECT_TRUE(writers.Announce(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 150, 149),
+                               player_status));
+  EXPECT_EQ(writers.NumForeignStatuses(), 3u);
+  // Without the status writer's GUID (no participant known) the status is taken as before.
+  RunWriters plain;
+  EXPECT_TRUE(plain.Announce(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 20, 19)));
 }
 
 TEST_F(RunIntegrity, EarlierOutputsStayUntilTheRunReplacesThem) {
@@ -92,48 +126,85 @@ TEST_F(RunIntegrity, EarlierOutputsStayUntilTheRunReplacesThem) {
     EXPECT_FALSE(Contains(entry.path().filename().string(), ".tmp.")) << entry.path();
 }
 
-// A participant outside the run publishes END_OF_STREAM statuses into the run's
-// partition: before, the run ended early (83 of 150 frames) with exit 0. Now it either processes
-// every frame (the status ignored) or says that frames are missing and exits 3.
-TEST_F(RunIntegrity, AForeignEndOfStreamNeverEndsARunWithExitZero) {
-  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
-  const std::string partition = "dygslam_integrity_" + std::to_string(kIntruderDomain);
+// A participant outside the run publishes `forged` statuses into the run's partition on `domain`
+// from 3 s on; returns the frames the run processed, with its exit code in `*code`.
+int RunWithForgedStatus(const std::string& source, const std::string& dir, int domain,
+                        const msg::StreamStatus& forged, int* code) {
+  const std::string partition = "dygslam_integrity_" + std::to_string(domain);
   dds::ParticipantOptions po;
-  po.domain_id = kIntruderDomain;
+  po.domain_id = domain;
   po.name = "intruder";
   po.partition = partition;
   auto intruder = dds::Participant::Create(po);
   dds::Writer<msg::StreamStatusPubSubType> status_writer(intruder, dds::topics::kStreamStatus,
                                                          dds::TopicKind::kStreamStatus);
-  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet",
-                           "--frames", "0:150", "--no-map", "--out", dir_ + "/out", "--domain",
-                           std::to_string(kIntruderDomain), "--partition", partition});
-  int code = -1;
+  const pid_t pid = testing::SpawnDygslam(
+      {"run", source, "--config", std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml",
+       "--filter", "none", "--quiet", "--frames", "0:150", "--no-map", "--out", dir + "/out",
+       "--domain", std::to_string(domain), "--partition", partition},
+      dir + "/run.out", dir + "/run.err");
   const auto start = std::chrono::steady_clock::now();
-  while (!Exited(pid, &code)) {
-    ASSERT_LT(std::chrono::steady_clock::now(), start + std::chrono::seconds(280));
-    if (std::chrono::steady_clock::now() > start + std::chrono::seconds(3)) {
-      status_writer.Write(ToMsg(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 20, 20)));
+  while (!Exited(pid, code)) {
+    if (std::chrono::steady_clock::now() > start + std::chrono::seconds(280)) {
+      kill(pid, SIGKILL);
+      ADD_FAILURE() << "run did not end";
+      return -1;
     }
+    if (std::chrono::steady_clock::now() > start + std::chrono::seconds(3))
+      status_writer.Write(forged);
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
-  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  const std::string summary = ReadAll(dir + "/run.out");
   std::smatch m;
-  const std::regex frames("frames: ([0-9]+) processed");
-  ASSERT_TRUE(std::regex_search(summary, m, frames)) << summary << err;
-  const int processed = std::stoi(m[1]);
+  if (!std::regex_search(summary, m, std::regex("frames: ([0-9]+) processed"))) {
+    ADD_FAILURE() << summary << ReadAll(dir + "/run.err");
+    return -1;
+  }
+  return std::stoi(m[1]);
+}
+
+// A participant outside the run publishes END_OF_STREAM statuses into the run's partition:
+// before, the run ended early (20 of 150 frames) with exit 0. Now the status is not the run's:
+// every frame is processed.
+TEST_F(RunIntegrity, AForeignEndOfStreamIsIgnored) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  int code = -1;
+  const int processed = RunWithForgedStatus(
+      source, dir_, kIntruderDomain,
+      ToMsg(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 20, 20)), &code);
+  EXPECT_EQ(processed, 150) << ReadAll(dir_ + "/run.out") << ReadAll(dir_ + "/run.err");
+  EXPECT_EQ(code, 0) << ReadAll(dir_ + "/run.err");
+  EXPECT_TRUE(Contains(ReadAll(dir_ + "/run.err"),
+                       "end-of-stream / done statuses of participants "
+                       "that announced no component"))
+      << ReadAll(dir_ + "/run.err");
+}
+
+// A FAILED is taken from any participant (a component can fail before announcing itself), so a
+// forged one can end the run early: then the run says that frames are missing and exits non-zero
+// (3: cut short), never 0.
+TEST_F(RunIntegrity, ARunCutShortNeverExitsZero) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  int code = -1;
+  const int processed =
+      RunWithForgedStatus(source, dir_, kFailedDomain,
+                          ToMsg(ComponentStatus::Failed(ComponentKind::kPlayer, "forged")), &code);
+  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  std::printf("forged FAILED: %d of 150 frames, exit %d\n", processed, code);
+  ASSERT_GE(processed, 0);
   if (processed < 150) {
-    EXPECT_EQ(code, 3) << processed << " frames\n" << summary << err;
-    EXPECT_TRUE(Contains(summary, "run incomplete: " + std::to_string(processed) +
-                                      " of the 150 requested frames processed"))
-        << summary;
-    EXPECT_TRUE(Contains(
-        err, "the run ended with " + std::to_string(processed) + " of the 150 requested frames"))
-        << err;
+    EXPECT_NE(code, 0) << summary << err;
+    if (code == 3) {
+      EXPECT_TRUE(Contains(summary, "run incomplete: " + std::to_string(processed) +
+                                        " of the 150 requested frames processed"))
+          << summary;
+      EXPECT_TRUE(Contains(
+          err, "the run ended with " + std::to_string(processed) + " of the 150 requested frames"))
+          << err;
+    }
   } else {
     EXPECT_EQ(code, 0) << summary << err;
   }
-  std::printf("foreign END_OF_STREAM: %d of 150 frames, exit %d\n", processed, code);
 }
 
 }  // namespace

@@ -375,6 +375,9 @@ int RunBench(const std::vector<std::string>& args) {
   const bool report_only = p.Flag("report-only");
   if (report_only) {
     all_runs = ReadBenchRunsCsv((out_dir / "runs.csv").string());
+    if (all_runs.empty())
+      throw InputError((out_dir / "runs.csv").string(), 0,
+                       "holds no run (empty, or its header only): nothing to report from");
     // The context of the bench that measured the runs (written next to runs.csv).
     std::ifstream meta(out_dir / "bench_context.txt");
     for (std::string line; std::getline(meta, line);) {
@@ -650,7 +653,13 @@ int RunBench(const std::vector<std::string>& args) {
   const std::string report =
       "# dygslam bench report\n\n" + RenderBenchMarkdown(context, cells, pictures, "") + "\n";
   WriteFileAtomically((out_dir / "report.md").string(), report);
-  if (p.Has("update-benchmarks")) {
+  // Runs cut short by a stop signal give a partial report (OUT/report.md says so): it never
+  // replaces the benchmark section of the file, which keeps the last complete one.
+  if (p.Has("update-benchmarks") && stopped_by != 0) {
+    std::cerr << "dygslam bench: " << p.Get("update-benchmarks")
+              << " not updated: the runs were stopped by signal " << stopped_by
+              << " (the partial report is " << (out_dir / "report.md").string() << ")\n";
+  } else if (p.Has("update-benchmarks")) {
     const fs::path target = fs::absolute(p.Get("update-benchmarks"));
     std::ifstream in(target);
     if (!in) throw InputError(target.string(), 0, "cannot read");
@@ -680,6 +689,7 @@ int RunBench(const std::vector<std::string>& args) {
   }
   std::printf("report: %s\nruns:   %s\n", (out_dir / "report.md").string().c_str(),
               (out_dir / "runs.csv").string().c_str());
+  if (p.Has("update-benchmarks") && stopped_by != 0) return 128 + stopped_by;
   return notes.empty() || all_runs.size() > 0 ? 0 : 1;
 }
 

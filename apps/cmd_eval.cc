@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -58,6 +59,21 @@ std::string JsonNumber(double v) {
   char buf[40];
   std::snprintf(buf, sizeof(buf), "%.12g", v);
   return buf;
+}
+
+// printf into a string of any length: a huge finite error (coordinates of 1e150) prints all its
+// digits instead of a line cut at a fixed buffer.
+__attribute__((format(printf, 1, 2))) std::string Printf(const char* format, ...) {
+  va_list args;
+  va_start(args, format);
+  va_list again;
+  va_copy(again, args);
+  const int n = std::vsnprintf(nullptr, 0, format, args);
+  va_end(args);
+  std::string text(n > 0 ? static_cast<size_t>(n) : 0, '\0');
+  if (n > 0) std::vsnprintf(text.data(), text.size() + 1, format, again);
+  va_end(again);
+  return text;
 }
 
 // --OPTION as seconds; `positive`: above 0. A malformed or out-of-range value is a usage error
@@ -173,6 +189,15 @@ int RunEval(const std::vector<std::string>& args) {
   if (p.Flag("calibrated-ate") && calibration == "none")
     return p.UsageError(
         "--calibrated-ate needs a ground-truth calibration (--gt-calibration bonn)");
+  // The outputs never replace an input or each other (exit 2, before any work).
+  {
+    std::vector<NamedPath> outputs;
+    for (const char* option : {"save-aligned", "plot"})
+      if (p.Has(option)) outputs.push_back({std::string("--") + option, p.Get(option)});
+    const std::string clash =
+        FindOutputClash({{"GROUNDTRUTH", gt_path}, {"ESTIMATE", est_path}}, outputs);
+    if (!clash.empty()) return p.UsageError(clash);
+  }
   if (p.Has("plot")) {
     std::error_code ec;
     const std::string png = p.Get("plot");
@@ -247,7 +272,6 @@ int RunEval(const std::vector<std::string>& args) {
     std::cout << j.str();
     return 0;
   }
-  char buf[512];
   std::cout << "ground truth: " << gt_path << " (" << gt.size() << " poses)\n"
             << "estimate:     " << est_path << " (" << est.size() << " poses)\n";
   if (calibration == "bonn") {
@@ -255,20 +279,18 @@ int RunEval(const std::vector<std::string>& args) {
                  "marker-to-camera calibration for "
               << (p.Flag("calibrated-ate") ? "ATE and RPE" : "RPE (ATE as given)") << "\n";
   }
-  std::snprintf(buf, sizeof(buf),
-                "ATE  pairs %zu (%.1f%% of ground truth), rigid SE(3) alignment, metres\n"
-                "     rmse %.6f  mean %.6f  median %.6f  sd %.6f  min %.6f  max %.6f\n",
-                ate.num_pairs, 100.0 * coverage, ate.error.rmse, ate.error.mean, ate.error.median,
-                ate.error.sd, ate.error.min, ate.error.max);
-  std::cout << buf;
+  std::cout << Printf(
+      "ATE  pairs %zu (%.1f%% of ground truth), rigid SE(3) alignment, metres\n"
+      "     rmse %.6f  mean %.6f  median %.6f  sd %.6f  min %.6f  max %.6f\n",
+      ate.num_pairs, 100.0 * coverage, ate.error.rmse, ate.error.mean, ate.error.median,
+      ate.error.sd, ate.error.min, ate.error.max);
   if (rpe.num_pairs > 0) {
-    std::snprintf(buf, sizeof(buf),
-                  "RPE  pairs %zu, delta %g s\n"
-                  "     translation (m per %g s)   rmse %.6f  mean %.6f  median %.6f\n"
-                  "     rotation (deg per %g s)    rmse %.6f  mean %.6f  median %.6f\n",
-                  rpe.num_pairs, rpe.delta, rpe.delta, rpe.trans_rmse, rpe.trans_mean,
-                  rpe.trans_median, rpe.delta, rpe.rot_rmse, rpe.rot_mean, rpe.rot_median);
-    std::cout << buf;
+    std::cout << Printf(
+        "RPE  pairs %zu, delta %g s\n"
+        "     translation (m per %g s)   rmse %.6f  mean %.6f  median %.6f\n"
+        "     rotation (deg per %g s)    rmse %.6f  mean %.6f  median %.6f\n",
+        rpe.num_pairs, rpe.delta, rpe.delta, rpe.trans_rmse, rpe.trans_mean, rpe.trans_median,
+        rpe.delta, rpe.rot_rmse, rpe.rot_mean, rpe.rot_median);
   } else {
     std::cout << "RPE  n/a (estimate shorter than the " << rpe.delta << " s interval)\n";
   }

@@ -127,6 +127,26 @@ int RunMap(const std::vector<std::string>& args) {
       p.Has("config") ? p.Get("config") : DefaultSettingsPath(dataset_dir, ConfigDir());
   // The output folder first: a bad --out is found before the run, not after it.
   const fs::path out = PrepareOutputDir("out", p.Get("out"));
+  // No output may replace an input or another output: checked before any work (exit 2).
+  {
+    std::vector<NamedPath> inputs;
+    for (const char* name : {"rgb.txt", "depth.txt", "groundtruth.txt", "associations.txt"})
+      inputs.push_back(
+          {std::string("the dataset's ") + name, (fs::path(dataset_dir) / name).string()});
+    inputs.push_back({p.Has("config") ? "--config" : "the settings file", config});
+    if (p.Has("trajectory")) inputs.push_back({"--trajectory", p.Get("trajectory")});
+    std::vector<NamedPath> outputs;
+    for (const char* name : {"map.bt", "map.ot", "map_top.png", "map_slice.png", "reference.bt",
+                             "ghosts_top.png", "ghost_cells.txt"})
+      outputs.push_back({"the output " + std::string(name), (out / name).string()});
+    if (!p.Has("trajectory")) {
+      for (const char* name : {"trajectory.txt", "keyframes.txt"})
+        outputs.push_back({"the output " + std::string(name), (out / name).string()});
+    }
+    if (const std::string clash = FindOutputClash(inputs, outputs); !clash.empty())
+      return p.UsageError(clash);
+  }
+
   RunConfiguration configuration =
       LoadRunConfiguration({config, CliSettingsReadOptions(p.Flag("strict-settings")),
                             p.Get("filter"), p.Flag("deterministic")});
@@ -179,7 +199,34 @@ int RunMap(const std::vector<std::string>& args) {
           Timestamp::FromNanoseconds(dataset.frames().back().rgb_stamp.nanoseconds() + 1);
   }
   std::vector<StampedPose> given_poses;
-  if (from_trajectory) given_poses = ReadTumTrajectory(p.Get("trajectory"));
+  if (from_trajectory) {
+    given_poses = ReadTumTrajectory(p.Get("trajectory"));
+    // A trajectory of another sequence (or stamps in another unit) gives no frame a pose: an
+    // error before any work, not an empty map.
+    size_t with_pose = 0, frames = 0;
+    Timestamp first_stamp, last_stamp;
+    for (size_t k = first; k < last; ++k) {
+      const auto index = dataset.FrameForRgbEntry(k);
+      if (!index) continue;
+      if (frames++ == 0) first_stamp = dataset.frame(*index).rgb_stamp;
+      last_stamp = dataset.frame(*index).rgb_stamp;
+      if (InterpolatePose(given_poses, dataset.frame(*index).rgb_stamp)) ++with_pose;
+    }
+    if (with_pose == 0) {
+      std::string span = "no pose";
+      if (!given_poses.empty())
+        span = "poses from " + given_poses.front().stamp.ToString() + " to " +
+               given_poses.back().stamp.ToString() + " s";
+      std::string frames_span = "no frame";
+      if (frames > 0)
+        frames_span = std::to_string(frames) + " frames from " + first_stamp.ToString() + " to " +
+                      last_stamp.ToString() + " s";
+      throw InputError(p.Get("trajectory"), 0,
+                       "--trajectory gives none of the range's frames a pose (" + span +
+                           "; the range has " + frames_span +
+                           "): is it the trajectory of another sequence?");
+    }
+  }
 
   // Background rebuilds after pose corrections keep the live map exact at a bounded cost; a
   // deterministic run leaves them to the final read so that the map is the same every time.

@@ -32,6 +32,7 @@
 #include <memory>
 #include <optional>
 #include <random>
+#include <stdexcept>
 
 #include "apps/command.h"
 #include "core/base/echo.h"
@@ -59,6 +60,18 @@
 namespace dygslam::cli {
 namespace {
 namespace fs = std::filesystem;
+
+// The files a run writes into --out (groundtruth.txt: the DDS recorder's copy of the player's
+// ground truth), and those the summary lists.
+constexpr const char* kRunOutputNames[] = {
+    "trajectory.txt", "trajectory_online.txt", "keyframes.txt",    "frames.csv", "map.bt",
+    "map.ot",         "groundtruth.txt",       kRealtimeReportFile};
+constexpr const char* kListedOutputNames[] = {"trajectory.txt", "trajectory_online.txt",
+                                              "keyframes.txt", "frames.csv", "map.bt"};
+
+// A ground-truth coordinate beyond this (metres) is no camera trajectory (1e300 overflows the
+// error); `dygslam eval` refuses such files too.
+constexpr double kMaxGroundTruthCoordinate = 1e7;
 
 struct RunSetup {
   std::string dataset_dir;
@@ -88,7 +101,7 @@ struct RunOutcome {
   size_t ignored_samples = 0;  // DDS: samples of writers outside this run (components/protocol.h)
 };
 
-RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
+RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset, RunOutputs& outputs) {
   RunOutcome outcome;
   System system(s.system);
   std::unique_ptr<KeyframeMapper> mapper;
@@ -146,17 +159,24 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   if (s.rate > 0) {
     const double fps = s.system.sensor.fps > 0 ? s.system.sensor.fps : 30.0;
     const double late_after_ms = kLateFramePeriods * 1000.0 / (fps * s.rate);
-    WriteRealtimeReport((s.out / kRealtimeReportFile).string(),
-                        MakeRealtimeReport(s.rate, summary.processed + summary.dropped,
-                                           summary.latency_ms, late_after_ms));
+    outputs.Write(kRealtimeReportFile, [&] {
+      WriteRealtimeReport(outputs.PathOf(kRealtimeReportFile),
+                          MakeRealtimeReport(s.rate, summary.processed + summary.dropped,
+                                             summary.latency_ms, late_after_ms));
+    });
   }
   if (s.progress) std::fprintf(stderr, "\n");
   outcome.interrupted = summary.interrupted || stop.requested();
   if (outcome.interrupted) std::fprintf(stderr, "[run] interrupted: flushing outputs\n");
   system.Shutdown();
-  if (!s.save_map.empty())
-    std::printf("map file: saved %s (%s)\n", s.save_map.c_str(),
-                DescribeMapFile(system.SaveMap(s.save_map)).c_str());
+  // Every output is written even when one of them fails (a --save-map onto a full disk): the
+  // failures are reported at the end (exit 1).
+  if (!s.save_map.empty()) {
+    outputs.Write(s.save_map, [&] {
+      std::printf("map file: saved %s (%s)\n", s.save_map.c_str(),
+                  DescribeMapFile(system.SaveMap(s.save_map)).c_str());
+    });
+  }
   {
     LocalMappingStats lm = system.LocalMappingStatistics();
     std::vector<double> ms = lm.per_keyframe_ms;
@@ -177,8 +197,8 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
       };
       std::vector<double> kfs(lm.ba_keyframes.begin(), lm.ba_keyframes.end());
       std::vector<double> obs(lm.ba_observations.begin(), lm.ba_observations.end());
-      std::printf("local BA: median %.0f keyframes optimised, %.0f observations\n",
-                  median_of(kfs), median_of(obs));
+      std::printf("local BA: median %.0f keyframes optimised, %.0f observations\n", median_of(kfs),
+                  median_of(obs));
       std::printf(
           "local mapping schedule: local BA solve median %.1f ms, in tracking's thread median "
           "%.1f ms per keyframe; %d local BAs late (tracking waited %.0f ms in all), %d landed "
@@ -208,12 +228,22 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
                   static_cast<long long>(loop_frame));
   }
   RecreateOutputDirIfRemoved("run", "out", s.out);
-  WriteFileAtomically((s.out / "frames.csv").string(), csv);
-  WriteSystemTrajectories(s.out.string(), system);
-  WriteTumTrajectory((s.out / "trajectory_online.txt").string(), online);
+  outputs.Write("frames.csv", [&] { WriteFileAtomically(outputs.PathOf("frames.csv"), csv); });
+  outputs.Write("trajectory.txt",
+                [&] { WriteTumTrajectory(outputs.PathOf("trajectory.txt"), system.Trajectory()); });
+  outputs.Write("keyframes.txt", [&] {
+    WriteTumTrajectory(outputs.PathOf("keyframes.txt"), system.KeyframeTrajectory());
+  });
+  outputs.Write("trajectory_online.txt",
+                [&] { WriteTumTrajectory(outputs.PathOf("trajectory_online.txt"), online); });
   // With --save-map, map.ot too (the OctoMap with probabilities, what --load-octomap continues).
-  if (mapper) WriteMapperBinary(s.out.string(), *mapper, /*with_full_map=*/!s.save_map.empty());
+  if (mapper) {
+    outputs.Write("map.bt", [&] {
+      WriteMapperBinary(s.out.string(), *mapper, /*with_full_map=*/!s.save_map.empty());
+    });
+  }
   if (failure) {
+    std::fprintf(stderr, "%s", outputs.FailureReport("run").c_str());
     std::fprintf(stderr,
                  "[run] stopped by an error after %zu frames: the outputs of those frames are "
                  "written to %s (trajectory.txt, keyframes.txt, frames.csv%s)\n",
@@ -299,7 +329,8 @@ std::string RunPartition() {
 }
 
 RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
-                              const std::string& partition, const std::string& security_dir) {
+                              const std::string& partition, const std::string& security_dir,
+                              const RunOutputs& outputs) {
   PipelineOptions o;
   o.dataset_dir = s.dataset_dir;
   o.output_dir = s.out.string();
@@ -322,17 +353,13 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
   o.save_map = s.save_map;
   o.load_octomap = s.load_octomap;
   RunOutcome outcome;
-  // The files a previous run left in DIR must not be mistaken for this run's.
-  for (const char* name :
-       {"trajectory.txt", "keyframes.txt", "frames.csv", "map.bt", kRealtimeReportFile}) {
-    std::error_code ec;
-    fs::remove(s.out / name, ec);
-  }
+  // Nothing in DIR is deleted up front: the components replace each file atomically when theirs
+  // is complete, and a file an earlier run left is told apart by its version (RunOutputs).
   StopReport report;
   outcome.exit_code = RunPipeline(o, &report);
   outcome.interrupted = report.signaled;
   outcome.ignored_samples = report.ignored_samples;
-  if (fs::exists(s.out / "frames.csv")) {
+  if (outputs.Fresh("frames.csv")) {
     for (const TextLine& line : ReadDataLines((s.out / "frames.csv").string())) {
       if (line.tokens.size() < 2 || line.tokens[0] == "stamp") continue;
       ++outcome.processed;
@@ -432,6 +459,26 @@ int RunRun(const std::vector<std::string>& args) {
     s.octomap = c.octomap;
   }
   ::setenv("DYGSLAM_SETTINGS_WARNED", "1", 1);  // --processes: components do not repeat them
+  // No output may replace an input or another output: checked before any work (exit 2).
+  {
+    const fs::path data(p.Positional("DATASET_DIR"));
+    std::vector<NamedPath> inputs;
+    for (const char* name : {"rgb.txt", "depth.txt", "groundtruth.txt", "associations.txt"})
+      inputs.push_back({std::string("the dataset's ") + name, (data / name).string()});
+    inputs.push_back({p.Has("config") ? "--config" : "the settings file", s.config});
+    for (const char* option : {"load-map", "load-octomap", "detections"})
+      if (p.Has(option)) inputs.push_back({std::string("--") + option, p.Get(option)});
+    inputs.push_back({"the vocabulary (LoopClosing.vocabulary)", s.system.loop_closing.vocabulary});
+    inputs.push_back({"the detector's cfg", s.system.detector.cfg_path});
+    inputs.push_back({"the detector's weights", s.system.detector.weights_path});
+    inputs.push_back({"the detector's names", s.system.detector.names_path});
+    std::vector<NamedPath> outputs;
+    for (const char* name : kRunOutputNames)
+      outputs.push_back({"the output " + std::string(name), (out_dir / name).string()});
+    if (p.Has("save-map")) outputs.insert(outputs.begin(), {"--save-map", p.Get("save-map")});
+    if (const std::string clash = FindOutputClash(inputs, outputs); !clash.empty())
+      return p.UsageError(clash);
+  }
   s.map = !p.Flag("no-map");
   if (p.Flag("localization") && !p.Has("load-map"))
     return p.UsageError("--localization needs --load-map FILE");
@@ -501,7 +548,21 @@ int RunRun(const std::vector<std::string>& args) {
   if (dataset.has_groundtruth()) {
     try {
       groundtruth = ReadTumTrajectory(dataset.groundtruth_path());
+      // Coordinates no camera reaches (1e300 m) overflow the error: refused like a malformed
+      // file, as `dygslam eval` refuses them.
+      for (const StampedPose& pose : groundtruth) {
+        const double largest = pose.world_from_cam.translation.cwiseAbs().maxCoeff();
+        if (!(largest <= kMaxGroundTruthCoordinate)) {
+          char why[200];
+          std::snprintf(why, sizeof(why),
+                        "the pose at %s s has a coordinate of %g m (beyond %g m: not a camera "
+                        "trajectory)",
+                        pose.stamp.ToString().c_str(), largest, kMaxGroundTruthCoordinate);
+          throw InputError(dataset.groundtruth_path(), 0, why);
+        }
+      }
     } catch (const InputError& e) {
+      groundtruth.clear();
       std::fprintf(stderr,
                    "dygslam run: warning: %s; the run goes on without evaluation (fix the file, "
                    "then `dygslam eval GROUNDTRUTH OUT/trajectory.txt`)\n",
@@ -514,10 +575,21 @@ int RunRun(const std::vector<std::string>& args) {
                  EchoValue(dataset.groundtruth_problem(), 500).c_str());
   }
   if (s.use_detection_file) WarnUnmatchedDetections(p.Get("detections"), s, dataset);
+  // Depth that no RGB-D sensor measures on most pixels (every pixel saturated, DepthMapFactor off
+  // by orders of magnitude) would run to the end with a meaningless map and trajectory: said
+  // before the run.
+  if (const std::string why = ImplausibleDepth(
+          SampleDepthRange(dataset, s.first, s.last, s.system.sensor.depth_map_factor,
+                           s.system.camera.width, s.system.camera.height),
+          s.system.sensor.depth_map_factor);
+      !why.empty()) {
+    std::fprintf(stderr, "dygslam run: warning: implausible depth: %s\n", why.c_str());
+  }
   size_t skipped = 0;
   for (size_t k = s.first; k < s.last; ++k) {
     if (!dataset.FrameForRgbEntry(k)) ++skipped;
   }
+  const size_t requested = s.last - s.first - skipped;  // frames with a depth partner
   s.out = out_dir;
 
   bool direct = p.Flag("direct") || s.use_detection_file;
@@ -527,6 +599,10 @@ int RunRun(const std::vector<std::string>& args) {
   // The detector's model files before any output: missing models fail here, nothing written.
   if (direct && !s.use_detection_file) ResolveDetectorModel(&s.system);
 
+  // This run's outputs: written atomically, nothing deleted up front (see RunOutputs).
+  RunOutputs outputs(
+      s.out, std::vector<std::string>(std::begin(kRunOutputNames), std::end(kRunOutputNames)));
+  if (!s.save_map.empty()) outputs.AddFile(s.save_map);
   std::string mode;
   RunOutcome outcome;
   const auto t0 = std::chrono::steady_clock::now();
@@ -535,7 +611,7 @@ int RunRun(const std::vector<std::string>& args) {
     mode = p.Flag("processes") ? "DDS pipeline, one process per component"
                                : "DDS pipeline, one process";
     outcome = RunThroughPipeline(s, p.Flag("processes"), domain_id, p.Get("partition"),
-                                 p.Get("security"));
+                                 p.Get("security"), outputs);
   }
 #else
   if (p.Flag("processes")) {
@@ -550,17 +626,18 @@ int RunRun(const std::vector<std::string>& args) {
 #endif
   if (mode.empty()) {
     mode = "direct (no DDS)";
-    outcome = RunDirect(s, dataset);
+    outcome = RunDirect(s, dataset, outputs);
   }
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   // A --load-map run that added no keyframe (--localization, or nothing new seen) gave the mapper
   // nothing to insert: map.bt is then the loaded map's static map (its map points).
-  if (s.map && !s.system.load_map.empty() && s.load_octomap.empty() &&
-      !fs::exists(s.out / "map.bt")) {
-    const size_t points =
-        WriteMapFileOctoMap(s.out.string(), s.system.load_map, s.system, s.octomap,
-                            /*with_full_map=*/!s.save_map.empty());
+  if (s.map && !s.system.load_map.empty() && s.load_octomap.empty() && !outputs.Fresh("map.bt")) {
+    size_t points = 0;
+    outputs.Write("map.bt", [&] {
+      points = WriteMapFileOctoMap(s.out.string(), s.system.load_map, s.system, s.octomap,
+                                   /*with_full_map=*/!s.save_map.empty());
+    });
     if (points > 0)
       std::printf(
           "map.bt: the static map of %s (%zu map point observations; the run added no "
@@ -569,7 +646,7 @@ int RunRun(const std::vector<std::string>& args) {
   }
 
   const fs::path trajectory_path = s.out / "trajectory.txt";
-  const std::vector<StampedPose> trajectory = fs::exists(trajectory_path)
+  const std::vector<StampedPose> trajectory = outputs.Fresh("trajectory.txt")
                                                   ? ReadTumTrajectory(trajectory_path.string())
                                                   : std::vector<StampedPose>{};
   std::printf("mode: %s%s\n", mode.c_str(),
@@ -596,20 +673,22 @@ int RunRun(const std::vector<std::string>& args) {
   }
   std::printf("filter: %s%s\n", p.Get("filter").c_str(),
               s.system.deterministic ? " (deterministic)" : "");
-  if (s.rate > 0 && fs::exists(s.out / kRealtimeReportFile))
+  if (s.rate > 0 && outputs.Fresh(kRealtimeReportFile))
     std::printf("real time: %s\n",
                 ReadRealtimeReport((s.out / kRealtimeReportFile).string()).Summary().c_str());
   if (!groundtruth.empty() && trajectory.size() >= 3) {
     try {
       const AteResult ate = ComputeAte(groundtruth, trajectory);
+      if (!std::isfinite(ate.error.rmse) || !std::isfinite(ate.error.max))
+        throw std::runtime_error("the error is not a finite number");
       std::printf("ATE RMSE %.4f m (mean %.4f, median %.4f, max %.4f; %zu pairs)\n", ate.error.rmse,
                   ate.error.mean, ate.error.median, ate.error.max, ate.num_pairs);
       // The pose each frame got when it was tracked (what a robot receives at the moment),
       // against the final trajectory above, which later bundle adjustments refined.
       const fs::path online_path = s.out / "trajectory_online.txt";
-      const std::vector<StampedPose> online =
-          fs::exists(online_path) ? ReadTumTrajectory(online_path.string())
-                                  : std::vector<StampedPose>{};
+      const std::vector<StampedPose> online = outputs.Fresh("trajectory_online.txt")
+                                                  ? ReadTumTrajectory(online_path.string())
+                                                  : std::vector<StampedPose>{};
       if (online.size() >= 3) {
         const AteResult online_ate = ComputeAte(groundtruth, online);
         std::printf("online ATE RMSE %.4f m (mean %.4f, median %.4f, max %.4f; %zu pairs)\n",
@@ -631,12 +710,44 @@ int RunRun(const std::vector<std::string>& args) {
                 IgnoredSamplesNote(std::to_string(outcome.ignored_samples) + " samples").c_str());
   }
 #endif
-  const bool has_map = fs::exists(s.out / "map.bt");
-  std::printf("outputs: %s/{trajectory.txt,trajectory_online.txt,keyframes.txt,frames.csv%s}\n",
-              s.out.string().c_str(), has_map ? ",map.bt" : "");
+  // The files this run wrote; a file an earlier run left (not replaced) is named apart.
+  {
+    std::string written, stale;
+    for (const char* name : kListedOutputNames) {
+      if (outputs.Fresh(name)) {
+        written += (written.empty() ? "" : ",") + std::string(name);
+      } else if (fs::exists(s.out / name)) {
+        stale += (stale.empty() ? "" : ", ") + std::string(name);
+      }
+    }
+    std::printf("outputs: %s/{%s}\n", s.out.string().c_str(), written.c_str());
+    if (!stale.empty())
+      std::printf("outputs left from an earlier run, not replaced by this one: %s\n",
+                  stale.c_str());
+  }
+  if (!outputs.failures().empty()) {
+    std::fprintf(stderr, "%s", outputs.FailureReport("run").c_str());
+    std::fprintf(stderr,
+                 "dygslam run: the other outputs are written (see the list above); exit 1\n");
+    return 1;
+  }
   if (outcome.exit_code != 0) {
     std::fprintf(stderr, "dygslam run: a pipeline component failed (see the messages above)\n");
     return 1;
+  }
+  // Fewer frames than requested, without a stop the user gave (Ctrl-C, SIGTERM): the stream was
+  // cut short (a peer gone, an end of stream from outside, a stalled component). Its outputs are
+  // written, but the run is not the one asked for: a distinct exit code.
+  // A camera-paced run (--rate) drops frames by design (realtime.txt counts them).
+  if (!outcome.interrupted && s.loop_minutes == 0 && s.rate == 0 && outcome.processed < requested) {
+    std::printf("run incomplete: %zu of the %zu requested frames processed (%zu missing)\n",
+                outcome.processed, requested, requested - outcome.processed);
+    std::fprintf(stderr,
+                 "dygslam run: error: the run ended with %zu of the %zu requested frames (rgb.txt "
+                 "entries %zu to %zu with a depth partner): the stream was cut short (a component "
+                 "stopped or stalled, or an end of stream came from outside the run); exit %d\n",
+                 outcome.processed, requested, s.first, s.last, kExitIncompleteRun);
+    return kExitIncompleteRun;
   }
   // A run that tracked (almost) nothing has no trajectory to speak of: fail, and say why.
   if (!outcome.interrupted && IsTrackingFailure(outcome.processed, trajectory.size())) {

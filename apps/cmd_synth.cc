@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <optional>
 #include <string>
@@ -29,7 +30,10 @@ rgb/, depth/ (16-bit, /5000 = m), rgb.txt, depth.txt (stamps offset ~4 ms), grou
 mask/ + mask.txt (255 = moving object), detections.txt (ground-truth person boxes
 't x y w h class score'), objects.txt (object poses per frame) and camera.yaml (ORB-SLAM2
 keys). The same seed gives byte-identical files.)");
-  p.AddPositional("OUT_DIR", "output folder (created if needed; existing files are replaced)");
+  p.AddPositional("OUT_DIR",
+                  "output folder (created if needed); a folder that holds a dataset (rgb.txt,\n"
+                  "depth.txt or groundtruth.txt) is refused unless --replace");
+  p.AddFlag("replace", "replace the dataset files an earlier synth (or anyone) left in OUT_DIR");
   p.AddOption("frames", "N", "number of frames", "100");
   p.AddOption("objects", "K", "moving objects (people), 0..4", "2");
   p.AddOption("seed", "S", "random seed (textures, object lanes/speeds/phases, noise)", "1");
@@ -138,6 +142,20 @@ keys). The same seed gives byte-identical files.)");
   }
 
   const std::string out_dir = p.Positional("OUT_DIR");
+  // A dataset in OUT_DIR (a recorded sequence, the user's ground truth) is never overwritten
+  // without being asked to.
+  if (!p.Flag("replace")) {
+    std::string found;
+    for (const char* name : {"rgb.txt", "depth.txt", "groundtruth.txt"}) {
+      std::error_code ec;
+      if (std::filesystem::exists(std::filesystem::path(out_dir) / name, ec))
+        found += (found.empty() ? "" : ", ") + std::string(name);
+    }
+    if (!found.empty())
+      return p.UsageError("OUT_DIR '" + EchoValue(out_dir) + "' holds a dataset (" + found +
+                          "): writing the sequence would replace its files; choose a new folder " +
+                          "or give --replace");
+  }
   const bool quiet = p.Flag("quiet");
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] {

@@ -297,6 +297,14 @@ bool ArgParser::Parse(const std::vector<std::string>& args) {
           exit_code_ = UsageError("option --" + name + " needs a value (" + spec->value_name + ")");
           return false;
         }
+        // `--out --no-map`: the value is missing and the next option would be taken for it.
+        if (args[i + 1].rfind("--", 0) == 0) {
+          exit_code_ =
+              UsageError("option --" + name + " needs a value (" + spec->value_name +
+                         "), got the option '" + EchoValue(args[i + 1]) +
+                         "' (a value that starts with '--' is given as --" + name + "=VALUE)");
+          return false;
+        }
         value = args[++i];
       }
       // Given twice with different values (`--out a --out b`): one of them would be ignored

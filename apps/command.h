@@ -3,6 +3,10 @@
 // A subcommand lives in apps/cmd_<name>.cc and registers itself:
 //
 //   namespace dygslam::cli {
+
+// `run`: the stream ended before every requested frame was processed, and no stop signal asked
+// for that (a component stopped or stalled, an end of stream from outside the run).
+inline constexpr int kExitIncompleteRun = 3;
 //   namespace {
 //   int RunEval(const std::vector<std::string>& args) {
 //     ArgParser p("eval", "GROUNDTRUTH ESTIMATE [--json] [--plot FILE.png]", "Prints ATE / RPE.");
@@ -19,7 +23,8 @@
 // apps/CMakeLists.txt globs cmd_*.cc into the executable. The dispatcher (dygslam.cc) catches
 // InputError / InvalidOptions (exit 1, message names the file/line/key); an unknown command is a
 // usage error (exit 2).
-// Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error / unavailable command.
+// Exit codes: 0 success, 1 bad input or runtime failure, 2 usage error / unavailable command,
+// 3 a run that ended with fewer frames than requested without being asked to (kExitIncompleteRun).
 #pragma once
 
 #include <filesystem>
@@ -48,6 +53,8 @@ struct CommandRegistrar {
 };
 
 // Minimal option parser: positionals, `--name value`, `--name=value`, boolean `--flag`, `--help`.
+// A separate value that starts with "--" (`--out --no-map`: the value was forgotten) is a usage
+// error; such a value is given as `--name=--value`.
 class ArgParser {
  public:
   // usage: the part after "dygslam <command> " (e.g. "GROUNDTRUTH ESTIMATE [--json]").

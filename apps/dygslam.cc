@@ -1,6 +1,12 @@
 // dygslam: dispatcher of the command line (subcommands register themselves, see command.h).
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <csignal>
+#include <cstdio>
+#include <cstring>
 #include <exception>
 #include <iostream>
 #include <iterator>
@@ -128,6 +134,32 @@ int Dispatch(const std::vector<std::string>& argv) {
 }
 
 }  // namespace
+
+// What the command printed must have reached its reader: `dygslam eval --json > /dev/full` (disk
+// full, a closed terminal) wrote nothing, so it fails (exit 1, the reason on stderr) instead of
+// exiting 0. A reader that closed its pipe on purpose (`dygslam run ... | head`) is not a failure:
+// the command's files are written and its exit code stands.
+int CheckStandardOutput(const std::string& command, int code) {
+  std::cout.flush();
+  errno = 0;
+  const bool flushed = std::fflush(stdout) == 0;
+  int error = flushed ? 0 : errno;
+  if (flushed && !std::ferror(stdout) && !std::cout.fail()) return code;
+  if (error == 0) {
+    // An earlier flush failed and its errno is gone: one byte tells the reason (the output is
+    // broken already).
+    errno = 0;
+    if (::write(STDOUT_FILENO, "\n", 1) < 0) error = errno;
+  }
+  if (error == EPIPE) return code;
+  struct stat st {};
+  if (error == 0 && ::fstat(STDOUT_FILENO, &st) == 0 && S_ISFIFO(st.st_mode)) return code;
+  const std::string name = command.empty() ? "dygslam" : "dygslam " + command;
+  std::fprintf(stderr, "%s: error: cannot write to standard output: %s\n", name.c_str(),
+               error != 0 ? std::strerror(error) : "write error");
+  return code == 0 ? 1 : code;
+}
+
 }  // namespace dygslam::cli
 
 int main(int argc, char** argv) {
@@ -142,5 +174,6 @@ int main(int argc, char** argv) {
     if (name == "run" || name == "map" || name == "component" || name == "bridge")
       stop_signals.emplace();
   }
-  return dygslam::cli::Dispatch(std::vector<std::string>(argv + 1, argv + argc));
+  const int code = dygslam::cli::Dispatch(std::vector<std::string>(argv + 1, argv + argc));
+  return dygslam::cli::CheckStandardOutput(argc > 1 ? argv[1] : "", code);
 }

@@ -229,7 +229,9 @@ size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
       s.detection_wait = options.detection_wait;
       s.save_map = options.save_map;
       const SlamStats stats = RunSlam(participant, s, stop);
-      return stats.foreign_frames + stats.foreign_detections;
+      // The final trajectories are out (the recorder writes them): now the map file's failure.
+      if (!stats.save_map_error.empty()) throw InputError(stats.save_map_error);
+      return stats.foreign_frames + stats.foreign_detections + stats.foreign_statuses;
     }
     case ComponentKind::kMapper: {
       MapperOptions m;

@@ -308,7 +308,16 @@ bool RunWriters::Announce(const ComponentStatus& status,
       frame_source_.reset();  // the next frame source may play (e.g. a player started again)
     }
   }
-  if (status.event != StreamEvent::kStarted) return true;
+  if (status.event != StreamEvent::kStarted) {
+    const bool ends =
+        status.event == StreamEvent::kEndOfStream || status.event == StreamEvent::kComponentDone;
+    if (ends && status_writer && announced_.count(PrefixOf(*status_writer)) == 0) {
+      ++foreign_statuses_;
+      return false;
+    }
+    return true;
+  }
+  if (status_writer) announced_.insert(PrefixOf(*status_writer));
   for (const auto& [topic, guid] : status.writers) writers_[topic].insert(guid);
   return true;
 }

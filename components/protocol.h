@@ -126,6 +126,12 @@ ComponentStatus StatusFromMsg(const msg::StreamStatus& message);
 // are not the run's: Announce returns false for them, and the shell must not act on them.
 // `status_writer`: the GUID of the status sample's writer (its participant prefix tells which
 // participant sent it); without it a frame source's END_OF_STREAM / FAILED is always the run's.
+//
+// The end of a stream or of a component (END_OF_STREAM, DONE) is the run's only when its
+// participant announced a component of the run (a STARTED) before: the same statuses from any
+// other participant in the partition would end the run early. They are not the run's (false) and
+// are counted (NumForeignStatuses). A FAILED is taken from any participant: a component that fails
+// while it starts fails before its announcement.
 class RunWriters {
  public:
   // False when `status` comes from a rival frame source (see above); true otherwise.
@@ -138,6 +144,8 @@ class RunWriters {
   size_t NumRivals() const { return rivals_.size(); }
   // "player (participant 0f..12)" of the last rival, for messages; "" when there is none.
   const std::string& LastRival() const { return last_rival_; }
+  // END_OF_STREAM / DONE statuses from participants that announced no component (see above).
+  size_t NumForeignStatuses() const { return foreign_statuses_; }
 
  private:
   using Prefix = std::array<uint8_t, 12>;
@@ -145,6 +153,8 @@ class RunWriters {
   std::map<DataTopic, std::set<WriterGuid>> writers_;
   std::optional<Prefix> frame_source_;  // the participant of the frame source that plays
   std::set<Prefix> rivals_;
+  std::set<Prefix> announced_;  // participants that announced a component of the run
+  size_t foreign_statuses_ = 0;
   std::string last_rival_;
 };
 

@@ -303,6 +303,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   }
 
   publish_keyframes(core.Finish());
+  stats.save_map_error = core.save_map_error();
   trajectory_writer.Write(TrajectoryToMsg(core.Trajectory(), false));
   trajectory_writer.Write(TrajectoryToMsg(core.KeyframeTrajectory(), true));
   {
@@ -313,6 +314,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
     detection_gate.Close();
     stats.foreign_frames = frame_gate.ignored();
     stats.foreign_detections = detection_gate.ignored();
+    stats.foreign_statuses = run_writers.NumForeignStatuses();
   }
   status.Write(ToMsg(ComponentStatus::Done(ComponentKind::kSlam, stats.frames_processed)));
   // Let reliable readers (mapper, recorder) get everything before the writers go away.
@@ -337,6 +339,11 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
     LOG_WARNING << "slam: "
                 << IgnoredSamplesNote(std::to_string(stats.foreign_frames) + " frames and " +
                                       std::to_string(stats.foreign_detections) + " detections");
+  }
+  if (stats.foreign_statuses > 0) {
+    LOG_WARNING << "slam: ignored " << stats.foreign_statuses
+                << " end-of-stream / done statuses of participants that announced no component "
+                   "of this run (not acted on)";
   }
   return stats;
 }

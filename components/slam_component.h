@@ -47,6 +47,11 @@ struct SlamStats {
   // Samples of writers no component of this run announced (components/protocol.h), ignored.
   size_t foreign_frames = 0;
   size_t foreign_detections = 0;
+  // END_OF_STREAM / DONE statuses of participants that announced no component of the run
+  // (RunWriters::NumForeignStatuses): not acted on.
+  size_t foreign_statuses = 0;
+  // --save-map FILE that could not be written (SlamCore::save_map_error); "" when saved or none.
+  std::string save_map_error;
 };
 
 SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,

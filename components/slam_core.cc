@@ -58,8 +58,12 @@ std::vector<KeyframeData> SlamCore::Finish() {
     system_->Shutdown();
     finished_ = true;
     if (!options_.save_map.empty()) {
-      LOG_INFO << "slam: map file saved " << options_.save_map << " ("
-               << DescribeMapFile(system_->SaveMap(options_.save_map)) << ")";
+      try {
+        LOG_INFO << "slam: map file saved " << options_.save_map << " ("
+                 << DescribeMapFile(system_->SaveMap(options_.save_map)) << ")";
+      } catch (const std::exception& e) {
+        save_map_error_ = e.what();
+      }
     }
   }
   return TakeKeyframes();

@@ -47,8 +47,11 @@ class SlamCore {
   // the detector component does not run on this frame (cadence): the System carries the boxes.
   SlamOutput Process(const RgbdFrameData& frame, const std::vector<Detection>* detections,
                      bool detector_skipped = false);
-  // Shutdown + final keyframe corrections.
+  // Shutdown + final keyframe corrections, then the SLAM map file (save_map). A map file that
+  // cannot be written does not stop the component from publishing its final trajectories: the
+  // reason is kept in save_map_error() for the caller to report once they are out.
   std::vector<KeyframeData> Finish();
+  const std::string& save_map_error() const { return save_map_error_; }
   std::vector<StampedPose> Trajectory() const { return system_->Trajectory(); }
   std::vector<StampedPose> KeyframeTrajectory() const { return system_->KeyframeTrajectory(); }
   const PinholeCamera& camera() const { return options_.system.camera; }
@@ -61,6 +64,7 @@ class SlamCore {
   std::mutex keyframes_mutex_;
   std::vector<KeyframeData> keyframes_;
   bool finished_ = false;
+  std::string save_map_error_;
 };
 
 // One frame's result as slam publishes it (dygslam/camera_pose).

@@ -18,6 +18,68 @@
 namespace dygslam {
 namespace fs = std::filesystem;
 
+RunOutputs::RunOutputs(std::filesystem::path directory, std::vector<std::string> names)
+    : directory_(std::move(directory)) {
+  for (const std::string& name : names) {
+    names_.push_back(name);
+    paths_[name] = (directory_ / name).string();
+    before_[name] = FileVersionOf(paths_[name]);
+  }
+}
+
+void RunOutputs::AddFile(const std::string& path) {
+  if (paths_.count(path) != 0) return;
+  names_.push_back(path);
+  paths_[path] = path;
+  before_[path] = FileVersionOf(path);
+}
+
+std::string RunOutputs::PathOf(const std::string& name) const {
+  const auto it = paths_.find(name);
+  return it != paths_.end() ? it->second : (directory_ / name).string();
+}
+
+bool RunOutputs::Write(const std::string& name, const std::function<void()>& write) {
+  try {
+    write();
+    return true;
+  } catch (const std::exception& e) {
+    RecordFailure(name, e.what());
+    return false;
+  }
+}
+
+void RunOutputs::RecordFailure(const std::string& name, const std::string& reason) {
+  failures_.emplace_back(name, reason);
+}
+
+bool RunOutputs::Fresh(const std::string& name) const {
+  const FileVersion now = FileVersionOf(PathOf(name));
+  const auto it = before_.find(name);
+  return now.exists && (it == before_.end() || it->second != now);
+}
+
+std::vector<std::string> RunOutputs::FreshNames() const {
+  std::vector<std::string> out;
+  for (const std::string& name : names_)
+    if (Fresh(name)) out.push_back(name);
+  return out;
+}
+
+std::vector<std::string> RunOutputs::StaleNames() const {
+  std::vector<std::string> out;
+  for (const std::string& name : names_)
+    if (!Fresh(name) && FileVersionOf(PathOf(name)).exists) out.push_back(name);
+  return out;
+}
+
+std::string RunOutputs::FailureReport(const std::string& command) const {
+  std::string text;
+  for (const auto& [name, reason] : failures_)
+    text += "dygslam " + command + ": error: " + name + " not written: " + reason + "\n";
+  return text;
+}
+
 FrameRow FrameRowFromResult(const FrameResult& result) {
   FrameRow row;
   row.stamp = result.stamp;
@@ -71,9 +133,11 @@ size_t WriteMapFileOctoMap(const std::string& directory, const std::string& map_
   uint64_t vocabulary_checksum = 0;
   if (!options.loop_closing.vocabulary.empty())
     vocabulary_checksum = Vocabulary::Load(options.loop_closing.vocabulary).Checksum();
-  const LoadedMap loaded = LoadMapFile(
-      map_file, MapFileSettings::Of(*geometry, options.orb.scale_factor, vocabulary_checksum),
-      geometry);
+  const LoadedMap loaded =
+      LoadMapFile(map_file,
+                  MapFileSettings::Of(*geometry, options.orb.scale_factor, vocabulary_checksum,
+                                      options.sensor.depth_map_factor),
+                  geometry);
   octomap::OcTree tree(octomap.resolution);
   tree.setProbHit(octomap.prob_hit);
   tree.setProbMiss(octomap.prob_miss);

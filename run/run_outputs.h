@@ -6,11 +6,16 @@
 //             probability_ms,tracking_ms,total_ms   (stage times in ms, StageTimes)
 #pragma once
 
+#include <filesystem>
+#include <functional>
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/base/timestamp.h"
 #include "core/base/types.h"
+#include "core/io/file_util.h"
 #include "core/system/system.h"
 #include "mapping/octomap_builder.h"
 
@@ -28,6 +33,43 @@ struct FrameRow {
   int num_dynamic = 0;
   int num_tracked = 0;
   StageTimes times;
+};
+
+// The output files of one run, transactional: each is written under a temporary name in its
+// folder and renamed over the old one only when complete (WriteFileAtomically); nothing is
+// deleted up front, so a file an earlier run left stays until this run's replacement is complete.
+// The versions taken at construction tell this run's files (replaced since: a rename is a new
+// inode, also when another process of the run wrote it) from an earlier run's. A write that fails
+// is recorded with its reason and does not stop the others; the command reports the failures at
+// the end and exits 1.
+class RunOutputs {
+ public:
+  // `names`: the files this run may write into `directory` (trajectory.txt, map.bt, ...).
+  RunOutputs(std::filesystem::path directory, std::vector<std::string> names);
+  // An output outside the folder (--save-map FILE): tracked like the others, named by its path.
+  void AddFile(const std::string& path);
+
+  const std::filesystem::path& directory() const { return directory_; }
+  std::string PathOf(const std::string& name) const;  // DIR/name, or the path of AddFile
+  // Runs `write` (which writes output `name`); an exception is recorded as a failure of `name`
+  // with its message and false is returned.
+  bool Write(const std::string& name, const std::function<void()>& write);
+  void RecordFailure(const std::string& name, const std::string& reason);
+  // `name` was written by this run: its file was replaced (or created) since construction.
+  bool Fresh(const std::string& name) const;
+  // The tracked names written by this run / present but left from before it, in the order given.
+  std::vector<std::string> FreshNames() const;
+  std::vector<std::string> StaleNames() const;
+  const std::vector<std::pair<std::string, std::string>>& failures() const { return failures_; }
+  // "dygslam COMMAND: error: NAME not written: REASON" lines for stderr ("" when none failed).
+  std::string FailureReport(const std::string& command) const;
+
+ private:
+  std::filesystem::path directory_;
+  std::vector<std::string> names_;
+  std::map<std::string, std::string> paths_;  // name -> path
+  std::map<std::string, FileVersion> before_;
+  std::vector<std::pair<std::string, std::string>> failures_;  // name, reason
 };
 
 FrameRow FrameRowFromResult(const FrameResult& result);

@@ -60,17 +60,26 @@ std::string EchoValue(const std::string& text, size_t max_chars) {
 }
 
 std::string BoundedMessage(const std::string& message, size_t max_chars) {
-  std::string out;
-  size_t start = 0;
-  while (start <= message.size() && out.size() < max_chars) {
+  // Every line escaped (EchoValue), not cut yet.
+  std::string whole;
+  for (size_t start = 0; start <= message.size();) {
     const size_t end = std::min(message.find('\n', start), message.size());
-    if (start > 0) out += '\n';
-    out += EchoValue(message.substr(start, end - start), max_chars - out.size());
+    if (start > 0) whole += '\n';
+    whole += EchoValue(message.substr(start, end - start), std::string::npos);
     start = end + 1;
   }
-  if (start <= message.size())
-    out += " ... (message of " + std::to_string(message.size()) + " bytes)";
-  return out;
+  if (whole.size() <= max_chars) return whole;
+  // Too long: its start (what the message is about) and its end (the reason, which follows the
+  // long value: "PATH: is not writable") are kept, the middle is cut.
+  const std::string cut = " ... (" + std::to_string(message.size()) + "-byte message, cut) ... ";
+  const size_t keep = max_chars > cut.size() + 2 ? (max_chars - cut.size()) / 2 : 1;
+  size_t head_end = keep;
+  while (head_end > 0 && (static_cast<unsigned char>(whole[head_end]) & 0xC0) == 0x80) --head_end;
+  size_t tail_start = whole.size() - keep;
+  while (tail_start < whole.size() &&
+         (static_cast<unsigned char>(whole[tail_start]) & 0xC0) == 0x80)
+    ++tail_start;
+  return whole.substr(0, head_end) + cut + whole.substr(tail_start);
 }
 
 std::string ExactNumber(double value) {

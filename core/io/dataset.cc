@@ -8,6 +8,7 @@
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/base/number_option.h"
 #include "core/io/association.h"
@@ -371,13 +372,78 @@ std::pair<size_t, size_t> ParseFrameRange(const std::string& text, size_t total,
   const size_t first = sides.first.value_or(0);
   const size_t asked = sides.last.value_or(total);
   const size_t last = std::min(asked, total);
-  if (first >= last) throw InvalidOptions("--frames: empty range '" + Abbreviate(text) + "'");
+  if (first >= last) {
+    // Which range, and why it is empty: beyond the dataset (with its size) or FIRST >= LAST.
+    const std::string range = "'" + Abbreviate(text) + "' (rgb.txt entries " +
+                              std::to_string(first) + " to " + std::to_string(asked) + ")";
+    if (first >= total)
+      throw InvalidOptions("--frames: empty range " + range + ": FIRST " + std::to_string(first) +
+                           " is beyond the dataset's " + std::to_string(total) +
+                           " rgb.txt entries (0.." + std::to_string(total == 0 ? 0 : total - 1) +
+                           ")");
+    throw InvalidOptions("--frames: empty range " + range + ": FIRST must be below LAST (the " +
+                         "dataset has " + std::to_string(total) + " rgb.txt entries)");
+  }
   if (asked > total && note != nullptr) {
     *note = "--frames '" + Abbreviate(text) + "': LAST " + std::to_string(asked) +
             " is beyond the " + std::to_string(total) + " rgb.txt entries; using " +
             std::to_string(first) + ":" + std::to_string(total);
   }
   return {first, last};
+}
+
+DepthRangeSample SampleDepthRange(const RgbdDataset& dataset, size_t first, size_t last,
+                                  double depth_map_factor, int width, int height,
+                                  size_t max_images) {
+  DepthRangeSample sample;
+  std::vector<size_t> frames;
+  for (size_t k = first; k < last; ++k) {
+    if (const auto index = dataset.FrameForRgbEntry(k)) frames.push_back(*index);
+  }
+  if (frames.empty() || max_images == 0) return sample;
+  const size_t n = std::min(max_images, frames.size());
+  std::vector<float> depths;
+  for (size_t j = 0; j < n; ++j) {
+    const size_t index = frames[n == 1 ? 0 : j * (frames.size() - 1) / (n - 1)];
+    const cv::Mat raw = dataset.LoadDepth(index, width, height);
+    if (sample.example.empty()) sample.example = dataset.frame(index).depth_path;
+    ++sample.images;
+    for (int y = 0; y < raw.rows; ++y) {
+      const uint16_t* row = raw.ptr<uint16_t>(y);
+      for (int x = 0; x < raw.cols; ++x) {
+        if (row[x] == 0) continue;
+        const double metres = row[x] / depth_map_factor;
+        ++sample.valid;
+        if (metres > kMaxSensorDepthMetres) ++sample.beyond;
+        if (metres < kMinSensorDepthMetres) ++sample.below;
+        if ((x + y) % 7 == 0) depths.push_back(static_cast<float>(metres));
+      }
+    }
+  }
+  if (!depths.empty()) {
+    std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+    sample.median_m = depths[depths.size() / 2];
+  }
+  return sample;
+}
+
+std::string ImplausibleDepth(const DepthRangeSample& s, double depth_map_factor) {
+  if (s.valid == 0) return "";
+  const bool beyond = s.beyond * 2 > s.valid, below = s.below * 2 > s.valid;
+  if (!beyond && !below) return "";
+  char text[640];
+  std::snprintf(
+      text, sizeof(text),
+      "%.0f %% of the depth pixels of %zu sampled depth images (e.g. %s) lie %s m "
+      "(median %.4g m with DepthMapFactor %g): outside the range of an RGB-D sensor "
+      "(%g to %g m). Likely causes: DepthMapFactor off by orders of magnitude (raw / "
+      "DepthMapFactor = metres: 5000 for TUM and Bonn, 1000 for millimetres)%s",
+      100.0 * (beyond ? s.beyond : s.below) / s.valid, s.images, EchoValue(s.example, 300).c_str(),
+      beyond ? ("beyond " + std::to_string(static_cast<int>(kMaxSensorDepthMetres))).c_str()
+             : "closer than 0.05",
+      s.median_m, depth_map_factor, kMinSensorDepthMetres, kMaxSensorDepthMetres,
+      beyond ? ", or depth images saturated at their largest value (invalid depth)" : "");
+  return text;
 }
 
 }  // namespace dygslam

@@ -88,4 +88,28 @@ class RgbdDataset {
   std::string groundtruth_problem_;
 };
 
+// The range an RGB-D sensor measures (metres): structured light and time of flight reach 4 to
+// 10 m (Kinect v1 / v2, RealSense D4xx), none beyond 12 m; a saturated 16-bit pixel at the TUM
+// scale (65535 / 5000 = 13.1 m) is beyond it. Below 5 cm no sensor gives depth.
+inline constexpr double kMaxSensorDepthMetres = 12.0;
+inline constexpr double kMinSensorDepthMetres = 0.05;
+
+// The depth of a few frames of a run in metres (raw / DepthMapFactor), against the sensor range.
+struct DepthRangeSample {
+  size_t images = 0;
+  size_t valid = 0;   // pixels with depth (raw > 0)
+  size_t beyond = 0;  // ... farther than kMaxSensorDepthMetres
+  size_t below = 0;   // ... closer than kMinSensorDepthMetres
+  double median_m = 0;
+  std::string example;  // the first sampled depth image
+};
+// Up to `max_images` frames spread evenly over rgb entries [first, last) (those with a depth
+// partner). Throws what LoadDepth throws.
+DepthRangeSample SampleDepthRange(const RgbdDataset& dataset, size_t first, size_t last,
+                                  double depth_map_factor, int width, int height,
+                                  size_t max_images = 5);
+// "" when most valid pixels lie within the sensor range; else what is wrong and the likely cause
+// (DepthMapFactor off by orders of magnitude, saturated or invalid depth images).
+std::string ImplausibleDepth(const DepthRangeSample& sample, double depth_map_factor);
+
 }  // namespace dygslam

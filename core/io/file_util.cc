@@ -1,5 +1,6 @@
 #include "core/io/file_util.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -54,6 +55,47 @@ void WriteFileAtomically(const std::string& path, const std::string& content) {
     std::remove(tmp.c_str());
     throw InputError(path, 0, "cannot rename temporary file into place: " + reason);
   }
+}
+
+FileVersion FileVersionOf(const std::string& path) {
+  FileVersion v;
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return v;
+  v.exists = true;
+  v.device = static_cast<unsigned long long>(st.st_dev);
+  v.inode = static_cast<unsigned long long>(st.st_ino);
+  v.mtime_ns = static_cast<long long>(st.st_mtim.tv_sec) * 1000000000LL + st.st_mtim.tv_nsec;
+  v.size = static_cast<long long>(st.st_size);
+  return v;
+}
+
+bool SameFile(const std::string& a, const std::string& b) {
+  if (a.empty() || b.empty()) return false;
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec) && !ec) return true;
+  const fs::path ca = fs::weakly_canonical(fs::absolute(a, ec), ec);
+  const fs::path cb = fs::weakly_canonical(fs::absolute(b, ec), ec);
+  return !ca.empty() && ca.lexically_normal() == cb.lexically_normal();
+}
+
+std::string FindOutputClash(const std::vector<NamedPath>& inputs,
+                            const std::vector<NamedPath>& outputs) {
+  const auto quote = [](const std::string& path) { return "'" + EchoValue(path) + "'"; };
+  for (size_t i = 0; i < outputs.size(); ++i) {
+    const NamedPath& out = outputs[i];
+    for (const NamedPath& in : inputs) {
+      if (!SameFile(out.path, in.path)) continue;
+      return out.role + " " + quote(out.path) + " is " + in.role + " " + quote(in.path) +
+             ", an input: writing it would replace that file; choose another path";
+    }
+    for (size_t j = 0; j < i; ++j) {
+      if (!SameFile(out.path, outputs[j].path)) continue;
+      return out.role + " " + quote(out.path) + " is also " + outputs[j].role + " " +
+             quote(outputs[j].path) + ", another output of this command: one of them would be " +
+             "lost; choose another path";
+    }
+  }
+  return "";
 }
 
 std::string Abbreviate(const std::string& text, size_t max_chars) {

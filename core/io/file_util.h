@@ -11,6 +11,36 @@ namespace dygslam {
 // when the directory does not exist or is not writable.
 void WriteFileAtomically(const std::string& path, const std::string& content);
 
+// Which version of a file a path names: a file replaced by WriteFileAtomically (a rename) is a new
+// inode, so a version taken before a run tells whether the run (or another process of it) wrote
+// the file since. `exists` false: nothing at the path.
+struct FileVersion {
+  bool exists = false;
+  unsigned long long device = 0, inode = 0;
+  long long mtime_ns = 0, size = 0;
+  bool operator==(const FileVersion& o) const {
+    return exists == o.exists && device == o.device && inode == o.inode && mtime_ns == o.mtime_ns &&
+           size == o.size;
+  }
+  bool operator!=(const FileVersion& o) const { return !(*this == o); }
+};
+FileVersion FileVersionOf(const std::string& path);
+
+// A file a command reads or writes, with how the user named it ("--save-map", "GROUNDTRUTH",
+// "the dataset's rgb.txt", "OUT/trajectory.txt").
+struct NamedPath {
+  std::string role;
+  std::string path;
+};
+// Whether `a` and `b` name the same file: the same path once made absolute and resolved (symbolic
+// links, "..", a file that does not exist yet), or the same existing file (a hard link).
+bool SameFile(const std::string& a, const std::string& b);
+// The first clash among the files of a command, "" when there is none: an output that is one of
+// the inputs (it would replace the user's file) or another output of the same command (one of
+// the two would be lost). The message names both roles and the path.
+std::string FindOutputClash(const std::vector<NamedPath>& inputs,
+                            const std::vector<NamedPath>& outputs);
+
 // One non-empty, non-comment line of a text file, split on whitespace (and commas).
 struct TextLine {
   int line_number = 0;  // 1-based

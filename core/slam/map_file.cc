@@ -141,9 +141,10 @@ void PutSettings(Writer& w, const MapFileSettings& s) {
   w.Put(s.orb_scale_factor);
   w.Put<int32_t>(s.orb_levels);
   w.Put<uint64_t>(s.vocabulary_checksum);
+  w.Put(s.depth_map_factor);  // version 3
 }
 
-MapFileSettings GetSettings(Reader& r) {
+MapFileSettings GetSettings(Reader& r, uint32_t version) {
   MapFileSettings s;
   PinholeCamera& c = s.camera;
   for (double* v : {&c.fx, &c.fy, &c.cx, &c.cy, &c.k1, &c.k2, &c.p1, &c.p2, &c.k3})
@@ -155,6 +156,10 @@ MapFileSettings GetSettings(Reader& r) {
   s.orb_scale_factor = r.GetFinite("ORB settings");
   s.orb_levels = r.Get<int32_t>("ORB settings");
   s.vocabulary_checksum = r.Get<uint64_t>("vocabulary identity");
+  if (version >= 3) {
+    s.depth_map_factor = r.GetFinite("depth settings");
+    if (s.depth_map_factor < 0) r.Fail("negative DepthMapFactor");
+  }
   return s;
 }
 
@@ -171,8 +176,9 @@ int64_t StoredPointId(const Map& map, const std::shared_ptr<MapPoint>& mp) {
 }  // namespace
 
 MapFileSettings MapFileSettings::Of(const CameraGeometry& geometry, double orb_scale_factor,
-                                    uint64_t vocabulary_checksum) {
+                                    uint64_t vocabulary_checksum, double depth_map_factor) {
   MapFileSettings s;
+  s.depth_map_factor = depth_map_factor;
   s.camera = geometry.camera;
   s.bf = geometry.bf;
   s.close_depth = geometry.close_depth;
@@ -219,6 +225,11 @@ std::string MapFileSettings::Difference(const MapFileSettings& run) const {
     return "different vocabulary (LoopClosing.vocabulary): " + name(vocabulary_checksum) +
            " in the map, " + name(run.vocabulary_checksum) + " in the settings";
   }
+  // Known on both sides (a map file of version 3 or later, a run's settings).
+  if (depth_map_factor > 0 && run.depth_map_factor > 0 && depth_map_factor != run.depth_map_factor)
+    return "different depth scale: DepthMapFactor is " + Number(depth_map_factor) +
+           " in the map, " + Number(run.depth_map_factor) +
+           " in the settings (every point would be at the wrong distance)";
   return {};
 }
 
@@ -376,7 +387,7 @@ LoadedMap DecodeMapFile(const std::string& bytes, const std::string& source,
   loaded.info.version = version;
   loaded.info.checksum = stored;
   loaded.info.bytes = bytes.size();
-  loaded.info.settings = GetSettings(r);
+  loaded.info.settings = GetSettings(r, version);
   const std::string difference = loaded.info.settings.Difference(run_settings);
   if (!difference.empty()) throw fail("the map was made with a " + difference);
   auto map = std::make_shared<Map>();

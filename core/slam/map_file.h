@@ -7,7 +7,9 @@
 // visibility counters, reference and first keyframe, observations), the id counters (a continued
 // map keeps counting) and the settings that must match for the map to be usable: the camera
 // (intrinsics, distortion, size, bf), ThDepth's close depth, the ORB pyramid (scale factor,
-// levels) and the vocabulary identity (its checksum; 0 = no vocabulary). Culled keyframes are not
+// levels), the vocabulary identity (its checksum; 0 = no vocabulary) and, from version 3 on, the
+// depth scale (DepthMapFactor: a map made at one scale and used at another puts every point at
+// the wrong distance). Culled keyframes are not
 // stored: they only serve the trajectory of the run that culled them.
 //
 // Layout (binary, little-endian): magic "DYGSLMAP", u32 format version, u64 payload size, the
@@ -27,8 +29,10 @@
 
 namespace dygslam {
 
-constexpr uint32_t kMapFileVersion = 2;
-// Version 1 differs only in its checksum's FNV offset basis; it is still read.
+constexpr uint32_t kMapFileVersion = 3;
+// Version 1 differs only in its checksum's FNV offset basis; versions 1 and 2 have no depth scale
+// (DepthMapFactor: 8 bytes after the vocabulary identity in version 3). Both are still read; their
+// depth scale is unknown (0) and not checked.
 constexpr uint32_t kOldestReadableMapFileVersion = 1;
 
 // The settings a map depends on; a map is loaded only when they match the run's.
@@ -39,10 +43,11 @@ struct MapFileSettings {
   double orb_scale_factor = 0;
   int orb_levels = 0;
   uint64_t vocabulary_checksum = 0;  // 0: made without a vocabulary (no BoW vectors)
+  double depth_map_factor = 0;       // DepthMapFactor; 0: unknown (versions 1 and 2), not checked
 
   // The settings of a run: geometry (camera, bf, close depth, pyramid) and its vocabulary checksum.
   static MapFileSettings Of(const CameraGeometry& geometry, double orb_scale_factor,
-                            uint64_t vocabulary_checksum);
+                            uint64_t vocabulary_checksum, double depth_map_factor = 0);
   // Empty when equal, else the first difference, e.g. "different camera: Camera.fx is 535.4 in
   // the map, 542.8 in the settings".
   std::string Difference(const MapFileSettings& run) const;

@@ -110,7 +110,8 @@ class SystemImpl {
             CameraGeometry::Create(options.camera, options.sensor, extractor_))),
         vocabulary_(LoadVocabulary(options)),
         map_file_settings_(MapFileSettings::Of(*geometry_, options.orb.scale_factor,
-                                               vocabulary_ ? vocabulary_->Checksum() : 0)),
+                                               vocabulary_ ? vocabulary_->Checksum() : 0,
+                                               options.sensor.depth_map_factor)),
         loaded_(options.load_map.empty()
                     ? LoadedMap{}
                     : LoadMapFile(options.load_map, map_file_settings_, geometry_)),
@@ -624,8 +625,9 @@ MapFileInfo CheckMapFile(const std::string& path, const SystemOptions& options) 
   auto geometry = std::make_shared<CameraGeometry>(
       CameraGeometry::Create(options.camera, options.sensor, extractor));
   const auto vocabulary = LoadVocabulary(options);
-  const MapFileSettings settings = MapFileSettings::Of(*geometry, options.orb.scale_factor,
-                                                       vocabulary ? vocabulary->Checksum() : 0);
+  const MapFileSettings settings =
+      MapFileSettings::Of(*geometry, options.orb.scale_factor,
+                          vocabulary ? vocabulary->Checksum() : 0, options.sensor.depth_map_factor);
   return LoadMapFile(path, settings, geometry).info;
 }
 

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 
@@ -245,12 +246,40 @@ TEST_F(MapFileTest, LoadedMapWithoutLocalizationIsExtendedWithContinuingIds) {
   EXPECT_GT(sizes.keyframes, half_sizes.keyframes);
 }
 
-// A version-1 file (the same payload, its checksum with version 1's FNV offset basis) still
-// loads, to the same map; the same bytes labelled version 2 are a checksum mismatch.
+// A version-1 file (the payload without the depth scale of version 3, its checksum with version
+// 1's FNV offset basis) still loads, to the same map; the same bytes labelled version 2 are a
+// checksum mismatch. A version-2 file (the same payload, version 2's checksum) loads too: its
+// depth scale is unknown and not checked.
 TEST_F(MapFileTest, VersionOneFilesAreStillRead) {
   const std::string good = ReadBytes(MapPath());
   ASSERT_EQ(static_cast<uint8_t>(good[8]), kMapFileVersion);
-  std::string v1 = good.substr(0, good.size() - 8);
+  ASSERT_EQ(kMapFileVersion, 3u);
+  // Version 3's DepthMapFactor: 8 bytes after the header (20) and the settings before it (9
+  // camera doubles, width, height, bf, close depth, scale factor, levels, vocabulary checksum).
+  constexpr size_t kDepthScaleOffset = 20 + 9 * 8 + 4 + 4 + 3 * 8 + 4 + 8;
+  double stored_scale = 0;
+  std::memcpy(&stored_scale, good.data() + kDepthScaleOffset, 8);
+  ASSERT_EQ(stored_scale, Options().sensor.depth_map_factor);
+  std::string v2 = good.substr(0, good.size() - 8);
+  v2.erase(kDepthScaleOffset, 8);
+  uint64_t payload_size = 0;
+  std::memcpy(&payload_size, v2.data() + 12, 8);
+  payload_size -= 8;
+  std::memcpy(v2.data() + 12, &payload_size, 8);
+  std::string v1 = v2;
+  v2[8] = 2;
+  const uint64_t v2_checksum = MapFileChecksum(v2.data(), v2.size(), 2);
+  v2.append(reinterpret_cast<const char*>(&v2_checksum), 8);
+  WriteBytes(*dir_ + "/version2.dygmap", v2);
+  {
+    SystemOptions options = Options();
+    options.sensor.depth_map_factor = 1000;  // not checked: the file does not know its scale
+    options.load_map = *dir_ + "/version2.dygmap";
+    System loaded(options);
+    ASSERT_TRUE(loaded.LoadedMapInfo().has_value());
+    EXPECT_EQ(loaded.LoadedMapInfo()->version, 2u);
+    EXPECT_EQ(loaded.LoadedMapInfo()->settings.depth_map_factor, 0.0);
+  }
   v1[8] = 1;
   const uint64_t checksum = MapFileChecksum(v1.data(), v1.size(), 1);
   ASSERT_NE(checksum, MapFileChecksum(v1.data(), v1.size(), 2));
@@ -297,7 +326,7 @@ TEST_F(MapFileTest, DamagedFilesGiveClearErrors) {
     std::string bad = good;
     bad[8] = 7;
     WriteBytes(path, bad);
-    EXPECT_NE(LoadError(path).find("format version 7, this build reads versions 1 to 2"),
+    EXPECT_NE(LoadError(path).find("format version 7, this build reads versions 1 to 3"),
               std::string::npos)
         << LoadError(path);
   }
@@ -322,6 +351,16 @@ TEST_F(MapFileTest, DamagedFilesGiveClearErrors) {
     SystemOptions other = Options();
     other.loop_closing.vocabulary.clear();
     EXPECT_NE(LoadError(MapPath(), other).find("different vocabulary"), std::string::npos);
+  }
+  // Another depth scale: every point would be at the wrong distance.
+  {
+    SystemOptions other = Options();
+    other.sensor.depth_map_factor = 1000;
+    EXPECT_NE(LoadError(MapPath(), other)
+                  .find("different depth scale: DepthMapFactor is 5000 in the map, 1000 in the "
+                        "settings"),
+              std::string::npos)
+        << LoadError(MapPath(), other);
   }
 }
 

@@ -1,0 +1,161 @@
+// Outputs never overwrite inputs: every output path of a command is checked against every input
+// path (dataset lists, settings, ground truth, loaded maps, the trajectory a map is built from) and
+// against the command's other outputs; a clash is a usage error (exit 2) naming both, before any
+// work, and the input is left as it was. Before, `run --save-map` onto the dataset's
+// groundtruth.txt / rgb.txt / the --config file, `eval --save-aligned` / `--plot` onto the ground
+// truth and `synth` into an existing dataset replaced the user's file (exit 0), and `--save-map
+// OUT/trajectory.txt` said "saved" and then lost the map.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "core/io/file_util.h"
+#include "tests/support/cli_fixture.h"
+#include "tests/support/test_support.h"
+
+namespace dygslam {
+namespace {
+namespace fs = std::filesystem;
+using testing::Contains;
+using testing::ReadAll;
+
+TEST(OutputClash, SameFileSeesThroughSpellingsLinksAndHardLinks) {
+  const fs::path dir = testing::MakeTempDir("clash_same_file");
+  fs::create_directories(dir / "a");
+  std::ofstream(dir / "a" / "gt.txt") << "1 0 0 0 0 0 0 1\n";
+  fs::create_symlink(dir / "a", dir / "link");
+  fs::create_hard_link(dir / "a" / "gt.txt", dir / "hard.txt");
+  const std::string gt = (dir / "a" / "gt.txt").string();
+  EXPECT_TRUE(SameFile(gt, (dir / "a" / "." / "gt.txt").string()));
+  EXPECT_TRUE(SameFile(gt, (dir / "a" / ".." / "a" / "gt.txt").string()));
+  EXPECT_TRUE(SameFile(gt, (dir / "link" / "gt.txt").string()));
+  EXPECT_TRUE(SameFile(gt, (dir / "hard.txt").string()));
+  EXPECT_TRUE(SameFile((dir / "new.txt").string(), (dir / "link" / ".." / "new.txt").string()));
+  EXPECT_FALSE(SameFile(gt, (dir / "a" / "other.txt").string()));
+  EXPECT_FALSE(SameFile(gt, ""));
+  // Relative to the working folder.
+  const fs::path cwd = fs::current_path();
+  fs::current_path(dir / "a");
+  EXPECT_TRUE(SameFile("gt.txt", gt));
+  fs::current_path(cwd);
+}
+
+TEST(OutputClash, NamesBothFilesOfTheFirstClash) {
+  const std::string none =
+      FindOutputClash({{"GROUNDTRUTH", "/d/gt.txt"}},
+                      {{"--save-aligned", "/d/aligned.txt"}, {"--plot", "/d/plot.png"}});
+  EXPECT_EQ(none, "");
+  const std::string input = FindOutputClash(
+      {{"ESTIMATE", "/d/est.txt"}, {"GROUNDTRUTH", "/d/gt.txt"}}, {{"--plot", "/d/./gt.txt"}});
+  EXPECT_TRUE(Contains(input, "--plot '/d/./gt.txt' is GROUNDTRUTH '/d/gt.txt', an input"))
+      << input;
+  const std::string output = FindOutputClash(
+      {},
+      {{"--save-map", "/o/trajectory.txt"}, {"the output trajectory.txt", "/o/trajectory.txt"}});
+  EXPECT_TRUE(Contains(output, "is also --save-map '/o/trajectory.txt', another output")) << output;
+}
+
+class OutputClashCli : public testing::CliFixture {
+ protected:
+  OutputClashCli() : CliFixture("clash_cli") {}
+
+  // Runs `args`, expects the clash (exit 2, both names) and `kept` unchanged.
+  void ExpectClash(const std::vector<std::string>& args, const std::string& kept,
+                   const std::vector<std::string>& needles) {
+    const std::string before = ReadAll(kept);
+    ASSERT_FALSE(before.empty()) << kept;
+    const auto r = Run(args);
+    ExpectError(r, 2, needles);
+    EXPECT_TRUE(Contains(r.err, "choose another path")) << r.err;
+    EXPECT_EQ(ReadAll(kept), before) << kept << " was changed";
+  }
+};
+
+TEST_F(OutputClashCli, RunRefusesAnOutputOntoAnInputOrAnotherOutput) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string data = SmallDataset(source, 10, "data", /*with_groundtruth=*/true);
+  const std::string out = dir_ + "/out";
+  const std::string config = dir_ + "/settings.yaml";
+  fs::copy_file(Config(), config);
+  const std::vector<std::string> base = {"run",      data,      "--config", config,
+                                         "--direct", "--quiet", "--out",    out};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = base;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+  };
+  ExpectClash(with({"--save-map", data + "/groundtruth.txt"}), data + "/groundtruth.txt",
+              {"--save-map '" + data + "/groundtruth.txt' is the dataset's groundtruth.txt"});
+  ExpectClash(with({"--save-map", data + "/rgb.txt"}), data + "/rgb.txt",
+              {"is the dataset's rgb.txt"});
+  ExpectClash(with({"--save-map", config}), config, {"--save-map '" + config + "' is --config"});
+  // Another spelling of the same file.
+  ExpectClash(with({"--save-map", data + "/../data/depth.txt"}), data + "/depth.txt",
+              {"is the dataset's depth.txt"});
+  // Onto a file the run itself writes: one of the two would be lost.
+  std::ofstream(dir_ + "/marker") << "x";
+  ExpectClash(with({"--save-map", out + "/trajectory.txt"}), dir_ + "/marker",
+              {"the output trajectory.txt '" + out + "/trajectory.txt' is also --save-map"});
+  // The loaded map is an input too.
+  std::ofstream(dir_ + "/old.map") << "not read: the clash comes first";
+  ExpectClash(with({"--load-map", dir_ + "/old.map", "--save-map", dir_ + "/old.map"}),
+              dir_ + "/old.map", {"--save-map '" + dir_ + "/old.map' is --load-map"});
+  // No work was done: nothing in --out.
+  EXPECT_TRUE(!fs::exists(out) || fs::is_empty(out));
+}
+
+TEST_F(OutputClashCli, EvalRefusesToWriteOverItsInputs) {
+  const std::string gt = dir_ + "/gt.txt", est = dir_ + "/est.txt";
+  {
+    std::ofstream g(gt), e(est);
+    for (int i = 0; i < 40; ++i) {
+      g << 100 + 0.1 * i << " " << 0.01 * i << " 0 0 0 0 0 1\n";
+      e << 100 + 0.1 * i << " " << 0.5 + 0.01 * i << " 0 0 0 0 0 1\n";
+    }
+  }
+  ExpectClash({"eval", gt, est, "--save-aligned", gt}, gt,
+              {"--save-aligned '" + gt + "' is GROUNDTRUTH"});
+  ExpectClash({"eval", gt, est, "--save-aligned", est}, est, {"is ESTIMATE"});
+  ExpectClash({"eval", gt, est, "--plot", gt}, gt, {"--plot '" + gt + "' is GROUNDTRUTH"});
+  ExpectClash({"eval", gt, est, "--plot", dir_ + "/x.png", "--save-aligned", dir_ + "/x.png"}, gt,
+              {"is also --save-aligned"});
+  // Distinct files: written.
+  const auto r = Run({"eval", gt, est, "--save-aligned", dir_ + "/aligned.txt"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir_ + "/aligned.txt"));
+}
+
+TEST_F(OutputClashCli, MapRefusesAnOutputOntoItsInputs) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string data = SmallDataset(source, 10, "data", /*with_groundtruth=*/true);
+  const std::string out = dir_ + "/out";
+  fs::create_directories(out);
+  fs::copy_file(data + "/groundtruth.txt", out + "/trajectory.txt");
+  const std::string config = out + "/map.ot";
+  fs::copy_file(Config(), config);
+  ExpectClash({"map", data, "--config", config, "--out", out, "--quiet"}, config,
+              {"the output map.ot '" + out + "/map.ot' is --config"});
+}
+
+TEST_F(OutputClashCli, SynthRefusesAnExistingDatasetUnlessAskedToReplaceIt) {
+  const std::string target = dir_ + "/dataset";
+  fs::create_directories(target);
+  std::ofstream(target + "/groundtruth.txt") << "1 0 0 0 0 0 0 1\n";
+  const auto r = Run({"synth", target, "--frames", "2", "--quiet"});
+  ExpectError(r, 2, {"OUT_DIR '" + target + "' holds a dataset (groundtruth.txt)", "--replace"});
+  EXPECT_EQ(ReadAll(target + "/groundtruth.txt"), "1 0 0 0 0 0 0 1\n");
+  EXPECT_FALSE(fs::exists(target + "/rgb.txt"));
+  const auto replaced = Run({"synth", target, "--frames", "2", "--quiet", "--replace"});
+  EXPECT_EQ(replaced.code, 0) << replaced.err;
+  EXPECT_TRUE(fs::exists(target + "/rgb.txt"));
+  EXPECT_NE(ReadAll(target + "/groundtruth.txt"), "1 0 0 0 0 0 0 1\n");
+  // A new folder needs no flag.
+  EXPECT_EQ(Run({"synth", dir_ + "/fresh", "--frames", "2", "--quiet"}).code, 0);
+}
+
+}  // namespace
+}  // namespace dygslam

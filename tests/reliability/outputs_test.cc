@@ -1,0 +1,193 @@
+// Outputs are transactional: every output file of a run is written under a temporary name and
+// renamed over the old one only when complete; nothing in --out is deleted up front (a file an
+// earlier run left stays until this run's replacement is complete, and the summary tells the two
+// apart); an output that cannot be written (a --save-map onto a full disk) does not stop the others
+// (exit 1 and the reason at the end).
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "core/base/error.h"
+#include "core/io/file_util.h"
+#include "core/io/trajectory_io.h"
+#include "run/run_outputs.h"
+#include "tests/support/cli_fixture.h"
+#include "tests/support/test_support.h"
+
+namespace dygslam {
+namespace {
+namespace fs = std::filesystem;
+using testing::Contains;
+using testing::ReadAll;
+
+void WriteText(const fs::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+TEST(RunOutputsFiles, TellThisRunsFilesFromThoseAnEarlierRunLeft) {
+  const fs::path dir = testing::MakeTempDir("outputs_versions");
+  WriteText(dir / "trajectory.txt", "earlier run\n");
+  WriteText(dir / "map.bt", "earlier map\n");
+  RunOutputs outputs(dir, {"trajectory.txt", "frames.csv", "map.bt", "keyframes.txt"});
+  EXPECT_TRUE(outputs.FreshNames().empty());
+  ASSERT_EQ(outputs.StaleNames(), (std::vector<std::string>{"trajectory.txt", "map.bt"}));
+  // Written by this run through the writer, and by another process of the run (a rename).
+  EXPECT_TRUE(outputs.Write("trajectory.txt", [&] {
+    WriteFileAtomically(outputs.PathOf("trajectory.txt"), "this run\n");
+  }));
+  WriteFileAtomically((dir / "frames.csv").string(), "stamp\n");
+  EXPECT_EQ(outputs.FreshNames(), (std::vector<std::string>{"trajectory.txt", "frames.csv"}));
+  EXPECT_EQ(outputs.StaleNames(), (std::vector<std::string>{"map.bt"}));
+  EXPECT_EQ(ReadAll((dir / "map.bt").string()), "earlier map\n");  // kept, not deleted
+  EXPECT_TRUE(outputs.failures().empty());
+}
+
+TEST(RunOutputsFiles, AFailedWriteIsReportedAndTheOthersAreWritten) {
+  const fs::path dir = testing::MakeTempDir("outputs_failure");
+  WriteText(dir / "map.bt", "earlier map\n");
+  RunOutputs outputs(dir, {"map.bt", "trajectory.txt"});
+  outputs.AddFile((dir / "missing_folder" / "run.map").string());
+  const std::string map_file = (dir / "missing_folder" / "run.map").string();
+  EXPECT_FALSE(outputs.Write(map_file, [&] { WriteFileAtomically(map_file, "map"); }));
+  EXPECT_FALSE(outputs.Write("map.bt", [] { throw InputError("map.bt", 0, "disk full"); }));
+  EXPECT_TRUE(outputs.Write("trajectory.txt", [&] {
+    WriteFileAtomically(outputs.PathOf("trajectory.txt"), "this run\n");
+  }));
+  ASSERT_EQ(outputs.failures().size(), 2u);
+  const std::string report = outputs.FailureReport("run");
+  EXPECT_TRUE(Contains(report, "dygslam run: error: " + map_file + " not written: ")) << report;
+  EXPECT_TRUE(Contains(report, "does not exist")) << report;
+  EXPECT_TRUE(Contains(report, "map.bt not written: map.bt: disk full")) << report;
+  EXPECT_EQ(ReadAll((dir / "map.bt").string()), "earlier map\n");
+  EXPECT_EQ(outputs.FreshNames(), (std::vector<std::string>{"trajectory.txt"}));
+}
+
+// A failed rename or write leaves the old file whole and no temporary file behind.
+TEST(RunOutputsFiles, AnIncompleteWriteLeavesTheOldFileAndNoTemporary) {
+  const fs::path dir = testing::MakeTempDir("outputs_incomplete");
+  WriteText(dir / "frames.csv", "earlier\n");
+  const pid_t pid = fork();
+  if (pid == 0) {
+    // 4 KiB file size limit: the 64 KiB write is cut short (EFBIG, SIGXFSZ ignored).
+    signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{4096, 4096};
+    setrlimit(RLIMIT_FSIZE, &limit);
+    try {
+      WriteFileAtomically((dir / "frames.csv").string(), std::string(65536, 'x'));
+    } catch (const InputError&) {
+      std::_Exit(3);
+    }
+    std::_Exit(0);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 3);  // the short write is an error
+  EXPECT_EQ(ReadAll((dir / "frames.csv").string()), "earlier\n");
+  size_t files = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    ++files;
+    EXPECT_EQ(entry.path().filename(), "frames.csv");
+  }
+  EXPECT_EQ(files, 1u);
+}
+
+class RunOutputsCli : public testing::CliFixture {
+ protected:
+  RunOutputsCli() : CliFixture("outputs_cli") {}
+
+  // `dygslam ARGS` with the file size limit `max_file_bytes` (SIGXFSZ ignored: a write beyond it
+  // fails with EFBIG, like a full disk).
+  testing::ProcessResult RunWithFileSizeLimit(const std::vector<std::string>& args,
+                                              rlim_t max_file_bytes) {
+    const std::string out = dir_ + "/limited.out", err = dir_ + "/limited.err";
+    std::vector<std::string> copy = {testing::DygslamBinary()};
+    copy.insert(copy.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (auto& a : copy) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    const pid_t pid = fork();
+    if (pid == 0) {
+      if (!std::freopen(out.c_str(), "w", stdout) || !std::freopen(err.c_str(), "w", stderr))
+        std::_Exit(126);
+      signal(SIGXFSZ, SIG_IGN);
+      const rlimit limit{max_file_bytes, max_file_bytes};
+      setrlimit(RLIMIT_FSIZE, &limit);
+      execv(argv[0], argv.data());
+      std::_Exit(127);
+    }
+    std::string diagnostics;
+    testing::ProcessResult r;
+    r.code = testing::WaitForExit(pid, 240, &diagnostics);
+    r.out = ReadAll(out);
+    r.err = ReadAll(err) + diagnostics;
+    return r;
+  }
+};
+
+// --direct with a --save-map that cannot be written (the file size limit stands for a full disk):
+// before, every frame was processed and then trajectory.txt, frames.csv and map.bt were not
+// written at all (exit 1, no summary).
+TEST_F(RunOutputsCli, AFailedMapSaveDoesNotStopTheOtherOutputs) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string data = SmallDataset(source, 20, "data");
+  const fs::path out = fs::path(dir_) / "out";
+  fs::create_directories(out);
+  const std::string map_file = (out / "run.map").string();
+  WriteText(map_file, "earlier map file\n");
+  // 160 KiB: above the text outputs of 20 frames (a few KiB each) and map.bt at 5 cm (measured
+  // 60-70 KiB), below the SLAM map file (measured above 1 MiB: descriptors and depth of every
+  // keyframe).
+  const auto r = RunWithFileSizeLimit(
+      {"run", data, "--config", Config(), "--direct", "--filter", "none", "--deterministic",
+       "--quiet", "--out", out.string(), "--save-map", map_file},
+      160 * 1024);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_TRUE(Contains(r.err, "dygslam run: error: " + map_file + " not written: ")) << r.err;
+  EXPECT_FALSE(Contains(r.err, "internal error")) << r.err;
+  // The old map file is whole; every other output is this run's.
+  EXPECT_EQ(ReadAll(map_file), "earlier map file\n");
+  EXPECT_GE(ReadTumTrajectory((out / "trajectory.txt").string()).size(), 10u) << r.out;
+  EXPECT_TRUE(Contains(ReadAll((out / "frames.csv").string()), "stamp,state"));
+  EXPECT_TRUE(fs::exists(out / "keyframes.txt"));
+  EXPECT_TRUE(fs::exists(out / "trajectory_online.txt"));
+  EXPECT_TRUE(fs::exists(out / "map.bt"));
+  EXPECT_TRUE(Contains(r.out, "outputs: " + out.string() +
+                                  "/{trajectory.txt,trajectory_online.txt,keyframes.txt,"
+                                  "frames.csv,map.bt}"))
+      << r.out;
+  for (const auto& entry : fs::directory_iterator(out))
+    EXPECT_FALSE(Contains(entry.path().filename().string(), ".tmp.")) << entry.path();
+}
+
+// A file an earlier run left that this run does not write (map.bt of a run with a map, then a run
+// with --no-map) stays, and the summary does not list it as this run's.
+TEST_F(RunOutputsCli, AnEarlierRunsFileIsKeptAndNotListedAsThisRuns) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string data = SmallDataset(source, 20, "data");
+  const fs::path out = fs::path(dir_) / "out";
+  fs::create_directories(out);
+  WriteText(out / "map.bt", "earlier map\n");
+  WriteText(out / "trajectory.txt", "earlier trajectory\n");
+  const auto r = Run({"run", data, "--config", Config(), "--direct", "--filter", "none",
+                      "--deterministic", "--quiet", "--no-map", "--out", out.string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(ReadAll((out / "map.bt").string()), "earlier map\n");
+  EXPECT_GE(ReadTumTrajectory((out / "trajectory.txt").string()).size(), 10u);
+  EXPECT_TRUE(Contains(r.out, "outputs: " + out.string() +
+                                  "/{trajectory.txt,trajectory_online.txt,keyframes.txt,"
+                                  "frames.csv}\n"))
+      << r.out;
+  EXPECT_TRUE(Contains(r.out, "outputs left from an earlier run, not replaced by this one: map.bt"))
+      << r.out;
+}
+
+}  // namespace
+}  // namespace dygslam

@@ -1,0 +1,211 @@
+// The DDS run's integrity (default mode: the components on threads of one process). Outputs are
+// transactional there too: nothing in --out is deleted when the run starts (before, 0.3 s in, an
+// earlier run's trajectory.txt, map.bt and frames.csv were gone, and a run killed then left
+// nothing); at every moment each output is either the earlier run's file or this run's complete
+// one. A run cut short without being asked to (an END_OF_STREAM published into the run's
+// partition by a participant that is not part of it) never exits 0 with fewer frames than
+// requested. Runs in a private network namespace (the test emulator), on its own domains.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "components/dds/participant.h"
+#include "components/dds/pubsub.h"
+#include "components/protocol.h"
+#include "dygslam_msg/StreamStatusPubSubTypes.h"
+#include "tests/support/cli_fixture.h"
+#include "tests/support/test_support.h"
+
+namespace dygslam {
+namespace {
+namespace fs = std::filesystem;
+using testing::Contains;
+using testing::ReadAll;
+
+constexpr int kKeepDomain = 141;
+constexpr int kIntruderDomain = 142;
+constexpr int kFailedDomain = 143;
+
+class RunIntegrity : public testing::CliFixture {
+ protected:
+  RunIntegrity() : CliFixture("run_integrity") {}
+
+  pid_t Spawn(const std::vector<std::string>& args) {
+    return testing::SpawnDygslam(args, dir_ + "/run.out", dir_ + "/run.err");
+  }
+};
+
+bool Exited(pid_t pid, int* code) {
+  int status = 0;
+  if (waitpid(pid, &status, WNOHANG) != pid) return false;
+  *code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return true;
+}
+
+WriterGuid GuidOf(uint8_t participant, uint8_t entity) {
+  WriterGuid g{};
+  g.fill(participant);
+  g[15] = entity;
+  return g;
+}
+
+// The rule behind the test below: an end of stream or of a component is the run's only from a
+// participant that announced a component of the run; others are ignored and counted. A FAILED is
+// taken from anyone (a component can fail before it announces itself).
+TEST(RunIntegrityRule, EndsFromParticipantsThatAnnouncedNothingAreIgnoredAndCounted) {
+  RunWriters writers;
+  const WriterGuid player_status = GuidOf(1, 4), player_frames = GuidOf(1, 2);
+  const WriterGuid stranger = GuidOf(7, 4);
+  EXPECT_FALSE(
+      writers.Announce(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 20, 19), stranger));
+  EXPECT_FALSE(writers.Announce(ComponentStatus::Done(ComponentKind::kSlam, 20), stranger));
+  EXPECT_EQ(writers.NumForeignStatuses(), 2u);
+  EXPECT_TRUE(writers.Announce(
+      ComponentStatus::Started(ComponentKind::kPlayer, {{DataTopic::kFrames, player_frames}}),
+      player_status));
+  EXPECT_FALSE(
+      writers.Announce(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 20, 19), stranger));
+  EXPECT_EQ(writers.NumForeignStatuses(), 3u);
+  EXPECT_TRUE(writers.Announce(ComponentStatus::Failed(ComponentKind::kDetector, "x"), stranger));
+  EXPECT_TRUE(writers.Announce(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 150, 149),
+                               player_status));
+  EXPECT_EQ(writers.NumForeignStatuses(), 3u);
+  // Without the status writer's GUID (no participant known) the status is taken as before.
+  RunWriters plain;
+  EXPECT_TRUE(plain.Announce(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 20, 19)));
+}
+
+TEST_F(RunIntegrity, EarlierOutputsStayUntilTheRunReplacesThem) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string data = SmallDataset(source, 40, "data");
+  const fs::path out = fs::path(dir_) / "out";
+  fs::create_directories(out);
+  const std::string earlier = "# an earlier run's file\n";
+  const std::vector<std::string> names = {"trajectory.txt", "keyframes.txt", "frames.csv",
+                                          "map.bt"};
+  for (const std::string& name : names) std::ofstream(out / name) << earlier;
+  const pid_t pid = Spawn({"run", data, "--config", Config(), "--filter", "none", "--quiet",
+                           "--out", out.string(), "--domain", std::to_string(kKeepDomain)});
+  // Until the run ends, every output is there: the earlier file or a complete new one.
+  int code = -1;
+  size_t checks = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(240);
+  while (!Exited(pid, &code)) {
+    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "run did not end";
+    for (const std::string& name : names) {
+      const std::string text = ReadAll((out / name).string());
+      ASSERT_FALSE(text.empty()) << name << " missing or empty during the run (check " << checks
+                                 << ")";
+      if (text == earlier) continue;
+      // Replaced: complete (a TUM file or frames.csv ends with a newline; map.bt holds a tree).
+      if (name != "map.bt") EXPECT_EQ(text.back(), '\n') << name;
+    }
+    ++checks;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_GT(checks, 10u);
+  ASSERT_EQ(code, 0) << ReadAll(dir_ + "/run.err");
+  // This run replaced each of them.
+  for (const std::string& name : names)
+    EXPECT_NE(ReadAll((out / name).string()), earlier) << name << " not replaced";
+  const std::string summary = ReadAll(dir_ + "/run.out");
+  EXPECT_TRUE(Contains(summary,
+                       "/{trajectory.txt,trajectory_online.txt,keyframes.txt,frames.csv,"
+                       "map.bt}"))
+      << summary;
+  for (const auto& entry : fs::directory_iterator(out))
+    EXPECT_FALSE(Contains(entry.path().filename().string(), ".tmp.")) << entry.path();
+}
+
+// A participant outside the run publishes `forged` statuses into the run's partition on `domain`
+// from 3 s on; returns the frames the run processed, with its exit code in `*code`.
+int RunWithForgedStatus(const std::string& source, const std::string& dir, int domain,
+                        const msg::StreamStatus& forged, int* code) {
+  const std::string partition = "dygslam_integrity_" + std::to_string(domain);
+  dds::ParticipantOptions po;
+  po.domain_id = domain;
+  po.name = "intruder";
+  po.partition = partition;
+  auto intruder = dds::Participant::Create(po);
+  dds::Writer<msg::StreamStatusPubSubType> status_writer(intruder, dds::topics::kStreamStatus,
+                                                         dds::TopicKind::kStreamStatus);
+  const pid_t pid = testing::SpawnDygslam(
+      {"run", source, "--config", std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml",
+       "--filter", "none", "--quiet", "--frames", "0:150", "--no-map", "--out", dir + "/out",
+       "--domain", std::to_string(domain), "--partition", partition},
+      dir + "/run.out", dir + "/run.err");
+  const auto start = std::chrono::steady_clock::now();
+  while (!Exited(pid, code)) {
+    if (std::chrono::steady_clock::now() > start + std::chrono::seconds(280)) {
+      kill(pid, SIGKILL);
+      ADD_FAILURE() << "run did not end";
+      return -1;
+    }
+    if (std::chrono::steady_clock::now() > start + std::chrono::seconds(3))
+      status_writer.Write(forged);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  const std::string summary = ReadAll(dir + "/run.out");
+  std::smatch m;
+  if (!std::regex_search(summary, m, std::regex("frames: ([0-9]+) processed"))) {
+    ADD_FAILURE() << summary << ReadAll(dir + "/run.err");
+    return -1;
+  }
+  return std::stoi(m[1]);
+}
+
+// A participant outside the run publishes END_OF_STREAM statuses into the run's partition:
+// before, the run ended early (20 of 150 frames) with exit 0. Now the status is not the run's:
+// every frame is processed.
+TEST_F(RunIntegrity, AForeignEndOfStreamIsIgnored) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  int code = -1;
+  const int processed = RunWithForgedStatus(
+      source, dir_, kIntruderDomain,
+      ToMsg(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 20, 20)), &code);
+  EXPECT_EQ(processed, 150) << ReadAll(dir_ + "/run.out") << ReadAll(dir_ + "/run.err");
+  EXPECT_EQ(code, 0) << ReadAll(dir_ + "/run.err");
+  EXPECT_TRUE(Contains(ReadAll(dir_ + "/run.err"),
+                       "end-of-stream / done statuses of participants "
+                       "that announced no component"))
+      << ReadAll(dir_ + "/run.err");
+}
+
+// A FAILED is taken from any participant (a component can fail before announcing itself), so a
+// forged one can end the run early: then the run says that frames are missing and exits non-zero
+// (3: cut short), never 0.
+TEST_F(RunIntegrity, ARunCutShortNeverExitsZero) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  int code = -1;
+  const int processed =
+      RunWithForgedStatus(source, dir_, kFailedDomain,
+                          ToMsg(ComponentStatus::Failed(ComponentKind::kPlayer, "forged")), &code);
+  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  std::printf("forged FAILED: %d of 150 frames, exit %d\n", processed, code);
+  ASSERT_GE(processed, 0);
+  if (processed < 150) {
+    EXPECT_NE(code, 0) << summary << err;
+    if (code == 3) {
+      EXPECT_TRUE(Contains(summary, "run incomplete: " + std::to_string(processed) +
+                                        " of the 150 requested frames processed"))
+          << summary;
+      EXPECT_TRUE(Contains(
+          err, "the run ended with " + std::to_string(processed) + " of the 150 requested frames"))
+          << err;
+    }
+  } else {
+    EXPECT_EQ(code, 0) << summary << err;
+  }
+}
+
+}  // namespace
+}  // namespace dygslam

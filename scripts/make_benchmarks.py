@@ -348,7 +348,10 @@ class Bench:
             self.decoded_reason = "it takes the whole sequence (--frames given)"  # file names written into figures_stage
 
     def cmdline(self, cmd):
-        return command_text(cmd, self.replacements)
+        """The command as printed: the run's own scratch folder shown as OUT."""
+        text = command_text(cmd, self.replacements)
+        text = re.sub(r"--out OUT/\S+", "--out OUT", text)
+        return re.sub(r"OUT/\S*/(\w+\.dygmap)", r"OUT/\1", text)
 
     def record_load(self):
         self.load_samples.append(load1())
@@ -686,13 +689,14 @@ class Bench:
                  "refined trajectory at the end of the run); *online* is `trajectory_online.txt` (the "
                  "pose published for each frame at the moment it was tracked).\n")
         L.append("| | |\n|---|---|")
-        L.append(f"| commit | `{commit}`" + (f" with uncommitted changes ({len(dirty_lines)} files)" if dirty_lines else " (clean tree)") + " |")
+        L.append(f"| commit | `{commit}`" + (f" with uncommitted changes ({len(dirty_lines)} file{'s' if len(dirty_lines) > 1 else ''})" if dirty_lines else " (clean tree)") + " |")
         L.append(f"| date | {started} to {finished} ({elapsed / 60:.0f} min) |")
         L.append(f"| machine | {machine_text()} |")
-        L.append(f"| load average (1 min) | {fmt(loads[0], 2) if loads else '-'} at the start, "
-                 f"median {fmt(median(loads), 2)} over the runs (max {fmt(max(loads), 2) if loads else '-'}); "
-                 f"1/5/15 min at the end {loadavg_text()}; above ~{os.cpu_count() * 0.6:.1f} other "
-                 "jobs shared the cores: timings are slower than on a quiet machine, accuracy is not affected |")
+        L.append(f"| load average (1 min) | {fmt(loads[0], 2) if loads else '-'} at the start, median "
+                 f"{fmt(median(loads), 2)} over the runs, max {fmt(max(loads), 2) if loads else '-'}; "
+                 f"1/5/15 min at the end: {loadavg_text()}. A load above the {os.cpu_count()} cores "
+                 "means other jobs shared them: timings are then slower than on a quiet machine "
+                 "(accuracy is not affected) |")
         L.append(f"| runs | {a.runs} per configuration (accuracy, schedule, speed); {a.map_runs} (map reuse, "
                  f"map quality); {a.loop_runs if not a.quick else 0} per loop and mode |")
         L.append(f"| data | bonn_crowd_part (360 frames of the Bonn RGB-D Dynamic `crowd` sequence, "
@@ -976,10 +980,10 @@ class Bench:
         dds = R.get("dds") or []
         full = (R.get("ablation") or {}).get("full") or []
         main = dds or full
-        mode = "default command (DDS pipeline)" if dds else "direct loop"
+        mode = "default command, DDS pipeline" if dds else "direct loop"
         L = [f"Measured by `make bench` at commit `{git('rev-parse', '--short=12', 'HEAD') or 'unknown'}` "
-             f"on {machine_text()} ({self.args.runs} runs, median and range; BENCHMARKS.md has every "
-             "table with its command).", "",
+             f"on {machine_text()} ({self.args.runs} run{'s' if self.args.runs > 1 else ''}, median "
+             "and range; BENCHMARKS.md has every table with its command).", "",
              "| figure | bonn_crowd_part, shipped settings |", "|---|---|"]
         L.append(f"| final ATE ({mode}) | {med_range([r['ate'] for r in main])} m, {poses_text(main)} frames with a pose |")
         L.append(f"| online ATE (pose published at the moment) | {med_range([r['online_ate'] for r in main])} m, "
@@ -1032,6 +1036,10 @@ def associate(gt, est, max_dt=0.02):
 
 
 def draw_top_view(ax, gt, series, colour):
+    # The ground truth over the time the estimates cover (a --frames range is part of it).
+    t_lo = min(e[0][0] for _, _, e in series if e) - 0.05
+    t_hi = max(e[-1][0] for _, _, e in series if e) + 0.05
+    gt = [g for g in gt if t_lo <= g[0] <= t_hi] or gt
     extent = [max(p[k] for p in gt) - min(p[k] for p in gt) for k in (1, 2, 3)]
     a, b = sorted(sorted(range(3), key=lambda k: -extent[k])[:2])
     ax.plot([p[1 + a] for p in gt], [p[1 + b] for p in gt], "-", color="black", lw=2.5,
@@ -1039,9 +1047,17 @@ def draw_top_view(ax, gt, series, colour):
     for key, label, est in series:
         ax.plot([p[1 + a] for p in est], [p[1 + b] for p in est], "-", color=colour(key), lw=1.2,
                 label=label)
+    # Framed on the ground truth: an estimate that drifts far leaves the picture (its error curve
+    # shows it) instead of shrinking the others to a dot.
+    lo = [min(p[1 + k] for p in gt) for k in (a, b)]
+    hi = [max(p[1 + k] for p in gt) for k in (a, b)]
+    half = 0.8 * max(hi[0] - lo[0], hi[1] - lo[1], 0.2)
+    centre = [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2]
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
     ax.set_xlabel("xyz"[a] + " (m)")
     ax.set_ylabel("xyz"[b] + " (m)")
-    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_aspect("equal")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="best")
 
@@ -1156,12 +1172,20 @@ def reexec_with_matplotlib():
 
 
 def main():
+    # First: a stop during the set-up below is a clean stop too (nothing written yet).
+    for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(signum, on_signal)
+    try:
+        return bench_main()
+    except Stopped as e:
+        say(f"{e} during set-up: nothing written")
+        return 128 + e.signum
+
+
+def bench_main():
     a = parse_args()
     reexec_with_matplotlib()
     reexec_in_netns()
-    signal.signal(signal.SIGINT, on_signal)
-    signal.signal(signal.SIGTERM, on_signal)
-    signal.signal(signal.SIGHUP, on_signal)
 
     bench = Bench(a)
     if not os.access(bench.dygslam, os.X_OK):
@@ -1181,8 +1205,9 @@ def main():
     bench.dds_reason = ("" if bench.dds_ok else
                         "no private network namespace could be created (needs root or CAP_SYS_ADMIN); "
                         "DDS runs stay off the network")
-    if "DDS" not in help_text:
-        bench.dds_ok, bench.dds_reason = False, "this build has no DDS components"
+    cache_file = os.path.join(a.build, "CMakeCache.txt")
+    if os.path.exists(cache_file) and "DYGSLAM_BUILD_DDS:BOOL=OFF" in open(cache_file).read():
+        bench.dds_ok, bench.dds_reason = False, "this build has no DDS components (DYGSLAM_BUILD_DDS=OFF)"
     if not bench.dds_ok:
         bench.notes.append("DDS sections not measured: " + bench.dds_reason)
 
@@ -1206,10 +1231,12 @@ def main():
         elapsed = time.monotonic() - started_wall
         text = bench.render(started, finished, elapsed, a.out, a.figures)
         staged.append((write_atomically(a.out, text), a.out))
+        readme_updated = False
         if os.path.exists(a.readme):
             updated = replace_between_markers(open(a.readme).read(), bench.headline(), a.readme)
             if updated is not None:
                 staged.append((write_atomically(a.readme, updated), a.readme))
+                readme_updated = True
             else:
                 say(f"{a.readme}: no {FIGURES_BEGIN} ... {FIGURES_END} block: left as it is")
         # The commit point: signals wait until every file is in place.
@@ -1221,8 +1248,8 @@ def main():
             os.replace(tmp, target)
         staged = []
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM, signal.SIGHUP})
-        say(f"wrote {a.out} in {elapsed / 60:.1f} min" + (f" and the figures block of {a.readme}"
-                                                          if len(staged) == 0 else ""))
+        say(f"wrote {a.out} in {elapsed / 60:.1f} min"
+            + (f" and the figures block of {a.readme}" if readme_updated else ""))
         return 0
     except Stopped as e:
         child = CURRENT_CHILD[0]

@@ -67,11 +67,16 @@ def main():
            "--out", out, "--readme", readme, "--figures", figures, "--work",
            os.path.join(a.tmp, "work")]
 
-    # 1. A stopped run leaves the previous files untouched.
+    # 1. A stopped run leaves the previous files untouched: SIGTERM while the first run goes on.
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    time.sleep(8)
+    for line in proc.stdout:
+        print(line, end="")
+        if "ablation none run 1/1" in line:
+            break
+    time.sleep(2)
     proc.send_signal(signal.SIGTERM)
     log, _ = proc.communicate(timeout=120)
+    print(log)
     check(proc.returncode == 128 + signal.SIGTERM,
           f"SIGTERM: exit code {proc.returncode} (expected {128 + signal.SIGTERM})")
     check(open(out).read() == "previous benchmarks\n", "SIGTERM: BENCHMARKS.md untouched")

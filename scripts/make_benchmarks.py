@@ -500,9 +500,10 @@ class Bench:
                 if p.poll() is None:
                     os.killpg(p.pid, signal.SIGTERM)
         self.loop_render_note = (f"generated loops rendered in this run ({time.monotonic() - t0:.0f} s, "
-                                 "before the timed runs; reused by later runs)")
+                                 "before the loop runs; reused by later runs)")
 
     def loops(self):
+        self.render_loops()
         results = {}
         for name, title, synth_args in LOOPS:
             directory = self.loop_dirs[name]
@@ -1217,8 +1218,6 @@ def bench_main():
     try:
         shutil.rmtree(bench.figures_stage, ignore_errors=True)
         os.makedirs(a.work, exist_ok=True)
-        if not a.quick:
-            bench.render_loops()
         bench.ablation_and_schedule()
         if not a.quick:
             if bench.dds_ok:

@@ -120,6 +120,11 @@ def med_range(values, digits=4):
     return f"{fmt(statistics.median(v), digits)} ({fmt(min(v), digits)}–{fmt(max(v), digits)})"
 
 
+def stage_text(values):
+    """A stage's milliseconds; '-' for a stage the method does not run (0 in every run)."""
+    return "-" if values and all(v == 0 for v in values) else med_range(values, 2)
+
+
 def int_range(values):
     v = [x for x in values if x is not None]
     if not v:
@@ -337,6 +342,8 @@ class Bench:
                              (self.data, "DATA"),
                              (os.path.join(REPO, "config"), "config"), (self.work, "OUT"),
                              (self.cache, "LOOPS")]
+        # Longest path first: the scratch folders may lie inside the build folder.
+        self.replacements.sort(key=lambda r: -len(r[0]))
         self.results = {}
         self.figures = []
         # System CPU on frames decoded beforehand (the robot case); the whole sequence only.
@@ -479,7 +486,7 @@ class Bench:
             cmd = [self.dygslam, "synth", directory] + synth_args + ["--quiet"]
             pending.append((name, directory, stamp, command, cmd))
         if not pending:
-            self.loop_render_note = "generated loops reused from the cache (same `dygslam synth` command)"
+            self.loop_render_note = "The loops were reused from the cache (same `dygslam synth` command)"
             return
         say("rendering " + ", ".join(p[0] for p in pending) + " (once; cached for later runs)")
         t0 = time.monotonic()
@@ -499,7 +506,7 @@ class Bench:
             for p, *_ in procs:
                 if p.poll() is None:
                     os.killpg(p.pid, signal.SIGTERM)
-        self.loop_render_note = (f"generated loops rendered in this run ({time.monotonic() - t0:.0f} s, "
+        self.loop_render_note = (f"The loops were rendered in this run ({time.monotonic() - t0:.0f} s, "
                                  "before the loop runs; reused by later runs)")
 
     def loops(self):
@@ -792,14 +799,14 @@ class Bench:
             runs = ab.get(config) or []
             if not runs:
                 continue
-            st = lambda key: med_range([r["stages"].get(key, float("nan")) for r in runs], 2)
+            st = lambda key: stage_text([r["stages"].get(key, float("nan")) for r in runs])
             L.append(f"| `{config}` | {med_range([r['fps'] for r in runs], 1)} | "
                      f"{med_range([r['cpu_ms_per_frame'] for r in runs], 1)} | {st('orb_ms')} | "
                      f"{st('detection_ms')} | {st('matching_ms')} | {st('probability_ms')} | "
                      f"{st('tracking_ms')} | {st('total_ms')} | {st('total_median_ms')} | "
                      f"{med_range([r['peak_rss_mib'] for r in runs], 0)} |")
         if dds:
-            st = lambda key: med_range([r["stages"].get(key, float("nan")) for r in dds], 2)
+            st = lambda key: stage_text([r["stages"].get(key, float("nan")) for r in dds])
             L.append(f"| `full`, default DDS mode | {med_range([r['fps'] for r in dds], 1)} | "
                      f"{med_range([r['cpu_ms_per_frame'] for r in dds], 1)} | {st('orb_ms')} | "
                      f"{st('detection_ms')} | {st('matching_ms')} | {st('probability_ms')} | "
@@ -865,7 +872,7 @@ class Bench:
                                          (self.dds_reason if not self.dds_ok else "no samples")) + ".\n")
         else:
             L.append(f"The default command with the player replaying bonn_crowd_part for "
-                     f"{a.memory_minutes:g} minutes (stamps continue: one long sequence of "
+                     f"{a.memory_minutes:g} minute{'s' if a.memory_minutes != 1 else ''} (stamps continue: one long sequence of "
                      f"{mem['frames'] or '?'} frames), resident memory of the process sampled every 2 s; "
                      "slope = least-squares line over the second half (the last 5 s, shutdown, left out).\n")
             L.append("| frames | peak RSS (MiB) | RSS at 1 min | at half | at end | slope, second half (MiB/min) | CPU ms / frame |")

@@ -41,7 +41,7 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   p.AddOption("rate", "R", "player: 0 = as fast as consumed, 1 = real time", "0");
   p.AddOption("window", "N", "player back-pressure window in frames", "2");
   p.AddOption("loop-minutes", "M", "player: replay the frames for M minutes (soak)", "0");
-  p.AddOption("detection-wait-ms", "MS", "slam: longest wait for a frame's detections", "150");
+  p.AddOption("detection-wait-ms", "MS", "slam: longest wait for a frame's detections", "1000");
   p.AddOption("detector-model", "NAME", "detector model (DetectorOptionsForModel)",
               "yolo-fastest-1.1");
   p.AddOption("detector-cfg", "FILE", "detector Darknet cfg (overrides --detector-model)");

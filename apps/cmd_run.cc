@@ -49,6 +49,7 @@
 #include "mapping/keyframe_mapper.h"
 #include "mapping/octomap_builder.h"
 #include "run/dataset_runner.h"
+#include "run/realtime_report.h"
 #include "run/run_outputs.h"
 #include "run/run_settings.h"
 #ifdef DYGSLAM_HAVE_COMPONENTS
@@ -69,6 +70,7 @@ struct RunSetup {
   bool map = true;
   bool progress = true;
   double loop_minutes = 0;  // DDS modes: player replays the frames (soak)
+  double rate = 0;          // --rate: frames arrive as from a camera at this many times real time
   // --detections FILE: boxes from a file (e.g. the ground-truth boxes of `dygslam synth`, or an
   // external detector) instead of the internal detector. Direct mode only.
   std::map<Timestamp, std::vector<Detection>> detections;
@@ -108,6 +110,7 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   run.image_height = s.system.camera.height;
   if (s.use_detection_file) run.detections = &s.detections;
   run.stop = [&stop] { return stop.requested(); };
+  run.rate = s.rate;
   std::string csv = FramesCsvHeader();
   std::vector<StampedPose> online;  // the pose known when each frame was tracked
   const auto t0 = std::chrono::steady_clock::now();
@@ -140,6 +143,13 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
   }
   outcome.processed = summary.processed;
   outcome.lost = summary.lost;
+  if (s.rate > 0) {
+    const double fps = s.system.sensor.fps > 0 ? s.system.sensor.fps : 30.0;
+    const double late_after_ms = kLateFramePeriods * 1000.0 / (fps * s.rate);
+    WriteRealtimeReport((s.out / kRealtimeReportFile).string(),
+                        MakeRealtimeReport(s.rate, summary.processed + summary.dropped,
+                                           summary.latency_ms, late_after_ms));
+  }
   if (s.progress) std::fprintf(stderr, "\n");
   outcome.interrupted = summary.interrupted || stop.requested();
   if (outcome.interrupted) std::fprintf(stderr, "[run] interrupted: flushing outputs\n");
@@ -160,20 +170,21 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset) {
         "%d keyframes culled\n",
         lm.keyframes_processed, median, lm.points_triangulated, lm.keyframes_culled);
     {
-      std::vector<double> lag = lm.lag_ms;
-      double lag_median = 0, lag_max = 0;
-      if (!lag.empty()) {
-        std::nth_element(lag.begin(), lag.begin() + lag.size() / 2, lag.end());
-        lag_median = lag[lag.size() / 2];
-        lag_max = *std::max_element(lag.begin(), lag.end());
-      }
-      int busy = 0;
-      for (int q : lm.queue_at_insert) busy += q > 0;
+      auto median_of = [](std::vector<double> v) {
+        if (v.empty()) return 0.0;
+        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+        return v[v.size() / 2];
+      };
+      std::vector<double> kfs(lm.ba_keyframes.begin(), lm.ba_keyframes.end());
+      std::vector<double> obs(lm.ba_observations.begin(), lm.ba_observations.end());
+      std::printf("local BA: median %.0f keyframes optimised, %.0f observations\n",
+                  median_of(kfs), median_of(obs));
       std::printf(
-          "local mapping schedule: %d of %zu keyframes inserted while it was busy, %d without "
-          "local BA, %d local BAs interrupted, insert-to-done median %.0f ms (max %.0f)\n",
-          busy, lm.queue_at_insert.size(), lm.keyframes_without_ba, lm.ba_interrupted, lag_median,
-          lag_max);
+          "local mapping schedule: local BA solve median %.1f ms, in tracking's thread median "
+          "%.1f ms per keyframe; %d local BAs late (tracking waited %.0f ms in all), %d landed "
+          "early (next keyframe)\n",
+          median_of(lm.solve_ms), median_of(lm.insert_ms), lm.late_bundle_adjustments,
+          lm.late_wait_ms, lm.early_landings);
     }
     const MapStatistics sizes = system.MapSizes();
     std::printf("map: %zu keyframes (%zu culled), %zu map points\n", sizes.keyframes,
@@ -306,11 +317,14 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
                EchoValue(o.partition).c_str(), EchoValue(o.partition).c_str());
   o.progress = s.progress;
   o.loop_minutes = s.loop_minutes;
+  o.rate = s.rate;
+  if (s.rate > 0) o.window = 0;  // a camera does not wait for the pipeline
   o.save_map = s.save_map;
   o.load_octomap = s.load_octomap;
   RunOutcome outcome;
   // The files a previous run left in DIR must not be mistaken for this run's.
-  for (const char* name : {"trajectory.txt", "keyframes.txt", "frames.csv", "map.bt"}) {
+  for (const char* name :
+       {"trajectory.txt", "keyframes.txt", "frames.csv", "map.bt", kRealtimeReportFile}) {
     std::error_code ec;
     fs::remove(s.out / name, ec);
   }
@@ -368,6 +382,11 @@ int RunRun(const std::vector<std::string>& args) {
               "DDS Security: make_dds_certs.sh's OUT_DIR (one identity folder per component) or "
               "one identity folder (default: $DYGSLAM_DDS_SECURITY_DIR; none = off)",
               security_env != nullptr ? security_env : "");
+  p.AddOption("rate", "R",
+              "play the frames as a camera would, at R times the dataset's frame rate (1: real\n"
+              "time); frames the pipeline cannot take in time are dropped and counted, latency\n"
+              "is measured (OUT/realtime.txt). 0: as fast as the pipeline takes them",
+              "0");
   p.AddOption("loop-minutes", "M",
               "DDS modes: the player replays the frames for M minutes, stamps continuing (soak)",
               "0");
@@ -453,7 +472,8 @@ int RunRun(const std::vector<std::string>& args) {
   }
   s.progress = !p.Flag("quiet");
   int domain_id = -1;
-  if (!p.GetNumber("loop-minutes", 0, 1e6, &s.loop_minutes) ||
+  if (!p.GetNumber("rate", 0, 1000, &s.rate) ||
+      !p.GetNumber("loop-minutes", 0, 1e6, &s.loop_minutes) ||
       !p.GetInt("domain", -1, 232, &domain_id))
     return p.exit_code();
   if (s.loop_minutes > 0 && p.Flag("direct"))
@@ -576,11 +596,26 @@ int RunRun(const std::vector<std::string>& args) {
   }
   std::printf("filter: %s%s\n", p.Get("filter").c_str(),
               s.system.deterministic ? " (deterministic)" : "");
+  if (s.rate > 0 && fs::exists(s.out / kRealtimeReportFile))
+    std::printf("real time: %s\n",
+                ReadRealtimeReport((s.out / kRealtimeReportFile).string()).Summary().c_str());
   if (!groundtruth.empty() && trajectory.size() >= 3) {
     try {
       const AteResult ate = ComputeAte(groundtruth, trajectory);
       std::printf("ATE RMSE %.4f m (mean %.4f, median %.4f, max %.4f; %zu pairs)\n", ate.error.rmse,
                   ate.error.mean, ate.error.median, ate.error.max, ate.num_pairs);
+      // The pose each frame got when it was tracked (what a robot receives at the moment),
+      // against the final trajectory above, which later bundle adjustments refined.
+      const fs::path online_path = s.out / "trajectory_online.txt";
+      const std::vector<StampedPose> online =
+          fs::exists(online_path) ? ReadTumTrajectory(online_path.string())
+                                  : std::vector<StampedPose>{};
+      if (online.size() >= 3) {
+        const AteResult online_ate = ComputeAte(groundtruth, online);
+        std::printf("online ATE RMSE %.4f m (mean %.4f, median %.4f, max %.4f; %zu pairs)\n",
+                    online_ate.error.rmse, online_ate.error.mean, online_ate.error.median,
+                    online_ate.error.max, online_ate.num_pairs);
+      }
     } catch (const std::exception& e) {  // e.g. no stamp in common: the outputs stand
       std::printf("ATE: not evaluated (%s)\n", EchoValue(e.what(), 500).c_str());
     }

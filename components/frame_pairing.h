@@ -38,7 +38,9 @@ namespace dygslam {
 struct PairingOptions {
   bool needs_detections = true;
   bool deterministic = false;
-  std::chrono::milliseconds max_wait{150};
+  // Long enough that a detector keeping up is always waited for (its frames are paired the same
+  // way every run: a reproducible trajectory); a detector a second behind counts as stalled.
+  std::chrono::milliseconds max_wait{1000};
   int lost_after_misses = 5;
   int carry_forward_max_frames = 30;                      // 0: never carry boxes forward
   std::chrono::milliseconds carry_forward_max_age{1000};  // stamp difference, frame to boxes

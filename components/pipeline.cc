@@ -26,6 +26,7 @@
 #include "components/player.h"
 #include "components/recorder.h"
 #include "components/slam_component.h"
+#include "run/realtime_report.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "core/base/stop_signal.h"
@@ -184,7 +185,17 @@ size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
           if (component != ComponentKind::kPlayer) p.wait_for_components.push_back(component);
         }
       }
-      RunPlayer(participant, p, stop);
+      const PlayerStats stats = RunPlayer(participant, p, stop);
+      if (options.rate > 0) {
+        RealtimeReport report;
+        report.rate = options.rate;
+        report.frames = stats.frames_published;
+        report.results = stats.poses_timed;
+        report.late = stats.late;
+        report.latency_median_ms = stats.latency_median_ms;
+        report.latency_p99_ms = stats.latency_p99_ms;
+        WriteRealtimeReport((fs::path(options.output_dir) / kRealtimeReportFile).string(), report);
+      }
       return 0;
     }
     case ComponentKind::kDetector:

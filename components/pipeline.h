@@ -46,7 +46,7 @@ struct PipelineOptions {
   double loop_minutes = 0;                 // player: replay the range for this long (soak)
   std::string save_map;                    // slam: SLAM map file written at the end (issue 15)
   std::string load_octomap;                // mapper: OctoMap (.ot) to continue (issue 15)
-  std::chrono::milliseconds detection_wait{150};
+  std::chrono::milliseconds detection_wait{1000};
   bool processes = false;
   bool run_detector = true;  // detector component (filter modes boxes/full); false: System's own
   bool run_mapper = true;

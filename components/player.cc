@@ -128,6 +128,14 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   // End-to-end latency: when each frame was published, and from it to its pose's arrival here.
   std::map<uint64_t, Clock::time_point> sent;
   LatencyReservoir latency_ms;
+  // Paced runs: the frame period at the played rate, from the stamps; later poses are late.
+  double late_after_ms = 0;
+  size_t late = 0;
+  if (options.rate > 0 && player.num_frames() > 1) {
+    const double span_s = SecondsBetween(player.Stamp(0), player.Stamp(player.num_frames() - 1));
+    late_after_ms = kLateFramePeriods * 1000.0 * span_s /
+                    static_cast<double>(player.num_frames() - 1) / options.rate;
+  }
   std::optional<Clock::time_point> first_sent, last_pose;
   bool slam_done = false;
   std::set<ComponentKind> ready;  // components that announced READY
@@ -146,7 +154,9 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
           const auto it = sent.find(pose.header().seq());
           if (it != sent.end()) {
             const auto now = Clock::now();
-            latency_ms.Add(std::chrono::duration<double, std::milli>(now - it->second).count());
+            const double ms = std::chrono::duration<double, std::milli>(now - it->second).count();
+            latency_ms.Add(ms);
+            if (late_after_ms > 0 && ms > late_after_ms) ++late;
             last_pose = now;
             sent.erase(sent.begin(), std::next(it));
           }
@@ -301,6 +311,8 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
     stats.poses_timed = latency_ms.count();
     stats.latency_median_ms = latency_ms.Quantile(0.5);
     stats.latency_p95_ms = latency_ms.Quantile(0.95);
+    stats.latency_p99_ms = latency_ms.Quantile(0.99);
+    stats.late = late;
     if (first_sent && last_pose && latency_ms.count() > 1) {
       stats.poses_per_second = (latency_ms.count() - 1) /
                                std::chrono::duration<double>(*last_pose - *first_sent).count();

@@ -19,6 +19,7 @@
 #include "components/convert.h"
 #include "core/base/camera.h"
 #include "core/io/dataset.h"
+#include "run/realtime_report.h"
 
 namespace dygslam {
 
@@ -99,8 +100,11 @@ struct PlayerStats {
   // Frame published -> its pose received back (the player reads the poses for back-pressure):
   // end-to-end latency through detector and slam, and the rate at which poses came back.
   size_t poses_timed = 0;
-  double latency_median_ms = 0, latency_p95_ms = 0;
+  double latency_median_ms = 0, latency_p95_ms = 0, latency_p99_ms = 0;
   double poses_per_second = 0;
+  // Paced runs (rate > 0): poses that came more than kLateFramePeriods frame periods (at the
+  // played rate) after their frame was published.
+  size_t late = 0;
 };
 
 // Publishes the dataset; returns when slam reported done, or stop was requested.

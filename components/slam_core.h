@@ -22,7 +22,7 @@ struct SlamComponentOptions {
   // Take detections from the detector component (true) or let System run its own detector
   // (false; then System needs the model paths).
   bool external_detections = true;
-  std::chrono::milliseconds detection_wait{150};
+  std::chrono::milliseconds detection_wait{1000};
   int detector_lost_after_misses = 5;
   // A frame whose detections are late gets the newest earlier boxes for at most this many frames
   // in a row (FramePairer); 0: such frames run geometry-only.

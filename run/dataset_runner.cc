@@ -1,6 +1,12 @@
 #include "run/dataset_runner.h"
 
+#include <algorithm>
 #include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <optional>
+#include <thread>
 #include <exception>
 #include <filesystem>
 #include <string>
@@ -13,7 +19,110 @@ namespace dygslam {
 void DatasetRunOptions::Check() const {
   DYGSLAM_CHECK_OPTION(first_entry <= last_entry, "dataset_run.first_entry <= last_entry");
   DYGSLAM_CHECK_OPTION(image_width >= 0 && image_height >= 0, "dataset_run.image_width/height");
+  DYGSLAM_CHECK_OPTION(rate >= 0 && rate <= 1000, "--rate (0..1000)");
+  DYGSLAM_CHECK_OPTION(decode_ahead >= 1 && decode_ahead <= 64, "dataset_run.decode_ahead");
 }
+
+namespace {
+
+// A frame read by the loader thread: its images, or the error that reading them raised, or
+// `skipped` for an entry without a depth partner.
+struct LoadedFrame {
+  size_t entry = 0;
+  bool skipped = false;
+  cv::Mat rgb, depth;
+  Timestamp stamp;
+  std::exception_ptr error;
+};
+
+// Reads rgb.txt entries [first, last) in order on its own thread, at most `capacity` ahead of
+// the consumer; Stop() ends it early.
+class FrameLoader {
+ public:
+  FrameLoader(const RgbdDataset& dataset, const DatasetRunOptions& options)
+      : dataset_(dataset), options_(options), capacity_(std::max(1, options.decode_ahead)) {
+    next_entry_ = options.first_entry;
+    thread_ = std::thread([this] { Load(); });
+  }
+  ~FrameLoader() { Stop(); }
+  FrameLoader(const FrameLoader&) = delete;
+  FrameLoader& operator=(const FrameLoader&) = delete;
+
+  // The next frame in entry order; nullopt after the last one.
+  std::optional<LoadedFrame> Pop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [this] { return !queue_.empty() || done_; });
+    if (queue_.empty()) return std::nullopt;
+    LoadedFrame f = std::move(queue_.front());
+    queue_.pop_front();
+    changed_.notify_all();
+    return f;
+  }
+  // The frame Pop() will return next, waiting for it; nullptr after the last one. Valid until
+  // the next Pop().
+  const LoadedFrame* Peek() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [this] { return !queue_.empty() || done_; });
+    return queue_.empty() ? nullptr : &queue_.front();
+  }
+  void Stop() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    changed_.notify_all();
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  void Load() {
+    for (size_t k = options_.first_entry; k < options_.last_entry; ++k) {
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        changed_.wait(lock, [this] { return stop_ || queue_.size() < capacity_; });
+        if (stop_) break;
+      }
+      LoadedFrame f;
+      f.entry = k;
+      const auto index = dataset_.FrameForRgbEntry(k);
+      if (!index) {
+        f.skipped = true;
+      } else {
+        try {
+          f.rgb = dataset_.LoadRgb(*index, options_.image_width, options_.image_height);
+          f.depth = dataset_.LoadDepth(*index, options_.image_width, options_.image_height);
+          f.stamp = Timestamp::FromNanoseconds(dataset_.frame(*index).rgb_stamp.nanoseconds() +
+                                               options_.stamp_offset_ns);
+        } catch (...) {
+          f.error = std::current_exception();
+        }
+      }
+      const bool failed = f.error != nullptr;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        queue_.push_back(std::move(f));
+      }
+      changed_.notify_all();
+      if (failed) break;  // nothing after a bad frame is fed
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    done_ = true;
+    changed_.notify_all();
+  }
+
+  const RgbdDataset& dataset_;
+  const DatasetRunOptions& options_;
+  const size_t capacity_;
+  size_t next_entry_ = 0;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<LoadedFrame> queue_;
+  bool done_ = false;
+  bool stop_ = false;
+  std::thread thread_;  // last: it uses everything above
+};
+
+}  // namespace
 
 DatasetRunSummary RunDatasetFrames(const RgbdDataset& dataset, System& system,
                                    const DatasetRunOptions& options,
@@ -24,53 +133,69 @@ DatasetRunSummary RunDatasetFrames(const RgbdDataset& dataset, System& system,
                          " beyond the " + std::to_string(dataset.num_rgb_entries()) +
                          " rgb.txt entries of " + dataset.directory());
   }
-  const int width = options.image_width;
-  const int height = options.image_height;
   const bool prefetch = options.prefetch_detections && options.detections == nullptr;
-  auto stamp_of = [&](size_t index) {
-    return Timestamp::FromNanoseconds(dataset.frame(index).rgb_stamp.nanoseconds() +
-                                      options.stamp_offset_ns);
-  };
+  const bool paced = options.rate > 0;
+  using Clock = std::chrono::steady_clock;
   DatasetRunSummary summary;
-  const auto t0 = std::chrono::steady_clock::now();
-  cv::Mat next_rgb;  // loaded one frame ahead so its detection overlaps this frame's tracking
-  // A bad next image is reported when its own turn comes: the frames before it are all fed.
-  std::exception_ptr next_error;
-  for (size_t k = options.first_entry; k < options.last_entry; ++k) {
+  const auto t0 = Clock::now();
+  std::optional<Timestamp> first_stamp;
+  // The time frame `f` arrives (paced runs): its stamp's offset from the first, over the rate.
+  auto arrival = [&](const LoadedFrame& f) {
+    if (!first_stamp) first_stamp = f.stamp;
+    const double s = SecondsBetween(*first_stamp, f.stamp) / options.rate;
+    return t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  };
+  FrameLoader loader(dataset, options);
+  std::optional<Timestamp> prefetched;  // the stamp whose detection was started ahead
+  while (true) {
     if (options.stop && options.stop()) {
-      summary.interrupted = true;
+      summary.interrupted = loader.Peek() != nullptr;
       break;
     }
-    if (next_error) std::rethrow_exception(next_error);
-    const auto index = dataset.FrameForRgbEntry(k);
-    if (!index) {
+    std::optional<LoadedFrame> frame = loader.Pop();
+    if (!frame) break;
+    if (frame->skipped) {
       ++summary.skipped;
       continue;
     }
-    const cv::Mat rgb = next_rgb.empty() ? dataset.LoadRgb(*index, width, height) : next_rgb;
-    next_rgb = cv::Mat();
-    const cv::Mat depth = dataset.LoadDepth(*index, width, height);
-    const Timestamp stamp = stamp_of(*index);
-    if (prefetch && k + 1 < options.last_entry) {
-      if (const auto next = dataset.FrameForRgbEntry(k + 1)) {
-        try {
-          next_rgb = dataset.LoadRgb(*next, width, height);
-          system.PrefetchDetections(next_rgb, stamp_of(*next));
-        } catch (const InputError&) {
-          next_rgb = cv::Mat();
-          next_error = std::current_exception();
-        }
+    if (frame->error) std::rethrow_exception(frame->error);
+    Clock::time_point arrived = Clock::now();
+    if (paced) {
+      arrived = arrival(*frame);
+      std::this_thread::sleep_until(arrived);
+      // A camera's queue of one: newer frames that have arrived replace this one.
+      for (const LoadedFrame* next = loader.Peek();
+           next && !next->skipped && !next->error && arrival(*next) <= Clock::now();
+           next = loader.Peek()) {
+        ++summary.dropped;
+        frame = loader.Pop();
+        arrived = arrival(*frame);
       }
     }
-    const FrameResult r = options.detections != nullptr
-                              ? system.FeedRgbdFrame(rgb, depth, stamp, cv::Mat(),
-                                                     &DetectionsNear(*options.detections, stamp))
-                              : system.FeedRgbdFrame(rgb, depth, stamp);
+    if (prefetch) {
+      // The next frame's detection starts now, overlapping this frame's tracking (paced: only
+      // once it has arrived).
+      const LoadedFrame* next = loader.Peek();
+      if (next && !next->skipped && !next->error && (!paced || arrival(*next) <= Clock::now()) &&
+          prefetched != next->stamp) {
+        system.PrefetchDetections(next->rgb, next->stamp);
+        prefetched = next->stamp;
+      }
+    }
+    const FrameResult r =
+        options.detections != nullptr
+            ? system.FeedRgbdFrame(frame->rgb, frame->depth, frame->stamp, cv::Mat(),
+                                   &DetectionsNear(*options.detections, frame->stamp))
+            : system.FeedRgbdFrame(frame->rgb, frame->depth, frame->stamp);
     ++summary.processed;
+    if (paced) {
+      const auto now = Clock::now();
+      summary.latency_ms.push_back(std::chrono::duration<double, std::milli>(now - arrived).count());
+    }
     if (r.state == TrackingState::kLost) ++summary.lost;
-    if (on_frame) on_frame(k, r);
+    if (on_frame) on_frame(frame->entry, r);
   }
-  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  summary.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   return summary;
 }
 

@@ -13,6 +13,12 @@
 // and its detection started (System::PrefetchDetections), so detection of frame t+1 overlaps the
 // tracking of frame t. With `detections` (boxes from a file, e.g. `dygslam synth`'s ground truth)
 // the detector does not run and nothing is prefetched.
+//
+// Images are decoded ahead on a loader thread (decode_ahead frames), so PNG decoding does not
+// hold up tracking. With `rate` > 0 the frames arrive as from a camera: frame k becomes available
+// (stamp_k - stamp_first) / rate after the start, and when the System takes the next frame it takes
+// the newest one that has arrived; older ones that waited are dropped (a camera driver's queue of
+// one). Each frame's latency (arrival to result) is measured.
 #pragma once
 
 #include <cstddef>
@@ -41,6 +47,11 @@ struct DatasetRunOptions {
   const std::map<Timestamp, std::vector<Detection>>* detections = nullptr;
   // Added to every frame's stamp (soak runs replay a sequence with stamps that keep increasing).
   int64_t stamp_offset_ns = 0;
+  // > 0: play at this many times the dataset's frame rate, as a camera would (see above);
+  // 0: as fast as the System takes the frames.
+  double rate = 0;
+  // Frames decoded ahead on the loader thread (>= 1).
+  int decode_ahead = 4;
   // Polled before every frame; true ends the run (interrupted).
   std::function<bool()> stop;
   void Check() const;
@@ -52,6 +63,10 @@ struct DatasetRunSummary {
   size_t skipped = 0;        // entries without a depth partner (of those reached)
   bool interrupted = false;  // `stop` ended the run before last_entry
   double seconds = 0;        // wall time of the loop
+  // rate > 0: frames replaced by a newer one before the System took them, and per processed frame
+  // the time from its arrival to its result (ms).
+  size_t dropped = 0;
+  std::vector<double> latency_ms;
 };
 
 // Called after each fed frame with its rgb.txt entry and the System's result.

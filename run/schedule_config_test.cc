@@ -1,6 +1,6 @@
-// Local-mapping schedule settings (issue 22): the waits of tracking for local mapping and the
-// final bundle adjustment are read, default off, and bad values are named; so are the weak-frame
-// keyframe rule and the fallback smoothing weight.
+// Schedule settings: the local BA's lag and the final bundle adjustment are read and bad values
+// are named; so are the weak-frame keyframe rule and the fallback smoothing weight. The dataset
+// presets hold the sensor only: a dataset run gets the schedule a robot gets.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -46,75 +46,48 @@ void ExpectNamed(const std::string& section, const std::string& field) {
   }
 }
 
-TEST(ScheduleConfig, WaitsAndFinalBundleAdjustmentAreReadAndChecked) {
+TEST(ScheduleConfig, BaLagAndFinalBundleAdjustmentAreReadAndChecked) {
   const SystemOptions defaults = Options("");
-  EXPECT_EQ(defaults.tracking.keyframe_wait_ms, 0);
-  EXPECT_EQ(defaults.tracking.handoff_wait_ms, 0);
+  EXPECT_EQ(defaults.local_mapping.ba_lag_frames, LocalMappingOptions{}.ba_lag_frames);
   EXPECT_EQ(defaults.local_mapping.final_ba_iterations, 0);
-  const SystemOptions set = Options(
-      "Tracking:\n  keyframe_wait_ms: 50\n  handoff_wait_ms: 20.5\n"
-      "LocalMapping:\n  final_ba_iterations: 10\n");
-  EXPECT_EQ(set.tracking.keyframe_wait_ms, 50);
-  EXPECT_EQ(set.tracking.handoff_wait_ms, 20.5);
+  const SystemOptions set =
+      Options("LocalMapping:\n  ba_lag_frames: 4\n  final_ba_iterations: 10\n");
+  EXPECT_EQ(set.local_mapping.ba_lag_frames, 4);
   EXPECT_EQ(set.local_mapping.final_ba_iterations, 10);
-  ExpectNamed("Tracking:\n  keyframe_wait_ms: -1\n", "Tracking.keyframe_wait_ms");
-  ExpectNamed("Tracking:\n  handoff_wait_ms: 20000\n", "Tracking.handoff_wait_ms");
+  ExpectNamed("LocalMapping:\n  ba_lag_frames: -1\n", "LocalMapping.ba_lag_frames");
+  ExpectNamed("LocalMapping:\n  ba_lag_frames: 31\n", "LocalMapping.ba_lag_frames");
   ExpectNamed("LocalMapping:\n  final_ba_iterations: -3\n", "LocalMapping.final_ba_iterations");
 }
 
-// Session 11: the dataset presets wait for local mapping after each keyframe (threaded runs give
-// the deterministic trajectory; README "Hand-off wait"); the options struct's default, what a
-// settings file of one's own gets, stays 0 (live use).
-TEST(ScheduleConfig, DatasetPresetsSetTheHandOffWait) {
-  for (const char* name : {"bonn", "tum1", "tum2", "tum3"}) {
-    const std::string path = PresetPath(name);
-    const SystemOptions preset = SystemOptionsFromSettings(ParseSettings(ReadText(path), path));
-    EXPECT_EQ(preset.tracking.handoff_wait_ms, 1000) << path;
-    EXPECT_EQ(preset.tracking.keyframe_wait_ms, 0) << path;
-  }
-  EXPECT_EQ(TrackingOptions{}.handoff_wait_ms, 0);
-}
 
-// Session 13 (issue 19): the presets run the detector as the paper does (every frame, square
-// 320 x 320 input); a settings file without these keys gets the live defaults (every 2nd frame,
-// the frame's aspect ratio, one OpenCV thread), README "Live use on a robot".
-TEST(ScheduleConfig, DatasetPresetsDetectEveryFrameAtTheSquareInputLiveDefaultsDoNot) {
-  for (const char* name : {"bonn", "tum1", "tum2", "tum3"}) {
-    const std::string path = PresetPath(name);
-    const SystemOptions preset = SystemOptionsFromSettings(ParseSettings(ReadText(path), path));
-    EXPECT_EQ(preset.detection_every_n_frames, 1) << path;
-    EXPECT_EQ(preset.detector.input_width, 320) << path;
-    EXPECT_EQ(preset.detector.input_height, 320) << path;
-    EXPECT_EQ(preset.detector.num_threads, 1) << path;
-  }
-  // bonn.yaml without its dataset-run keys: the camera and ORB settings of a live run.
-  const std::string path = PresetPath("bonn");
-  std::string text;
-  std::istringstream lines(testing::WithoutSection(ReadText(path), "Tracking"));
-  for (std::string line; std::getline(lines, line);) {
-    if (line.rfind("Detector.every_n_frames:", 0) == 0 ||
-        line.rfind("Detector.input_height:", 0) == 0)
-      continue;
-    text += line + "\n";
-  }
-  const SystemOptions live = SystemOptionsFromSettings(ParseSettings(text, path));
-  EXPECT_EQ(live.detection_every_n_frames, 2);
-  EXPECT_EQ(live.detector.input_height, 0);
-  EXPECT_EQ(DetectorInputSize(live.detector, {640, 480}), cv::Size(live.detector.input_width, 256));
-  EXPECT_EQ(live.detector.num_threads, 1);
-  EXPECT_EQ(live.tracking.handoff_wait_ms, 0);
-}
-
-TEST(ScheduleConfig, WeakFrameKeyframeRuleAndSmoothingWeightAreReadAndChecked) {
+// Each preset sets camera, depth and ORB keys only, so `dygslam run` on a dataset runs the
+// schedule and detector cadence a robot runs (the shipped defaults).
+TEST(ScheduleConfig, DatasetPresetsHoldTheSensorOnly) {
   const SystemOptions defaults = Options("");
-  EXPECT_EQ(defaults.tracking.keyframe_weak_inliers, TrackingOptions{}.keyframe_weak_inliers);
+  for (const char* name : {"bonn", "tum1", "tum2", "tum3"}) {
+    const std::string path = PresetPath(name);
+    std::istringstream lines(ReadText(path));
+    for (std::string line; std::getline(lines, line);) {
+      if (line.empty() || line[0] == '#' || line[0] == '%' || line[0] == ' ') continue;
+      const std::string key = line.substr(0, line.find(':'));
+      const bool sensor = key.rfind("Camera.", 0) == 0 || key.rfind("ORBextractor.", 0) == 0 ||
+                          key == "ThDepth" || key == "DepthMapFactor";
+      EXPECT_TRUE(sensor) << path << ": " << key << " is not a sensor key";
+    }
+    const SystemOptions preset = SystemOptionsFromSettings(ParseSettings(ReadText(path), path));
+    EXPECT_EQ(preset.detection_every_n_frames, defaults.detection_every_n_frames) << path;
+    EXPECT_EQ(preset.detector.input_height, defaults.detector.input_height) << path;
+    EXPECT_EQ(preset.local_mapping.ba_lag_frames, defaults.local_mapping.ba_lag_frames) << path;
+  }
+}
+
+TEST(ScheduleConfig, SmoothingWeightIsReadAndChecked) {
+  const SystemOptions defaults = Options("");
   EXPECT_EQ(defaults.tracking.fallback_smoothing_dense_weight,
             TrackingOptions{}.fallback_smoothing_dense_weight);
   const SystemOptions set =
-      Options("Tracking:\n  keyframe_weak_inliers: 0\n  fallback_smoothing_dense_weight: 0.2\n");
-  EXPECT_EQ(set.tracking.keyframe_weak_inliers, 0);
+      Options("Tracking:\n  fallback_smoothing_dense_weight: 0.2\n");
   EXPECT_EQ(set.tracking.fallback_smoothing_dense_weight, 0.2);
-  ExpectNamed("Tracking:\n  keyframe_weak_inliers: -1\n", "Tracking.keyframe_weak_inliers");
   ExpectNamed("Tracking:\n  fallback_smoothing_dense_weight: 1.5\n",
               "Tracking.fallback_smoothing_dense_weight");
 }

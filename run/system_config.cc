@@ -92,9 +92,6 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
        {"localization_local_keyframes", &options.tracking.localization_local_keyframes},
        {"keyframe_counts_odometry_points", &options.tracking.keyframe_counts_odometry_points},
        {"keyframe_min_map_inliers", &options.tracking.keyframe_min_map_inliers},
-       {"keyframe_weak_inliers", &options.tracking.keyframe_weak_inliers},
-       {"keyframe_wait_ms", &options.tracking.keyframe_wait_ms},
-       {"handoff_wait_ms", &options.tracking.handoff_wait_ms},
        {"dense_fallback", &options.tracking.dense_fallback},
        {"fallback_min_inlier_fraction", &options.tracking.fallback.min_inlier_fraction},
        {"fallback_min_inliers", &options.tracking.fallback.min_inliers},
@@ -107,6 +104,7 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   const ConfigReader mapping = root.Section("LocalMapping");
   ReadFields(mapping, {{"triangulation_neighbors", &options.local_mapping.triangulation_neighbors},
                        {"cull_keyframes", &options.local_mapping.cull_keyframes},
+                       {"ba_lag_frames", &options.local_mapping.ba_lag_frames},
                        {"final_ba_iterations", &options.local_mapping.final_ba_iterations},
                        {"redundancy_ratio", &options.local_mapping.redundancy_ratio}});
   mapping.CheckOptions(options.local_mapping);

@@ -17,12 +17,7 @@
 # env:OPENCV_FOR_THREADS_NUM=1 or env:GLIBC_TUNABLES=glibc.malloc.trim_threshold=67108864).
 # CPU_BUDGET_CASE=robot runs BUILD/tests/cpu_per_frame_benchmark (one run per round) instead of
 # `dygslam run`: the frames decoded beforehand, the System's CPU only (the robot case); the table
-# then also gives each configuration's CPU per round as a ratio of the first configuration's, and
-# every configuration runs with the live defaults (README "Live use on a robot"): the preset's
-# dataset-run keys are left out (Detector.every_n_frames, Detector.input_height) and
-# Tracking.handoff_wait_ms is 0 (a robot's camera does not wait for local mapping), unless its
-# parts set these keys (e.g. preset=full,Detector.every_n_frames=1,Detector.input_height=320,
-# Tracking.handoff_wait_ms=1000: the dataset preset in the robot case).
+# then also gives each configuration's CPU per round as a ratio of the first configuration's.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 build=$1 dataset=$2 runs=$3 out=$4
@@ -42,9 +37,6 @@ for spec in "$@"; do
   filter=${parts[0]}
   cfg=$out/$name.yaml
   keys=()
-  # The robot case runs live: no hand-off wait and the detector's live defaults (the presets'
-  # dataset-run keys dropped) unless named.
-  [ "$case_" = robot ] && keys+=("Tracking.handoff_wait_ms=0" "Detector.every_n_frames=-" "Detector.input_height=-")
   echo "$bin" > "$out/$name.bin"
   : > "$out/$name.env"
   for part in "${parts[@]:1}"; do

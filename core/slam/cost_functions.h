@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 
 #include "core/base/rigid3.h"
+#include "core/slam/projection_model.h"
 
 namespace dygslam {
 
@@ -30,10 +31,6 @@ class PoseManifold : public ceres::Manifold {
   bool PlusJacobian(const double* x, double* jacobian) const override;
   bool Minus(const double* y, const double* x, double* y_minus_x) const override;
   bool MinusJacobian(const double* x, double* jacobian) const override;
-};
-
-struct ProjectionModel {
-  double fx, fy, cx, cy, bf;
 };
 
 // Reprojection residual of kRows rows, pose only (the point X is constant):

@@ -10,18 +10,22 @@
 
 namespace dygslam {
 
+namespace {
+
+double MsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+}  // namespace
+
 LocalMapper::LocalMapper(std::shared_ptr<Map> map, const LocalMappingOptions& options,
                          bool threaded)
     : map_(std::move(map)),
       options_(options),
       matcher_(options.matcher),
       threaded_(threaded),
-      queue_(
-          [this](std::shared_ptr<KeyFrame>& kf) {
-            abort_ba_ = false;
-            Process(kf);
-          },
-          threaded) {
+      solver_([this](std::shared_ptr<Job>& job) { Solve(*job, options_.optimizer); }, threaded) {
   options_.Check();
 }
 
@@ -37,31 +41,25 @@ void LocalMapper::SetKeyFrameDoneCallback(KeyFrameDoneCallback callback) {
   keyframe_done_ = std::move(callback);
 }
 
-void LocalMapper::InsertKeyFrame(std::shared_ptr<KeyFrame> kf) {
-  {
-    std::lock_guard<std::mutex> lock(stats_mutex_);
-    stats_.queue_at_insert.push_back(static_cast<int>(queue_.Size()) + (queue_.Idle() ? 0 : 1));
-    inserted_at_[kf->id] = std::chrono::steady_clock::now();
-  }
-  // The flag first: the worker clears it when it takes the keyframe, so setting it after the
-  // push could land after that and stop this keyframe's own local BA (issue 22, BENCHMARKS.md).
-  abort_ba_ = true;
-  queue_.Push(std::move(kf));
-}
-
-size_t LocalMapper::QueueSize() const { return queue_.Size(); }
-
-void LocalMapper::ProcessPending() { queue_.Drain(); }
-
-void LocalMapper::Finish() { queue_.Finish(); }
-
-LocalMappingStats LocalMapper::stats() const {
-  std::lock_guard<std::mutex> lock(stats_mutex_);
-  return stats_;
-}
-
-void LocalMapper::Process(const std::shared_ptr<KeyFrame>& kf) {
+void LocalMapper::Solve(Job& job, const OptimizerOptions& options) {
+  if (job.bundle.empty()) return;
   const auto start = std::chrono::steady_clock::now();
+  SolveBundle(job.bundle, options, options.ba_iterations_first, options.ba_iterations_second);
+  job.solve_ms = MsSince(start);
+}
+
+void LocalMapper::InsertKeyFrame(std::shared_ptr<KeyFrame> kf) {
+  if (pending_) {
+    {
+      std::lock_guard<std::mutex> lock(stats_mutex_);
+      stats_.early_landings++;
+    }
+    Land();
+  }
+  const auto start = std::chrono::steady_clock::now();
+  auto job = std::make_shared<Job>();
+  job->kf = kf;
+  job->due_frame = kf->frame_id + options_.ba_lag_frames;
   {
     std::lock_guard<std::mutex> lock(map_->mutex());
     if (kf->bad) return;
@@ -72,37 +70,64 @@ void LocalMapper::Process(const std::shared_ptr<KeyFrame>& kf) {
   }
   CullRecentPoints(kf);
   CreateNewMapPoints(kf);
-  if (QueueSize() == 0) FuseWithNeighbors(kf);
-  std::vector<int64_t> changed;
-  bool ran_ba = false, interrupted = false;
-  if (QueueSize() == 0) {
-    {
-      std::lock_guard<std::mutex> lock(map_->mutex());
-      changed.push_back(kf->id);
-      for (int64_t id : kf->ordered_connections) changed.push_back(id);
-    }
-    if (map_->NumKeyFrames() > 2) {
-      LocalBundleAdjustment(*map_, kf, options_.optimizer, &abort_ba_, !threaded_);
-      ran_ba = true;
-      interrupted = threaded_ && abort_ba_;
-    }
+  FuseWithNeighbors(kf);
+  {
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    // Reported as moved whether or not the BA changes them (the map re-reads their poses).
+    job->window.push_back(kf->id);
+    for (int64_t id : kf->ordered_connections) job->window.push_back(id);
+    if (map_->NumKeyFrames() > 2) job->bundle = PrepareLocalBundle(*map_, kf);
   }
-  if (options_.cull_keyframes) CullKeyFrames(kf);
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  job->insert_ms = MsSince(start);
+  pending_ = job;
+  if (options_.ba_lag_frames == 0) {
+    Land();  // solved and landed here, at once
+  } else if (threaded_) {
+    solver_.Push(job);  // solved on the mapping thread; lands at the due frame
+  }  // unthreaded: solved and landed here at the due frame (BeginFrame)
+}
+
+void LocalMapper::BeginFrame(int64_t frame_id) {
+  if (pending_ && frame_id >= pending_->due_frame) Land();
+}
+
+void LocalMapper::Land() {
+  std::shared_ptr<Job> job = std::move(pending_);
+  pending_.reset();
+  if (!job) return;
+  double waited_ms = 0;
+  if (threaded_ && options_.ba_lag_frames > 0) {
+    if (!solver_.Idle()) {
+      const auto start = std::chrono::steady_clock::now();
+      solver_.WaitIdle(std::chrono::hours(24));
+      waited_ms = MsSince(start);
+    }
+  } else {
+    Solve(*job, options_.optimizer);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<int64_t> moved, culled;
+  {
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    ApplyBundle(*map_, job->bundle);
+  }
+  moved = job->window;
+  if (options_.cull_keyframes) CullKeyFrames(job->kf, &culled);
+  const double land_ms = MsSince(start);
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
+    const double ms = job->insert_ms + job->solve_ms + land_ms;
     stats_.keyframes_processed++;
     stats_.total_ms += ms;
     stats_.per_keyframe_ms.push_back(ms);
-    stats_.keyframes_without_ba += ran_ba ? 0 : 1;
-    stats_.ba_interrupted += interrupted ? 1 : 0;
-    auto it = inserted_at_.find(kf->id);
-    if (it != inserted_at_.end()) {
-      stats_.lag_ms.push_back(
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - it->second)
-              .count());
-      inserted_at_.erase(it);
+    stats_.insert_ms.push_back(job->insert_ms + land_ms);
+    stats_.solve_ms.push_back(job->solve_ms);
+    stats_.ba_keyframes.push_back(
+        static_cast<int>(job->bundle.poses.size() - job->bundle.fixed.size()));
+    stats_.ba_observations.push_back(static_cast<int>(job->bundle.observations.size()));
+    if (waited_ms > 0) {
+      stats_.late_bundle_adjustments++;
+      stats_.late_wait_ms += waited_ms;
     }
   }
   MapChangedCallback callback;
@@ -112,10 +137,8 @@ void LocalMapper::Process(const std::shared_ptr<KeyFrame>& kf) {
     callback = poses_changed_;
     done = keyframe_done_;
   }
-  std::vector<int64_t> culled;
-  culled.swap(culled_since_callback_);
-  if (callback && (!changed.empty() || !culled.empty())) callback(changed, culled);
-  if (done) done(kf);
+  if (callback && (!moved.empty() || !culled.empty())) callback(moved, culled);
+  if (done) done(job->kf);
   // Culled keyframes free their features and images in the middle of the heap, where glibc keeps
   // the pages resident: a long run's resident set would creep up with a flat heap in use.
   // The pages are the process's, so the count is too (one per process, any number of mappers).
@@ -126,6 +149,16 @@ void LocalMapper::Process(const std::shared_ptr<KeyFrame>& kf) {
     culled_since_trim = 0;
     ReleaseFreedMemory();
   }
+}
+
+void LocalMapper::Finish() {
+  Land();
+  solver_.Finish();
+}
+
+LocalMappingStats LocalMapper::stats() const {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  return stats_;
 }
 
 void LocalMapper::CullRecentPoints(const std::shared_ptr<KeyFrame>& kf) {
@@ -166,7 +199,6 @@ void LocalMapper::CreateNewMapPoints(const std::shared_ptr<KeyFrame>& kf) {
   const PinholeCamera& cam = g.camera;
   int created = 0;
   for (const auto& other : neighbors) {
-    if (QueueSize() > 0 && other != neighbors.front()) break;
     std::lock_guard<std::mutex> lock(map_->mutex());
     if (other->bad || kf->bad) continue;
     const Eigen::Vector3d c1 = kf->CameraCenter(), c2 = other->CameraCenter();
@@ -291,7 +323,8 @@ void LocalMapper::FuseWithNeighbors(const std::shared_ptr<KeyFrame>& kf) {
   map_->UpdateConnections(kf);
 }
 
-void LocalMapper::CullKeyFrames(const std::shared_ptr<KeyFrame>& kf) {
+void LocalMapper::CullKeyFrames(const std::shared_ptr<KeyFrame>& kf,
+                                std::vector<int64_t>* culled_ids) {
   std::lock_guard<std::mutex> lock(map_->mutex());
   if (kf->bad) return;
   int culled = 0;
@@ -320,7 +353,7 @@ void LocalMapper::CullKeyFrames(const std::shared_ptr<KeyFrame>& kf) {
     }
     if (considered > 0 && redundant > options_.redundancy_ratio * considered) {
       map_->SetBad(other);
-      culled_since_callback_.push_back(other->id);
+      culled_ids->push_back(other->id);
       ++culled;
     }
   }

@@ -294,14 +294,14 @@ std::string LoopRejectionSummary(const LoopClosingStats& stats) {
 
 LoopCloser::LoopCloser(std::shared_ptr<Map> map, std::shared_ptr<KeyFrameDatabase> database,
                        const LoopClosingOptions& options, const OptimizerOptions& optimizer,
-                       const MatcherOptions& matcher, bool threaded)
+                       const MatcherOptions& matcher, bool threaded, bool threaded_checks)
     : map_(std::move(map)),
       database_(std::move(database)),
       options_(options),
       optimizer_(optimizer),
       matcher_(matcher),
       threaded_(threaded),
-      queue_([this](std::shared_ptr<KeyFrame>& kf) { Process(kf); }, threaded) {
+      queue_([this](std::shared_ptr<KeyFrame>& kf) { Process(kf); }, threaded && threaded_checks) {
   options_.Check();
 }
 

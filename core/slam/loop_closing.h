@@ -102,12 +102,14 @@ class LoopCloser {
  public:
   LoopCloser(std::shared_ptr<Map> map, std::shared_ptr<KeyFrameDatabase> database,
              const LoopClosingOptions& options, const OptimizerOptions& optimizer,
-             const MatcherOptions& matcher, bool threaded);
+             const MatcherOptions& matcher, bool threaded, bool threaded_checks = true);
   ~LoopCloser();
   LoopCloser(const LoopCloser&) = delete;
   LoopCloser& operator=(const LoopCloser&) = delete;
 
-  // A keyframe local mapping is done with. Threaded: queued; deterministic: processed here.
+  // A keyframe local mapping is done with. threaded_checks: queued for the loop thread; else
+  // detected, verified and corrected here, in the caller's thread (the System's schedule: loop
+  // corrections enter the map at a defined frame). `threaded`: the global BA on its own thread.
   void InsertKeyFrame(std::shared_ptr<KeyFrame> kf);
   // Waits for the queue and any global bundle adjustment, then stops the threads.
   void Finish();

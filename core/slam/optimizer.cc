@@ -173,70 +173,83 @@ int OptimizePoseWithCeres(Frame& frame, const OptimizerOptions& options) {
 
 namespace {
 
-// Bundle adjustment of the keyframes `select` returns (called under the map lock; empty: nothing
-// to do) with every point they see; other keyframes observing those points are fixed, and so is
-// the map's first keyframe (else the oldest selected one) when nothing else fixes the gauge.
-void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyFrame>>()>& select,
-                  const OptimizerOptions& options, int iterations_first, int iterations_second,
-                  const std::atomic<bool>* abort, bool deterministic) {
-  struct ObsCopy {
-    int64_t kf_id;
-    int64_t point_id;
-    Eigen::Vector3d measurement;
-    double sqrt_info;
-    bool stereo;
-  };
-  std::map<int64_t, std::array<double, 7>> poses;  // local and fixed
-  std::set<int64_t> fixed;
-  std::map<int64_t, Eigen::Vector3d> points;
-  std::vector<ObsCopy> observations;
-  ProjectionModel model;
-  int64_t epoch = 0;
-  {
-    std::lock_guard<std::mutex> lock(map.mutex());
-    const std::vector<std::shared_ptr<KeyFrame>> local = select();
-    if (local.empty()) return;
-    epoch = map.CorrectionEpoch();
-    model = ModelOf(*local.front()->geometry);
-    for (const auto& k : local) PoseToParameters(k->cam_from_world, poses[k->id].data());
-    std::map<int64_t, std::shared_ptr<MapPoint>> local_points;
-    for (const auto& k : local) {
-      for (const auto& mp : k->map_points) {
-        if (mp && !mp->bad) local_points[mp->id] = mp;
-      }
-    }
-    for (const auto& [pid, mp] : local_points) {
-      points[pid] = mp->position;
-      for (const auto& [obs_kf_id, idx] : mp->observations) {
-        auto obs_kf = map.GetKeyFrame(obs_kf_id);
-        if (!obs_kf || obs_kf->bad) continue;
-        if (!poses.count(obs_kf_id)) {
-          PoseToParameters(obs_kf->cam_from_world, poses[obs_kf_id].data());
-          fixed.insert(obs_kf_id);
-        }
-        const cv::KeyPoint& kp = obs_kf->undistorted[idx];
-        const bool stereo = obs_kf->u_right[idx] >= 0;
-        observations.push_back(
-            {obs_kf_id, pid, Eigen::Vector3d(kp.pt.x, kp.pt.y, stereo ? obs_kf->u_right[idx] : 0.0),
-             std::sqrt(obs_kf->geometry->inv_sigma2[kp.octave]), stereo});
-      }
-    }
-    // Gauge: if no keyframe outside the local window observes the points, fix the oldest one.
-    if (poses.count(map.keyframes().begin()->first)) fixed.insert(map.keyframes().begin()->first);
-    if (fixed.empty()) fixed.insert(poses.begin()->first);  // oldest local keyframe
+// The keyframes of the local window around `kf`: it and its covisible keyframes (empty when kf
+// was culled). Called under the map lock.
+std::vector<std::shared_ptr<KeyFrame>> LocalWindow(const Map& map,
+                                                   const std::shared_ptr<KeyFrame>& kf) {
+  std::vector<std::shared_ptr<KeyFrame>> local;
+  if (kf->bad) return local;
+  local.push_back(kf);
+  for (int64_t id : kf->ordered_connections) {
+    auto other = map.GetKeyFrame(id);
+    if (other && !other->bad) local.push_back(other);
   }
-  if (observations.empty()) return;
+  return local;
+}
 
-  std::vector<uint8_t> outlier(observations.size(), 0);
+}  // namespace
+
+// Copies the problem of the keyframes `local` (with every point they see; other keyframes
+// observing those points are fixed, and so is the map's first keyframe, else the oldest selected
+// one, when nothing else fixes the gauge). Called under the map lock.
+BundleProblem PrepareBundle(const Map& map, const std::vector<std::shared_ptr<KeyFrame>>& local) {
+  BundleProblem problem;
+  if (local.empty()) return problem;
+  problem.epoch = map.CorrectionEpoch();
+  const CameraGeometry& g = *local.front()->geometry;
+  problem.model = ModelOf(g);
+  for (const auto& k : local) PoseToParameters(k->cam_from_world, problem.poses[k->id].data());
+  std::map<int64_t, std::shared_ptr<MapPoint>> local_points;
+  for (const auto& k : local) {
+    for (const auto& mp : k->map_points) {
+      if (mp && !mp->bad) local_points[mp->id] = mp;
+    }
+  }
+  for (const auto& [pid, mp] : local_points) {
+    problem.points[pid] = mp->position;
+    for (const auto& [obs_kf_id, idx] : mp->observations) {
+      auto obs_kf = map.GetKeyFrame(obs_kf_id);
+      if (!obs_kf || obs_kf->bad) continue;
+      if (!problem.poses.count(obs_kf_id)) {
+        PoseToParameters(obs_kf->cam_from_world, problem.poses[obs_kf_id].data());
+        problem.fixed.insert(obs_kf_id);
+      }
+      const cv::KeyPoint& kp = obs_kf->undistorted[idx];
+      const bool stereo = obs_kf->u_right[idx] >= 0;
+      problem.observations.push_back(
+          {obs_kf_id, pid, Eigen::Vector3d(kp.pt.x, kp.pt.y, stereo ? obs_kf->u_right[idx] : 0.0),
+           std::sqrt(obs_kf->geometry->inv_sigma2[kp.octave]), stereo});
+    }
+  }
+  // Gauge: if no keyframe outside the local window observes the points, fix the oldest one.
+  if (problem.poses.count(map.keyframes().begin()->first))
+    problem.fixed.insert(map.keyframes().begin()->first);
+  if (problem.fixed.empty()) problem.fixed.insert(problem.poses.begin()->first);
+  return problem;
+}
+
+BundleProblem PrepareLocalBundle(const Map& map, const std::shared_ptr<KeyFrame>& kf) {
+  return PrepareBundle(map, LocalWindow(map, kf));
+}
+
+void SolveBundle(BundleProblem& bundle, const OptimizerOptions& options, int iterations_first,
+                 int iterations_second, const std::atomic<bool>* abort) {
+  auto& observations = bundle.observations;
+  auto& poses = bundle.poses;
+  auto& points = bundle.points;
+  const auto& fixed = bundle.fixed;
+  const ProjectionModel& model = bundle.model;
+  auto& outlier = bundle.outlier;
+  outlier.assign(observations.size(), 0);
+  if (observations.empty()) return;
   const double delta_mono = std::sqrt(options.chi2_mono),
                delta_stereo = std::sqrt(options.chi2_stereo);
   AbortCallback abort_callback(abort);
   // Cost functions and the two Huber kernels are made once and shared by both solves (the
   // problems do not own them): only the problem's structure is rebuilt for the second solve.
-  // Residuals are added in the same order as before, so the result is the same.
   std::vector<std::unique_ptr<ceres::CostFunction>> costs;
   costs.reserve(observations.size());
-  for (const ObsCopy& o : observations) {
+  for (const BundleObservation& o : observations) {
     if (o.stereo) {
       costs.emplace_back(new StereoBACost(o.measurement, o.sqrt_info, model));
     } else {
@@ -253,7 +266,7 @@ void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyF
     PoseManifold manifold;
     for (size_t k = 0; k < observations.size(); ++k) {
       if (outlier[k]) continue;
-      const ObsCopy& o = observations[k];
+      const BundleObservation& o = observations[k];
       double* pose = poses[o.kf_id].data();
       double* point = points[o.point_id].data();
       ceres::LossFunction* loss = robust ? (o.stereo ? &huber_stereo : &huber_mono) : nullptr;
@@ -266,21 +279,19 @@ void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyF
     }
     ceres::Solver::Options solver_options;
     // The reduced camera system of a local window is small and dense (its keyframes share most
-    // points): a dense Schur complement suits it; sparse for large global problems. Same ATE on
-    // bonn_crowd_part; CPU per frame 0.96x in the dataset case, within the noise in the robot case
-    // (BENCHMARKS.md, issue 19, session 12).
+    // points): a dense Schur complement suits it; sparse for large global problems.
     solver_options.linear_solver_type =
         poses.size() <= kDenseSchurMaxPoses ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
     solver_options.max_num_iterations = iterations;
     solver_options.num_threads = 1;
     solver_options.logging_type = ceres::SILENT;
-    if (!deterministic) solver_options.callbacks.push_back(&abort_callback);
+    if (abort) solver_options.callbacks.push_back(&abort_callback);
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &problem, &summary);
   };
   auto classify = [&]() {
     for (size_t k = 0; k < observations.size(); ++k) {
-      const ObsCopy& o = observations[k];
+      const BundleObservation& o = observations[k];
       const Rigid3d cw = PoseFromParameters(poses[o.kf_id].data());
       const Eigen::Vector3d p = cw * points[o.point_id];
       if (p.z() <= 0) {
@@ -299,54 +310,65 @@ void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyF
     }
   };
   solve(iterations_first, true);
-  if (!(abort && abort->load() && !deterministic)) {
+  if (!(abort && abort->load())) {
     classify();
     solve(iterations_second, false);
   }
   classify();
+  bundle.solved = true;
+}
 
-  std::lock_guard<std::mutex> lock(map.mutex());
+bool ApplyBundle(Map& map, const BundleProblem& bundle) {
+  if (!bundle.solved || bundle.observations.empty()) return false;
   // A loop correction moved the map meanwhile: this solution is relative to the old poses.
-  if (map.CorrectionEpoch() != epoch) return;
+  if (map.CorrectionEpoch() != bundle.epoch) return false;
   // Drop outlier observations, then write back poses and points.
-  for (size_t k = 0; k < observations.size(); ++k) {
-    if (!outlier[k]) continue;
-    const ObsCopy& o = observations[k];
+  for (size_t k = 0; k < bundle.observations.size(); ++k) {
+    if (!bundle.outlier[k]) continue;
+    const BundleObservation& o = bundle.observations[k];
     auto it = map.map_points().find(o.point_id);
     if (it == map.map_points().end()) continue;
     auto mp = it->second;
     map.EraseObservation(mp, o.kf_id);
   }
-  for (const auto& [id, pose] : poses) {
-    if (fixed.count(id)) continue;
+  for (const auto& [id, pose] : bundle.poses) {
+    if (bundle.fixed.count(id)) continue;
     auto k = map.GetKeyFrame(id);
     if (k && !k->bad) k->cam_from_world = PoseFromParameters(pose.data());
   }
-  for (const auto& [pid, position] : points) {
+  for (const auto& [pid, position] : bundle.points) {
     auto it = map.map_points().find(pid);
     if (it == map.map_points().end()) continue;
     it->second->position = position;
     map.UpdateNormalAndDepth(*it->second);
   }
+  return true;
+}
+
+namespace {
+
+// Copy in under the map lock, solve without it, write back under it.
+void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyFrame>>()>& select,
+                  const OptimizerOptions& options, int iterations_first, int iterations_second,
+                  const std::atomic<bool>* abort) {
+  BundleProblem bundle;
+  {
+    std::lock_guard<std::mutex> lock(map.mutex());
+    bundle = PrepareBundle(map, select());
+  }
+  if (bundle.observations.empty()) return;
+  SolveBundle(bundle, options, iterations_first, iterations_second, abort);
+  std::lock_guard<std::mutex> lock(map.mutex());
+  ApplyBundle(map, bundle);
 }
 
 }  // namespace
 
 void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf,
-                           const OptimizerOptions& options, const std::atomic<bool>* abort,
-                           bool deterministic) {
-  auto select = [&map, &kf]() {
-    std::vector<std::shared_ptr<KeyFrame>> local;
-    if (kf->bad) return local;
-    local.push_back(kf);
-    for (int64_t id : kf->ordered_connections) {
-      auto other = map.GetKeyFrame(id);
-      if (other && !other->bad) local.push_back(other);
-    }
-    return local;
-  };
-  AdjustBundle(map, select, options, options.ba_iterations_first, options.ba_iterations_second,
-               abort, deterministic);
+                           const OptimizerOptions& options, const std::atomic<bool>* abort) {
+  AdjustBundle(
+      map, [&map, &kf]() { return LocalWindow(map, kf); }, options, options.ba_iterations_first,
+      options.ba_iterations_second, abort);
 }
 
 void GlobalBundleAdjustment(Map& map, const OptimizerOptions& options, int iterations_first,
@@ -357,8 +379,7 @@ void GlobalBundleAdjustment(Map& map, const OptimizerOptions& options, int itera
       if (!k->bad) all.push_back(k);
     return all;
   };
-  AdjustBundle(map, select, options, iterations_first, iterations_second, nullptr,
-               /*deterministic=*/true);
+  AdjustBundle(map, select, options, iterations_first, iterations_second, nullptr);
 }
 
 }  // namespace dygslam

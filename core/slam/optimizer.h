@@ -3,10 +3,16 @@
 #pragma once
 
 #include <atomic>
+#include <array>
+#include <cstdint>
+#include <map>
 #include <memory>
+#include <set>
+#include <vector>
 
 #include "core/slam/frame.h"
 #include "core/slam/map.h"
+#include "core/slam/projection_model.h"
 
 namespace dygslam {
 
@@ -34,11 +40,46 @@ int OptimizePose(Frame& frame, const OptimizerOptions& options);
 // reference the dedicated solver is tested against; not used by the system.
 int OptimizePoseWithCeres(Frame& frame, const OptimizerOptions& options);
 
-// Local BA around `kf`: it and its covisible keyframes are optimised with every point they see;
-// other keyframes seeing those points are fixed. Takes the map lock only to copy the problem in
-// and to write the result back. `abort` may be set by tracking to stop early.
-void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf, const OptimizerOptions& options,
-                           const std::atomic<bool>* abort, bool deterministic);
+// A bundle adjustment in three steps, so that the solve can run on another thread while the map
+// goes on being used: PrepareBundle copies the problem in (under the map lock), SolveBundle works
+// on the copy only (no lock, no map access), ApplyBundle writes the result back (under the map
+// lock). The result does not depend on which thread solves or when.
+struct BundleObservation {
+  int64_t kf_id;
+  int64_t point_id;
+  Eigen::Vector3d measurement;  // u, v, u_right (0 when mono)
+  double sqrt_info;
+  bool stereo;
+};
+struct BundleProblem {
+  std::map<int64_t, std::array<double, 7>> poses;  // optimised and fixed keyframes
+  std::set<int64_t> fixed;
+  std::map<int64_t, Eigen::Vector3d> points;
+  std::vector<BundleObservation> observations;
+  std::vector<uint8_t> outlier;  // per observation, after SolveBundle
+  ProjectionModel model;
+  int64_t epoch = 0;  // the map's correction epoch when copied in
+  bool solved = false;
+  bool empty() const { return observations.empty(); }
+};
+// The keyframes `local` with every point they see; other keyframes observing those points are
+// fixed, and so is the gauge. Hold the map lock.
+BundleProblem PrepareBundle(const Map& map, const std::vector<std::shared_ptr<KeyFrame>>& local);
+// The local window of `kf`: it and its covisible keyframes. Hold the map lock.
+BundleProblem PrepareLocalBundle(const Map& map, const std::shared_ptr<KeyFrame>& kf);
+// Two rounds (robust, then without the outliers), as ORB-SLAM2's RGB-D local BA. `abort` (may be
+// null) stops the solve early.
+void SolveBundle(BundleProblem& problem, const OptimizerOptions& options, int iterations_first,
+                 int iterations_second, const std::atomic<bool>* abort = nullptr);
+// Drops outlier observations and writes poses and points back; false (nothing written) when the
+// problem is empty or a loop correction moved the map since it was copied. Hold the map lock.
+bool ApplyBundle(Map& map, const BundleProblem& problem);
+
+// Local BA around `kf` in one call (prepare, solve, apply; the map lock only to copy in and
+// write back). `abort` may be set by another thread to stop early.
+void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf,
+                           const OptimizerOptions& options,
+                           const std::atomic<bool>* abort = nullptr);
 
 // Bundle adjustment of every keyframe and point of the map (the first keyframe fixed), the same
 // two rounds as the local one (robust, then without the outliers); outlier observations are

@@ -171,7 +171,7 @@ TEST(Optimizer, LocalBundleAdjustmentPullsPerturbedKeyframeBack) {
     // Perturb the newest keyframe by 4 cm.
     kfs[3]->cam_from_world = Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.04, -0.02, 0.01)) * truths[3];
   }
-  LocalBundleAdjustment(*map, kfs[3], OptimizerOptions{}, nullptr, true);
+  LocalBundleAdjustment(*map, kfs[3], OptimizerOptions{});
   std::lock_guard<std::mutex> lock(map->mutex());
   EXPECT_LT((kfs[3]->cam_from_world.translation - truths[3].translation).norm(), 0.005);
   EXPECT_LT((kfs[0]->cam_from_world.translation - truths[0].translation).norm(), 1e-9);  // gauge fixed

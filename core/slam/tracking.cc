@@ -11,18 +11,19 @@
 namespace dygslam {
 
 Tracker::Tracker(const TrackingOptions& options, std::shared_ptr<Map> map,
-                 LocalMapper& local_mapper, bool deterministic)
+                 LocalMapper& local_mapper)
     : options_(options),
       map_(std::move(map)),
       local_mapper_(local_mapper),
-      matcher_(options.matcher),
-      deterministic_(deterministic) {
+      matcher_(options.matcher) {
   options_.Check();
 }
 
 TrackResult Tracker::Track(Frame frame) {
   TrackResult result;
   ++frames_seen_;
+  // A local BA due before this frame lands now (the schedule: core/slam/local_mapping.h).
+  local_mapper_.BeginFrame(frame.id);
   {
     std::unique_lock<std::mutex> lock(map_->mutex());
     if (!initialized_) {
@@ -69,7 +70,7 @@ TrackResult Tracker::Track(Frame frame) {
         for (size_t i = 0; i < frame.size(); ++i) {
           if (frame.outlier[i]) frame.map_points[i] = nullptr;
         }
-        if (!localization_ && NeedNewKeyFrame(frame, lock))
+        if (!localization_ && NeedNewKeyFrame(frame))
           result.new_keyframe = CreateKeyFrame(frame);
         if (result.new_keyframe) RememberDenseKeyFrame(result.new_keyframe, frame);
         result.map_points = frame.map_points;
@@ -118,11 +119,6 @@ void Tracker::StartFromLoadedMap(bool localization) {
 
 void Tracker::HandOffKeyFrame(const std::shared_ptr<KeyFrame>& kf) {
   local_mapper_.InsertKeyFrame(kf);
-  if (deterministic_) {
-    local_mapper_.ProcessPending();
-  } else if (options_.handoff_wait_ms > 0) {
-    local_mapper_.WaitIdle(options_.handoff_wait_ms);  // the next frame tracks a refined map
-  }
 }
 
 bool Tracker::Initialize(Frame& frame, TrackResult* result) {
@@ -380,22 +376,16 @@ bool Tracker::TrackLocalMap(Frame& frame) {
          (static_inliers >= options_.local_map_min_inliers && last_relocalization_frame_id_ < 0);
 }
 
-bool Tracker::NeedNewKeyFrame(const Frame& frame, std::unique_lock<std::mutex>& map_lock) {
+bool Tracker::NeedNewKeyFrame(const Frame& frame) {
   const int64_t kfs = static_cast<int64_t>(map_->NumKeyFrames());
   if (frame.id < last_relocalization_frame_id_ + options_.max_frames_between_keyframes &&
       kfs > options_.max_frames_between_keyframes)
     return false;
-  // A weakly held frame with a person in view: its pose would seed the keyframe's points; the
-  // dense fallback holds the next frames instead when features cannot.
-  if (options_.keyframe_weak_inliers > 0 && options_.dense_fallback && frame.dense &&
-      last_inliers_ < options_.keyframe_weak_inliers &&
-      std::any_of(frame.in_dynamic_region.begin(), frame.in_dynamic_region.end(),
-                  [](uint8_t d) { return d != 0; }))
-    return false;
   // ORB-SLAM2 counts an RGB-D observation twice; here each keyframe observation counts once.
   const int min_obs = kfs <= 2 ? 1 : 2;
   const int ref_matches = reference_kf_->NumTrackedPoints(min_obs);
-  bool mapper_idle = local_mapper_.Idle();
+  // Idle: no local BA pending. Both are decided by the frame sequence, not by the clock.
+  const bool mapper_idle = local_mapper_.Idle();
   int tracked_close = 0, untracked_close = 0;
   const double close = frame.geometry->close_depth;
   for (size_t i = 0; i < frame.size(); ++i) {
@@ -419,26 +409,11 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame, std::unique_lock<std::mutex>& 
                           last_inliers_ < options_.keyframe_min_map_inliers;
   const double ratio = kfs < 2 ? 0.4 : options_.ref_ratio;
   const bool c2 = (last_inliers_ < ref_matches * ratio || need_close) && last_inliers_ > 15;
-  // A keyframe is due and local mapping is still busy with the previous one: wait for it a
-  // little (keyframe_wait_ms), so that the keyframe goes in on a refined map instead of being
-  // skipped or queued (the deterministic schedule; issue 22, BENCHMARKS.md).
-  // Tracking holds the map lock, which local mapping needs to finish: released for the wait
-  // (before, the wait always ran into its timeout; issue 22, BENCHMARKS.md). A loop correction
-  // meanwhile moved the map under this frame's pose: no keyframe from it.
-  if (c2 && !mapper_idle && options_.keyframe_wait_ms > 0 && !deterministic_) {
-    const int64_t epoch = map_->CorrectionEpoch();
-    map_lock.unlock();
-    mapper_idle = local_mapper_.WaitIdle(options_.keyframe_wait_ms);
-    map_lock.lock();
-    if (map_->CorrectionEpoch() != epoch) return false;
-  }
   const bool c1a = frame.id >= last_kf_frame_id_ + options_.max_frames_between_keyframes;
   const bool c1b = mapper_idle;
   const bool c1c = last_inliers_ < ref_matches * 0.25 || need_close;
-  if (!((c1a || c1b || c1c) && c2)) return false;
-  if (mapper_idle || deterministic_) return true;
-  local_mapper_.InterruptBA();
-  return local_mapper_.QueueSize() < 3;
+  // A keyframe while a local BA is pending lands that BA first (LocalMapper::InsertKeyFrame).
+  return (c1a || c1b || c1c) && c2;
 }
 
 std::shared_ptr<KeyFrame> Tracker::CreateKeyFrame(Frame& frame) {

@@ -49,19 +49,6 @@ struct TrackingOptions {
   // to 37, below local_map_min_inliers (30): lost with no keyframe made. 100 leaves ~3 frames of
   // that decay before the loss (BENCHMARKS.md, issue 14).
   int keyframe_min_map_inliers = 100;
-  // A frame whose pose rests on fewer map-point inliers than this while a person is in view (a
-  // feature of the frame lies in a dynamic region) does not become a keyframe when the dense
-  // fallback can hold the next frames (0: off). Such a keyframe seeds its points from a weak pose
-  // and the frames after it inherit the error (bonn_crowd_part frames 322-325: 0.03 -> 0.07 m,
-  // BENCHMARKS.md, issue 22).
-  int keyframe_weak_inliers = 0;
-  // Real threading only (issue 22): when a keyframe is due while local mapping is still busy,
-  // wait up to this long for it before deciding (0: do not wait; ORB-SLAM2 then skips or queues
-  // the keyframe) ...
-  double keyframe_wait_ms = 0;
-  // ... and after handing a keyframe to local mapping, wait up to this long for it to be done
-  // (0: do not wait), so the next frames track the points its local BA refined.
-  double handoff_wait_ms = 0;
   PlaceRecognitionOptions place;  // candidates from the BoW index (when a vocabulary is set)
   OptimizerOptions optimizer;
   MatcherOptions matcher;
@@ -94,11 +81,6 @@ struct TrackingOptions {
     DYGSLAM_CHECK_OPTION(max_frames_between_keyframes >= 1,
                          "Tracking.max_frames_between_keyframes");
     DYGSLAM_CHECK_OPTION(keyframe_min_map_inliers >= 0, "Tracking.keyframe_min_map_inliers");
-    DYGSLAM_CHECK_OPTION(keyframe_weak_inliers >= 0, "Tracking.keyframe_weak_inliers");
-    DYGSLAM_CHECK_OPTION(keyframe_wait_ms >= 0 && keyframe_wait_ms <= 10000,
-                         "Tracking.keyframe_wait_ms");
-    DYGSLAM_CHECK_OPTION(handoff_wait_ms >= 0 && handoff_wait_ms <= 10000,
-                         "Tracking.handoff_wait_ms");
     place.Check();
     optimizer.Check();
     matcher.Check();
@@ -149,8 +131,7 @@ struct TrajectoryRecord {
 
 class Tracker {
  public:
-  Tracker(const TrackingOptions& options, std::shared_ptr<Map> map, LocalMapper& local_mapper,
-          bool deterministic);
+  Tracker(const TrackingOptions& options, std::shared_ptr<Map> map, LocalMapper& local_mapper);
 
   // A new keyframe is returned in TrackResult::new_keyframe; the caller hands it to the local
   // mapper (HandOffKeyFrame) after it has announced it, so corrections never precede it.
@@ -181,9 +162,7 @@ class Tracker {
   bool Relocalize(Frame& frame);
   bool TrackLocalMap(Frame& frame);
   void UpdateLocalMap(Frame& frame);
-  // `map_lock` holds the map's mutex; the keyframe wait (options_.keyframe_wait_ms) releases it
-  // while it waits, so that local mapping can finish.
-  bool NeedNewKeyFrame(const Frame& frame, std::unique_lock<std::mutex>& map_lock);
+  bool NeedNewKeyFrame(const Frame& frame);
   std::shared_ptr<KeyFrame> CreateKeyFrame(Frame& frame);
   // tracking_fallback.cc: the dense estimate of a frame feature tracking could not hold.
   bool TrackWithStaticDepth(Frame& frame, const std::optional<Rigid3d>& predicted);
@@ -216,7 +195,6 @@ class Tracker {
   Matcher matcher_;
   std::shared_ptr<const Vocabulary> vocabulary_;
   std::shared_ptr<KeyFrameDatabase> database_;
-  bool deterministic_;
   int64_t frames_seen_ = 0;
 
   bool initialized_ = false;

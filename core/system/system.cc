@@ -116,7 +116,7 @@ class SystemImpl {
                     : LoadMapFile(options.load_map, map_file_settings_, geometry_)),
         map_(loaded_.map ? loaded_.map : std::make_shared<Map>()),
         local_mapper_(map_, options.local_mapping, !options.deterministic),
-        tracker_(options.tracking, map_, local_mapper_, options.deterministic),
+        tracker_(options.tracking, map_, local_mapper_),
         filter_(options.filter),
         dynamic_points_(options.dynamic_points),
         boxes_(options.box_propagation) {
@@ -126,7 +126,7 @@ class SystemImpl {
       tracker_.SetPlaceRecognition(vocabulary_, database_);
       loop_closer_ = std::make_unique<LoopCloser>(
           map_, database_, options.loop_closing, options.local_mapping.optimizer,
-          options.local_mapping.matcher, !options.deterministic);
+          options.local_mapping.matcher, !options.deterministic, /*threaded_checks=*/false);
       loop_closer_->SetCorrectionCallback(
           [this](const std::vector<int64_t>& moved) { EmitMapChanges(moved, {}); });
       LoopCloser* closer = loop_closer_.get();

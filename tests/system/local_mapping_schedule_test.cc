@@ -1,9 +1,6 @@
-// Issue 22: the local-mapping schedule under real threading. With Tracking.handoff_wait_ms the
-// tracker waits after each keyframe until local mapping is done with it, so every keyframe is
-// handed to an idle local mapper and must get its whole local BA: none may be stopped early.
-// (Before the fix in LocalMapper::InsertKeyFrame the abort flag was raised after the push, and
-// the worker, having already taken the keyframe and cleared the flag, then stopped that
-// keyframe's own BA after its first iteration: 30-36 of ~55 keyframes on bonn_crowd_part.)
+// The local-mapping schedule (core/slam/local_mapping.h): a keyframe's local BA is solved on the
+// mapping thread and lands at a fixed point of the frame sequence, so a threaded run gives the
+// trajectory of the unthreaded (deterministic) run, whatever the threads' timing.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -37,101 +34,98 @@ SystemOptions ScheduleOptions(const SyntheticOptions& synth) {
 }
 
 struct ScheduledRun {
+  int keyframes = 0;
+  std::vector<StampedPose> trajectory;
   LocalMappingStats stats;
-  size_t poses = 0;
 };
 
-// The first `num_frames` frames of `scene` through a threaded System.
-ScheduledRun RunThreaded(const SystemOptions& options, const SyntheticScene& scene,
-                         int num_frames) {
+ScheduledRun RunSystem(SystemOptions options, const std::vector<SyntheticFrame>& frames,
+                 bool deterministic) {
+  options.deterministic = deterministic;
   System system(options);
-  for (int i = 0; i < num_frames; ++i) {
-    const SyntheticFrame f = scene.RenderFrame(i);
-    system.FeedRgbdFrame(f.rgb, f.depth, f.stamp);
-  }
+  ScheduledRun run;
+  for (const SyntheticFrame& f : frames)
+    run.keyframes += system.FeedRgbdFrame(f.rgb, f.depth, f.stamp).is_keyframe;
   system.Shutdown();
-  return {system.LocalMappingStatistics(), system.Trajectory().size()};
+  run.trajectory = system.Trajectory();
+  run.stats = system.LocalMappingStatistics();
+  return run;
 }
 
-// Every keyframe was handed to an idle local mapper and none had its local BA cut short.
-void ExpectNoKeyframeQueuedNoBaInterrupted(const LocalMappingStats& stats) {
-  ASSERT_GE(stats.keyframes_processed, 4) << "too few keyframes to test the schedule";
-  ASSERT_EQ(stats.queue_at_insert.size(), static_cast<size_t>(stats.keyframes_processed));
-  for (size_t k = 0; k < stats.queue_at_insert.size(); ++k)
-    EXPECT_EQ(stats.queue_at_insert[k], 0) << "keyframe " << k << " queued behind a busy mapper";
-  EXPECT_EQ(stats.ba_interrupted, 0) << "of " << stats.keyframes_processed << " keyframes";
-}
-
-TEST(LocalMappingSchedule, KeyframesHandedToAnIdleMapperGetTheirWholeLocalBa) {
-  const SyntheticOptions synth = ScheduleScene();
-  const SyntheticScene scene(synth);
-  SystemOptions options = ScheduleOptions(synth);
-  options.tracking.handoff_wait_ms = 10000;  // real threading, but one keyframe at a time
-  const ScheduledRun run = RunThreaded(options, scene, scene.num_frames());
-  ExpectNoKeyframeQueuedNoBaInterrupted(run.stats);
-  ASSERT_EQ(run.stats.lag_ms.size(), static_cast<size_t>(run.stats.keyframes_processed));
-  // Only the first two keyframes go without local BA (it needs three keyframes in the map).
-  EXPECT_LE(run.stats.keyframes_without_ba, 2);
-  EXPECT_EQ(run.poses, static_cast<size_t>(scene.num_frames()));
-}
-
-// Session 11: Tracking.keyframe_wait_ms (wait when a keyframe is due while local mapping is
-// busy) never saw local mapping finish: the tracker waited holding the map lock, which local
-// mapping needs, so every wait ran into its timeout and the keyframe was then queued behind the
-// busy mapper anyway (bonn_crowd_part: 11-13 of ~52 keyframes inserted while busy, local BAs
-// interrupted as often as without the wait). The lock is now released while it waits: no keyframe
-// is queued behind another and no local BA is cut short, while tracking does not wait after
-// handing a keyframe over (handoff_wait_ms 0).
-TEST(LocalMappingSchedule, KeyframeWaitLetsLocalMappingFinishFirst) {
-  const SyntheticOptions synth = ScheduleScene();
-  const SyntheticScene scene(synth);
-  SystemOptions options = ScheduleOptions(synth);
-  options.tracking.handoff_wait_ms = 0;
-  options.tracking.keyframe_wait_ms = 2000;  // generous: a wait that times out is the failure
-  // A keyframe due on every frame (the map-point floor above any count), so that one is due
-  // while local mapping is still busy with the previous one.
-  options.tracking.keyframe_min_map_inliers = 1000000;
-  const int num_frames = 30;
-  const ScheduledRun run = RunThreaded(options, scene, num_frames);
-  ExpectNoKeyframeQueuedNoBaInterrupted(run.stats);
-  EXPECT_GE(run.stats.keyframes_processed, num_frames / 2) << "the keyframe rule did not fire";
-  EXPECT_EQ(run.poses, static_cast<size_t>(num_frames));
-}
-
-// Session 10: with the hand-off wait, a threaded run follows the deterministic schedule (local
-// mapping done with each keyframe before the next frame is tracked), so it gives the deterministic
-// trajectory: the same keyframes, the same poses. On bonn_crowd_part the threaded runs with
-// Tracking.handoff_wait_ms gave the deterministic figures to the last digit (BENCHMARKS.md, issue
-// 22, Round 6); without the wait they differ by 0.001-0.002 m there.
-TEST(LocalMappingSchedule, HandOffWaitGivesTheDeterministicTrajectory) {
-  const SyntheticOptions synth = ScheduleScene();
-  const SyntheticScene scene(synth);
+std::vector<SyntheticFrame> Frames(const SyntheticScene& scene, int num_frames) {
   std::vector<SyntheticFrame> frames;
-  for (int i = 0; i < scene.num_frames(); ++i) frames.push_back(scene.RenderFrame(i));
-  auto run = [&](bool deterministic) {
-    SystemOptions options = ScheduleOptions(synth);
-    options.deterministic = deterministic;
-    options.tracking.handoff_wait_ms = 10000;  // no effect in deterministic mode
-    System system(options);
-    int keyframes = 0;
-    for (const SyntheticFrame& f : frames)
-      keyframes += system.FeedRgbdFrame(f.rgb, f.depth, f.stamp).is_keyframe;
-    system.Shutdown();
-    return std::make_pair(keyframes, system.Trajectory());
-  };
-  const auto [det_keyframes, det] = run(true);
-  const auto [thr_keyframes, thr] = run(false);
-  ASSERT_GE(det_keyframes, 4) << "too few keyframes to test the schedule";
-  EXPECT_EQ(thr_keyframes, det_keyframes);
-  ASSERT_EQ(thr.size(), det.size());
-  ASSERT_EQ(det.size(), frames.size());
-  double max_diff_m = 0;
-  for (size_t i = 0; i < det.size(); ++i) {
-    max_diff_m = std::max(
-        max_diff_m, (thr[i].world_from_cam.translation - det[i].world_from_cam.translation).norm());
+  for (int i = 0; i < num_frames; ++i) frames.push_back(scene.RenderFrame(i));
+  return frames;
+}
+
+// The same keyframes and bit-identical poses.
+void ExpectSameRun(const ScheduledRun& a, const ScheduledRun& b) {
+  EXPECT_EQ(a.keyframes, b.keyframes);
+  ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
+  for (size_t i = 0; i < a.trajectory.size(); ++i) {
+    ASSERT_EQ(a.trajectory[i].world_from_cam.translation, b.trajectory[i].world_from_cam.translation)
+        << "frame " << i;
+    ASSERT_EQ(a.trajectory[i].world_from_cam.rotation.coeffs(),
+              b.trajectory[i].world_from_cam.rotation.coeffs())
+        << "frame " << i;
   }
-  // The same operations in the same order: equal up to rounding (1 um allows for nothing else).
-  EXPECT_LT(max_diff_m, 1e-6) << "threaded with the hand-off wait left the deterministic path";
+}
+
+TEST(LocalMappingSchedule, ThreadedRunGivesTheDeterministicTrajectory) {
+  const SyntheticOptions synth = ScheduleScene();
+  const SyntheticScene scene(synth);
+  const std::vector<SyntheticFrame> frames = Frames(scene, scene.num_frames());
+  const SystemOptions options = ScheduleOptions(synth);
+  ASSERT_GT(options.local_mapping.ba_lag_frames, 0) << "the default runs the BA on its thread";
+  const ScheduledRun det = RunSystem(options, frames, /*deterministic=*/true);
+  ASSERT_GE(det.keyframes, 4) << "too few keyframes to test the schedule";
+  ASSERT_EQ(det.trajectory.size(), frames.size());
+  EXPECT_EQ(det.stats.keyframes_processed, det.keyframes);
+  for (int repeat = 0; repeat < 2; ++repeat) {
+    const ScheduledRun threaded = RunSystem(options, frames, /*deterministic=*/false);
+    ExpectSameRun(threaded, det);
+    EXPECT_EQ(threaded.stats.keyframes_processed, threaded.keyframes);
+  }
+}
+
+// A keyframe due on every frame (the map-point floor above any count): each keyframe comes before
+// the previous one's BA is due, so every BA lands early, at the insertion of the next keyframe,
+// usually before its solve is done. Still the deterministic trajectory.
+TEST(LocalMappingSchedule, KeyframesBeforeTheDueFrameLandTheBaEarlyAndDeterministically) {
+  const SyntheticOptions synth = ScheduleScene();
+  const SyntheticScene scene(synth);
+  const int num_frames = 30;
+  const std::vector<SyntheticFrame> frames = Frames(scene, num_frames);
+  SystemOptions options = ScheduleOptions(synth);
+  options.tracking.keyframe_min_map_inliers = 1000000;
+  const ScheduledRun det = RunSystem(options, frames, /*deterministic=*/true);
+  EXPECT_GE(det.keyframes, num_frames / 2) << "the keyframe rule did not fire";
+  EXPECT_GE(det.stats.early_landings, det.keyframes / 2);
+  const ScheduledRun threaded = RunSystem(options, frames, /*deterministic=*/false);
+  ExpectSameRun(threaded, det);
+  EXPECT_EQ(threaded.stats.early_landings, det.stats.early_landings);
+  EXPECT_EQ(threaded.trajectory.size(), static_cast<size_t>(num_frames));
+}
+
+// The lag is a real choice: landing the BA at once (0) and two frames later give different
+// trajectories, and both are followed exactly by the threaded run.
+TEST(LocalMappingSchedule, TheLagDecidesTheTrajectoryNotTheThreads) {
+  const SyntheticOptions synth = ScheduleScene();
+  const SyntheticScene scene(synth);
+  const std::vector<SyntheticFrame> frames = Frames(scene, scene.num_frames());
+  SystemOptions at_once = ScheduleOptions(synth);
+  at_once.local_mapping.ba_lag_frames = 0;
+  SystemOptions lagged = ScheduleOptions(synth);
+  lagged.local_mapping.ba_lag_frames = 2;
+  const ScheduledRun a = RunSystem(at_once, frames, false), b = RunSystem(lagged, frames, false);
+  ExpectSameRun(a, RunSystem(at_once, frames, true));
+  double max_diff_m = 0;
+  ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
+  for (size_t i = 0; i < a.trajectory.size(); ++i)
+    max_diff_m = std::max(max_diff_m, (a.trajectory[i].world_from_cam.translation -
+                                       b.trajectory[i].world_from_cam.translation)
+                                          .norm());
+  EXPECT_GT(max_diff_m, 0.0) << "the lag changed nothing: the BA does not land where scheduled";
 }
 
 }  // namespace

@@ -1,0 +1,74 @@
+#include "run/realtime_report.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "core/base/error.h"
+#include "core/io/file_util.h"
+
+namespace dygslam {
+
+std::string RealtimeReport::Summary() const {
+  char line[256];
+  std::snprintf(line, sizeof(line),
+                "rate %.2fx: %zu frames, %zu dropped, %zu late; latency median %.1f ms, 99th "
+                "percentile %.1f ms",
+                rate, frames, dropped(), late, latency_median_ms, latency_p99_ms);
+  return line;
+}
+
+RealtimeReport MakeRealtimeReport(double rate, size_t frames, const std::vector<double>& latency_ms,
+                                  double late_after_ms) {
+  RealtimeReport r;
+  r.rate = rate;
+  r.frames = frames;
+  r.results = latency_ms.size();
+  std::vector<double> sorted = latency_ms;
+  std::sort(sorted.begin(), sorted.end());
+  auto quantile = [&](double q) {
+    if (sorted.empty()) return 0.0;
+    const size_t i = std::min(sorted.size() - 1, static_cast<size_t>(q * sorted.size()));
+    return sorted[i];
+  };
+  r.latency_median_ms = quantile(0.5);
+  r.latency_p99_ms = quantile(0.99);
+  if (late_after_ms > 0)
+    r.late = static_cast<size_t>(
+        std::count_if(sorted.begin(), sorted.end(), [&](double ms) { return ms > late_after_ms; }));
+  return r;
+}
+
+void WriteRealtimeReport(const std::string& path, const RealtimeReport& r) {
+  std::ostringstream out;
+  out << "rate " << r.rate << "\nframes " << r.frames << "\nresults " << r.results << "\nlate "
+      << r.late << "\nlatency_median_ms " << r.latency_median_ms << "\nlatency_p99_ms "
+      << r.latency_p99_ms << "\n";
+  WriteFileAtomically(path, out.str());
+}
+
+RealtimeReport ReadRealtimeReport(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot be read");
+  RealtimeReport r;
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    if (line.empty()) continue;
+    std::istringstream fields(line);
+    std::string key;
+    double value = 0;
+    if (!(fields >> key >> value) || value < 0)
+      throw InputError(path + ":" + std::to_string(n) + ": expected 'key value', got '" + line +
+                       "'");
+    if (key == "rate") r.rate = value;
+    if (key == "frames") r.frames = static_cast<size_t>(value);
+    if (key == "results") r.results = static_cast<size_t>(value);
+    if (key == "late") r.late = static_cast<size_t>(value);
+    if (key == "latency_median_ms") r.latency_median_ms = value;
+    if (key == "latency_p99_ms") r.latency_p99_ms = value;
+  }
+  return r;
+}
+
+}  // namespace dygslam

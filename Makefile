@@ -6,8 +6,10 @@
 #   make test-fuzz  build the libFuzzer targets (clang) and run each for FUZZ_SECONDS, replay crashes
 #   make test-docker  build the Docker image with a private engine and run compose on 100 frames
 #   make ci      what CI runs: test, test-fuzz, test-docker
+#   make bench   rewrite BENCHMARKS.md (and the README's figures block) from this commit (~30 min)
 # Variables: BUILD_DIR (build), JOBS (2), CMAKE_ARGS (extra cmake options, e.g.
-# -DDYGSLAM_BUILD_DDS=OFF), DEMO_OUT (out/demo), DYGSLAM_DATA_DIR (where datasets are looked up).
+# -DDYGSLAM_BUILD_DDS=OFF), DEMO_OUT (out/demo), DYGSLAM_DATA_DIR (where datasets are looked up),
+# BENCH_ARGS (options of scripts/make_benchmarks.py, e.g. --quick or --runs 3; BENCH_QUICK=1 too).
 
 SHELL := /bin/bash
 
@@ -28,12 +30,12 @@ CTEST_ARGS ?=
 FUZZ_BUILD_DIR ?= build-fuzz
 FUZZ_SECONDS ?= 30
 
-.PHONY: all setup configure build test test-asan test-fuzz test-docker ci demo clean help
+.PHONY: all setup configure build test test-asan test-fuzz test-docker ci demo bench clean help
 
 all: build
 
 help:
-	@sed -n '2,10p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '2,12p' Makefile | sed 's/^# \{0,1\}//'
 
 setup:
 	scripts/setup.sh
@@ -90,6 +92,17 @@ demo: build
 	echo ""; \
 	echo "demo: outputs in $(DEMO_OUT)/"; \
 	ls -1 $(DEMO_OUT) | sed 's/^/  /'
+
+# BENCHMARKS.md from scratch: every table measured on this commit with the shipped settings, the
+# commit / machine / load in its header; the README's <!-- figures:begin --> block rewritten; the
+# pictures in docs/benchmarks/. Written only at the end (a stopped run leaves the old files).
+# The system python is preferred for the plots (matplotlib).
+BENCH_ARGS ?=
+BENCH_PYTHON ?= $(shell [ -x /usr/bin/python3 ] && echo /usr/bin/python3 || echo python3)
+bench: build
+	@set -eo pipefail; \
+	data=$$(scripts/fetch_data.sh bonn_crowd_part); \
+	$(BENCH_PYTHON) scripts/make_benchmarks.py --build $(BUILD_DIR) --data "$$data" $(BENCH_ARGS)
 
 clean:
 	rm -rf $(BUILD_DIR)

@@ -15,8 +15,11 @@ import sys
 
 from plot_common import import_pyplot
 
+# One colour per configuration, none shared (a configuration not listed gets one of the spare colours).
 COLORS = {"none": "tab:red", "boxes": "tab:orange", "geometry": "tab:purple", "full": "tab:blue",
+          "paper": "tab:brown", "paper+margin": "tab:olive", "paper+margin+demotion": "tab:cyan",
           "rgbd_icp_odometry": "tab:gray"}
+SPARE_COLORS = ["tab:green", "tab:pink", "black", "gold"]
 
 
 def read_pairs(path):
@@ -57,8 +60,9 @@ def draw(plt, sequence, series, out_png):
     names = "xyz"
     t0 = min(rows[0][0] for _, _, rows in series)
     ax0.plot([p[a] for p in gt], [p[b] for p in gt], "-", color="black", lw=2.0, label="ground truth")
+    spare = iter(SPARE_COLORS)
     for config, label, rows in series:
-        color = COLORS.get(config, None)
+        color = COLORS.get(config) or next(spare, "dimgray")
         est = [r[4:7] for r in rows]
         err = [r[7] for r in rows]
         rmse = (sum(e * e for e in err) / len(err)) ** 0.5

@@ -1,6 +1,7 @@
 #!/bin/bash
 # Private network namespaces for DDS runs: the one place that knows how (sourced by
-# components/tests/run_in_netns.sh, scripts/two_hosts.sh, reliability_soak.sh, speed_compare.sh).
+# components/tests/run_in_netns.sh, scripts/two_hosts.sh, reliability_soak.sh, speed_compare.sh,
+# make_benchmarks.py).
 # DDS discovery multicasts on every interface; inside a namespace with only loopback up (multicast
 # routed to lo) nothing leaves the machine. Fast DDS's shared-memory transport lives in /dev/shm,
 # which a network namespace does not isolate: each namespace also gets its own empty tmpfs there
@@ -19,6 +20,14 @@ netns_available() {
 # /dev/shm); stdin, stdout and the exit code pass through.
 netns_run() {
   unshare -n -m --propagation private bash -c \
+    "mount -t tmpfs -o mode=1777 dygslam-netns-shm /dev/shm && $netns_loopback_setup && exec \"\$@\"" \
+    netns "$@"
+}
+
+# netns_exec CMD [ARGS...]: like netns_run, but replaces this shell (the command keeps its pid, so
+# signals sent to it arrive directly).
+netns_exec() {
+  exec unshare -n -m --propagation private bash -c \
     "mount -t tmpfs -o mode=1777 dygslam-netns-shm /dev/shm && $netns_loopback_setup && exec \"\$@\"" \
     netns "$@"
 }

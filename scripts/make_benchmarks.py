@@ -1,0 +1,1299 @@
+#!/usr/bin/env python3
+"""BENCHMARKS.md from the current commit, in one command (`make bench`).
+
+Runs the `dygslam` binary of BUILD with the shipped settings (config/bonn.yaml, no extra keys) and
+writes BENCHMARKS.md from scratch: the commit, the machine, the number of runs, then one section per
+measurement, each table with the command lines that produced it, medians with their ranges, frames
+with a pose beside every ATE, final and online ATE:
+
+  accuracy and ablation   bonn_crowd_part, filters none / paper / boxes / geometry / full (direct)
+  schedule (live)         the default command (DDS pipeline, shipped defaults); --rate 1 when the
+                          run command has it
+  speed and CPU           frames/s, CPU ms per frame over all threads, per-stage times (frames.csv)
+  DDS against direct      frames/s ratio, the two modes interleaved in the same rounds
+  memory                  resident memory over a longer run (the player replays the frames)
+  loop closing            generated loops (24.4 m and 62.2 m), loop closing on (default) and off
+  map reuse               save the SLAM map, localize in it, ATE
+  map quality             ghost voxels with and without the dynamic masks (`dygslam map`)
+  published figures       quoted from docs/benchmarks/published_figures.md (not measured)
+
+Scores come from `dygslam eval --json`; pictures go to docs/benchmarks/ (committed). The README's
+block between <!-- figures:begin --> and <!-- figures:end --> is rewritten with the headline
+figures when both markers exist. Outputs are written only at the end, each through a temporary
+file renamed into place: a stopped run (SIGINT / SIGTERM) leaves the previous files untouched.
+
+DDS runs stay on this machine: the whole benchmark runs in a private network namespace (loopback
+only, private /dev/shm; scripts/netns_lib.sh), entered automatically when this process may create
+one. Without it the DDS sections say "not measured" and why.
+
+  scripts/make_benchmarks.py [--build build] [--data DIR] [--runs N] [--quick] [--frames A:B] ...
+  BENCH_QUICK=1 scripts/make_benchmarks.py     (1 run, no memory and loop sections)
+"""
+import argparse
+import datetime
+import json
+import math
+import os
+import re
+import shlex
+import shutil
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ABLATION = ["none", "paper", "boxes", "geometry", "full"]
+LABELS = {
+    "none": "no filter",
+    "paper": "the paper's method as written",
+    "boxes": "person boxes only",
+    "geometry": "geometry only (depth-residual test)",
+    "full": "full method (default)",
+}
+# One colour per method, never shared (pictures).
+COLOURS = {"none": "#d62728", "paper": "#8c564b", "boxes": "#ff7f0e", "geometry": "#9467bd",
+           "full": "#1f77b4", "loop_on": "#1f77b4", "loop_off": "#d62728"}
+# Generated loops: (name, length text, `dygslam synth` arguments). Rendered once into the cache
+# folder and reused while the command is the same (the renderer is deterministic).
+LOOPS = [
+    ("loop24", "24.4 m inward loop, 480 frames (1.18 laps)",
+     ["--room", "10.5,8,3", "--loop-path", "4,2.75", "--loop-corner", "1.5", "--loop-inward",
+      "--speed", "1.2", "--fps", "20", "--texels", "200", "--objects", "0", "--noise",
+      "--supersampling", "1", "--frames", "480"]),
+    ("loop62", "62.2 m inward loop, 1,150 frames (1.11 laps)",
+     ["--room", "26.5,11.2,3", "--loop-path", "12,4.2", "--loop-corner", "1.5", "--loop-inward",
+      "--speed", "1.2", "--fps", "20", "--texels", "200", "--objects", "0", "--noise",
+      "--supersampling", "1", "--frames", "1150", "--seed", "2"]),
+]
+FIGURES_BEGIN = "<!-- figures:begin -->"
+FIGURES_END = "<!-- figures:end -->"
+
+
+class Stopped(Exception):
+    def __init__(self, signum):
+        super().__init__(f"stopped by signal {signum}")
+        self.signum = signum
+
+
+class RunFailed(Exception):
+    pass
+
+
+CURRENT_CHILD = [None]
+
+
+def on_signal(signum, _frame):
+    child = CURRENT_CHILD[0]
+    if child is not None and child.poll() is None:
+        try:
+            os.killpg(child.pid, signal.SIGTERM)
+        except ProcessLookupError:
+            pass
+    raise Stopped(signum)
+
+
+# --- small helpers ---------------------------------------------------------------------------
+
+def say(text):
+    print(f"[bench {time.strftime('%H:%M:%S')}] {text}", file=sys.stderr, flush=True)
+
+
+def median(values):
+    v = [x for x in values if x is not None and math.isfinite(x)]
+    return statistics.median(v) if v else float("nan")
+
+
+def fmt(value, digits=4):
+    return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
+
+
+def med_range(values, digits=4):
+    """'median (min–max)' over the finite values; one value alone; '-' for none."""
+    v = [x for x in values if x is not None and math.isfinite(x)]
+    if not v:
+        return "-"
+    if len(v) == 1:
+        return fmt(v[0], digits)
+    return f"{fmt(statistics.median(v), digits)} ({fmt(min(v), digits)}–{fmt(max(v), digits)})"
+
+
+def stage_text(values):
+    """A stage's milliseconds; '-' for a stage the method does not run (0 in every run)."""
+    return "-" if values and all(v == 0 for v in values) else med_range(values, 2)
+
+
+def int_range(values):
+    v = [x for x in values if x is not None]
+    if not v:
+        return "-"
+    lo, hi = min(v), max(v)
+    return str(lo) if lo == hi else f"{lo}–{hi}"
+
+
+def poses_text(runs, key_poses="poses", key_frames="frames"):
+    return f"{int_range([r.get(key_poses) for r in runs])} / {int_range([r.get(key_frames) for r in runs])}"
+
+
+def command_text(cmd, replacements):
+    """A command line as a user would type it (paths shortened)."""
+    words = []
+    for word in cmd:
+        for long, short in replacements:
+            if word == long or word.startswith(long + "/"):
+                word = short + word[len(long):]
+                break
+        words.append(shlex.quote(word))
+    return " ".join(words)
+
+
+def load1():
+    try:
+        return float(open("/proc/loadavg").read().split()[0])
+    except (OSError, ValueError, IndexError):
+        return float("nan")
+
+
+def loadavg_text():
+    try:
+        return " / ".join(open("/proc/loadavg").read().split()[:3])
+    except OSError:
+        return "n/a"
+
+
+def machine_text():
+    model = "unknown CPU"
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    mem = 0.0
+    try:
+        for line in open("/proc/meminfo"):
+            if line.startswith("MemTotal:"):
+                mem = float(line.split()[1]) / (1024 * 1024)
+                break
+    except OSError:
+        pass
+    return f"{model}, {os.cpu_count()} CPU cores, {mem:.0f} GiB RAM"
+
+
+def git(*args):
+    try:
+        return subprocess.run(["git", "-C", REPO] + list(args), capture_output=True, text=True,
+                              check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return ""
+
+
+def write_atomically(path, text):
+    directory = os.path.dirname(os.path.abspath(path))
+    os.makedirs(directory, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".tmp", dir=directory)
+    with os.fdopen(fd, "w") as f:
+        f.write(text)
+    return tmp
+
+
+def rss_mib(pid):
+    try:
+        for line in open(f"/proc/{pid}/status"):
+            if line.startswith("VmRSS:"):
+                return float(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return None
+
+
+# --- running the binary ----------------------------------------------------------------------
+
+def run(cmd, log_path, sample_rss_every=None, check=True):
+    """Runs cmd (its own process group), stdout+stderr into log_path. Returns a dict: exit code,
+    wall seconds, CPU seconds (user + sys, all threads), peak RSS (MiB), the log text and, with
+    sample_rss_every, [(seconds, RSS MiB)] of the process."""
+    os.makedirs(os.path.dirname(log_path), exist_ok=True)
+    samples = []
+    with open(log_path, "w") as log:
+        t0 = time.monotonic()
+        child = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        CURRENT_CHILD[0] = child
+        next_sample = t0
+        while True:
+            pid, status, usage = os.wait4(child.pid, os.WNOHANG)
+            if pid != 0:
+                break
+            now = time.monotonic()
+            if sample_rss_every and now >= next_sample:
+                value = rss_mib(child.pid)
+                if value is not None:
+                    samples.append((now - t0, value))
+                next_sample = now + sample_rss_every
+            time.sleep(0.05)
+        child.returncode = os.waitstatus_to_exitcode(status)
+        CURRENT_CHILD[0] = None
+        wall = time.monotonic() - t0
+    text = open(log_path, errors="replace").read()
+    result = {"exit": child.returncode, "wall_s": wall, "cpu_s": usage.ru_utime + usage.ru_stime,
+              "peak_rss_mib": usage.ru_maxrss / 1024.0, "log": text, "rss": samples}
+    if check and child.returncode != 0:
+        tail = "\n".join(text.splitlines()[-15:])
+        raise RunFailed(f"exit code {child.returncode}: {' '.join(cmd)}\n{tail}")
+    return result
+
+
+def evaluate(dygslam, groundtruth, trajectory, work, save_aligned=None):
+    """`dygslam eval --json` of one trajectory (None when it has fewer than 3 poses)."""
+    if not os.path.exists(trajectory) or sum(1 for _ in open(trajectory)) < 3:
+        return None
+    cmd = [dygslam, "eval", groundtruth, trajectory, "--json"]
+    if save_aligned:
+        cmd += ["--save-aligned", save_aligned]
+    r = run(cmd, os.path.join(work, "eval_" + os.path.basename(trajectory) + ".log"), check=False)
+    if r["exit"] != 0:
+        return None
+    for line in r["log"].splitlines():
+        if line.startswith("{"):
+            return json.loads(line)
+    return None
+
+
+def count_poses(path):
+    if not os.path.exists(path):
+        return 0
+    return sum(1 for line in open(path) if line.strip() and not line.startswith("#"))
+
+
+def read_frames_csv(path):
+    if not os.path.exists(path):
+        return []
+    lines = [l.rstrip("\n").split(",") for l in open(path) if l.strip()]
+    if not lines:
+        return []
+    header = lines[0]
+    return [dict(zip(header, row)) for row in lines[1:]]
+
+
+def score_run(dygslam, groundtruth, out_dir, result, aligned_prefix=None):
+    """Final and online ATE, poses, frames, frames/s, CPU per frame, stage means of one run."""
+    log = result["log"]
+    frames = None
+    fps = float("nan")
+    m = re.search(r"^frames: (\d+) processed, (\d+) tracked.*?([\d.]+) fps", log, re.M)
+    if m:
+        frames, fps = int(m.group(1)), float(m.group(3))
+    m = re.search(r"^poses: (\d+) of (\d+) frames", log, re.M)
+    poses = int(m.group(1)) if m else count_poses(os.path.join(out_dir, "trajectory.txt"))
+    if frames is None and m:
+        frames = int(m.group(2))
+    traj = os.path.join(out_dir, "trajectory.txt")
+    online = os.path.join(out_dir, "trajectory_online.txt")
+    final_eval = evaluate(dygslam, groundtruth, traj, out_dir,
+                          aligned_prefix + "_final.txt" if aligned_prefix else None)
+    online_eval = evaluate(dygslam, groundtruth, online, out_dir,
+                           aligned_prefix + "_online.txt" if aligned_prefix else None)
+    rows = read_frames_csv(os.path.join(out_dir, "frames.csv"))
+    stages = {}
+    for key in ("orb_ms", "detection_ms", "matching_ms", "probability_ms", "tracking_ms",
+                "total_ms"):
+        values = [float(r[key]) for r in rows if key in r and r[key] not in ("", None)]
+        if values:
+            stages[key] = sum(values) / len(values)
+    totals = [float(r["total_ms"]) for r in rows if r.get("total_ms")]
+    if totals:
+        stages["total_median_ms"] = statistics.median(totals)
+    return {
+        "frames": frames if frames is not None else len(rows),
+        "poses": poses,
+        "online_poses": count_poses(online),
+        "ate": final_eval["ate_rmse"] if final_eval else float("nan"),
+        "ate_pairs": final_eval["pairs"] if final_eval else 0,
+        "online_ate": online_eval["ate_rmse"] if online_eval else float("nan"),
+        "fps": fps,
+        "cpu_ms_per_frame": 1000.0 * result["cpu_s"] / frames if frames else float("nan"),
+        "wall_s": result["wall_s"],
+        "peak_rss_mib": result["peak_rss_mib"],
+        "stages": stages,
+        "log": log,
+        "aligned": aligned_prefix,
+    }
+
+
+# --- the benchmark ---------------------------------------------------------------------------
+
+class Bench:
+    def __init__(self, args):
+        self.args = args
+        self.dygslam = os.path.abspath(os.path.join(args.build, "apps", "dygslam"))
+        self.data = os.path.abspath(args.data)
+        self.groundtruth = os.path.join(self.data, "groundtruth.txt")
+        self.config = os.path.join(REPO, "config", "bonn.yaml")
+        self.work = os.path.abspath(args.work)
+        self.cache = os.path.abspath(args.cache)
+        self.figures_stage = os.path.join(self.work, "figures")
+        self.frames = ["--frames", args.frames] if args.frames else []
+        self.notes = []
+        self.load_samples = []
+        self.replacements = [(self.dygslam, "dygslam"), (os.path.abspath(args.build), "BUILD"),
+                             (self.data, "DATA"),
+                             (os.path.join(REPO, "config"), "config"), (self.work, "OUT"),
+                             (self.cache, "LOOPS")]
+        # Longest path first: the scratch folders may lie inside the build folder.
+        self.replacements.sort(key=lambda r: -len(r[0]))
+        self.results = {}
+        self.figures = []
+        # System CPU on frames decoded beforehand (the robot case); the whole sequence only.
+        decoded = os.path.abspath(os.path.join(args.build, "tests", "cpu_per_frame_benchmark"))
+        self.decoded_bin = decoded if os.access(decoded, os.X_OK) and not args.frames else None
+        if not os.access(decoded, os.X_OK):
+            self.decoded_reason = f"{os.path.relpath(decoded, REPO)} is not built (tests off)"
+        elif args.frames:
+            self.decoded_reason = "it takes the whole sequence (--frames given)"  # file names written into figures_stage
+
+    def cmdline(self, cmd):
+        """The command as printed: the run's own scratch folder shown as OUT."""
+        text = command_text(cmd, self.replacements)
+        text = re.sub(r"--out OUT/\S+", "--out OUT", text)
+        return re.sub(r"OUT/\S*/(\w+\.dygmap)", r"OUT/\1", text)
+
+    def record_load(self):
+        self.load_samples.append(load1())
+
+    # accuracy, ablation, speed, DDS against direct, schedule ------------------------------
+    def ablation_and_schedule(self):
+        a = self.args
+        ablation = {c: [] for c in ABLATION}
+        dds = []
+        rate = []
+        decoded = []
+        commands = {}
+        for k in range(a.runs):
+            for config in ABLATION:
+                out = os.path.join(self.work, "ablation", f"{config}_{k + 1}")
+                shutil.rmtree(out, ignore_errors=True)
+                cmd = [self.dygslam, "run", self.data, "--config", self.config, "--filter", config,
+                       "--direct", "--out", out, "--quiet"] + self.frames
+                commands[config] = cmd
+                say(f"ablation {config} run {k + 1}/{a.runs}")
+                self.record_load()
+                r = run(cmd, out + ".log")
+                s = score_run(self.dygslam, self.groundtruth, out, r,
+                              os.path.join(self.work, "ablation", f"{config}_{k + 1}_aligned"))
+                say(f"  ATE {fmt(s['ate'])} m (online {fmt(s['online_ate'])}), "
+                    f"{s['poses']}/{s['frames']} poses, {fmt(s['fps'], 1)} frames/s")
+                ablation[config].append(s)
+            if self.dds_ok:
+                out = os.path.join(self.work, "dds", f"default_{k + 1}")
+                shutil.rmtree(out, ignore_errors=True)
+                cmd = [self.dygslam, "run", self.data, "--config", self.config, "--out", out,
+                       "--quiet"] + self.frames
+                commands["dds"] = cmd
+                say(f"default DDS mode run {k + 1}/{a.runs}")
+                self.record_load()
+                r = run(cmd, out + ".log")
+                s = score_run(self.dygslam, self.groundtruth, out, r)
+                say(f"  ATE {fmt(s['ate'])} m (online {fmt(s['online_ate'])}), "
+                    f"{s['poses']}/{s['frames']} poses, {fmt(s['fps'], 1)} frames/s")
+                dds.append(s)
+                if self.has_rate:
+                    out = os.path.join(self.work, "dds", f"rate1_{k + 1}")
+                    shutil.rmtree(out, ignore_errors=True)
+                    cmd = [self.dygslam, "run", self.data, "--config", self.config, "--rate", "1",
+                           "--out", out, "--quiet"] + self.frames
+                    commands["rate"] = cmd
+                    say(f"default DDS mode --rate 1 run {k + 1}/{a.runs}")
+                    self.record_load()
+                    r = run(cmd, out + ".log")
+                    s = score_run(self.dygslam, self.groundtruth, out, r)
+                    # What the paced run measured (OUT/realtime.txt: key value lines).
+                    report = {}
+                    path = os.path.join(out, "realtime.txt")
+                    if os.path.exists(path):
+                        for line in open(path):
+                            parts = line.split()
+                            if len(parts) == 2:
+                                report[parts[0]] = float(parts[1])
+                    s["realtime"] = report
+                    say(f"  ATE {fmt(s['ate'])} m (online {fmt(s['online_ate'])}), "
+                        f"{int(report.get('frames', 0) - report.get('results', 0))} dropped, "
+                        f"{int(report.get('late', 0))} late, latency median "
+                        f"{fmt(report.get('latency_median_ms', float('nan')), 1)} ms")
+                    rate.append(s)
+            if self.decoded_bin:
+                out = os.path.join(self.work, "decoded", f"full_{k + 1}")
+                cmd = [self.decoded_bin, self.data, "--config", self.config, "--runs", "1"]
+                commands["decoded"] = cmd
+                say(f"System CPU on decoded frames run {k + 1}/{a.runs}")
+                self.record_load()
+                r = run(cmd, out + ".log")
+                m = re.search(r"^\| 1 \| (\d+) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| (\d+)/(\d+) \|",
+                              r["log"], re.M)
+                if not m:
+                    raise RunFailed(f"no result row in {out}.log")
+                frames = int(m.group(1))
+                decoded.append({"frames": frames, "decode_ms": float(m.group(2)),
+                                "system_ms": float(m.group(3)), "sum_ms": float(m.group(4)),
+                                "fps": frames / float(m.group(5)) if float(m.group(5)) > 0 else float("nan"),
+                                "ate": float(m.group(6)), "poses": int(m.group(7))})
+                say(f"  System {m.group(3)} ms/frame, decoding {m.group(2)} ms/frame")
+        self.results.update(ablation=ablation, dds=dds, rate=rate, decoded=decoded,
+                            commands=commands)
+
+    # memory over a longer run -----------------------------------------------------------------
+    def memory(self):
+        minutes = self.args.memory_minutes
+        out = os.path.join(self.work, "memory")
+        shutil.rmtree(out, ignore_errors=True)
+        cmd = [self.dygslam, "run", self.data, "--config", self.config, "--loop-minutes",
+               f"{minutes:g}", "--out", out, "--quiet"]
+        say(f"memory: {minutes:g} minutes of the player replaying the sequence (DDS)")
+        self.record_load()
+        r = run(cmd, out + ".log", sample_rss_every=2.0)
+        samples = r["rss"]
+        end = samples[-1][0] if samples else 0
+        half = [(t, y) for t, y in samples if end / 2 <= t <= end - 5]
+        slope = float("nan")
+        if len(half) > 2:
+            n = len(half)
+            sx = sum(t for t, _ in half)
+            sy = sum(y for _, y in half)
+            sxx = sum(t * t for t, _ in half)
+            sxy = sum(t * y for t, y in half)
+            if n * sxx != sx * sx:
+                slope = (n * sxy - sx * sy) / (n * sxx - sx * sx) * 60.0  # MiB per minute
+
+        def at(t):
+            best = min(samples, key=lambda s: abs(s[0] - t)) if samples else None
+            return best[1] if best else float("nan")
+
+        m = re.search(r"^frames: (\d+) processed", r["log"], re.M)
+        self.results["memory"] = {
+            "cmd": cmd, "samples": samples, "peak": r["peak_rss_mib"], "slope": slope,
+            "at_1min": at(60), "at_half": at(end / 2), "at_end": at(max(end - 5, 0)),
+            "frames": int(m.group(1)) if m else None, "seconds": r["wall_s"],
+            "cpu_ms_per_frame": 1000.0 * r["cpu_s"] / int(m.group(1)) if m else float("nan"),
+        }
+
+    # loop closing on the generated loops ------------------------------------------------------
+    def render_loops(self):
+        """Renders the missing loops (in parallel, before any timed run)."""
+        pending = []
+        self.loop_dirs = {}
+        for name, _, synth_args in LOOPS:
+            directory = os.path.join(self.cache, name)
+            self.loop_dirs[name] = directory
+            stamp = os.path.join(directory, ".synth_command")
+            command = " ".join(synth_args)
+            if os.path.exists(os.path.join(directory, "rgb.txt")) and os.path.exists(stamp) \
+                    and open(stamp).read().strip() == command:
+                continue
+            shutil.rmtree(directory, ignore_errors=True)
+            os.makedirs(self.cache, exist_ok=True)
+            cmd = [self.dygslam, "synth", directory] + synth_args + ["--quiet"]
+            pending.append((name, directory, stamp, command, cmd))
+        if not pending:
+            self.loop_render_note = "The loops were reused from the cache (same `dygslam synth` command)"
+            return
+        say("rendering " + ", ".join(p[0] for p in pending) + " (once; cached for later runs)")
+        t0 = time.monotonic()
+        procs = []
+        for name, directory, stamp, command, cmd in pending:
+            log = open(os.path.join(self.cache, name + ".log"), "w")
+            p = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+            procs.append((p, log, name, stamp, command))
+        try:
+            for p, log, name, stamp, command in procs:
+                if p.wait() != 0:
+                    raise RunFailed(f"dygslam synth {name} failed (see {log.name})")
+                log.close()
+                with open(stamp, "w") as f:
+                    f.write(command + "\n")
+        finally:
+            for p, *_ in procs:
+                if p.poll() is None:
+                    os.killpg(p.pid, signal.SIGTERM)
+        self.loop_render_note = (f"The loops were rendered in this run ({time.monotonic() - t0:.0f} s, "
+                                 "before the loop runs; reused by later runs)")
+
+    def loops(self):
+        self.render_loops()
+        results = {}
+        for name, title, synth_args in LOOPS:
+            directory = self.loop_dirs[name]
+            camera = os.path.join(directory, "camera.yaml")
+            off = os.path.join(self.work, "loops", name + "_loop_closing_off.yaml")
+            os.makedirs(os.path.dirname(off), exist_ok=True)
+            with open(off, "w") as f:
+                f.write(loop_closing_off(open(camera).read()))
+            gt = os.path.join(directory, "groundtruth.txt")
+            entry = {"title": title, "synth": [self.dygslam, "synth", "LOOPS/" + name] + synth_args,
+                     "on": [], "off": []}
+            for k in range(self.args.loop_runs):
+                for mode, config in (("on", camera), ("off", off)):
+                    out = os.path.join(self.work, "loops", f"{name}_{mode}_{k + 1}")
+                    shutil.rmtree(out, ignore_errors=True)
+                    cmd = [self.dygslam, "run", directory, "--config", config, "--filter", "none",
+                           "--direct", "--no-map", "--out", out, "--quiet"]
+                    entry["cmd_" + mode] = cmd
+                    say(f"{name} loop closing {mode} run {k + 1}/{self.args.loop_runs}")
+                    self.record_load()
+                    r = run(cmd, out + ".log")
+                    s = score_run(self.dygslam, gt, out, r,
+                                  os.path.join(self.work, "loops", f"{name}_{mode}_{k + 1}_aligned"))
+                    m = re.search(r"^loop closing: (\d+) loops closed", r["log"], re.M)
+                    s["loops_closed"] = int(m.group(1)) if m else None
+                    s["gt"] = gt
+                    say(f"  ATE {fmt(s['ate'])} m, {s['loops_closed']} loops")
+                    entry[mode].append(s)
+            results[name] = entry
+        self.results["loops"] = results
+
+    # map reuse --------------------------------------------------------------------------------
+    def map_reuse(self):
+        rounds = []
+        for k in range(self.args.map_runs):
+            base = os.path.join(self.work, "map_reuse", f"round_{k + 1}")
+            shutil.rmtree(base, ignore_errors=True)
+            os.makedirs(base)
+            map_file = os.path.join(base, "crowd.dygmap")
+            save = [self.dygslam, "run", self.data, "--config", self.config, "--direct",
+                    "--save-map", map_file, "--out", os.path.join(base, "mapping"), "--quiet"] + self.frames
+            loc = [self.dygslam, "run", self.data, "--config", self.config, "--direct",
+                   "--load-map", map_file, "--localization", "--out",
+                   os.path.join(base, "localization"), "--quiet"] + self.frames
+            say(f"map reuse round {k + 1}/{self.args.map_runs}: mapping, then localization")
+            self.record_load()
+            r1 = run(save, os.path.join(base, "mapping.log"))
+            s1 = score_run(self.dygslam, self.groundtruth, os.path.join(base, "mapping"), r1)
+            self.record_load()
+            r2 = run(loc, os.path.join(base, "localization.log"))
+            s2 = score_run(self.dygslam, self.groundtruth, os.path.join(base, "localization"), r2)
+            m = re.search(r"map file: saved \S+ \(([^)]*)\)", r1["log"])
+            s1["map_text"] = m.group(1) if m else ""
+            s1["map_bytes"] = os.path.getsize(map_file) if os.path.exists(map_file) else 0
+            say(f"  mapping ATE {fmt(s1['ate'])}, localization ATE {fmt(s2['ate'])} m")
+            rounds.append((s1, s2))
+        self.results["map_reuse"] = {"rounds": rounds, "save": save, "loc": loc}
+
+    # map quality: ghost voxels ----------------------------------------------------------------
+    def map_quality(self):
+        first = int(self.args.frames.split(":")[0] or 0) if self.args.frames else 0
+        until = 100
+        if first >= until:
+            self.results["map_quality"] = None
+            self.notes.append("map quality not measured: the frame range starts after rgb entry "
+                              f"{until} (the people-free reference needs the frames before it)")
+            return
+        rows = {"masks": [], "no_masks": []}
+        cmds = {}
+        for k in range(self.args.map_runs):
+            for mode in ("masks", "no_masks"):
+                out = os.path.join(self.work, "map_quality", f"{mode}_{k + 1}")
+                shutil.rmtree(out, ignore_errors=True)
+                cmd = [self.dygslam, "map", self.data, "--config", self.config,
+                       "--reference-until", str(until), "--out", out, "--quiet"] + self.frames
+                if mode == "no_masks":
+                    cmd.append("--no-mask")
+                cmds[mode] = cmd
+                say(f"map quality ({mode}) run {k + 1}/{self.args.map_runs}")
+                self.record_load()
+                r = run(cmd, out + ".log")
+                m = re.search(r"^ghost voxels: ([\d,]+) .*?map occupied ([\d,]+), reference occupied ([\d,]+)",
+                              r["log"], re.M)
+                if not m:
+                    raise RunFailed(f"no 'ghost voxels:' line in {out}.log")
+                as_int = lambda s: int(s.replace(",", ""))
+                rows[mode].append({"ghost": as_int(m.group(1)), "occupied": as_int(m.group(2)),
+                                   "reference": as_int(m.group(3))})
+                say(f"  ghost voxels {m.group(1)} of {m.group(2)} occupied")
+        self.results["map_quality"] = {"rows": rows, "cmds": cmds, "until": until}
+
+    # pictures ---------------------------------------------------------------------------------
+    def draw(self):
+        try:
+            import matplotlib
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+        except ImportError:
+            self.notes.append("pictures not drawn: python3-matplotlib is not installed for "
+                              f"{sys.executable}")
+            return
+        os.makedirs(self.figures_stage, exist_ok=True)
+        gt = read_tum(self.groundtruth)
+
+        def save(fig, name):
+            fig.tight_layout()
+            fig.savefig(os.path.join(self.figures_stage, name), dpi=80)
+            plt.close(fig)
+            self.figures.append(name)
+
+        # Ablation: the median run of each method, top view and ATE over time.
+        ablation = self.results.get("ablation") or {}
+        series = []
+        for config in ABLATION:
+            runs = [r for r in ablation.get(config, []) if math.isfinite(r["ate"])]
+            if not runs:
+                continue
+            mid = sorted(runs, key=lambda r: r["ate"])[(len(runs) - 1) // 2]
+            path = mid["aligned"] + "_final.txt"
+            if os.path.exists(path):
+                series.append((config, f"{LABELS[config]}: {mid['ate']:.4f} m", read_tum(path)))
+        if series:
+            fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(12, 5))
+            draw_top_view(ax0, gt, series, lambda c: COLOURS[c])
+            draw_error_over_time(ax1, gt, series, lambda c: COLOURS[c])
+            ax0.set_title("bonn_crowd_part: ground truth and aligned estimates (top view)")
+            ax1.set_title("ATE over time (median run of each method)")
+            ax1.set_yscale("log")
+            save(fig, "accuracy_ablation.png")
+
+        memory = self.results.get("memory")
+        if memory and memory["samples"]:
+            fig, ax = plt.subplots(figsize=(8, 4))
+            ax.plot([t / 60 for t, _ in memory["samples"]], [y for _, y in memory["samples"]],
+                    color=COLOURS["full"], label="resident memory of `dygslam run` (DDS pipeline)")
+            ax.set_xlabel("minutes")
+            ax.set_ylabel("MiB")
+            ax.legend(loc="lower right")
+            ax.grid(alpha=0.3)
+            save(fig, "memory_rss.png")
+
+        loops = self.results.get("loops") or {}
+        if loops:
+            fig, axes = plt.subplots(1, len(loops), figsize=(6 * len(loops), 5), squeeze=False)
+            for ax, (name, entry) in zip(axes[0], loops.items()):
+                loop_series = []
+                for mode, label in (("on", "loop closing on (default)"), ("off", "loop closing off")):
+                    runs = [r for r in entry[mode] if math.isfinite(r["ate"])]
+                    if not runs:
+                        continue
+                    mid = sorted(runs, key=lambda r: r["ate"])[(len(runs) - 1) // 2]
+                    path = mid["aligned"] + "_final.txt"
+                    if os.path.exists(path):
+                        loop_series.append(("loop_" + mode, f"{label}: {mid['ate']:.4f} m",
+                                            read_tum(path)))
+                if loop_series:
+                    draw_top_view(ax, read_tum(entry["on"][0]["gt"]), loop_series,
+                                  lambda c: COLOURS[c])
+                ax.set_title(entry["title"])
+            save(fig, "loop_closing.png")
+
+    # the documents ------------------------------------------------------------------------------
+    def render(self, started, finished, elapsed, out_path, figures_dir):
+        a = self.args
+        R = self.results
+        rel_fig = os.path.relpath(figures_dir, os.path.dirname(os.path.abspath(out_path)))
+        fig = lambda name: f"{rel_fig}/{name}"
+        cmd = self.cmdline
+        commit = git("rev-parse", "--short=12", "HEAD") or "unknown"
+        ignored = {os.path.relpath(os.path.abspath(p), REPO)
+                   for p in (out_path, a.readme)} | {os.path.relpath(figures_dir, REPO)}
+        dirty_lines = [l for l in git("status", "--porcelain").splitlines()
+                       if not any(l[3:].startswith(p) for p in ignored)]
+        loads = [x for x in self.load_samples if math.isfinite(x)]
+        L = []
+        L.append("# dygslam benchmarks\n")
+        L.append("Generated by `make bench` (`scripts/make_benchmarks.py`) from the commit below; do not edit by "
+                 "hand: the whole file is rewritten. Every table gives the command lines that produced it "
+                 "(`DATA` = the bonn_crowd_part folder, `OUT` = a scratch folder, `dygslam` = the binary of "
+                 "the build). Figures are medians over the runs with the range (min–max) in brackets; "
+                 "\"poses / frames\" are the frames with a pose out of the frames processed (a range "
+                 "when the runs differ). ATE = RMSE of the absolute trajectory error after rigid SE(3) "
+                 "alignment (`dygslam eval`, TUM conventions, metres). *Final* is `trajectory.txt` (the "
+                 "refined trajectory at the end of the run); *online* is `trajectory_online.txt` (the "
+                 "pose published for each frame at the moment it was tracked).\n")
+        L.append("| | |\n|---|---|")
+        L.append(f"| commit | `{commit}`" + (f" with uncommitted changes ({len(dirty_lines)} file{'s' if len(dirty_lines) > 1 else ''})" if dirty_lines else " (clean tree)") + " |")
+        L.append(f"| date | {started} to {finished} ({elapsed / 60:.0f} min) |")
+        L.append(f"| machine | {machine_text()} |")
+        L.append(f"| load average (1 min) | {fmt(loads[0], 2) if loads else '-'} at the start, median "
+                 f"{fmt(median(loads), 2)} over the runs, max {fmt(max(loads), 2) if loads else '-'}; "
+                 f"1/5/15 min at the end: {loadavg_text()}. A load above the {os.cpu_count()} cores "
+                 "means other jobs shared them: timings are then slower than on a quiet machine "
+                 "(accuracy is not affected) |")
+        L.append(f"| runs | {a.runs} per configuration (accuracy, schedule, speed); {a.map_runs} (map reuse, "
+                 f"map quality); {a.loop_runs if not a.quick else 0} per loop and mode |")
+        L.append(f"| data | bonn_crowd_part (360 frames of the Bonn RGB-D Dynamic `crowd` sequence, "
+                 f"ground truth `groundtruth.txt`, marker body){'; rgb.txt entries ' + a.frames if a.frames else ''} |")
+        L.append("| settings | `config/bonn.yaml` as shipped (sensor and ORB); every other setting at its default |")
+        L.append(f"| mode | {'quick (development check: 1 run, fewer sections)' if a.quick else 'full'} |")
+        L.append("")
+        L.append("Regenerate: `make bench` (BUILD_DIR, BENCH_ARGS; `make bench BENCH_ARGS=--quick` for a "
+                 "short check).\n")
+        if self.notes:
+            L.append("Notes of this run:\n")
+            L.extend(f"- {n}" for n in self.notes)
+            L.append("")
+
+        # Accuracy and ablation.
+        ab = R.get("ablation") or {}
+        L.append("## Accuracy and ablation (bonn_crowd_part)\n")
+        L.append("`paper` is DYG-SLAM's filter as the paper writes it (person boxes, epipolar probability, "
+                 "Kalman filter); `boxes` removes every feature in a person box; `geometry` uses the "
+                 "depth-residual test alone; `full` is the default (README, *How it works*). Direct "
+                 "library loop (`--direct`), map on, local mapping and loop closing on their threads.\n")
+        L.append("| method | final ATE (m) | poses / frames | online ATE (m) | online poses / frames |")
+        L.append("|---|---|---|---|---|")
+        for config in ABLATION:
+            runs = ab.get(config) or []
+            if not runs:
+                continue
+            L.append(f"| `{config}`: {LABELS[config]} | {med_range([r['ate'] for r in runs])} | "
+                     f"{poses_text(runs)} | {med_range([r['online_ate'] for r in runs])} | "
+                     f"{poses_text(runs, 'online_poses')} |")
+        L.append("")
+        if "none" in R.get("commands", {}):
+            L.append("```")
+            L.append(cmd(R["commands"]["none"]).replace("--filter none", "--filter METHOD"))
+            L.append(f"dygslam eval DATA/groundtruth.txt OUT/trajectory.txt --json          # final")
+            L.append(f"dygslam eval DATA/groundtruth.txt OUT/trajectory_online.txt --json   # online")
+            L.append("```\n")
+        L.append("RPE is not given for Bonn: its ground truth is the pose of the motion-capture marker "
+                 "body, not of the camera, so a relative error per second mixes the marker-to-camera "
+                 "offset into the figure; ATE after alignment is what published tables report.\n")
+        if "accuracy_ablation.png" in self.figures:
+            L.append(f"![bonn_crowd_part: aligned trajectories and ATE over time, median run of each method]"
+                     f"({fig('accuracy_ablation.png')})\n")
+
+        # Schedule / live.
+        L.append("## Schedule: the default command (live)\n")
+        dds = R.get("dds") or []
+        if not self.dds_ok:
+            L.append(f"Not measured: {self.dds_reason}.\n")
+        else:
+            L.append("What a user gets from `dygslam run` with the shipped settings: the DDS pipeline "
+                     "(player, detector, slam, mapper, recorder as threads of one process), the full "
+                     "filter, map on. The player sends frames as fast as the pipeline takes them.\n")
+            L.append("| command | final ATE (m) | poses / frames | online ATE (m) | online poses / frames | frames/s |")
+            L.append("|---|---|---|---|---|---|")
+            L.append(f"| default (DDS) | {med_range([r['ate'] for r in dds])} | {poses_text(dds)} | "
+                     f"{med_range([r['online_ate'] for r in dds])} | {poses_text(dds, 'online_poses')} | "
+                     f"{med_range([r['fps'] for r in dds], 1)} |")
+            rate = R.get("rate") or []
+            if rate:
+                L.append(f"| `--rate 1` (camera rate) | {med_range([r['ate'] for r in rate])} | {poses_text(rate)} | "
+                         f"{med_range([r['online_ate'] for r in rate])} | {poses_text(rate, 'online_poses')} | "
+                         f"{med_range([r['fps'] for r in rate], 1)} |")
+            L.append("")
+            L.append("```")
+            L.append(cmd(R["commands"]["dds"]))
+            if rate:
+                L.append(cmd(R["commands"]["rate"]))
+            L.append("```\n")
+            if rate:
+                rt = lambda key: [r["realtime"].get(key, float("nan")) for r in rate]
+                dropped = [int(r["realtime"].get("frames", 0) - r["realtime"].get("results", 0))
+                           for r in rate if r["realtime"]]
+                L.append("`--rate 1`: the player sends the frames at the camera's rate (30 Hz); frames "
+                         "the pipeline cannot take in time are dropped; a result is late when it comes "
+                         "more than 3 frame periods after its frame; latency = frame to pose "
+                         "(`OUT/realtime.txt`).\n")
+                L.append("| frames | dropped | late | latency median (ms) | latency 99th percentile (ms) |")
+                L.append("|---|---|---|---|---|")
+                L.append(f"| {int_range([int(v) for v in rt('frames') if math.isfinite(v)])} | "
+                         f"{int_range(dropped)} | {int_range([int(v) for v in rt('late') if math.isfinite(v)])} | "
+                         f"{med_range(rt('latency_median_ms'), 1)} | {med_range(rt('latency_p99_ms'), 1)} |")
+                L.append("")
+            else:
+                L.append("`--rate 1` (the dataset played at the camera's rate): not measured: "
+                         "`dygslam run` has no `--rate` option in this build.\n")
+
+        # Speed and CPU per stage.
+        L.append("## Speed and CPU per stage (direct loop)\n")
+        L.append("Same runs as the accuracy table. frames/s as `dygslam run` reports it (frames / wall "
+                 "time of the run, PNG decoding and start-up included). CPU = user + system time of "
+                 "the process over all its threads / frames (decoding, detector, local mapping, loop "
+                 "closing, mapper and start-up included). Stage columns: mean milliseconds per frame "
+                 "from `frames.csv` (wall time on the tracking thread; the detector runs beside ORB "
+                 "extraction); \"total\" is the wall time of one frame through `FeedRgbdFrame`, mean "
+                 "and median. Peak memory: maximum resident set of the process.\n")
+        L.append("| method | frames/s | CPU ms / frame | ORB extraction | detection | matching | probability | tracking | total (mean) | total (median) | peak memory (MiB) |")
+        L.append("|---|---|---|---|---|---|---|---|---|---|---|")
+        for config in ABLATION:
+            runs = ab.get(config) or []
+            if not runs:
+                continue
+            st = lambda key: stage_text([r["stages"].get(key, float("nan")) for r in runs])
+            L.append(f"| `{config}` | {med_range([r['fps'] for r in runs], 1)} | "
+                     f"{med_range([r['cpu_ms_per_frame'] for r in runs], 1)} | {st('orb_ms')} | "
+                     f"{st('detection_ms')} | {st('matching_ms')} | {st('probability_ms')} | "
+                     f"{st('tracking_ms')} | {st('total_ms')} | {st('total_median_ms')} | "
+                     f"{med_range([r['peak_rss_mib'] for r in runs], 0)} |")
+        if dds:
+            st = lambda key: stage_text([r["stages"].get(key, float("nan")) for r in dds])
+            L.append(f"| `full`, default DDS mode | {med_range([r['fps'] for r in dds], 1)} | "
+                     f"{med_range([r['cpu_ms_per_frame'] for r in dds], 1)} | {st('orb_ms')} | "
+                     f"{st('detection_ms')} | {st('matching_ms')} | {st('probability_ms')} | "
+                     f"{st('tracking_ms')} | {st('total_ms')} | {st('total_median_ms')} | "
+                     f"{med_range([r['peak_rss_mib'] for r in dds], 0)} |")
+        L.append("")
+        if "none" in R.get("commands", {}):
+            L.append("```")
+            L.append(cmd(R["commands"]["none"]).replace("--filter none", "--filter METHOD"))
+            if dds:
+                L.append(cmd(R["commands"]["dds"]))
+            L.append("```\n")
+        decoded = R.get("decoded") or []
+        L.append("### CPU per frame on decoded frames (the robot case)\n")
+        if decoded:
+            L.append("The frames decoded into memory first (a camera driver hands over raw images), "
+                     "then fed to the System (full method, shipped settings) as fast as it takes them; "
+                     "CPU of the process over all threads from the first frame to the end of local "
+                     "mapping, without start-up. PNG decoding is measured alone.\n")
+            L.append("| System CPU ms / frame | PNG decoding CPU ms / frame | sum | feed frames/s | final ATE (m) | poses / frames |")
+            L.append("|---|---|---|---|---|---|")
+            L.append(f"| {med_range([r['system_ms'] for r in decoded], 1)} | "
+                     f"{med_range([r['decode_ms'] for r in decoded], 1)} | "
+                     f"{med_range([r['sum_ms'] for r in decoded], 1)} | "
+                     f"{med_range([r['fps'] for r in decoded], 1)} | {med_range([r['ate'] for r in decoded])} | "
+                     f"{poses_text(decoded)} |")
+            L.append("")
+            L.append("```")
+            L.append(cmd(R["commands"]["decoded"]))
+            L.append("```\n")
+        else:
+            L.append(f"Not measured: {self.decoded_reason}.\n")
+
+        # DDS against direct.
+        L.append("## DDS pipeline against the direct loop\n")
+        full = ab.get("full") or []
+        if not dds:
+            L.append(f"Not measured: {self.dds_reason}.\n")
+        else:
+            ratios = [d["fps"] / f["fps"] for d, f in zip(dds, full) if f["fps"] > 0]
+            L.append("The full method, shipped settings, map on; the two modes alternate in the same "
+                     "rounds (each round: the direct run, then the DDS run), ratio per round.\n")
+            L.append("| mode | frames/s | CPU ms / frame | final ATE (m) | poses / frames |")
+            L.append("|---|---|---|---|---|")
+            L.append(f"| direct (`--direct`) | {med_range([r['fps'] for r in full], 1)} | "
+                     f"{med_range([r['cpu_ms_per_frame'] for r in full], 1)} | "
+                     f"{med_range([r['ate'] for r in full])} | {poses_text(full)} |")
+            L.append(f"| default (DDS, one process) | {med_range([r['fps'] for r in dds], 1)} | "
+                     f"{med_range([r['cpu_ms_per_frame'] for r in dds], 1)} | "
+                     f"{med_range([r['ate'] for r in dds])} | {poses_text(dds)} |")
+            L.append(f"| **DDS / direct, frames/s** | **{med_range(ratios, 2)}** | | | |")
+            L.append("")
+            L.append("```")
+            L.append(cmd(R["commands"]["full"]))
+            L.append(cmd(R["commands"]["dds"]))
+            L.append("```\n")
+
+        # Memory.
+        L.append("## Memory over a longer run\n")
+        mem = R.get("memory")
+        if not mem:
+            L.append("Not measured: " + ("skipped in --quick mode" if a.quick else
+                                         (self.dds_reason if not self.dds_ok else "no samples")) + ".\n")
+        else:
+            L.append(f"The default command with the player replaying bonn_crowd_part for "
+                     f"{a.memory_minutes:g} minute{'s' if a.memory_minutes != 1 else ''} (stamps continue: one long sequence of "
+                     f"{mem['frames'] or '?'} frames), resident memory of the process sampled every 2 s; "
+                     "slope = least-squares line over the second half (the last 5 s, shutdown, left out).\n")
+            L.append("| frames | peak RSS (MiB) | RSS at 1 min | at half | at end | slope, second half (MiB/min) | CPU ms / frame |")
+            L.append("|---|---|---|---|---|---|---|")
+            L.append(f"| {mem['frames'] or '-'} | {mem['peak']:.0f} | {fmt(mem['at_1min'], 0)} | "
+                     f"{fmt(mem['at_half'], 0)} | {fmt(mem['at_end'], 0)} | {fmt(mem['slope'], 2)} | "
+                     f"{fmt(mem['cpu_ms_per_frame'], 1)} |")
+            L.append("")
+            L.append("```")
+            L.append(cmd(mem["cmd"]))
+            L.append("```\n")
+            if "memory_rss.png" in self.figures:
+                L.append(f"![resident memory over the run]({fig('memory_rss.png')})\n")
+
+        # Loop closing.
+        L.append("## Loop closing on generated loops\n")
+        loops = R.get("loops")
+        if not loops:
+            L.append("Not measured: skipped in --quick mode.\n")
+        else:
+            L.append("Sequences rendered by `dygslam synth` (textured rooms, depth and colour noise, no "
+                     "people: `--filter none`); the camera goes once round and past its start. Loop "
+                     "closing is on by default; *off* adds `LoopClosing: {enabled: false}` to the "
+                     "sequence's camera.yaml. " + self.loop_render_note + ".\n")
+            L.append("| loop | loop closing | final ATE (m) | poses / frames | online ATE (m) | loops closed (per run) | ATE off / on |")
+            L.append("|---|---|---|---|---|---|---|")
+            for name, e in loops.items():
+                on = median([r["ate"] for r in e["on"]])
+                off = median([r["ate"] for r in e["off"]])
+                gain = off / on if on > 0 else float("nan")
+                for mode in ("on", "off"):
+                    runs = e[mode]
+                    closed = ", ".join(str(r["loops_closed"]) for r in runs)
+                    L.append(f"| {e['title']} | {mode}{' (default)' if mode == 'on' else ''} | "
+                             f"{med_range([r['ate'] for r in runs])} | {poses_text(runs)} | "
+                             f"{med_range([r['online_ate'] for r in runs])} | {closed} | "
+                             f"{'**' + fmt(gain, 1) + 'x**' if mode == 'on' else ''} |")
+            L.append("")
+            L.append("```")
+            for name, e in loops.items():
+                L.append(cmd(e["synth"]))
+                L.append(cmd(e["cmd_on"]).replace(self.loop_dirs[name], "LOOPS/" + name))
+                L.append(cmd(e["cmd_off"]).replace(self.loop_dirs[name], "LOOPS/" + name)
+                         + "   # camera.yaml + LoopClosing: {enabled: false}")
+            L.append("```\n")
+            if "loop_closing.png" in self.figures:
+                L.append(f"![generated loops: ground truth and the median run with loop closing on and off]"
+                         f"({fig('loop_closing.png')})\n")
+
+        # Map reuse.
+        L.append("## Map reuse: save, then localize\n")
+        mr = R.get("map_reuse")
+        if mr and mr["rounds"]:
+            maps = [m for m, _ in mr["rounds"]]
+            locs = [l for _, l in mr["rounds"]]
+            L.append("A run saves its SLAM map (keyframes, map points, place-recognition index); a "
+                     "second run over the same frames loads it and tracks against it without adding "
+                     "keyframes or points (`--localization`).\n")
+            L.append("| run | final ATE (m) | poses / frames | online ATE (m) | frames/s | map file |")
+            L.append("|---|---|---|---|---|---|")
+            L.append(f"| mapping (`--save-map`) | {med_range([r['ate'] for r in maps])} | {poses_text(maps)} | "
+                     f"{med_range([r['online_ate'] for r in maps])} | {med_range([r['fps'] for r in maps], 1)} | "
+                     f"{maps[0]['map_text'] or '-'}; {med_range([r['map_bytes'] / 1e6 for r in maps], 1)} MB |")
+            L.append(f"| localization (`--load-map --localization`) | {med_range([r['ate'] for r in locs])} | "
+                     f"{poses_text(locs)} | {med_range([r['online_ate'] for r in locs])} | "
+                     f"{med_range([r['fps'] for r in locs], 1)} | |")
+            ratio = [l["ate"] / m["ate"] for m, l in mr["rounds"] if m["ate"] > 0]
+            L.append(f"| localization / mapping, final ATE per round | {med_range(ratio, 2)} | | | | |")
+            L.append("")
+            L.append("```")
+            L.append(cmd(mr["save"]))
+            L.append(cmd(mr["loc"]))
+            L.append("```\n")
+        else:
+            L.append("Not measured.\n")
+
+        # Map quality.
+        L.append("## Map quality: ghost voxels\n")
+        mq = R.get("map_quality")
+        if mq:
+            rows = mq["rows"]
+            L.append(f"`dygslam map` runs the SLAM and builds the OctoMap of the static scene from the "
+                     f"keyframes; with `--reference-until {mq['until']}` it also builds a reference from "
+                     f"the keyframes before rgb entry {mq['until']} (no person in view yet) and counts "
+                     "*ghost voxels*: cells occupied in the map, observed free in the reference, with no "
+                     "reference surface within one cell (people baked into the map). With masks is the "
+                     "default (people's pixels left out of the map); `--no-mask` inserts every pixel.\n")
+            L.append("| map | ghost voxels | occupied cells | reference occupied | ghost fraction |")
+            L.append("|---|---|---|---|---|")
+            for mode, label in (("masks", "with the dynamic masks (default)"), ("no_masks", "without masks (`--no-mask`)")):
+                rs = rows[mode]
+                L.append(f"| {label} | {med_range([r['ghost'] for r in rs], 0)} | "
+                         f"{med_range([r['occupied'] for r in rs], 0)} | {med_range([r['reference'] for r in rs], 0)} | "
+                         f"{med_range([100.0 * r['ghost'] / r['occupied'] for r in rs if r['occupied']], 2)} % |")
+            gm, gn = median([r["ghost"] for r in rows["masks"]]), median([r["ghost"] for r in rows["no_masks"]])
+            L.append(f"| **fewer with masks** | **{fmt(gn / gm, 1) + 'x' if gm > 0 else '-'}** | | | |")
+            L.append("")
+            L.append("```")
+            L.append(cmd(mq["cmds"]["masks"]))
+            L.append(cmd(mq["cmds"]["no_masks"]))
+            L.append("```\n")
+        else:
+            L.append("Not measured (see the notes above).\n")
+
+        # Published figures.
+        published = os.path.join(REPO, "docs", "benchmarks", "published_figures.md")
+        L.append(open(published).read().rstrip() + "\n")
+        return "\n".join(L)
+
+    def headline(self):
+        """The README's figures table."""
+        R = self.results
+        dds = R.get("dds") or []
+        full = (R.get("ablation") or {}).get("full") or []
+        main = dds or full
+        mode = "default command, DDS pipeline" if dds else "direct loop"
+        L = [f"Measured by `make bench` at commit `{git('rev-parse', '--short=12', 'HEAD') or 'unknown'}` "
+             f"on {machine_text()} ({self.args.runs} run{'s' if self.args.runs > 1 else ''}, median "
+             "and range; BENCHMARKS.md has every table with its command).", "",
+             "| figure | bonn_crowd_part, shipped settings |", "|---|---|"]
+        L.append(f"| final ATE ({mode}) | {med_range([r['ate'] for r in main])} m, {poses_text(main)} frames with a pose |")
+        L.append(f"| online ATE (pose published at the moment) | {med_range([r['online_ate'] for r in main])} m, "
+                 f"{poses_text(main, 'online_poses')} frames |")
+        if dds:
+            L.append(f"| frames/s, default command | {med_range([r['fps'] for r in dds], 1)} |")
+        decoded = R.get("decoded") or []
+        if decoded:
+            L.append(f"| CPU per frame, all threads, frames decoded beforehand (robot case) | "
+                     f"{med_range([r['system_ms'] for r in decoded], 1)} ms (+ "
+                     f"{med_range([r['decode_ms'] for r in decoded], 1)} ms of PNG decoding) |")
+        if full:
+            L.append(f"| frames/s, `--direct` | {med_range([r['fps'] for r in full], 1)} |")
+            L.append(f"| CPU per frame, all threads (`--direct`, PNG decoding included) | "
+                     f"{med_range([r['cpu_ms_per_frame'] for r in full], 1)} ms |")
+        L.append(f"| peak memory ({mode}) | {med_range([r['peak_rss_mib'] for r in main], 0)} MiB |")
+        mem = R.get("memory")
+        if mem:
+            L.append(f"| memory over {self.args.memory_minutes:g} min (player replaying) | peak "
+                     f"{mem['peak']:.0f} MiB, slope {fmt(mem['slope'], 2)} MiB/min over the second half |")
+        return "\n".join(L)
+
+
+# --- trajectories and drawing ----------------------------------------------------------------
+
+def read_tum(path):
+    rows = []
+    for line in open(path):
+        parts = line.split()
+        if len(parts) >= 8 and not line.startswith("#"):
+            rows.append([float(v) for v in parts[:4]])
+    return rows
+
+
+def associate(gt, est, max_dt=0.02):
+    """(t, gt xyz, est xyz) pairs, nearest stamp within max_dt (pictures only; scores come from
+    `dygslam eval`)."""
+    import bisect
+    stamps = [g[0] for g in gt]
+    pairs = []
+    for e in est:
+        i = bisect.bisect_left(stamps, e[0])
+        best = None
+        for j in (i - 1, i):
+            if 0 <= j < len(gt) and (best is None or abs(gt[j][0] - e[0]) < abs(gt[best][0] - e[0])):
+                best = j
+        if best is not None and abs(gt[best][0] - e[0]) <= max_dt:
+            pairs.append((e[0], gt[best][1:4], e[1:4]))
+    return pairs
+
+
+def draw_top_view(ax, gt, series, colour):
+    # The ground truth over the time the estimates cover (a --frames range is part of it).
+    t_lo = min(e[0][0] for _, _, e in series if e) - 0.05
+    t_hi = max(e[-1][0] for _, _, e in series if e) + 0.05
+    gt = [g for g in gt if t_lo <= g[0] <= t_hi] or gt
+    extent = [max(p[k] for p in gt) - min(p[k] for p in gt) for k in (1, 2, 3)]
+    a, b = sorted(sorted(range(3), key=lambda k: -extent[k])[:2])
+    ax.plot([p[1 + a] for p in gt], [p[1 + b] for p in gt], "-", color="black", lw=2.5,
+            label="ground truth")
+    for key, label, est in series:
+        ax.plot([p[1 + a] for p in est], [p[1 + b] for p in est], "-", color=colour(key), lw=1.2,
+                label=label)
+    # Framed on the ground truth: an estimate that drifts far leaves the picture (its error curve
+    # shows it) instead of shrinking the others to a dot.
+    lo = [min(p[1 + k] for p in gt) for k in (a, b)]
+    hi = [max(p[1 + k] for p in gt) for k in (a, b)]
+    half = 0.8 * max(hi[0] - lo[0], hi[1] - lo[1], 0.2)
+    centre = [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2]
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_xlabel("xyz"[a] + " (m)")
+    ax.set_ylabel("xyz"[b] + " (m)")
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="best")
+
+
+def draw_error_over_time(ax, gt, series, colour):
+    t0 = gt[0][0]
+    for key, label, est in series:
+        pairs = associate(gt, est)
+        ax.plot([t - t0 for t, _, _ in pairs],
+                [math.dist(g, e) for _, g, e in pairs], "-", color=colour(key), lw=1.0, label=label)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("position error after alignment (m)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="best")
+
+
+def loop_closing_off(camera_yaml):
+    """camera.yaml text with loop closing switched off (the section's key replaced or added)."""
+    lines = camera_yaml.rstrip("\n").split("\n")
+    for i, line in enumerate(lines):
+        if line.rstrip() == "LoopClosing:":
+            j = i + 1
+            while j < len(lines) and (lines[j].startswith(" ") or not lines[j].strip()):
+                if re.match(r"\s+enabled\s*:", lines[j]):
+                    lines[j] = "  enabled: false"
+                    return "\n".join(lines) + "\n"
+                j += 1
+            lines.insert(i + 1, "  enabled: false")
+            return "\n".join(lines) + "\n"
+    return "\n".join(lines + ["", "LoopClosing:", "  enabled: false"]) + "\n"
+
+
+def replace_between_markers(text, content, name):
+    b, e = text.find(FIGURES_BEGIN), text.find(FIGURES_END)
+    if b < 0 or e < 0:
+        return None
+    if e < b or text.count(FIGURES_BEGIN) != 1 or text.count(FIGURES_END) != 1:
+        raise SystemExit(f"make_benchmarks: {name}: the figures markers are repeated or out of order")
+    return text[:b + len(FIGURES_BEGIN)] + "\n" + content.rstrip("\n") + "\n" + text[e:]
+
+
+# --- main ------------------------------------------------------------------------------------
+
+def in_private_netns():
+    return os.environ.get("DYGSLAM_BENCH_NETNS") == "1"
+
+
+def reexec_in_netns():
+    """Replaces this process by this script run inside a private network + mount namespace
+    (loopback only, private /dev/shm; the pid stays, so signals reach it) when this process may
+    create one; returns when it may not."""
+    if in_private_netns() or shutil.which("unshare") is None:
+        return
+    probe = subprocess.run(["unshare", "-n", "-m", "--propagation", "private", "true"],
+                           capture_output=True)
+    if probe.returncode != 0:
+        return
+    lib = os.path.join(REPO, "scripts", "netns_lib.sh")
+    env = dict(os.environ, DYGSLAM_BENCH_NETNS="1")
+    bash = shutil.which("bash")
+    os.execve(bash, [bash, "-c", f'source {shlex.quote(lib)} && netns_exec "$@"', "netns",
+                     sys.executable, os.path.abspath(__file__)] + sys.argv[1:], env)
+
+
+def parse_args():
+    default_data = os.path.join(os.environ.get("DYGSLAM_DATA_DIR", os.path.join(REPO, "..", "shared", "data")),
+                                "bonn_crowd_part")
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--build", default=os.path.join(REPO, "build"), help="build folder (apps/dygslam)")
+    p.add_argument("--data", default=default_data, help="the bonn_crowd_part folder")
+    p.add_argument("--runs", type=int, help="runs per configuration (default 5; 1 with --quick)")
+    p.add_argument("--quick", action="store_true", default=os.environ.get("BENCH_QUICK") == "1",
+                   help="development check: 1 run, no memory and loop sections (also BENCH_QUICK=1)")
+    p.add_argument("--frames", help="rgb.txt entries FIRST:LAST of bonn_crowd_part (default: all)")
+    p.add_argument("--out", default=os.path.join(REPO, "BENCHMARKS.md"), help="the file written")
+    p.add_argument("--readme", default=os.path.join(REPO, "README.md"),
+                   help="README whose figures block is rewritten (skipped without the markers)")
+    p.add_argument("--figures", default=os.path.join(REPO, "docs", "benchmarks"),
+                   help="folder of the pictures (committed; linked relative to --out)")
+    p.add_argument("--work", help="scratch folder of the runs (default BUILD/bench_work)")
+    p.add_argument("--cache", help="rendered loop sequences (default BUILD/bench_cache)")
+    p.add_argument("--memory-minutes", type=float, default=3.0, help="length of the memory run")
+    p.add_argument("--loop-runs", type=int, default=3, help="runs per loop and mode")
+    p.add_argument("--map-runs", type=int, help="rounds of map reuse and map quality (default 3; 1 with --quick)")
+    a = p.parse_args()
+    if a.runs is None:
+        a.runs = 1 if a.quick else 5
+    if a.map_runs is None:
+        a.map_runs = 1 if a.quick else min(3, a.runs)
+    if a.runs < 1 or a.loop_runs < 1 or a.map_runs < 1:
+        p.error("--runs, --loop-runs and --map-runs must be at least 1")
+    a.work = os.path.abspath(a.work or os.path.join(a.build, "bench_work"))
+    a.cache = os.path.abspath(a.cache or os.path.join(a.build, "bench_cache"))
+    a.out = os.path.abspath(a.out)
+    a.readme = os.path.abspath(a.readme)
+    a.figures = os.path.abspath(a.figures)
+    return a
+
+
+def reexec_with_matplotlib():
+    """A python3 without matplotlib first on PATH (pyenv, venv): this script again with the
+    system's /usr/bin/python3 when that one has it (before any run; the pictures need it)."""
+    try:
+        import matplotlib  # noqa: F401
+        return
+    except ImportError:
+        pass
+    system = "/usr/bin/python3"
+    if os.path.exists(system) and os.path.realpath(sys.executable) != os.path.realpath(system) \
+            and subprocess.run([system, "-c", "import matplotlib"], capture_output=True).returncode == 0:
+        os.execv(system, [system, os.path.abspath(__file__)] + sys.argv[1:])
+
+
+def main():
+    # First: a stop during the set-up below is a clean stop too (nothing written yet).
+    for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(signum, on_signal)
+    try:
+        return bench_main()
+    except Stopped as e:
+        say(f"{e} during set-up: nothing written")
+        return 128 + e.signum
+
+
+def bench_main():
+    a = parse_args()
+    reexec_with_matplotlib()
+    reexec_in_netns()
+
+    bench = Bench(a)
+    if not os.access(bench.dygslam, os.X_OK):
+        print(f"make_benchmarks: {bench.dygslam} not built (make build, or --build DIR)", file=sys.stderr)
+        return 1
+    for name in ("rgb.txt", "depth.txt", "groundtruth.txt"):
+        if not os.path.exists(os.path.join(bench.data, name)):
+            print(f"make_benchmarks: {os.path.join(bench.data, name)} missing: the bonn_crowd_part data "
+                  "is needed (scripts/fetch_data.sh bonn_crowd_part, or --data DIR)", file=sys.stderr)
+            return 1
+    if os.path.exists(a.work) and os.path.abspath(a.work) in (REPO, "/"):
+        print("make_benchmarks: --work must be a scratch folder", file=sys.stderr)
+        return 2
+    help_text = subprocess.run([bench.dygslam, "run", "--help"], capture_output=True, text=True).stdout
+    bench.has_rate = "--rate" in help_text
+    bench.dds_ok = in_private_netns()
+    bench.dds_reason = ("" if bench.dds_ok else
+                        "no private network namespace could be created (needs root or CAP_SYS_ADMIN); "
+                        "DDS runs stay off the network")
+    cache_file = os.path.join(a.build, "CMakeCache.txt")
+    if os.path.exists(cache_file) and "DYGSLAM_BUILD_DDS:BOOL=OFF" in open(cache_file).read():
+        bench.dds_ok, bench.dds_reason = False, "this build has no DDS components (DYGSLAM_BUILD_DDS=OFF)"
+    if not bench.dds_ok:
+        bench.notes.append("DDS sections not measured: " + bench.dds_reason)
+
+    started_wall = time.monotonic()
+    started = datetime.datetime.utcnow().strftime("%Y-%m-%d %H:%M UTC")
+    staged = []
+    try:
+        shutil.rmtree(bench.figures_stage, ignore_errors=True)
+        os.makedirs(a.work, exist_ok=True)
+        bench.ablation_and_schedule()
+        if not a.quick:
+            if bench.dds_ok:
+                bench.memory()
+            bench.loops()
+        bench.map_reuse()
+        bench.map_quality()
+        bench.draw()
+        finished = datetime.datetime.utcnow().strftime("%Y-%m-%d %H:%M UTC")
+        elapsed = time.monotonic() - started_wall
+        text = bench.render(started, finished, elapsed, a.out, a.figures)
+        staged.append((write_atomically(a.out, text), a.out))
+        readme_updated = False
+        if os.path.exists(a.readme):
+            updated = replace_between_markers(open(a.readme).read(), bench.headline(), a.readme)
+            if updated is not None:
+                staged.append((write_atomically(a.readme, updated), a.readme))
+                readme_updated = True
+            else:
+                say(f"{a.readme}: no {FIGURES_BEGIN} ... {FIGURES_END} block: left as it is")
+        # The commit point: signals wait until every file is in place.
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM, signal.SIGHUP})
+        os.makedirs(a.figures, exist_ok=True)
+        for name in bench.figures:
+            os.replace(os.path.join(bench.figures_stage, name), os.path.join(a.figures, name))
+        for tmp, target in staged:
+            os.replace(tmp, target)
+        staged = []
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM, signal.SIGHUP})
+        say(f"wrote {a.out} in {elapsed / 60:.1f} min"
+            + (f" and the figures block of {a.readme}" if readme_updated else ""))
+        return 0
+    except Stopped as e:
+        child = CURRENT_CHILD[0]
+        if child is not None:
+            try:  # the run flushes its outputs and ends on SIGTERM
+                child.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                os.killpg(child.pid, signal.SIGKILL)
+        say(f"{e}: {a.out} and {a.readme} left untouched")
+        return 128 + e.signum
+    except RunFailed as e:
+        print(f"make_benchmarks: a run failed, nothing written: {e}", file=sys.stderr)
+        return 1
+    finally:
+        for tmp, _ in staged:
+            try:
+                os.remove(tmp)
+            except OSError:
+                pass
+
+
+if __name__ == "__main__":
+    sys.exit(main())

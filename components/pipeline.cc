@@ -194,6 +194,8 @@ size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
         report.late = stats.late;
         report.latency_median_ms = stats.latency_median_ms;
         report.latency_p99_ms = stats.latency_p99_ms;
+        std::error_code ec;  // the player may end before the recorder made the folder
+        fs::create_directories(options.output_dir, ec);
         WriteRealtimeReport((fs::path(options.output_dir) / kRealtimeReportFile).string(), report);
       }
       return 0;

@@ -64,7 +64,7 @@ TEST(MapFileCli, DamagedOrForeignMapIsAClearErrorWithNoOutput) {
     std::string bad = bytes;
     bad[8] = 9;
     cases.push_back(
-        {"version 9", bad, "bonn.yaml", "format version 9, this build reads versions 1 to 2"});
+        {"version 9", bad, "bonn.yaml", "format version 9, this build reads versions 1 to 3"});
   }
   cases.push_back({"other camera", bytes, "tum1.yaml", "different camera: Camera.fx"});
 

@@ -41,7 +41,6 @@ class FrameLoader {
  public:
   FrameLoader(const RgbdDataset& dataset, const DatasetRunOptions& options)
       : dataset_(dataset), options_(options), capacity_(std::max(1, options.decode_ahead)) {
-    next_entry_ = options.first_entry;
     thread_ = std::thread([this] { Load(); });
   }
   ~FrameLoader() { Stop(); }
@@ -113,7 +112,6 @@ class FrameLoader {
   const RgbdDataset& dataset_;
   const DatasetRunOptions& options_;
   const size_t capacity_;
-  size_t next_entry_ = 0;
   std::mutex mutex_;
   std::condition_variable changed_;
   std::deque<LoadedFrame> queue_;

@@ -15,55 +15,25 @@
 #include <vector>
 
 #include "core/io/dataset.h"
+#include "tests/support/cli_fixture.h"
 #include "tests/support/test_support.h"
 
 namespace dygslam {
 namespace {
 namespace fs = std::filesystem;
 
-std::string Config() { return std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml"; }
+using testing::Contains;
 
-bool Contains(const std::string& text, const std::string& needle) {
-  return text.find(needle) != std::string::npos;
-}
-
-class CliOptions : public ::testing::Test {
+class CliOptions : public testing::CliFixture {
  protected:
-  void SetUp() override {
-    DYGSLAM_REQUIRE_FILE(testing::DygslamBinary(), "dygslam binary");
-    dir_ = testing::MakeTempDir("cli_options");
-  }
+  CliOptions() : CliFixture("cli_options") {}
   void TearDown() override { fs::remove_all(dir_); }
-  testing::ProcessResult Run(const std::vector<std::string>& args) {
-    return testing::RunDygslam(args, dir_);
-  }
-  static void ExpectError(const testing::ProcessResult& r, int code,
-                          const std::vector<std::string>& needles) {
-    EXPECT_EQ(r.code, code) << r.err;
-    EXPECT_FALSE(Contains(r.err, "internal error")) << r.err;
-    for (const std::string& n : needles)
-      EXPECT_TRUE(Contains(r.err, n)) << "'" << n << "' not in\n" << r.err.substr(0, 3000);
-  }
-  // The first `n` frames of bonn_crowd_part (images by absolute path) in dir_/name.
-  std::string SmallDataset(const std::string& source, size_t n, const std::string& name) {
-    const fs::path dir = fs::path(dir_) / name;
-    fs::create_directories(dir);
-    const RgbdDataset d = RgbdDataset::Open(source);
-    std::ofstream rgb(dir / "rgb.txt"), depth(dir / "depth.txt");
-    for (size_t i = 0; i < n; ++i) {
-      rgb << d.frame(i).rgb_stamp.ToString() << " " << d.frame(i).rgb_path << "\n";
-      depth << d.frame(i).depth_stamp.ToString() << " " << d.frame(i).depth_path << "\n";
-    }
-    fs::copy_file(d.groundtruth_path(), dir / "groundtruth.txt");
-    return dir.string();
-  }
-  std::string dir_;
 };
 
 // Bench options checked up front, named as typed.
 TEST_F(CliOptions, BenchOptionsAreCheckedBeforeAnyRun) {
   DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
-  const std::string ds = SmallDataset(source, 12, "ds");
+  const std::string ds = SmallDataset(source, 12, "ds", /*with_groundtruth=*/true);
   ExpectError(Run({"bench", ds, "--out", Config(), "--runs", "1"}), 1,
               {"--out", "exists and is not a folder"});
   ExpectError(Run({"bench", ds, "--configs", "none,bogus", "--out", dir_ + "/b", "--runs", "1"}), 2,

@@ -391,7 +391,7 @@ int RunMap(const std::vector<std::string>& args) {
   const bool has_floor = floor && floor->found;
   mapper.WithBuilder([&](OctoMapBuilder& builder) {
     const auto t_sync = std::chrono::steady_clock::now();
-    builder.Sync();  // the final rebuild (pose corrections), if any
+    builder.Finalize();  // the map of the final poses
     const double final_sync_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_sync)
             .count();

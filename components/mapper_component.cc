@@ -163,6 +163,7 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
     LOG_WARNING << "mapper: "
                 << IgnoredSamplesNote(std::to_string(stats.foreign_samples) + " keyframes");
   }
+  core.Finalize();
   publish();
   const bool full_written = core.has_map() && core.WriteFull();
   status.Write(ToMsg(ComponentStatus::Done(ComponentKind::kMapper, core.num_keyframes())));

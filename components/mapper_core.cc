@@ -67,6 +67,10 @@ void MapperCore::Write() {
   consumer_->builder().WriteBinary(options_.map_path);
 }
 
+void MapperCore::Finalize() {
+  if (consumer_ != nullptr) consumer_->builder().Finalize();
+}
+
 bool MapperCore::WriteFull() {
   if (options_.full_map_path.empty()) return false;
   if (consumer_ != nullptr) {

@@ -62,6 +62,9 @@ class MapperCore {
   msg::MapUpdate MakeUpdate();
   // Atomic .bt write (no-op without map or path).
   void Write();
+  // At the end of the run: the map of the keyframes' final poses (OctoMapBuilder::Finalize), so
+  // the last map.bt and MapUpdate do not depend on when the updates during the run happened.
+  void Finalize();
   // The .ot (full_map_path), at the end of the run; false when there was nothing to write.
   bool WriteFull();
 

@@ -308,6 +308,19 @@ void OctoMapBuilder::Sync() {
   }
 }
 
+void OctoMapBuilder::Finalize() {
+  for (const auto& entry : keyframes_) {
+    const StoredKeyframe& keyframe = entry.second;
+    if (keyframe.world_from_cam.translation != keyframe.inserted_world_from_cam.translation ||
+        keyframe.world_from_cam.rotation.coeffs() !=
+            keyframe.inserted_world_from_cam.rotation.coeffs()) {
+      rebuild_pending_ = true;
+      break;
+    }
+  }
+  Sync();
+}
+
 const octomap::OcTree& OctoMapBuilder::tree() {
   Sync();
   return *tree_;

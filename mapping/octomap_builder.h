@@ -160,6 +160,12 @@ class OctoMapBuilder {
 
   // Brings the tree up to date (rebuild if scheduled, inner nodes if lazy).
   void Sync();
+  // The map of the final poses: rebuilds when any keyframe's pose differs at all from the pose it
+  // was inserted with (corrections below the rebuild threshold included), then Sync(). The tree
+  // is then what inserting every keyframe at its current pose, in insertion order, gives, whatever
+  // rebuilds happened during the run and when: the map written at the end of a run depends on the
+  // keyframes and their final poses only.
+  void Finalize();
   bool rebuild_pending() const { return rebuild_pending_; }
 
   // The map, synchronised first.

@@ -395,6 +395,54 @@ TEST(OctoMapBuilder, UpdatePosesMovesTheMap) {
   EXPECT_NE(builder.Pose(1).translation, WalkPose(1).translation);
 }
 
+// Finalize: the tree is the one of the final poses, whichever rebuilds ran before. Builder a is
+// rebuilt after keyframe 1 and nudged by corrections below the rebuild threshold afterwards; b
+// inserts the keyframes at their final poses: after Finalize both write the same bytes, and
+// without it they differ (the nudges are not in a's tree).
+TEST(OctoMapBuilder, FinalizeGivesTheMapOfTheFinalPoses) {
+  const PinholeCamera camera = box_room::SmallCamera();
+  const Scene scene = box_room::DefaultRoom();
+  auto nudged = [](int k) {
+    Rigid3d pose = WalkPose(k);
+    pose.translation.x() -= 0.004 * (k + 1);  // below half a voxel at max_range
+    return pose;
+  };
+  OctoMapBuilder a(camera, TestOptions()), b(camera, TestOptions());
+  for (int k = 0; k < 6; ++k) {
+    a.Insert(MakeKeyframe(k, scene, camera, WalkPose(k)));
+    if (k == 1) {
+      Rigid3d far = WalkPose(0);
+      far.translation.x() -= 0.3;
+      a.UpdatePoses({{0, far}});
+      a.Sync();  // a rebuild during the run
+      a.UpdatePoses({{0, WalkPose(0)}});
+      a.Sync();
+    }
+  }
+  std::map<int64_t, Rigid3d> final_poses;
+  for (int k = 0; k < 6; ++k) final_poses[k] = nudged(k);
+  a.UpdatePoses(final_poses);
+  EXPECT_FALSE(a.rebuild_pending());
+  for (int k = 0; k < 6; ++k) {  // the same images, inserted at the final poses
+    KeyframeData keyframe = MakeKeyframe(k, scene, camera, WalkPose(k));
+    keyframe.world_from_cam = nudged(k);
+    b.Insert(keyframe);
+  }
+  auto bytes = [](OctoMapBuilder& builder) {
+    std::ostringstream out;
+    WriteOctoMapBinaryStream(builder.tree(), out);
+    return out.str();
+  };
+  EXPECT_TRUE(bytes(a) != bytes(b));
+  a.Finalize();
+  b.Finalize();
+  EXPECT_TRUE(bytes(a) == bytes(b));
+  EXPECT_EQ(a.Stats().num_rebuilds, 3u);
+  const size_t before = b.Stats().num_rebuilds;
+  b.Finalize();  // nothing moved since: no rebuild
+  EXPECT_EQ(b.Stats().num_rebuilds, before);
+}
+
 // Culled keyframes leave the map.
 TEST(OctoMapBuilder, RemoveTakesAKeyframeOut) {
   const PinholeCamera camera = box_room::SmallCamera();

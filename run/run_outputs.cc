@@ -117,6 +117,7 @@ void WriteMapperBinary(const std::string& directory, KeyframeMapper& mapper, boo
   mapper.WithBuilder([&](OctoMapBuilder& b) {
     // A continued map (--load-octomap) is written even when no keyframe was added to it.
     if (b.KeyframeIds().empty() && !b.has_base_map()) return;
+    b.Finalize();
     b.WriteBinary((fs::path(directory) / "map.bt").string());
     if (with_full_map) b.WriteFull((fs::path(directory) / "map.ot").string());
   });

@@ -7,6 +7,7 @@
 #include <map>
 #include <set>
 
+#include "core/slam/bundle_solver.h"
 #include "core/slam/cost_functions.h"
 #include "core/slam/pose_solver.h"
 
@@ -15,6 +16,9 @@ namespace {
 
 // Bundle adjustments with at most this many keyframe poses solve with a dense Schur complement.
 constexpr size_t kDenseSchurMaxPoses = 100;
+// ... and with at most this many variable poses, with the dedicated solver (its reduced camera
+// system is a dense matrix of 6 x this size).
+constexpr size_t kDedicatedSolverMaxPoses = 60;
 
 ProjectionModel ModelOf(const CameraGeometry& g) {
   return {g.camera.fx, g.camera.fy, g.camera.cx, g.camera.cy, g.bf};
@@ -245,11 +249,38 @@ void SolveBundle(BundleProblem& bundle, const OptimizerOptions& options, int ite
   const double delta_mono = std::sqrt(options.chi2_mono),
                delta_stereo = std::sqrt(options.chi2_stereo);
   AbortCallback abort_callback(abort);
+  // Local windows: the dedicated Schur-complement solver (core/slam/bundle_solver.h) on the
+  // problem indexed once; larger problems: Ceres with a sparse camera system.
+  const bool dedicated = poses.size() - fixed.size() <= kDedicatedSolverMaxPoses;
+  std::vector<int64_t> pose_ids, point_ids;
+  std::vector<std::array<double, 7>> pose_values;
+  std::vector<uint8_t> pose_fixed;
+  std::vector<Eigen::Vector3d> point_values;
+  std::vector<BundleResidual> residuals;
+  if (dedicated) {
+    std::map<int64_t, int> pose_index, point_index;
+    for (const auto& [id, pose] : poses) {
+      pose_index[id] = static_cast<int>(pose_ids.size());
+      pose_ids.push_back(id);
+      pose_values.push_back(pose);
+      pose_fixed.push_back(fixed.count(id) ? 1 : 0);
+    }
+    for (const auto& [id, point] : points) {
+      point_index[id] = static_cast<int>(point_ids.size());
+      point_ids.push_back(id);
+      point_values.push_back(point);
+    }
+    residuals.reserve(observations.size());
+    for (const BundleObservation& o : observations)
+      residuals.push_back({pose_index.at(o.kf_id), point_index.at(o.point_id), o.measurement,
+                           o.sqrt_info, o.stereo});
+  }
   // Cost functions and the two Huber kernels are made once and shared by both solves (the
   // problems do not own them): only the problem's structure is rebuilt for the second solve.
   std::vector<std::unique_ptr<ceres::CostFunction>> costs;
   costs.reserve(observations.size());
   for (const BundleObservation& o : observations) {
+    if (dedicated) break;
     if (o.stereo) {
       costs.emplace_back(new StereoBACost(o.measurement, o.sqrt_info, model));
     } else {
@@ -258,6 +289,18 @@ void SolveBundle(BundleProblem& bundle, const OptimizerOptions& options, int ite
   }
   ceres::HuberLoss huber_mono(delta_mono), huber_stereo(delta_stereo);
   auto solve = [&](int iterations, bool robust) {
+    if (dedicated) {
+      std::vector<uint8_t> active(observations.size());
+      for (size_t k = 0; k < observations.size(); ++k) active[k] = outlier[k] ? 0 : 1;
+      BundleSolverOptions solver_options;
+      solver_options.max_iterations = iterations;
+      SolveBundleProblem(residuals, active.data(), model, robust ? delta_mono : 0.0,
+                         robust ? delta_stereo : 0.0, solver_options, pose_fixed, &pose_values,
+                         &point_values, abort);
+      for (size_t k = 0; k < pose_ids.size(); ++k) poses[pose_ids[k]] = pose_values[k];
+      for (size_t k = 0; k < point_ids.size(); ++k) points[point_ids[k]] = point_values[k];
+      return;
+    }
     ceres::Problem::Options problem_options;
     problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;

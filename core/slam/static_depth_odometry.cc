@@ -70,6 +70,17 @@ StaticDepthOdometry::StaticDepthOdometry(const PinholeCamera& camera,
       break;
     }
   }
+  // OpenCV's ICP odometries set up their normal estimator (tables for the image size) on the
+  // first frame they see, which took ~150 ms: done here, at start-up, and not on the first frame
+  // that needs the fallback (in the middle of a crowd, where every millisecond counts).
+  if (options_.alignment != DenseAlignment::kPhotometric) {
+    const cv::Mat depth(camera_.height, camera_.width, CV_32FC1, cv::Scalar(1.0f));
+    const cv::Mat gray(camera_.height, camera_.width, CV_8UC1, cv::Scalar(128));
+    const cv::Mat mask(camera_.height, camera_.width, CV_8UC1, cv::Scalar(255));
+    cv::Ptr<cv::rgbd::OdometryFrame> frame =
+        cv::makePtr<cv::rgbd::OdometryFrame>(gray, depth, mask, cv::Mat(), -1);
+    odometry_->prepareFrameCache(frame, cv::rgbd::OdometryFrame::CACHE_ALL);
+  }
 }
 
 StaticDepthOdometry::~StaticDepthOdometry() = default;
@@ -137,6 +148,7 @@ StaticDepthEstimate StaticDepthOdometry::Estimate(const DenseView& reference,
   const auto t0 = std::chrono::steady_clock::now();
   StaticDepthEstimate e;
   auto odometry_frame = [](const DenseView& view) {
+    if (view.odometry_frame) return view.odometry_frame;
     cv::Mat mask;
     if (view.static_mask.empty()) {
       mask = cv::Mat(view.depth.size(), CV_8UC1, cv::Scalar(255));
@@ -146,7 +158,9 @@ StaticDepthEstimate StaticDepthOdometry::Estimate(const DenseView& reference,
     // Pixels without depth are not usable either (OpenCV also tests the range, but a NaN-free
     // mask keeps its normal computation away from holes).
     mask.setTo(0, view.depth <= 0);
-    return cv::makePtr<cv::rgbd::OdometryFrame>(view.gray, view.depth, mask, cv::Mat(), -1);
+    view.odometry_frame =
+        cv::makePtr<cv::rgbd::OdometryFrame>(view.gray, view.depth, mask, cv::Mat(), -1);
+    return view.odometry_frame;
   };
   cv::Ptr<cv::rgbd::OdometryFrame> src = odometry_frame(reference);
   cv::Ptr<cv::rgbd::OdometryFrame> dst = odometry_frame(current);

@@ -28,6 +28,7 @@
 
 namespace cv::rgbd {
 class Odometry;
+struct OdometryFrame;
 }  // namespace cv::rgbd
 
 namespace dygslam {
@@ -38,6 +39,10 @@ struct DenseView {
   cv::Mat gray;         // CV_8UC1
   cv::Mat depth;        // CV_32FC1 metres, 0 = no measurement
   cv::Mat static_mask;  // CV_8UC1, nonzero = static pixel usable for alignment; empty = all
+  // The aligner's pyramids of this view, made on its first alignment and reused when the view is
+  // aligned again (a frame aligned as the current one is the next frame's reference): the images
+  // above must not change once the view has been used.
+  mutable std::shared_ptr<cv::rgbd::OdometryFrame> odometry_frame;
 };
 
 // How the static pixels are aligned (cv::rgbd odometries).

@@ -146,6 +146,9 @@ class Tracker {
   // instead of starting a new map. localization: track against it without adding keyframes or
   // map points (pose only, like ORB-SLAM2's localization mode).
   void StartFromLoadedMap(bool localization);
+  // With options.dense_fallback: sets up the dense estimator for images of `camera` now (start-up)
+  // rather than on the first frame that needs it.
+  void PrepareDenseFallback(const PinholeCamera& camera);
 
   // World poses of all tracked frames (resolved through current keyframe poses).
   std::vector<StampedPose> Trajectory() const;
@@ -210,7 +213,7 @@ class Tracker {
   std::vector<std::shared_ptr<KeyFrame>> local_keyframes_;
   std::vector<std::shared_ptr<MapPoint>> local_points_;
   std::vector<TrajectoryRecord> records_;
-  std::unique_ptr<StaticDepthOdometry> static_depth_odometry_;  // created on first use
+  std::unique_ptr<StaticDepthOdometry> static_depth_odometry_;  // PrepareDenseFallback / first use
   // The newest keyframe and its dense view: the dense fallback's first reference (its pose is
   // refined by local BA, so fallback frames do not chain the drift of the frames before them).
   std::shared_ptr<KeyFrame> dense_kf_;

@@ -21,6 +21,11 @@ void Tracker::RememberDenseKeyFrame(const std::shared_ptr<KeyFrame>& kf, const F
   dense_kf_view_ = frame.dense;
 }
 
+void Tracker::PrepareDenseFallback(const PinholeCamera& camera) {
+  if (options_.dense_fallback && !static_depth_odometry_)
+    static_depth_odometry_ = std::make_unique<StaticDepthOdometry>(camera, options_.fallback);
+}
+
 std::optional<Tracker::DenseResult> Tracker::DenseEstimate(const Frame& frame,
                                                            const Rigid3d& predicted,
                                                            bool keyframe_only) {

@@ -11,6 +11,7 @@
 
 #include "core/base/error.h"
 #include "core/base/log.h"
+#include "core/base/work_queue.h"
 #include "core/dynamic/detection_worker.h"
 #include "core/slam/frame.h"
 #include "core/slam/frame_preparation.h"
@@ -138,6 +139,7 @@ class SystemImpl {
         [this](const std::vector<int64_t>& moved, const std::vector<int64_t>& culled) {
           EmitMapChanges(moved, culled);
         });
+    if (options.filter.mode != FilterMode::kNone) tracker_.PrepareDenseFallback(geometry_->camera);
     if (loaded_.map) {
       first_own_keyframe_id_ = map_->PeekNextKeyFrameId();
       tracker_.StartFromLoadedMap(options.localization);
@@ -185,7 +187,36 @@ class SystemImpl {
         updates.push_back(std::move(d));
       }
     }
-    for (const KeyframeData& d : updates) cb(d);
+    Post([cb, updates = std::move(updates)] {
+      for (const KeyframeData& d : updates) cb(d);
+    });
+  }
+
+  // Runs `job` on the keyframe callback's thread, after what was posted before.
+  void Post(std::function<void()> job) {
+    emitter_.Push([this, job = std::move(job)] {
+      try {
+        job();
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(callback_mutex_);
+        if (!emit_error_) emit_error_ = std::current_exception();
+      }
+    });
+    emitter_.Drain();  // unthreaded (deterministic): at once
+  }
+  // Waits until every posted callback has run; rethrows the first exception one threw.
+  void FlushCallbacks() {
+    while (!emitter_.WaitIdle(std::chrono::seconds(1))) {
+    }
+    RethrowCallbackError();
+  }
+  void RethrowCallbackError() {
+    std::exception_ptr error;
+    {
+      std::lock_guard<std::mutex> lock(callback_mutex_);
+      std::swap(error, emit_error_);
+    }
+    if (error) std::rethrow_exception(error);
   }
 
   // carry_boxes: the frame's detector was skipped outside (FeedRgbdFrameCarryingBoxes).
@@ -262,6 +293,7 @@ class SystemImpl {
       }
       EmitMapChanges(moved, {});
     }
+    FlushCallbacks();
   }
 
  private:
@@ -323,6 +355,10 @@ class SystemImpl {
   bool has_last_stamp_ = false;
   std::mutex callback_mutex_;
   std::function<void(const KeyframeData&)> keyframe_callback_;
+  std::exception_ptr emit_error_;  // guarded by callback_mutex_
+  // The keyframe callback's thread (Post). Last: finishes its jobs before anything they use goes.
+  WorkQueue<std::function<void()>> emitter_{[](std::function<void()>& job) { job(); },
+                                             !options_.deterministic, /*capacity=*/16};
 };
 
 namespace {
@@ -566,24 +602,30 @@ void SystemImpl::EmitKeyframe(const std::shared_ptr<KeyFrame>& keyframe,
     cb = keyframe_callback_;
   }
   if (cb) {
+    // What the map needs of the frame, copied (the caller may reuse its buffers); the map mask
+    // and, on a frame the detector skipped, the detection for it are computed on the callback's
+    // thread (Post).
     const RgbdFrame& input = *prepared.input;
-    KeyframeData data;
-    data.id = keyframe->id;
-    data.stamp = input.stamp;
-    data.world_from_cam = *result->world_from_cam;
-    data.rgb = input.rgb;
-    data.depth = prepared.depth_m;
+    auto data = std::make_shared<KeyframeData>();
+    data->id = keyframe->id;
+    data->stamp = input.stamp;
+    data->world_from_cam = *result->world_from_cam;
+    data->rgb = input.rgb.clone();
+    data->depth = prepared.depth_m.clone();
+    data->keypoints = prepared.features.keypoints;
+    data->keypoint_dynamic = filtered.dynamic;
+    std::optional<std::vector<Detection>> boxes = prepared.detections;
     // A keyframe on a frame the detector skipped (own cadence, or a detector outside that skips
     // frames, e.g. the DDS detector component): its mask for the map from the detector run on
     // this frame (carried boxes fit the people less well; tracking keeps using the carried ones,
     // so the trajectory does not depend on whether a map is built). The own detector is created
     // here on first use when boxes come from outside.
-    std::optional<std::vector<Detection>> boxes = prepared.detections;
+    DetectionWorker* detector = nullptr;
     if (prepared.detector_skipped && options_.detect_skipped_keyframes && keyframe_detector_ok_ &&
         input.rgb.type() == CV_8UC3) {
       try {
         EnsureDetector();
-        boxes = detection_worker_->Submit(input.rgb).result.get();
+        detector = detection_worker_.get();
       } catch (const InputError& e) {
         // Boxes from outside (the own detector would have failed on its first frame): no model
         // here. The carried boxes stay; said once.
@@ -593,13 +635,15 @@ void SystemImpl::EmitKeyframe(const std::shared_ptr<KeyFrame>& keyframe,
         keyframe_detector_ok_ = false;
       }
     }
-    data.dynamic_mask =
-        ComputeDynamicMask(input.rgb.size(), prepared.depth_m, boxes ? *boxes : kNoDetections,
-                           prepared.features.keypoints, filtered.dynamic, options_.dynamic_mask);
-    data.keypoints = prepared.features.keypoints;
-    data.keypoint_dynamic = filtered.dynamic;
-    if (boxes) data.detections = *boxes;
-    cb(data);
+    const DynamicMaskOptions mask_options = options_.dynamic_mask;
+    Post([cb, data, boxes, detector, mask_options]() mutable {
+      if (detector) boxes = detector->Submit(data->rgb).result.get();
+      data->dynamic_mask =
+          ComputeDynamicMask(data->rgb.size(), data->depth, boxes ? *boxes : kNoDetections,
+                             data->keypoints, data->keypoint_dynamic, mask_options);
+      if (boxes) data->detections = *boxes;
+      cb(*data);
+    });
   }
   const auto t_map = std::chrono::steady_clock::now();
   tracker_.HandOffKeyFrame(keyframe);
@@ -608,6 +652,7 @@ void SystemImpl::EmitKeyframe(const std::shared_ptr<KeyFrame>& keyframe,
 
 // stella_vslam's create-frame / feed-frame: prepare, then filter -> track -> emit.
 FrameResult SystemImpl::Feed(const RgbdFrame& frame, bool carry_boxes) {
+  RethrowCallbackError();
   const auto t_start = std::chrono::steady_clock::now();
   FrameResult result;
   result.stamp = frame.stamp;
@@ -640,7 +685,12 @@ System::System(const SystemOptions& options) {
   impl_ = std::make_unique<SystemImpl>(options);
 }
 System::~System() {
-  if (impl_) impl_->Shutdown();
+  if (!impl_) return;
+  try {
+    impl_->Shutdown();
+  } catch (const std::exception& e) {  // a keyframe callback's error, not collected by Shutdown()
+    LOG_WARNING << "keyframe callback failed: " << e.what();
+  }
 }
 FrameResult System::FeedRgbdFrame(const RgbdFrame& frame) { return impl_->Feed(frame); }
 FrameResult System::FeedRgbdFrame(const cv::Mat& rgb, const cv::Mat& depth, Timestamp stamp,

@@ -183,8 +183,12 @@ class System {
   std::vector<StampedPose> Trajectory() const;
   // This run's keyframes (a loaded map's keyframes are in the map file, not here).
   std::vector<StampedPose> KeyframeTrajectory() const;
-  // Called (from the thread that produced it) for each new keyframe and for keyframe pose
-  // corrections (pose_update_only = true).
+  // Called for each new keyframe and for keyframe pose corrections (pose_update_only = true), in
+  // the order they happened, from one thread of the System's own (the caller's thread with
+  // SystemOptions::deterministic): a keyframe's map mask (and, on a frame the detector skipped,
+  // its detection) is computed there, not on the frame's critical path. Shutdown() returns when
+  // every call is done. An exception the callback throws is rethrown by the next FeedRgbdFrame or
+  // Shutdown.
   void SetKeyframeCallback(std::function<void(const KeyframeData&)> callback);
   // Local mapping so far: keyframes processed, points triangulated/culled, keyframes culled, time
   // per keyframe (its own thread; synchronous in deterministic mode).

@@ -60,12 +60,23 @@ TEST_F(CliOutputFiles, OutFolderRemovedMidRunIsMadeAgain) {
     if (command == "run") args.push_back("--direct");
     const pid_t pid = testing::SpawnDygslam(args, out + ".out", out + ".err");
     ASSERT_GT(pid, 0);
-    // The folder is made before the first frame (checked for writing); remove it then.
+    // The folder is made before the first frame and checked for writing with a probe file that
+    // is removed at once; remove the folder when the probe has gone (removing it while the
+    // command writes its probe is a different case: the folder is then not writable).
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-    while (!fs::exists(out) && std::chrono::steady_clock::now() < deadline)
+    auto probing = [&] {
+      std::error_code ec;
+      for (const auto& entry : fs::directory_iterator(out, ec))
+        if (Contains(entry.path().filename().string(), "write_probe")) return true;
+      return false;
+    };
+    while ((!fs::exists(out) || probing()) && std::chrono::steady_clock::now() < deadline)
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     ASSERT_TRUE(fs::exists(out)) << command;
-    fs::remove_all(out);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    std::error_code ec;
+    fs::remove_all(out, ec);
+    ASSERT_FALSE(fs::exists(out)) << command << ": " << ec.message();
     std::string diagnostics;
     const int code = testing::WaitForExit(pid, 300, &diagnostics);
     const std::string err = testing::ReadAll(out + ".err");

@@ -49,8 +49,9 @@ DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
           }
         }
       });
-  status.Write(ToMsg(ComponentStatus::Started(ComponentKind::kDetector,
-                                              {{DataTopic::kDetections, writer.guid()}})));
+  StartedAnnouncer started(status,
+                           ComponentStatus::Started(ComponentKind::kDetector,
+                                                    {{DataTopic::kDetections, writer.guid()}}));
 
   double total_ms = 0;
   size_t received = 0;
@@ -58,6 +59,7 @@ DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
   bool frame_source_seen = false;  // a frame writer was matched
   ReadyAnnouncer announcer(ComponentKind::kDetector);
   while (!stop->requested()) {
+    started.Poll(status);
     announcer.Poll(status, frames.matched() > 0 && writer.matched() > 0);
     std::optional<msg::RgbdFrame> sample = queue.Pop(std::chrono::milliseconds(20));
     if (!sample) {

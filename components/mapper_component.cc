@@ -37,11 +37,9 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
                                                 dds::TopicKind::kMapUpdate);
   dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
                                                   dds::TopicKind::kStreamStatus);
-  dds::Reader<msg::KeyframePubSubType> keyframes(participant, dds::topics::kKeyframe,
-                                                 dds::TopicKind::kKeyframe,
-                                                 [&](msg::Keyframe&& k, const WriterGuid& writer) {
-                                                   queue.Push(std::make_pair(std::move(k), writer));
-                                                 });
+  // The status reader before the keyframe reader: a mapper that joins a running slam gets up to
+  // 64 keyframes with images at once; its status endpoints match (and receive slam's
+  // announcement) before that burst fills the transport.
   StatusReader status_reader(
       participant, ComponentKind::kMapper,
       [&](const ComponentStatus& s, const msg::StreamStatus& /*m*/, const WriterGuid& from) {
@@ -52,8 +50,14 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
           slam_done = true;
         }
       });
-  status.Write(ToMsg(
-      ComponentStatus::Started(ComponentKind::kMapper, {{DataTopic::kMapUpdate, updates.guid()}})));
+  dds::Reader<msg::KeyframePubSubType> keyframes(participant, dds::topics::kKeyframe,
+                                                 dds::TopicKind::kKeyframe,
+                                                 [&](msg::Keyframe&& k, const WriterGuid& writer) {
+                                                   queue.Push(std::make_pair(std::move(k), writer));
+                                                 });
+  StartedAnnouncer started(
+      status,
+      ComponentStatus::Started(ComponentKind::kMapper, {{DataTopic::kMapUpdate, updates.guid()}}));
 
   using Clock = std::chrono::steady_clock;
   std::optional<Clock::time_point> next_update_allowed;
@@ -78,6 +82,7 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
   std::optional<std::chrono::steady_clock::time_point> flush_deadline;
   ReadyAnnouncer announcer(ComponentKind::kMapper);
   while (true) {
+    started.Poll(status);
     announcer.Poll(status, keyframes.matched() > 0);
     if (stop->requested() && !flush_deadline) {
       // Stopping: slam publishes its last corrections as it stops; take them if it is there.
@@ -172,7 +177,8 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
   LOG_INFO << "mapper: " << stats.keyframes_received << " keyframe messages ("
            << core.num_inserted() << " new, " << core.num_pose_updates() << " pose updates, "
            << core.num_removed() << " removed), " << core.num_keyframes() << " keyframes in the map"
-           << (options.map_path.empty() ? "" : ", written to " + options.map_path)
+           << (options.map_path.empty() || !core.has_map() ? ", no map written"
+                                                           : ", written to " + options.map_path)
            << (full_written ? " and " + options.full_map_path : "");
   return stats;
 }

@@ -187,10 +187,11 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
       });
   // Who we are and which writers are ours (the consumers accept frames and ground truth only
   // from announced writers; components/protocol.h).
-  status.Write(ToMsg(ComponentStatus::Started(
-      ComponentKind::kPlayer,
-      {{DataTopic::kFrames, frames.guid()}, {DataTopic::kGroundTruth, gt_writer.guid()}},
-      player.num_frames())));
+  StartedAnnouncer started(status,
+                           ComponentStatus::Started(ComponentKind::kPlayer,
+                                                    {{DataTopic::kFrames, frames.guid()},
+                                                     {DataTopic::kGroundTruth, gt_writer.guid()}},
+                                                    player.num_frames()));
 
   // A slam that was there and left without COMPONENT_DONE (killed, or its DONE lost): its pose
   // writer unmatched for 5 s. Then no acknowledgement and no DONE will come: stop waiting for them.
@@ -253,6 +254,7 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
         (options.loop_minutes <= 0 || Clock::now() >= loop_end)) {
       break;
     }
+    started.Poll(status);  // until the end of stream
     RgbdFrameData frame = player.Frame(n % frames_per_loop);
     frame.seq = n;
     frame.stamp = Timestamp::FromNanoseconds(frame.stamp.nanoseconds() + loop * replay_shift_ns);

@@ -245,6 +245,38 @@ class WriterGate {
 // "3 keyframes" -> "ignored 3 keyframes from writers outside this run (...)".
 std::string IgnoredSamplesNote(const std::string& counted);
 
+// Writes a component's STARTED, and writes it again whenever more status readers are matched
+// than at the last Poll (a peer joined): the transient-local history does not always reach a
+// reader that joins late (Fast DDS delivers it to late joiners unreliably, eProsima/Fast-DDS
+// issue 3822), and a peer without the announcement ignores the component's samples. A repeated
+// announcement changes nothing for a peer that has it (RunWriters takes it any number of
+// times). Call Poll() from the component's loop while its stream goes on (a frame source stops
+// after its END_OF_STREAM).
+class StartedAnnouncer {
+ public:
+  // StatusWriter: anything with Write(const msg::StreamStatus&) and matched().
+  template <class StatusWriter>
+  StartedAnnouncer(StatusWriter& status, const ComponentStatus& started)
+      : message_(ToMsg(started)) {
+    status.Write(message_);
+  }
+  template <class StatusWriter>
+  void Poll(StatusWriter& status) {
+    const int matched = status.matched();
+    if (matched > matched_) {
+      status.Write(message_);
+      ++repeats_;
+    }
+    matched_ = matched;
+  }
+  int repeats() const { return repeats_; }
+
+ private:
+  msg::StreamStatus message_;
+  int matched_ = 0;
+  int repeats_ = 0;
+};
+
 // Announces READY once the component's inputs are matched, or after `timeout` in any case. The
 // player waits for READY of the components the pipeline runs before it publishes the first frame,
 // so no component misses the start of the stream. Call Poll() from the component's loop.

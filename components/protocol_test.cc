@@ -300,5 +300,50 @@ TEST(Protocol, IgnoredSamplesNote) {
   EXPECT_NE(note.find("--security"), std::string::npos);
 }
 
+// The status writer as StartedAnnouncer sees it: what was written, how many readers matched.
+struct FakeStatusWriter {
+  std::vector<msg::StreamStatus> written;
+  int readers = 0;
+  bool Write(const msg::StreamStatus& m) {
+    written.push_back(m);
+    return true;
+  }
+  int matched() const { return readers; }
+};
+
+// STARTED is written at once and again each time more readers are matched than before (a peer
+// joined late and may have missed the history); the same count, or fewer, writes nothing.
+TEST(StartedAnnouncer, RepeatsTheAnnouncementWhenAPeerJoins) {
+  FakeStatusWriter w;
+  WriterGuid keyframes{};
+  keyframes[15] = 7;
+  StartedAnnouncer started(
+      w, ComponentStatus::Started(ComponentKind::kSlam, {{DataTopic::kKeyframe, keyframes}}));
+  ASSERT_EQ(w.written.size(), 1u);
+  started.Poll(w);  // nobody there yet
+  EXPECT_EQ(w.written.size(), 1u);
+  w.readers = 3;  // the run's peers
+  started.Poll(w);
+  EXPECT_EQ(w.written.size(), 2u);
+  started.Poll(w);
+  EXPECT_EQ(w.written.size(), 2u);
+  w.readers = 2;  // one left
+  started.Poll(w);
+  EXPECT_EQ(w.written.size(), 2u);
+  w.readers = 3;  // a late joiner (a mapper started mid-run)
+  started.Poll(w);
+  ASSERT_EQ(w.written.size(), 3u);
+  EXPECT_EQ(started.repeats(), 2);
+  // Every copy is the same announcement, and RunWriters takes it any number of times.
+  RunWriters writers;
+  for (const msg::StreamStatus& m : w.written) {
+    const ComponentStatus s = StatusFromMsg(m);
+    EXPECT_EQ(s.event, StreamEvent::kStarted);
+    EXPECT_TRUE(writers.Announce(s));
+  }
+  EXPECT_TRUE(writers.Owns(DataTopic::kKeyframe, keyframes));
+  EXPECT_EQ(writers.NumAnnounced(DataTopic::kKeyframe), 1u);
+}
+
 }  // namespace
 }  // namespace dygslam

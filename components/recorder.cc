@@ -133,7 +133,7 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
           cv.notify_all();
         }
       });
-  status.Write(ToMsg(ComponentStatus::Started(ComponentKind::kRecorder, {})));
+  StartedAnnouncer started(status, ComponentStatus::Started(ComponentKind::kRecorder, {}));
 
   {
     std::unique_lock<std::mutex> lock(mutex);
@@ -145,6 +145,7 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
         // Never write while holding `mutex`: intra-process delivery runs our own listeners
         // (which take it) on this thread.
         lock.unlock();
+        started.Poll(status);
         announcer.Poll(status, poses.matched() > 0 && trajectories.matched() > 0);
         lock.lock();
       }

@@ -175,10 +175,11 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
         }
         cv.notify_all();
       });
-  status.Write(ToMsg(ComponentStatus::Started(
-      ComponentKind::kSlam, {{DataTopic::kCameraPose, pose_writer.guid()},
-                             {DataTopic::kKeyframe, keyframe_writer.guid()},
-                             {DataTopic::kTrajectory, trajectory_writer.guid()}})));
+  StartedAnnouncer started(
+      status, ComponentStatus::Started(ComponentKind::kSlam,
+                                       {{DataTopic::kCameraPose, pose_writer.guid()},
+                                        {DataTopic::kKeyframe, keyframe_writer.guid()},
+                                        {DataTopic::kTrajectory, trajectory_writer.guid()}}));
 
   auto publish_keyframes = [&](const std::vector<KeyframeData>& keyframes) {
     for (const KeyframeData& k : keyframes) {
@@ -202,6 +203,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
   bool waited_with_frames = false;  // a frame was pending during that wait
   bool map_announced = !core.LoadedMapInfo();
   while (!stop->requested()) {
+    started.Poll(status);
     announcer.Poll(status, frames.matched() > 0 &&
                                (!pairing_options.needs_detections || detections.matched() > 0));
     if (announcer.done() && !map_announced) {

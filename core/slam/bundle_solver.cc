@@ -48,7 +48,7 @@ struct Linearization {
     g_c.assign(cameras, Vector6d::Zero());
     h_pp.assign(points, Eigen::Matrix3d::Zero());
     g_p.assign(points, Eigen::Vector3d::Zero());
-    h_cp.resize(residuals);
+    h_cp.assign(residuals, Matrix63d::Zero());  // a residual behind its camera couples nothing
     point_seen.assign(points, 0);
   }
 };

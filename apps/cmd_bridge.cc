@@ -107,6 +107,11 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
       !p.GetNumber("eos-idle", 0, 1e9, &o.end_of_stream_idle_s) ||
       !p.GetInt("path-every", 0, 1000000, &o.path_every) || !p.GetInt("domain", -1, 232, &domain))
     return p.exit_code();
+  // A depth unit of 0 would turn every depth into 0 m (no depth at all): a usage error naming the
+  // option typed, like the other ranges above.
+  if (!(o.depth_unit > 0))
+    return p.UsageError("--depth-unit " + p.Get("depth-unit") +
+                        ": must be > 0 (metres per depth unit, e.g. 0.001 for millimetres)");
   o.max_pending_frames = static_cast<size_t>(max_pending);
   o.pose_topic = p.Get("pose-topic");
   o.odom_topic = p.Get("odom-topic");

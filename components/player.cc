@@ -163,6 +163,7 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
         }
         cv.notify_all();
       });
+  RepeatedWarning rival_warning(3);  // a rival announces itself again as peers join
   StatusReader status_reader(
       participant, ComponentKind::kPlayer,
       [&](const ComponentStatus& s, const msg::StreamStatus& /*m*/, const WriterGuid& from) {
@@ -171,7 +172,8 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
           // Another frame source on the partition: the consumers take the frames of the one
           // that announced itself first and ignore the other's (components/protocol.h).
           if (s.event == StreamEvent::kStarted && IsFrameSource(s.source) &&
-              !std::equal(from.begin(), from.begin() + 12, frames.guid().begin())) {
+              !std::equal(from.begin(), from.begin() + 12, frames.guid().begin()) &&
+              rival_warning.Say()) {
             LOG_WARNING << "player: another frame source (" << ToString(s.source)
                         << ") plays on this partition; the run's consumers take the frames of "
                         << "the one that started first and ignore the other's (give each run its "

@@ -247,8 +247,8 @@ std::string IgnoredSamplesNote(const std::string& counted);
 
 // Writes a component's STARTED, and writes it again whenever more status readers are matched
 // than at the last Poll (a peer joined): the transient-local history does not always reach a
-// reader that joins late (Fast DDS delivers it to late joiners unreliably, eProsima/Fast-DDS
-// issue 3822), and a peer without the announcement ignores the component's samples. A repeated
+// reader that joins late (Fast DDS delivers it to late joiners unreliably, a limitation reported
+// upstream), and a peer without the announcement ignores the component's samples. A repeated
 // announcement changes nothing for a peer that has it (RunWriters takes it any number of
 // times). Call Poll() from the component's loop while its stream goes on (a frame source stops
 // after its END_OF_STREAM).

@@ -135,6 +135,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
         }
         cv.notify_all();
       });
+  RepeatedWarning rival_warning(3);  // a rival announces itself again as peers join
   StatusReader status_reader(
       participant, ComponentKind::kSlam,
       [&](const ComponentStatus& s, const msg::StreamStatus& m, const WriterGuid& from) {
@@ -143,7 +144,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
           if (!run_writers.Announce(s, from)) {
             // A second frame source on the run's partition: its frames and its end of stream
             // are not this run's (its frames count as ignored in the summary).
-            if (s.event == StreamEvent::kStarted) {
+            if (s.event == StreamEvent::kStarted && rival_warning.Say()) {
               LOG_WARNING << "slam: rejected a second frame source on this run's partition: "
                           << run_writers.LastRival() << " announced itself while the run's "
                           << "frame source plays; its frames are ignored (give each run its own "

@@ -34,22 +34,38 @@ class StatusReader {
                                                           const WriterGuid&) { cb(status, m); })) {}
   StatusReader(std::shared_ptr<dds::Participant> participant, ComponentKind self,
                CallbackWithWriter callback)
-      : reader_(std::move(participant), dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
-                [self, callback = std::move(callback)](msg::StreamStatus&& m,
-                                                       const WriterGuid& writer) {
+      : self_(self),
+        malformed_(std::make_unique<RepeatedWarning>(3)),
+        reader_(std::move(participant), dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
+                [self, malformed = malformed_.get(), callback = std::move(callback)](
+                    msg::StreamStatus&& m, const WriterGuid& writer) {
                   ComponentStatus status;
                   try {
                     status = StatusFromMsg(m);
                   } catch (const InputError& e) {
-                    LOG_WARNING << ToString(self) << ": ignored status: " << e.what();
+                    // A peer may send any number of these: the first few are said, the total
+                    // at the end.
+                    if (malformed->Say())
+                      LOG_WARNING << ToString(self) << ": ignored status: " << e.what();
                     return;
                   }
                   callback(status, m, writer);
                 }) {}
+  ~StatusReader() {
+    if (malformed_->suppressed() > 0)
+      LOG_WARNING << ToString(self_) << ": ignored " << malformed_->count()
+                  << " malformed status samples in all (the first " << 3 << " said above)";
+  }
+  StatusReader(const StatusReader&) = delete;
+  StatusReader& operator=(const StatusReader&) = delete;
 
   int matched() const { return reader_.matched(); }
+  // Status samples that were not understood (malformed), so far.
+  size_t malformed() const { return malformed_->count(); }
 
  private:
+  ComponentKind self_;
+  std::unique_ptr<RepeatedWarning> malformed_;  // outlives reader_'s callbacks (declared first)
   dds::Reader<msg::StreamStatusPubSubType> reader_;
 };
 

@@ -92,6 +92,20 @@ TEST_F(Cli, AnOptionIsNeverTakenAsTheValueOfTheOptionBeforeIt) {
   EXPECT_TRUE(fs::exists(fs::path(cwd) / "--aligned.txt"));
 }
 
+// A depth unit of 0 (every depth would be 0 m) is a usage error naming the option as typed,
+// before any DDS participant is made; so is one outside the range.
+TEST_F(Cli, BridgeDepthUnitZeroIsAUsageErrorNamingTheOption) {
+  const std::string cwd = dir_ + "/cwd_bridge";
+  fs::create_directories(cwd);
+  for (const std::string value : {"0", "0.0", "-0"}) {
+    const auto r = RunIn(cwd, {"bridge", "--depth-unit", value}, dir_ + "/cli.out");
+    ExpectError(r, 2, {"--depth-unit " + value + ": must be > 0"});
+    EXPECT_FALSE(Contains(r.err, "depth_unit")) << r.err;  // the option's name, not the field's
+  }
+  ExpectError(RunIn(cwd, {"bridge", "--depth-unit", "-1"}, dir_ + "/cli.out"), 2,
+              {"--depth-unit", "-1"});
+}
+
 TEST_F(Cli, AFailedWriteToStandardOutputFailsTheCommand) {
   const std::string gt = Trajectory("gt.txt", 0), est = Trajectory("est.txt", 0.5);
   const std::vector<std::vector<std::string>> commands = {

@@ -7,8 +7,8 @@
 // observations, solved after every keyframe. Ceres spent most of its time on building the problem
 // twice per keyframe (a residual block per observation, hash maps of parameter blocks) and on its
 // general block machinery; here the structure is indexed once, the reduced camera system is a
-// small dense matrix (6 x variable poses) accumulated point by point, and nothing is allocated per
-// iteration. Global bundle adjustments (hundreds of poses, a sparse camera system) stay on Ceres.
+// small dense matrix (6 x variable poses) accumulated point by point, with no per-residual
+// objects. Global bundle adjustments (hundreds of poses, a sparse camera system) stay on Ceres.
 //
 // The trust region follows Ceres' Levenberg-Marquardt defaults as SolvePose does
 // (core/slam/pose_solver.h): damping diag(H) / radius, radius 1e4 at first, grown by

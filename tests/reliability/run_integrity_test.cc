@@ -126,10 +126,13 @@ TEST_F(RunIntegrity, EarlierOutputsStayUntilTheRunReplacesThem) {
     EXPECT_FALSE(Contains(entry.path().filename().string(), ".tmp.")) << entry.path();
 }
 
-// A participant outside the run publishes `forged` statuses into the run's partition on `domain`
-// from 3 s on; returns the frames the run processed, with its exit code in `*code`.
+// A participant outside the run publishes `forged` statuses into the run's partition on `domain`,
+// every 100 ms from `delay` after the start on, once a reader of the run has matched its writer
+// (a run can end before a fixed delay has passed); returns the frames the run processed, with its
+// exit code in `*code`.
 int RunWithForgedStatus(const std::string& source, const std::string& dir, int domain,
-                        const msg::StreamStatus& forged, int* code) {
+                        const msg::StreamStatus& forged, std::chrono::milliseconds delay,
+                        int* code) {
   const std::string partition = "dygslam_integrity_" + std::to_string(domain);
   dds::ParticipantOptions po;
   po.domain_id = domain;
@@ -150,7 +153,7 @@ int RunWithForgedStatus(const std::string& source, const std::string& dir, int d
       ADD_FAILURE() << "run did not end";
       return -1;
     }
-    if (std::chrono::steady_clock::now() > start + std::chrono::seconds(3))
+    if (std::chrono::steady_clock::now() > start + delay && status_writer.matched() > 0)
       status_writer.Write(forged);
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
@@ -171,7 +174,8 @@ TEST_F(RunIntegrity, AForeignEndOfStreamIsIgnored) {
   int code = -1;
   const int processed = RunWithForgedStatus(
       source, dir_, kIntruderDomain,
-      ToMsg(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 20, 20)), &code);
+      ToMsg(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 20, 20)),
+      std::chrono::milliseconds(0), &code);
   EXPECT_EQ(processed, 150) << ReadAll(dir_ + "/run.out") << ReadAll(dir_ + "/run.err");
   EXPECT_EQ(code, 0) << ReadAll(dir_ + "/run.err");
   EXPECT_TRUE(Contains(ReadAll(dir_ + "/run.err"),
@@ -188,7 +192,8 @@ TEST_F(RunIntegrity, ARunCutShortNeverExitsZero) {
   int code = -1;
   const int processed =
       RunWithForgedStatus(source, dir_, kFailedDomain,
-                          ToMsg(ComponentStatus::Failed(ComponentKind::kPlayer, "forged")), &code);
+                          ToMsg(ComponentStatus::Failed(ComponentKind::kPlayer, "forged")),
+                          std::chrono::milliseconds(1500), &code);
   const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
   std::printf("forged FAILED: %d of 150 frames, exit %d\n", processed, code);
   ASSERT_GE(processed, 0);

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/rgbd.hpp>
 
 namespace dygslam {
@@ -18,6 +19,8 @@ void StaticDepthOdometryOptions::Check() const {
   DYGSLAM_CHECK_OPTION(!iteration_counts.empty(), "StaticDepthOdometry.iteration_counts");
   for (int n : iteration_counts)
     DYGSLAM_CHECK_OPTION(n > 0, "StaticDepthOdometry.iteration_counts");
+  DYGSLAM_CHECK_OPTION(align_downsample >= 1 && align_downsample <= 4,
+                       "StaticDepthOdometry.align_downsample");
   DYGSLAM_CHECK_OPTION(verify_step_px >= 1, "StaticDepthOdometry.verify_step_px");
   DYGSLAM_CHECK_OPTION(inlier_depth_tol > 0 && std::isfinite(inlier_depth_tol),
                        "StaticDepthOdometry.inlier_depth_tol");
@@ -37,8 +40,13 @@ StaticDepthOdometry::StaticDepthOdometry(const PinholeCamera& camera,
     : camera_(camera), options_(options) {
   camera_.Check();
   options_.Check();
-  cv::Mat k;
-  camera_.K().convertTo(k, CV_32F);
+  // The camera of the reduced images (pixel centres stay on pixel centres).
+  const double s = options_.align_downsample;
+  cv::Mat k = cv::Mat::eye(3, 3, CV_32F);
+  k.at<float>(0, 0) = static_cast<float>(camera_.fx / s);
+  k.at<float>(1, 1) = static_cast<float>(camera_.fy / s);
+  k.at<float>(0, 2) = static_cast<float>((camera_.cx + 0.5) / s - 0.5);
+  k.at<float>(1, 2) = static_cast<float>((camera_.cy + 0.5) / s - 0.5);
   const float min_depth = static_cast<float>(options_.min_depth);
   const float max_depth = static_cast<float>(options_.max_depth);
   const float max_depth_diff = static_cast<float>(options_.max_depth_diff);
@@ -74,9 +82,10 @@ StaticDepthOdometry::StaticDepthOdometry(const PinholeCamera& camera,
   // first frame they see, which took ~150 ms: done here, at start-up, and not on the first frame
   // that needs the fallback (in the middle of a crowd, where every millisecond counts).
   if (options_.alignment != DenseAlignment::kPhotometric) {
-    const cv::Mat depth(camera_.height, camera_.width, CV_32FC1, cv::Scalar(1.0f));
-    const cv::Mat gray(camera_.height, camera_.width, CV_8UC1, cv::Scalar(128));
-    const cv::Mat mask(camera_.height, camera_.width, CV_8UC1, cv::Scalar(255));
+    const cv::Size size = AlignSize();
+    const cv::Mat depth(size, CV_32FC1, cv::Scalar(1.0f));
+    const cv::Mat gray(size, CV_8UC1, cv::Scalar(128));
+    const cv::Mat mask(size, CV_8UC1, cv::Scalar(255));
     cv::Ptr<cv::rgbd::OdometryFrame> frame =
         cv::makePtr<cv::rgbd::OdometryFrame>(gray, depth, mask, cv::Mat(), -1);
     odometry_->prepareFrameCache(frame, cv::rgbd::OdometryFrame::CACHE_ALL);
@@ -84,6 +93,11 @@ StaticDepthOdometry::StaticDepthOdometry(const PinholeCamera& camera,
 }
 
 StaticDepthOdometry::~StaticDepthOdometry() = default;
+
+cv::Size StaticDepthOdometry::AlignSize() const {
+  const int s = options_.align_downsample;
+  return cv::Size((camera_.width + s - 1) / s, (camera_.height + s - 1) / s);
+}
 
 void StaticDepthOdometry::CheckView(const DenseView& view, const char* which) const {
   const cv::Size size(camera_.width, camera_.height);
@@ -147,9 +161,10 @@ StaticDepthEstimate StaticDepthOdometry::Estimate(const DenseView& reference,
   CheckView(current, "current");
   const auto t0 = std::chrono::steady_clock::now();
   StaticDepthEstimate e;
-  auto odometry_frame = [](const DenseView& view) {
+  const cv::Size align_size = AlignSize();
+  auto odometry_frame = [&align_size](const DenseView& view) {
     if (view.odometry_frame) return view.odometry_frame;
-    cv::Mat mask;
+    cv::Mat gray = view.gray, depth = view.depth, mask;
     if (view.static_mask.empty()) {
       mask = cv::Mat(view.depth.size(), CV_8UC1, cv::Scalar(255));
     } else {
@@ -158,8 +173,12 @@ StaticDepthEstimate StaticDepthOdometry::Estimate(const DenseView& reference,
     // Pixels without depth are not usable either (OpenCV also tests the range, but a NaN-free
     // mask keeps its normal computation away from holes).
     mask.setTo(0, view.depth <= 0);
-    view.odometry_frame =
-        cv::makePtr<cv::rgbd::OdometryFrame>(view.gray, view.depth, mask, cv::Mat(), -1);
+    if (align_size != view.depth.size()) {
+      cv::resize(view.gray, gray, align_size, 0, 0, cv::INTER_AREA);
+      cv::resize(view.depth, depth, align_size, 0, 0, cv::INTER_NEAREST);
+      cv::resize(mask, mask, align_size, 0, 0, cv::INTER_NEAREST);
+    }
+    view.odometry_frame = cv::makePtr<cv::rgbd::OdometryFrame>(gray, depth, mask, cv::Mat(), -1);
     return view.odometry_frame;
   };
   cv::Ptr<cv::rgbd::OdometryFrame> src = odometry_frame(reference);

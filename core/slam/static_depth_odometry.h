@@ -56,11 +56,16 @@ struct StaticDepthOdometryOptions {
   // Chosen by measurement on bonn_crowd_part (BENCHMARKS.md): depth-only ICP gave the
   // lowest ATE; the photometric terms suffer from the people's motion blur and exposure changes.
   DenseAlignment alignment = DenseAlignment::kIcp;
-  double min_depth = 0.3;                             // metres
-  double max_depth = 6.0;                             // metres
-  double max_depth_diff = 0.07;                       // metres, ICP correspondence rejection
-  double max_points_part = 0.07;                      // share of pixels used per pyramid level
-  std::vector<int> iteration_counts = {7, 7, 7, 10};  // OpenCV order (finest level first)
+  double min_depth = 0.3;                            // metres
+  double max_depth = 6.0;                            // metres
+  double max_depth_diff = 0.07;                      // metres, ICP correspondence rejection
+  double max_points_part = 0.07;                     // share of pixels used per pyramid level
+  std::vector<int> iteration_counts = {10, 10, 10};  // OpenCV order (finest level first)
+  // The alignment runs on the images reduced by this factor (1: full size; depth and mask by
+  // nearest neighbour, so no depth is mixed across an edge); the verification below always uses
+  // the full images. Halving them makes a fallback frame several times cheaper (the normals and
+  // pyramids of a 640x480 frame are most of its cost) for the same verified accuracy.
+  int align_downsample = 2;
   // Verification.
   int verify_step_px = 4;                 // every n-th pixel in x and y
   double inlier_depth_tol = 0.03;         // metres at 1 m ...
@@ -110,6 +115,8 @@ class StaticDepthOdometry {
 
  private:
   void CheckView(const DenseView& view, const char* which) const;
+  cv::Size AlignSize() const;  // of the images the alignment runs on
+
   PinholeCamera camera_;
   StaticDepthOdometryOptions options_;
   cv::Ptr<cv::rgbd::Odometry> odometry_;

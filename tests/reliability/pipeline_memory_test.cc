@@ -7,7 +7,7 @@
 // second half of the run must stay below kMaxSlopeMbPerFrame.
 //
 // Before the fix (unbounded keyframe history, default malloc arenas) the default mode grew
-// 0.88 MB per frame in the second half (RSS 130 -> 382 MB); after it, 0.06-0.14 MB per frame
+// 0.88 MB per frame in the second half (RSS 130 -> 382 MB); after it, 0.06-0.18 MB per frame
 // (the SLAM map itself grows: `--direct` ~0.05) and every --processes process <= 0.13. The margin
 // (0.3 MB per frame, per process) sits between the two; figures in BENCHMARKS.md.
 // Filter `none` (no detector) keeps the test short: the growth came from keyframes, which every

@@ -172,10 +172,10 @@ int RunWithForgedStatus(const std::string& source, const std::string& dir, int d
 TEST_F(RunIntegrity, AForeignEndOfStreamIsIgnored) {
   DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
   int code = -1;
-  const int processed = RunWithForgedStatus(
-      source, dir_, kIntruderDomain,
-      ToMsg(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 20, 20)),
-      std::chrono::milliseconds(0), &code);
+  const int processed =
+      RunWithForgedStatus(source, dir_, kIntruderDomain,
+                          ToMsg(ComponentStatus::EndOfStream(ComponentKind::kPlayer, 20, 20)),
+                          std::chrono::milliseconds(0), &code);
   EXPECT_EQ(processed, 150) << ReadAll(dir_ + "/run.out") << ReadAll(dir_ + "/run.err");
   EXPECT_EQ(code, 0) << ReadAll(dir_ + "/run.err");
   EXPECT_TRUE(Contains(ReadAll(dir_ + "/run.err"),
@@ -190,10 +190,9 @@ TEST_F(RunIntegrity, AForeignEndOfStreamIsIgnored) {
 TEST_F(RunIntegrity, ARunCutShortNeverExitsZero) {
   DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
   int code = -1;
-  const int processed =
-      RunWithForgedStatus(source, dir_, kFailedDomain,
-                          ToMsg(ComponentStatus::Failed(ComponentKind::kPlayer, "forged")),
-                          std::chrono::milliseconds(1500), &code);
+  const int processed = RunWithForgedStatus(
+      source, dir_, kFailedDomain, ToMsg(ComponentStatus::Failed(ComponentKind::kPlayer, "forged")),
+      std::chrono::milliseconds(1500), &code);
   const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
   std::printf("forged FAILED: %d of 150 frames, exit %d\n", processed, code);
   ASSERT_GE(processed, 0);

@@ -87,7 +87,6 @@ demo: build
 	if [ -f "$$data/groundtruth.txt" ]; then \
 	  $(DYGSLAM) eval "$$data/groundtruth.txt" $(DEMO_OUT)/trajectory.txt --plot $(DEMO_OUT)/ate.png \
 	    | tee $(DEMO_OUT)/eval.txt; \
-	  $(DYGSLAM) eval "$$data/groundtruth.txt" $(DEMO_OUT)/trajectory.txt --json > $(DEMO_OUT)/eval.json; \
 	fi; \
 	echo ""; \
 	echo "demo: outputs in $(DEMO_OUT)/"; \

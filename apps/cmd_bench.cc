@@ -33,6 +33,7 @@
 #include "apps/command.h"
 #include "core/base/echo.h"
 #include "core/base/error.h"
+#include "core/base/json.h"
 #include "core/base/number_option.h"
 #include "core/base/stop_signal.h"
 #include "core/config/settings.h"
@@ -221,21 +222,6 @@ int RunWorker(const ArgParser& p) {
 
 // --- pictures -------------------------------------------------------------------------------
 
-std::string JsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      out += ' ';
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
-
 // "t gt_x gt_y gt_z est_x est_y est_z error" per associated pair (scripts/plot_trajectory.py).
 void WritePairs(const std::string& path, const AteResult& ate) {
   WriteFileAtomically(path, AtePairsText(ate));
@@ -346,7 +332,8 @@ int RunBench(const std::vector<std::string>& args) {
     pr.last = pr.num_entries;
     // --features-frame is used after every run: checked now (a usage error naming it).
     if (p.Has("features-frame"))
-      IntegerOption("features-frame", p.Get("features-frame"), 0, static_cast<int64_t>(pr.num_entries) - 1);
+      IntegerOption("features-frame", p.Get("features-frame"), 0,
+                    static_cast<int64_t>(pr.num_entries) - 1);
     if (p.Has("frames")) {
       std::tie(pr.first, pr.last) = ParseFrameRange(p.Get("frames"), pr.num_entries);
     } else if (quick && pr.num_entries > 60) {

@@ -17,6 +17,7 @@
 #include "apps/command.h"
 #include "core/base/echo.h"
 #include "core/base/error.h"
+#include "core/base/json.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
@@ -24,42 +25,6 @@
 namespace dygslam::cli {
 namespace {
 namespace fs = std::filesystem;
-
-std::string JsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    switch (c) {
-      case '"':
-        out += "\\\"";
-        break;
-      case '\\':
-        out += "\\\\";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      case '\t':
-        out += "\\t";
-        break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-          out += buf;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
-}
-
-std::string JsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[40];
-  std::snprintf(buf, sizeof(buf), "%.12g", v);
-  return buf;
-}
 
 // printf into a string of any length: a huge finite error (coordinates of 1e150) prints all its
 // digits instead of a line cut at a fixed buffer.

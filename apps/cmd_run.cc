@@ -53,6 +53,7 @@
 #include "run/realtime_report.h"
 #include "run/run_outputs.h"
 #include "run/run_settings.h"
+#include "run/run_summary.h"
 #ifdef DYGSLAM_HAVE_COMPONENTS
 #include "components/pipeline.h"
 #endif
@@ -64,10 +65,11 @@ namespace fs = std::filesystem;
 // The files a run writes into --out (groundtruth.txt: the DDS recorder's copy of the player's
 // ground truth), and those the summary lists.
 constexpr const char* kRunOutputNames[] = {
-    "trajectory.txt", "trajectory_online.txt", "keyframes.txt",    "frames.csv", "map.bt",
-    "map.ot",         "groundtruth.txt",       kRealtimeReportFile};
+    "trajectory.txt", "trajectory_online.txt", "keyframes.txt",     "frames.csv", "map.bt",
+    "map.ot",         "groundtruth.txt",       kRealtimeReportFile, "eval.json"};
 constexpr const char* kListedOutputNames[] = {"trajectory.txt", "trajectory_online.txt",
-                                              "keyframes.txt", "frames.csv", "map.bt"};
+                                              "keyframes.txt",  "frames.csv",
+                                              "map.bt",         "eval.json"};
 
 // A ground-truth coordinate beyond this (metres) is no camera trajectory (1e300 overflows the
 // error); `dygslam eval` refuses such files too.
@@ -649,6 +651,23 @@ int RunRun(const std::vector<std::string>& args) {
   const std::vector<StampedPose> trajectory = outputs.Fresh("trajectory.txt")
                                                   ? ReadTumTrajectory(trajectory_path.string())
                                                   : std::vector<StampedPose>{};
+  RunSummary summary;
+  summary.mode = mode;
+  summary.filter = p.Get("filter");
+  summary.deterministic = s.system.deterministic;
+  summary.first = s.first;
+  summary.last = s.last;
+  summary.requested = requested;
+  summary.without_depth_partner = skipped;
+  summary.processed = outcome.processed;
+  summary.states = outcome.states;
+  summary.in_trajectory = trajectory.size();
+  summary.seconds = elapsed;
+  summary.interrupted = outcome.interrupted;
+  summary.component_failed = outcome.exit_code != 0;
+  summary.ignored_samples = outcome.ignored_samples;
+  if (s.rate > 0 && outputs.Fresh(kRealtimeReportFile))
+    summary.realtime = ReadRealtimeReport((s.out / kRealtimeReportFile).string());
   std::printf("mode: %s%s\n", mode.c_str(),
               outcome.interrupted ? " (interrupted by a signal)" : "");
   std::printf("frames: %zu processed, %zu tracked, %zu lost, %zu without depth partner; %.1f fps\n",
@@ -671,11 +690,17 @@ int RunRun(const std::vector<std::string>& args) {
         count(TrackingState::kRelocalized), count(TrackingState::kLost),
         count(TrackingState::kNotInitialized));
   }
+  if (summary.Reason() == Shortfall::kNone) {
+    std::printf("integrity: %zu of %zu requested frames processed (complete)\n", summary.processed,
+                summary.requested);
+  } else {
+    std::printf("integrity: %zu of %zu requested frames processed, %zu missing: %s\n",
+                summary.processed, summary.requested, summary.Missing(),
+                ToString(summary.Reason()));
+  }
   std::printf("filter: %s%s\n", p.Get("filter").c_str(),
               s.system.deterministic ? " (deterministic)" : "");
-  if (s.rate > 0 && outputs.Fresh(kRealtimeReportFile))
-    std::printf("real time: %s\n",
-                ReadRealtimeReport((s.out / kRealtimeReportFile).string()).Summary().c_str());
+  if (summary.realtime) std::printf("real time: %s\n", summary.realtime->Summary().c_str());
   if (!groundtruth.empty() && trajectory.size() >= 3) {
     try {
       const AteResult ate = ComputeAte(groundtruth, trajectory);
@@ -683,6 +708,8 @@ int RunRun(const std::vector<std::string>& args) {
         throw std::runtime_error("the error is not a finite number");
       std::printf("ATE RMSE %.4f m (mean %.4f, median %.4f, max %.4f; %zu pairs)\n", ate.error.rmse,
                   ate.error.mean, ate.error.median, ate.error.max, ate.num_pairs);
+      summary.ate = AteFigures{ate.error.rmse, ate.error.mean, ate.error.median, ate.error.max,
+                               ate.num_pairs};
       // The pose each frame got when it was tracked (what a robot receives at the moment),
       // against the final trajectory above, which later bundle adjustments refined.
       const fs::path online_path = s.out / "trajectory_online.txt";
@@ -694,15 +721,26 @@ int RunRun(const std::vector<std::string>& args) {
         std::printf("online ATE RMSE %.4f m (mean %.4f, median %.4f, max %.4f; %zu pairs)\n",
                     online_ate.error.rmse, online_ate.error.mean, online_ate.error.median,
                     online_ate.error.max, online_ate.num_pairs);
+        summary.online_ate =
+            AteFigures{online_ate.error.rmse, online_ate.error.mean, online_ate.error.median,
+                       online_ate.error.max, online_ate.num_pairs};
       }
     } catch (const std::exception& e) {  // e.g. no stamp in common: the outputs stand
-      std::printf("ATE: not evaluated (%s)\n", EchoValue(e.what(), 500).c_str());
+      summary.ate.reset();
+      summary.online_ate.reset();
+      summary.ate_note = EchoValue(e.what(), 500);
+      std::printf("ATE: not evaluated (%s)\n", summary.ate_note.c_str());
     }
   } else if (dataset.has_groundtruth() && groundtruth.empty()) {
-    std::printf("ATE: not evaluated (%s: see the warning above)\n",
-                dataset.groundtruth_path().c_str());
+    summary.ate_note = dataset.groundtruth_path() + ": see the warning above";
+    std::printf("ATE: not evaluated (%s)\n", summary.ate_note.c_str());
   } else if (!dataset.groundtruth_problem().empty()) {
-    std::printf("ATE: not evaluated (%s)\n", EchoValue(dataset.groundtruth_problem(), 500).c_str());
+    summary.ate_note = EchoValue(dataset.groundtruth_problem(), 500);
+    std::printf("ATE: not evaluated (%s)\n", summary.ate_note.c_str());
+  } else if (groundtruth.empty()) {
+    summary.ate_note = "no ground truth";
+  } else {
+    summary.ate_note = "fewer than 3 frames in the trajectory";
   }
 #ifdef DYGSLAM_HAVE_COMPONENTS
   if (outcome.ignored_samples > 0) {
@@ -710,6 +748,17 @@ int RunRun(const std::vector<std::string>& args) {
                 IgnoredSamplesNote(std::to_string(outcome.ignored_samples) + " samples").c_str());
   }
 #endif
+  // The exit code, then eval.json (which holds it), then the list of what was written.
+  const bool incomplete =
+      !outcome.interrupted && s.loop_minutes == 0 && s.rate == 0 && outcome.processed < requested;
+  const bool tracking_failure =
+      !outcome.interrupted && IsTrackingFailure(outcome.processed, trajectory.size());
+  summary.exit_code = !outputs.failures().empty() || outcome.exit_code != 0 ? 1
+                      : incomplete                                          ? kExitIncompleteRun
+                      : tracking_failure                                    ? 1
+                                                                            : 0;
+  outputs.Write("eval.json",
+                [&] { WriteFileAtomically(outputs.PathOf("eval.json"), RunSummaryJson(summary)); });
   // The files this run wrote; a file an earlier run left (not replaced) is named apart.
   {
     std::string written, stale;
@@ -739,7 +788,7 @@ int RunRun(const std::vector<std::string>& args) {
   // cut short (a peer gone, an end of stream from outside, a stalled component). Its outputs are
   // written, but the run is not the one asked for: a distinct exit code.
   // A camera-paced run (--rate) drops frames by design (realtime.txt counts them).
-  if (!outcome.interrupted && s.loop_minutes == 0 && s.rate == 0 && outcome.processed < requested) {
+  if (incomplete) {
     std::printf("run incomplete: %zu of the %zu requested frames processed (%zu missing)\n",
                 outcome.processed, requested, requested - outcome.processed);
     std::fprintf(stderr,
@@ -750,7 +799,7 @@ int RunRun(const std::vector<std::string>& args) {
     return kExitIncompleteRun;
   }
   // A run that tracked (almost) nothing has no trajectory to speak of: fail, and say why.
-  if (!outcome.interrupted && IsTrackingFailure(outcome.processed, trajectory.size())) {
+  if (tracking_failure) {
     PrintTrackingFailure("run", outcome.processed, trajectory.size(), outcome.lost);
     return 1;
   }

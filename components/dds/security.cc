@@ -1,12 +1,13 @@
 #include "components/dds/security.h"
 
+#include <fastrtps/config.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
-#include <fastrtps/config.h>
-
 #include "core/base/error.h"
+#include "core/base/input_file.h"
 
 namespace dygslam::dds {
 namespace {
@@ -15,7 +16,10 @@ namespace fs = std::filesystem;
 void RequireFile(const std::string& option, const std::string& path) {
   if (path.empty()) throw InputError("DDS Security: " + option + " is not set");
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw InputError(path, 0, "DDS Security " + option + ": file not found");
+  if (const std::string reason = NotRegularFileReason(path); !reason.empty())
+    throw InputError(path, 0, "DDS Security " + option + ": " + reason);
+  if (!fs::is_regular_file(path, ec))
+    throw InputError(path, 0, "DDS Security " + option + ": file not found");
   std::ifstream in(path);
   if (!in.good()) throw InputError(path, 0, "DDS Security " + option + ": cannot read the file");
 }
@@ -37,7 +41,8 @@ bool SecurityPluginsAvailable() {
 SecurityOptions SecurityOptions::FromDirectory(const std::string& directory) {
   const fs::path dir(directory);
   std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw InputError(directory, 0, "DDS Security: credentials directory not found");
+  if (!fs::is_directory(dir, ec))
+    throw InputError(directory, 0, "DDS Security: credentials directory not found");
   SecurityOptions o;
   o.enabled = true;
   o.identity_ca = (dir / "ca_cert.pem").string();
@@ -59,7 +64,8 @@ SecurityOptions SecurityOptions::FromEnvironment() {
 void SecurityOptions::Check() const {
   if (!enabled) return;
   if (!SecurityPluginsAvailable()) {
-    throw InvalidOptions("invalid option DDS Security: this Fast DDS library was built without security");
+    throw InvalidOptions(
+        "invalid option DDS Security: this Fast DDS library was built without security");
   }
   RequireFile("identity_ca", identity_ca);
   RequireFile("identity_certificate", identity_certificate);
@@ -69,7 +75,8 @@ void SecurityOptions::Check() const {
   RequireFile("permissions", permissions);
 }
 
-void ApplySecurity(const SecurityOptions& options, eprosima::fastdds::dds::DomainParticipantQos* qos) {
+void ApplySecurity(const SecurityOptions& options,
+                   eprosima::fastdds::dds::DomainParticipantQos* qos) {
   if (!options.enabled) return;
   options.Check();
   auto& props = qos->properties().properties();

@@ -8,12 +8,31 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <filesystem>
 
 #include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/base/stop_signal.h"
 
 namespace dygslam {
+
+std::string NotRegularFileReason(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (ec || !fs::exists(st) || fs::is_regular_file(st)) return "";
+  const std::string target =
+      fs::is_symlink(fs::symlink_status(path, ec))
+          ? " (a link to " + EchoValue(fs::read_symlink(path, ec).string()) + ")"
+          : "";
+  const char* kind = fs::is_directory(st)        ? "a directory"
+                     : fs::is_fifo(st)           ? "a FIFO"
+                     : fs::is_character_file(st) ? "a character device"
+                     : fs::is_block_file(st)     ? "a block device"
+                     : fs::is_socket(st)         ? "a socket"
+                                                 : "not a file";
+  return std::string("not a regular file: ") + kind + target;
+}
 
 std::string ReadPipeBounded(const std::string& path, size_t max_bytes, const std::string& what,
                             double wait_s) {

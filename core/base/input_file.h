@@ -18,6 +18,10 @@ inline constexpr double kPipeWaitSeconds = 30.0;
 // a read error, StopSignalError (core/base/stop_signal.h) when a SIGINT / SIGTERM / SIGHUP
 // arrives while it waits (under a ScopedStopSignals); `what` names the kind of file in the
 // message ("settings file").
+// What `path` is when it exists but is not a regular file, for a message ("not a regular file: a
+// FIFO", "... a directory (a link to X)"); "" when it is a regular file or does not exist.
+std::string NotRegularFileReason(const std::string& path);
+
 std::string ReadPipeBounded(const std::string& path, size_t max_bytes, const std::string& what,
                             double wait_s = kPipeWaitSeconds);
 

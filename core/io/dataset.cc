@@ -10,6 +10,7 @@
 
 #include "core/base/echo.h"
 #include "core/base/error.h"
+#include "core/base/input_file.h"
 #include "core/base/number_option.h"
 #include "core/io/association.h"
 #include "core/io/file_util.h"
@@ -37,24 +38,6 @@ Timestamp ParseStamp(const std::string& file, int line, const std::string& text)
   if (!t) throw InputError(file, line, "malformed timestamp '" + Abbreviate(text) + "'");
   if (t->nanoseconds() < 0) throw InputError(file, line, "negative timestamp " + Abbreviate(text));
   return *t;
-}
-
-// What a path is when it is not a regular file ("" when it is one or does not exist).
-std::string NotRegularReason(const fs::path& p) {
-  std::error_code ec;
-  const fs::file_status st = fs::status(p, ec);
-  if (ec || !fs::exists(st) || fs::is_regular_file(st)) return "";
-  const std::string target =
-      fs::is_symlink(fs::symlink_status(p, ec))
-          ? " (a link to " + Abbreviate(fs::read_symlink(p, ec).string()) + ")"
-          : "";
-  const char* kind = fs::is_directory(st)        ? "a directory"
-                     : fs::is_fifo(st)           ? "a FIFO"
-                     : fs::is_character_file(st) ? "a character device"
-                     : fs::is_block_file(st)     ? "a block device"
-                     : fs::is_socket(st)         ? "a socket"
-                                                 : "not a file";
-  return std::string("not a regular file: ") + kind + target;
 }
 
 // Image paths of one list file that point outside the dataset folder: warned once per list file
@@ -90,7 +73,7 @@ class OutsidePaths {
 std::string ResolveImage(const fs::path& directory, const std::string& file, int line,
                          const std::string& relative, bool refuse_outside, OutsidePaths* outside) {
   const fs::path p = fs::path(relative).is_absolute() ? fs::path(relative) : directory / relative;
-  const std::string reason = NotRegularReason(p);
+  const std::string reason = NotRegularFileReason(p.string());
   if (!reason.empty())
     throw InputError(file, line, "image " + Abbreviate(p.string()) + ": " + reason);
   std::error_code ec;
@@ -237,7 +220,7 @@ RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions
   const fs::path gt = dir / "groundtruth.txt";
   if (fs::is_regular_file(gt, ec)) {
     dataset.groundtruth_path_ = gt.string();
-  } else if (const std::string reason = NotRegularReason(gt); !reason.empty()) {
+  } else if (const std::string reason = NotRegularFileReason(gt.string()); !reason.empty()) {
     dataset.groundtruth_problem_ = gt.string() + ": " + reason;
   }
   return dataset;
@@ -299,7 +282,7 @@ cv::Mat LoadImage(const std::string& path, const std::string& listed_at, int exp
                      message + (listed_at.empty() ? "" : " (listed at " + listed_at + ")"));
   };
   std::error_code ec;
-  const std::string reason = NotRegularReason(path);
+  const std::string reason = NotRegularFileReason(path);
   if (!reason.empty()) fail(std::string(what) + " image " + reason);
   if (!fs::is_regular_file(path, ec)) fail(std::string(what) + " image not found");
   // The size first, from the header: decoding a 20000x20000 PNG allocates 1.2 GB before its size

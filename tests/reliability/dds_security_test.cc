@@ -2,20 +2,14 @@
 // credentials of scripts/make_dds_certs.sh: authenticated participants exchange camera poses;
 // a participant without credentials, or with credentials from another CA, reads nothing.
 // Runs in a private network namespace (tests/reliability/CMakeLists.txt); own domain id.
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
-#include <filesystem>
-#include <fstream>
-#include <functional>
-#include <memory>
-#include <string>
-#include <thread>
-
-#include <gtest/gtest.h>
-
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -25,7 +19,12 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
-#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <string>
+#include <thread>
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
@@ -133,7 +132,8 @@ class DdsSecurity : public ::testing::Test {
   static void SetUpTestSuite() {
     certs_ = new std::string(testing::MakeTempDir("dds_certs"));
     const std::string script = std::string(DYGSLAM_TEST_SOURCE_DIR) + "/scripts/make_dds_certs.sh";
-    const std::string cmd = script + " " + *certs_ + " slam recorder viewer > " + *certs_ + "/log.txt 2>&1";
+    const std::string cmd =
+        script + " " + *certs_ + " slam recorder viewer > " + *certs_ + "/log.txt 2>&1";
     script_status_ = std::system(cmd.c_str());
   }
   static void TearDownTestSuite() { delete certs_; }
@@ -184,7 +184,8 @@ TEST_F(DdsSecurity, AuthenticatedParticipantsExchangePosesOthersReadNothing) {
   Node plain_writer("plain_writer", dds::SecurityOptions());
   ASSERT_TRUE(plain_writer.ok());
   plain_writer.MakeWriter();
-  ASSERT_TRUE(WaitFor([&] { return plain_writer.writer_matches() >= 1; }, std::chrono::seconds(10)));
+  ASSERT_TRUE(
+      WaitFor([&] { return plain_writer.writer_matches() >= 1; }, std::chrono::seconds(10)));
   for (uint64_t i = 0; i < 5; ++i) ASSERT_TRUE(plain_writer.Write(i));
   EXPECT_TRUE(WaitFor([&] { return plain.received.load() >= 5; }, std::chrono::seconds(10)))
       << "control failed: plain reader got " << plain.received.load() << " of 5 unsecured samples";
@@ -202,7 +203,8 @@ TEST_F(DdsSecurity, InsecureWriterCannotInjectIntoSecureReader) {
   for (uint64_t i = 0; i < 10; ++i) intruder.Write(i);
   std::this_thread::sleep_for(std::chrono::seconds(2));
   EXPECT_EQ(intruder.writer_matches(), 0);
-  EXPECT_EQ(recorder.received.load(), 0) << "a secure reader accepted poses from an unauthenticated writer";
+  EXPECT_EQ(recorder.received.load(), 0)
+      << "a secure reader accepted poses from an unauthenticated writer";
 }
 
 TEST_F(DdsSecurity, MissingOrUnreadableCredentialsNameTheFile) {
@@ -220,6 +222,17 @@ TEST_F(DdsSecurity, MissingOrUnreadableCredentialsNameTheFile) {
     ADD_FAILURE() << "accepted a directory without permissions.smime";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("permissions.smime"), std::string::npos) << e.what();
+  }
+  // A FIFO in place of a credential file is named as such (not "not found"), and never opened
+  // (its open would wait for a writer).
+  ASSERT_EQ(mkfifo((dir / "viewer" / "permissions.smime").c_str(), 0600), 0);
+  try {
+    dds::SecurityOptions::FromDirectory((dir / "viewer").string());
+    ADD_FAILURE() << "accepted a FIFO as permissions.smime";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("permissions.smime"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not a regular file: a FIFO"), std::string::npos)
+        << e.what();
   }
   // Disabled options add nothing; enabled ones add the three plugins.
   DomainParticipantQos qos;
@@ -269,13 +282,13 @@ TEST_F(DdsSecurity, ComponentParticipantsApplySecurityOptions) {
   auto plain = make("eavesdropper", dds::SecurityOptions());
   std::atomic<int> received{0}, eavesdropped{0};
   dds::Reader<msg::CameraPosePubSubType> reader(recorder, dds::topics::kCameraPose,
-                                               dds::TopicKind::kCameraPose,
-                                               [&received](msg::CameraPose&&) { ++received; });
+                                                dds::TopicKind::kCameraPose,
+                                                [&received](msg::CameraPose&&) { ++received; });
   dds::Reader<msg::CameraPosePubSubType> eavesdropper(
       plain, dds::topics::kCameraPose, dds::TopicKind::kCameraPose,
       [&eavesdropped](msg::CameraPose&&) { ++eavesdropped; });
   dds::Writer<msg::CameraPosePubSubType> writer(slam, dds::topics::kCameraPose,
-                                               dds::TopicKind::kCameraPose);
+                                                dds::TopicKind::kCameraPose);
   ASSERT_TRUE(writer.WaitForReaders(1, std::chrono::seconds(20)))
       << "secured component participants never matched";
   for (uint64_t i = 0; i < 10; ++i) {
@@ -307,7 +320,8 @@ TEST_F(DdsSecurity, ComponentParticipantsApplySecurityOptions) {
     make("tampered", dds::SecurityOptions::FromDirectory((dir / "viewer").string()));
     ADD_FAILURE() << "a component participant was created with tampered permissions";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("credentials were rejected"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("credentials were rejected"), std::string::npos)
+        << e.what();
     EXPECT_NE(std::string(e.what()).find(p.string()), std::string::npos) << e.what();
   }
 }

@@ -161,7 +161,7 @@ TEST_F(RunOutputsCli, AFailedMapSaveDoesNotStopTheOtherOutputs) {
   EXPECT_TRUE(fs::exists(out / "map.bt"));
   EXPECT_TRUE(Contains(r.out, "outputs: " + out.string() +
                                   "/{trajectory.txt,trajectory_online.txt,keyframes.txt,"
-                                  "frames.csv,map.bt}"))
+                                  "frames.csv,map.bt,eval.json}"))
       << r.out;
   for (const auto& entry : fs::directory_iterator(out))
     EXPECT_FALSE(Contains(entry.path().filename().string(), ".tmp.")) << entry.path();
@@ -183,7 +183,7 @@ TEST_F(RunOutputsCli, AnEarlierRunsFileIsKeptAndNotListedAsThisRuns) {
   EXPECT_GE(ReadTumTrajectory((out / "trajectory.txt").string()).size(), 10u);
   EXPECT_TRUE(Contains(r.out, "outputs: " + out.string() +
                                   "/{trajectory.txt,trajectory_online.txt,keyframes.txt,"
-                                  "frames.csv}\n"))
+                                  "frames.csv,eval.json}\n"))
       << r.out;
   EXPECT_TRUE(Contains(r.out, "outputs left from an earlier run, not replaced by this one: map.bt"))
       << r.out;

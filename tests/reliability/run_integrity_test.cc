@@ -120,7 +120,7 @@ TEST_F(RunIntegrity, EarlierOutputsStayUntilTheRunReplacesThem) {
   const std::string summary = ReadAll(dir_ + "/run.out");
   EXPECT_TRUE(Contains(summary,
                        "/{trajectory.txt,trajectory_online.txt,keyframes.txt,frames.csv,"
-                       "map.bt}"))
+                       "map.bt,eval.json}"))
       << summary;
   for (const auto& entry : fs::directory_iterator(out))
     EXPECT_FALSE(Contains(entry.path().filename().string(), ".tmp.")) << entry.path();
@@ -182,6 +182,17 @@ TEST_F(RunIntegrity, AForeignEndOfStreamIsIgnored) {
                        "end-of-stream / done statuses of participants "
                        "that announced no component"))
       << ReadAll(dir_ + "/run.err");
+  // The run's integrity in its summary and in eval.json.
+  EXPECT_TRUE(Contains(ReadAll(dir_ + "/run.out"),
+                       "integrity: 150 of 150 requested frames processed (complete)"))
+      << ReadAll(dir_ + "/run.out");
+  const std::string json = ReadAll(dir_ + "/out/eval.json");
+  EXPECT_TRUE(Contains(json,
+                       "\"requested\": 150, \"without_depth_partner\": 0, "
+                       "\"processed\": 150,"))
+      << json;
+  EXPECT_TRUE(Contains(json, "\"complete\": true, \"shortfall\": \"none\"")) << json;
+  EXPECT_TRUE(Contains(json, "\"exit_code\": 0}")) << json;
 }
 
 // A FAILED is taken from any participant (a component can fail before announcing itself), so a
@@ -202,6 +213,16 @@ TEST_F(RunIntegrity, ARunCutShortNeverExitsZero) {
       EXPECT_TRUE(Contains(summary, "run incomplete: " + std::to_string(processed) +
                                         " of the 150 requested frames processed"))
           << summary;
+      EXPECT_TRUE(Contains(summary, "integrity: " + std::to_string(processed) +
+                                        " of 150 requested frames processed, " +
+                                        std::to_string(150 - processed) +
+                                        " missing: the stream was cut short"))
+          << summary;
+      const std::string json = ReadAll(dir_ + "/out/eval.json");
+      EXPECT_TRUE(Contains(json, "\"missing\": " + std::to_string(150 - processed))) << json;
+      EXPECT_TRUE(Contains(json, "\"complete\": false, \"shortfall\": \"the stream was cut"))
+          << json;
+      EXPECT_TRUE(Contains(json, "\"exit_code\": 3}")) << json;
       EXPECT_TRUE(Contains(
           err, "the run ended with " + std::to_string(processed) + " of the 150 requested frames"))
           << err;

@@ -2,12 +2,17 @@
 // pictures exist, BENCHMARKS.md changes only between the markers, and every number agrees with
 // `dygslam eval` on the same trajectories.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "core/io/file_util.h"
 #include "tests/support/test_support.h"
@@ -211,6 +216,49 @@ TEST(BenchCommand, BadInputIsNamed) {
   EXPECT_EQ(RunDygslam("bench " + root.string() + " --out " + (root / "o").string(), err).exit_code,
             1);
   EXPECT_NE(ReadText(err).find("no sequence found"), std::string::npos) << ReadText(err);
+}
+
+// A bench stopped by SIGTERM (a CI job cancelled, Ctrl-C) leaves --update-benchmarks FILE as it
+// was: its partial runs never replace the last complete report. It says so and exits 128 + 15.
+TEST(BenchCommand, StoppedRunLeavesTheBenchmarksFileAsItWas) {
+  const fs::path root = testing::MakeTempDir("bench_stopped");
+  SyntheticOptions synth;
+  synth.num_frames = 40;
+  synth.num_moving_objects = 2;
+  synth.seed = 3;
+  synth.supersampling = 1;
+  WriteSyntheticSequence((root / "data" / "gen_seq").string(), synth);
+  const std::string before =
+      "# Benchmarks\n<!-- bench:begin -->\nthe last complete figures\n<!-- bench:end -->\n";
+  const fs::path file = root / "BENCHMARKS.md";
+  WriteFileAtomically(file.string(), before);
+  const fs::path out = root / "out";
+  const std::string err = (root / "stderr.txt").string();
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    if (!freopen(err.c_str(), "w", stderr) || !freopen("/dev/null", "w", stdout)) _exit(127);
+    execl(DYGSLAM_EXECUTABLE, DYGSLAM_EXECUTABLE, "bench", (root / "data").c_str(), "--runs", "3",
+          "--out", out.c_str(), "--update-benchmarks", file.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Stopped once the second of its runs started (its progress line), i.e. with one run done.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(300);
+  int status = 0;
+  bool exited = false;
+  while (!(exited = waitpid(pid, &status, WNOHANG) == pid) &&
+         ReadText(err).find("[bench 2/") == std::string::npos &&
+         std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  ASSERT_FALSE(exited) << "bench ended before it could be stopped: " << ReadText(err);
+  kill(pid, SIGTERM);
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << ReadText(err);
+  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGTERM) << ReadText(err);
+  EXPECT_EQ(ReadText(file.string()), before);
+  EXPECT_NE(ReadText(err).find("not updated: the runs were stopped by signal 15"),
+            std::string::npos)
+      << ReadText(err);
 }
 
 }  // namespace

@@ -1,0 +1,93 @@
+#include "run/run_summary.h"
+
+#include <sstream>
+
+#include "core/base/json.h"
+
+namespace dygslam {
+
+const char* ToString(Shortfall shortfall) {
+  switch (shortfall) {
+    case Shortfall::kNone:
+      return "none";
+    case Shortfall::kStoppedByUser:
+      return "stopped by the user (a stop signal)";
+    case Shortfall::kDroppedByRate:
+      return "dropped: the pipeline could not take them at the camera's rate (--rate)";
+    case Shortfall::kComponentFailed:
+      return "a pipeline component failed";
+    case Shortfall::kCutShort:
+      return "the stream was cut short (a component stopped or stalled, or an end of stream came "
+             "from outside the run)";
+  }
+  return "unknown";
+}
+
+size_t RunSummary::WithPose() const {
+  size_t n = 0;
+  for (const char* state : {"ok", "fallback", "relocalized"}) {
+    const auto it = states.find(state);
+    if (it != states.end()) n += it->second;
+  }
+  return n;
+}
+
+Shortfall RunSummary::Reason() const {
+  if (Missing() == 0) return Shortfall::kNone;
+  if (interrupted) return Shortfall::kStoppedByUser;
+  if (component_failed) return Shortfall::kComponentFailed;
+  if (realtime) return Shortfall::kDroppedByRate;
+  return Shortfall::kCutShort;
+}
+
+namespace {
+
+std::string AteJson(const std::optional<AteFigures>& ate) {
+  if (!ate) return "null";
+  std::ostringstream j;
+  j << "{\"rmse\": " << JsonNumber(ate->rmse) << ", \"mean\": " << JsonNumber(ate->mean)
+    << ", \"median\": " << JsonNumber(ate->median) << ", \"max\": " << JsonNumber(ate->max)
+    << ", \"pairs\": " << ate->pairs << "}";
+  return j.str();
+}
+
+}  // namespace
+
+std::string RunSummaryJson(const RunSummary& s) {
+  std::ostringstream j;
+  j << "{\"mode\": " << JsonString(s.mode) << ", \"filter\": " << JsonString(s.filter)
+    << ", \"deterministic\": " << (s.deterministic ? "true" : "false") << ",\n";
+  j << " \"frames\": {\"first\": " << s.first << ", \"last\": " << s.last
+    << ", \"requested\": " << s.requested
+    << ", \"without_depth_partner\": " << s.without_depth_partner
+    << ", \"processed\": " << s.processed << ", \"with_pose\": " << s.WithPose()
+    << ", \"in_trajectory\": " << s.in_trajectory << ", \"missing\": " << s.Missing()
+    << ", \"states\": {";
+  bool first = true;
+  for (const auto& [state, count] : s.states) {
+    j << (first ? "" : ", ") << JsonString(state) << ": " << count;
+    first = false;
+  }
+  j << "}},\n";
+  j << " \"complete\": " << (s.Missing() == 0 ? "true" : "false")
+    << ", \"shortfall\": " << JsonString(ToString(s.Reason()))
+    << ", \"interrupted\": " << (s.interrupted ? "true" : "false")
+    << ", \"fps\": " << JsonNumber(s.seconds > 0 ? s.processed / s.seconds : 0) << ",\n";
+  j << " \"realtime\": ";
+  if (s.realtime) {
+    const RealtimeReport& r = *s.realtime;
+    j << "{\"rate\": " << JsonNumber(r.rate) << ", \"frames\": " << r.frames
+      << ", \"dropped\": " << r.dropped() << ", \"late\": " << r.late
+      << ", \"latency_median_ms\": " << JsonNumber(r.latency_median_ms)
+      << ", \"latency_p99_ms\": " << JsonNumber(r.latency_p99_ms) << "}";
+  } else {
+    j << "null";
+  }
+  j << ",\n \"ate\": " << AteJson(s.ate) << ",\n \"online_ate\": " << AteJson(s.online_ate)
+    << ",\n \"ate_note\": " << JsonString(s.ate_note)
+    << ", \"ignored_samples\": " << s.ignored_samples << ", \"exit_code\": " << s.exit_code
+    << "}\n";
+  return j.str();
+}
+
+}  // namespace dygslam

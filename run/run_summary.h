@@ -1,0 +1,69 @@
+// What a `dygslam run` delivered, for people (the summary lines) and for scripts (OUT/eval.json):
+// the frames requested, received and tracked, why any are missing, the accuracy of the final and
+// of the online trajectory, and the run's exit code.
+//
+//   RunSummary summary;  // filled by the command as the run ends
+//   WriteFileAtomically(out + "/eval.json", RunSummaryJson(summary));
+#pragma once
+
+#include <cstddef>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "run/realtime_report.h"
+
+namespace dygslam {
+
+// ATE figures of one trajectory against the ground truth (metres).
+struct AteFigures {
+  double rmse = 0, mean = 0, median = 0, max = 0;
+  size_t pairs = 0;
+};
+
+// Why a run delivered fewer frames than it was asked for.
+enum class Shortfall {
+  kNone,             // every requested frame was processed
+  kStoppedByUser,    // SIGINT / SIGTERM / SIGHUP: the user's stop
+  kDroppedByRate,    // --rate: frames the pipeline could not take in time (by design, counted)
+  kComponentFailed,  // a pipeline component failed (its message is on stderr)
+  kCutShort          // the stream ended early: a component stopped or stalled, or an end of
+                     // stream came from outside the run
+};
+const char* ToString(Shortfall shortfall);
+
+struct RunSummary {
+  std::string mode;    // "direct (no DDS)", "DDS pipeline, one process", ...
+  std::string filter;  // none | boxes | geometry | paper | full
+  bool deterministic = false;
+  size_t first = 0, last = 0;              // rgb.txt entries [first, last)
+  size_t requested = 0;                    // of them, frames with a depth partner
+  size_t without_depth_partner = 0;        // entries left out: no depth image to pair with
+  size_t processed = 0;                    // frames the SLAM processed
+  std::map<std::string, size_t> states;    // frames by tracking state (ok, fallback, lost, ...)
+  size_t in_trajectory = 0;                // frames in trajectory.txt
+  double seconds = 0;                      // wall time of the frames
+  std::optional<RealtimeReport> realtime;  // --rate
+  std::optional<AteFigures> ate, online_ate;
+  std::string ate_note;        // why no ATE ("" when there is one or no ground truth)
+  size_t ignored_samples = 0;  // DDS samples of participants outside the run
+  bool interrupted = false;    // a stop signal ended the run
+  bool component_failed = false;
+  int exit_code = 0;
+
+  // Frames with a pose: ok + fallback + relocalized.
+  size_t WithPose() const;
+  size_t Missing() const { return requested > processed ? requested - processed : 0; }
+  // Why frames are missing (kNone when none are).
+  Shortfall Reason() const;
+};
+
+// One JSON object:
+// {"mode": ..., "filter": ..., "deterministic": ..., "frames": {"first", "last", "requested",
+//  "without_depth_partner", "processed", "with_pose", "in_trajectory", "missing", "states": {..}},
+//  "complete": bool, "shortfall": "none" | "stopped by the user" | ..., "fps": ...,
+//  "realtime": {...} | null, "ate": {"rmse", "mean", "median", "max", "pairs"} | null,
+//  "online_ate": {...} | null, "ate_note": "...", "ignored_samples": N, "exit_code": N}
+std::string RunSummaryJson(const RunSummary& summary);
+
+}  // namespace dygslam

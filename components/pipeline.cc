@@ -26,11 +26,11 @@
 #include "components/player.h"
 #include "components/recorder.h"
 #include "components/slam_component.h"
-#include "run/realtime_report.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "core/base/stop_signal.h"
 #include "dygslam_msg/StreamStatusPubSubTypes.h"
+#include "run/realtime_report.h"
 
 namespace dygslam {
 
@@ -523,6 +523,16 @@ int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
   BoundMallocArenas();
   PipelineOptions options = pipeline_options;
   options.wait_for_components = true;
+  if (options.processes && !options.security_dir.empty()) {
+    // Before any process starts: every component's credentials readable, its certificate issued
+    // by its CA, and all of them trusting one CA (else they could not authenticate each other
+    // and the run would stall in discovery).
+    std::vector<std::pair<std::string, dds::SecurityOptions>> credentials;
+    for (const ComponentKind kind : PipelineComponents(options))
+      credentials.emplace_back(ToString(kind),
+                               ComponentSecurity(options.security_dir, ToString(kind)));
+    dds::CheckSameIdentityCa(credentials);
+  }
   fs::create_directories(options.output_dir);
   auto stop = std::make_shared<StopFlag>(StopFlag::Signals::kStop);
   size_t ignored_samples = 0;

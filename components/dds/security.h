@@ -4,18 +4,21 @@
 //   encryption      builtin.AES-GCM-GMAC      (what the governance asks: ENCRYPT everywhere)
 // Test credentials: scripts/make_dds_certs.sh OUT_DIR -> OUT_DIR/<name>/ holds the files
 // FromDirectory() expects. Debian's libfastrtps 2.9.1 is built with security (HAVE_SECURITY 1,
-// PKIDH / Permissions / AESGCMGMAC symbols present); SecurityPluginsAvailable() says so at run time.
+// PKIDH / Permissions / AESGCMGMAC symbols present); SecurityPluginsAvailable() says so at run
+// time.
 //
-//   dds::SecurityOptions sec = dds::SecurityOptions::FromEnvironment();  // DYGSLAM_DDS_SECURITY_DIR
-//   dds::ApplySecurity(sec, &participant_qos);                          // before create_participant
+//   dds::SecurityOptions sec = dds::SecurityOptions::FromEnvironment();  //
+//   DYGSLAM_DDS_SECURITY_DIR dds::ApplySecurity(sec, &participant_qos);                          //
+//   before create_participant
 //
 // With security on, a participant without valid credentials (none, or from another CA) is not
 // authenticated: it discovers nothing and receives no samples of the secured domain.
 #pragma once
 
-#include <string>
-
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace dygslam::dds {
 
@@ -36,10 +39,17 @@ struct SecurityOptions {
   // disabled options.
   static SecurityOptions FromEnvironment();
 
-  // When enabled: every file set and readable (InputError naming the option and file);
-  // InvalidOptions if the Fast DDS library was built without security.
+  // When enabled: every file set and readable (InputError naming the option and file); the
+  // identity certificate issued by the identity CA and valid now (InputError naming both files:
+  // authentication would fail, and Fast DDS would only stall); InvalidOptions if the Fast DDS
+  // library was built without security.
   void Check() const;
 };
+
+// The credentials of the participants of one run (name, options): every enabled one must trust the
+// same identity CA, or they cannot authenticate each other (Fast DDS then stalls discovery
+// without a message). Throws InputError naming the two components and their CA files.
+void CheckSameIdentityCa(const std::vector<std::pair<std::string, SecurityOptions>>& participants);
 
 // True when the Fast DDS library provides the builtin security plugins.
 bool SecurityPluginsAvailable();

@@ -355,6 +355,25 @@ TEST(Pipeline, SecureMultiProcessRunProcessesEveryFrame) {
             0);
   EXPECT_NE(ReadAll(tmp + "/bad.log").find("no_such_certs"), std::string::npos)
       << ReadAll(tmp + "/bad.log");
+
+  // One component's identity from another CA (the rogue identity in place of the mapper's): the
+  // components could not authenticate each other. Refused before any process starts, naming
+  // the component, instead of a run stalled in discovery.
+  const std::string mixed = tmp + "/mixed_certs";
+  ASSERT_EQ(std::system(("cp -r " + certs + " " + mixed + " && rm -r " + mixed +
+                         "/mapper && cp -r " + mixed + "/rogue " + mixed + "/mapper")
+                            .c_str()),
+            0);
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_NE(RunToEnd(RunArgs(dataset, tmp + "/mixed", 119, "0:10",
+                             {"--processes", "--filter", "geometry", "--security", mixed}),
+                     tmp + "/mixed.log"),
+            0);
+  const std::string mixed_log = ReadAll(tmp + "/mixed.log");
+  EXPECT_NE(mixed_log.find("component 'mapper' trusts another identity CA than component"),
+            std::string::npos)
+      << mixed_log;
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(30)) << mixed_log;
 }
 
 }  // namespace

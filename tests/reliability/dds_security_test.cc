@@ -248,6 +248,37 @@ TEST_F(DdsSecurity, MissingOrUnreadableCredentialsNameTheFile) {
   EXPECT_EQ(plugins, 3);
 }
 
+// Credentials that could never authenticate are refused when read, naming the files: a
+// certificate not issued by the folder's CA, and participants of one run that trust different
+// CAs (Fast DDS would only stall discovery, without a message).
+TEST_F(DdsSecurity, CertificateFromAnotherCaIsRefusedByName) {
+  const fs::path dir = testing::MakeTempDir("dds_certs_mixed");
+  fs::copy(*certs_ + "/slam", dir / "slam");
+  fs::copy_file(*certs_ + "/rogue/cert.pem", dir / "slam" / "cert.pem",
+                fs::copy_options::overwrite_existing);
+  fs::copy_file(*certs_ + "/rogue/key.pem", dir / "slam" / "key.pem",
+                fs::copy_options::overwrite_existing);
+  try {
+    dds::SecurityOptions::FromDirectory((dir / "slam").string());
+    ADD_FAILURE() << "accepted a certificate of another CA";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cert.pem"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not issued by the identity CA"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_NO_THROW(
+      dds::CheckSameIdentityCa({{"slam", Identity("slam")}, {"recorder", Identity("recorder")}}));
+  try {
+    dds::CheckSameIdentityCa({{"slam", Identity("slam")}, {"rogue", Identity("rogue")}});
+    ADD_FAILURE() << "accepted participants of two CAs";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(
+                  "component 'rogue' trusts another identity CA than component 'slam'"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST_F(DdsSecurity, TamperedPermissionsAreRejectedAtParticipantCreation) {
   const fs::path dir = testing::MakeTempDir("dds_certs_tampered");
   fs::copy(*certs_ + "/viewer", dir / "viewer");

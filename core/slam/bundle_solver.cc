@@ -252,11 +252,7 @@ class Problem {
 }  // namespace
 
 void BundleSolverOptions::Check() const {
-  DYGSLAM_CHECK_OPTION(max_iterations >= 0, "BundleSolverOptions.max_iterations");
-  DYGSLAM_CHECK_OPTION(initial_trust_radius > 0, "BundleSolverOptions.initial_trust_radius");
-  DYGSLAM_CHECK_OPTION(function_tolerance >= 0, "BundleSolverOptions.function_tolerance");
-  DYGSLAM_CHECK_OPTION(gradient_tolerance >= 0, "BundleSolverOptions.gradient_tolerance");
-  DYGSLAM_CHECK_OPTION(parameter_tolerance >= 0, "BundleSolverOptions.parameter_tolerance");
+  CheckFields("BundleSolverOptions", "BundleSolverOptions.max_iterations", 0);
 }
 
 BundleSolverSummary SolveBundleProblem(const std::vector<BundleResidual>& residuals,

@@ -25,25 +25,14 @@
 #include <vector>
 
 #include "core/slam/projection_model.h"
+#include "core/slam/trust_region.h"
 
 namespace dygslam {
 
-struct BundleSolverOptions {
-  int max_iterations = 10;
-  double initial_trust_radius = 1e4;
-  double function_tolerance = 1e-6;
-  double gradient_tolerance = 1e-10;
-  double parameter_tolerance = 1e-8;
+struct BundleSolverOptions : TrustRegionOptions {
   void Check() const;
 };
-
-struct BundleSolverSummary {
-  int iterations = 0;  // steps tried (accepted or not)
-  int successful_iterations = 0;
-  double initial_cost = 0;  // 0.5 sum rho(|r|^2)
-  double final_cost = 0;
-  bool aborted = false;
-};
+using BundleSolverSummary = TrustRegionSummary;
 
 // One residual of a bundle problem: keyframe `pose` (index into the pose list) sees `point`.
 struct BundleResidual {

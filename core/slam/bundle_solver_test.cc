@@ -12,6 +12,12 @@
 namespace dygslam {
 namespace {
 
+BundleSolverOptions Iterations(int n) {
+  BundleSolverOptions options;
+  options.max_iterations = n;
+  return options;
+}
+
 const ProjectionModel kModel{525.0, 525.0, 319.5, 239.5, 40.0};
 
 // A camera walking along x looking along z at points 2-6 m away; the first `fixed` poses are
@@ -123,9 +129,8 @@ TEST(BundleSolver, NoiseFreeWindowReturnsToTheTruth) {
   std::vector<Eigen::Vector3d> points;
   Perturb(w, 2, &poses, &points);
   ASSERT_GT(MaxPoseError(w, poses), 0.02);
-  const BundleSolverSummary s =
-      SolveBundleProblem(w.residuals, nullptr, kModel, 0, 0,
-                         BundleSolverOptions{.max_iterations = 20}, w.fixed, &poses, &points);
+  const BundleSolverSummary s = SolveBundleProblem(w.residuals, nullptr, kModel, 0, 0,
+                                                   Iterations(20), w.fixed, &poses, &points);
   EXPECT_GT(s.successful_iterations, 2);
   EXPECT_LT(s.final_cost, 1e-8 * s.initial_cost);
   EXPECT_LT(MaxPoseError(w, poses), 1e-6);
@@ -155,8 +160,8 @@ TEST(BundleSolver, ReachesTheMinimumCeresFinds) {
     points = ceres_points = start_points;
     const double huber_mono = std::sqrt(5.991), huber_stereo = std::sqrt(7.815);
     const BundleSolverSummary s =
-        SolveBundleProblem(w.residuals, nullptr, kModel, huber_mono, huber_stereo,
-                           BundleSolverOptions{.max_iterations = 30}, w.fixed, &poses, &points);
+        SolveBundleProblem(w.residuals, nullptr, kModel, huber_mono, huber_stereo, Iterations(30),
+                           w.fixed, &poses, &points);
     const double ceres_cost = SolveWithCeres(w, true, 30, &ceres_poses, &ceres_points);
     EXPECT_NEAR(s.final_cost, ceres_cost, 1e-3 * ceres_cost) << "seed " << seed;
     for (size_t k = 0; k < poses.size(); ++k) {
@@ -189,11 +194,10 @@ TEST(BundleSolver, InactiveResidualsAreLeftOut) {
   Perturb(w, 8, &start_poses, &start_points);
   with_active = with_all = start_poses;
   points_active = points_all = start_points;
-  SolveBundleProblem(w.residuals, active.data(), kModel, 0, 0,
-                     BundleSolverOptions{.max_iterations = 30}, w.fixed, &with_active,
-                     &points_active);
-  SolveBundleProblem(w.residuals, nullptr, kModel, 0, 0, BundleSolverOptions{.max_iterations = 30},
-                     w.fixed, &with_all, &points_all);
+  SolveBundleProblem(w.residuals, active.data(), kModel, 0, 0, Iterations(30), w.fixed,
+                     &with_active, &points_active);
+  SolveBundleProblem(w.residuals, nullptr, kModel, 0, 0, Iterations(30), w.fixed, &with_all,
+                     &points_all);
   EXPECT_LT(MaxPoseError(w, with_active), 0.01);
   EXPECT_LT(MaxPoseError(w, with_active), 0.5 * MaxPoseError(w, with_all));
 }

@@ -85,12 +85,21 @@ struct Evaluator {
 
 }  // namespace
 
+void TrustRegionOptions::CheckFields(const std::string& name, const std::string& iterations_key,
+                                     int min_iterations) const {
+  if (min_iterations >= 1) {
+    DYGSLAM_CHECK_OPTION(max_iterations >= 1, iterations_key);
+  } else {
+    DYGSLAM_CHECK_OPTION(max_iterations >= 0, iterations_key);
+  }
+  DYGSLAM_CHECK_OPTION(initial_trust_radius > 0, name + ".initial_trust_radius");
+  DYGSLAM_CHECK_OPTION(function_tolerance >= 0, name + ".function_tolerance");
+  DYGSLAM_CHECK_OPTION(gradient_tolerance >= 0, name + ".gradient_tolerance");
+  DYGSLAM_CHECK_OPTION(parameter_tolerance >= 0, name + ".parameter_tolerance");
+}
+
 void PoseSolverOptions::Check() const {
-  DYGSLAM_CHECK_OPTION(max_iterations >= 1, "Optimizer.pose_iterations");
-  DYGSLAM_CHECK_OPTION(initial_trust_radius > 0, "PoseSolverOptions.initial_trust_radius");
-  DYGSLAM_CHECK_OPTION(function_tolerance >= 0, "PoseSolverOptions.function_tolerance");
-  DYGSLAM_CHECK_OPTION(gradient_tolerance >= 0, "PoseSolverOptions.gradient_tolerance");
-  DYGSLAM_CHECK_OPTION(parameter_tolerance >= 0, "PoseSolverOptions.parameter_tolerance");
+  CheckFields("PoseSolverOptions", "Optimizer.pose_iterations", 1);
 }
 
 PoseSolverSummary SolvePose(const std::vector<PoseObservation>& observations, const uint8_t* active,

@@ -3,8 +3,8 @@
 //
 // Why not Ceres: tracking solves 4 rounds of <= 10 iterations per frame over a single 6-dof
 // block; building a new ceres::Problem per round (a cost function and a loss per residual) cost
-// more than the solve itself (measured by profiling). Here the normal equations are a fixed-size 6x6
-// system accumulated in one pass over the observations, and nothing is allocated per iteration.
+// more than the solve itself (measured by profiling). Here the normal equations are a fixed-size
+// 6x6 system accumulated in one pass over the observations, and nothing is allocated per iteration.
 //
 // The model is the one of core/slam/cost_functions.h (so results match the Ceres version within
 // the solvers' tolerances): residual r = (obs - proj(R X + t)) * sqrt_info, left update
@@ -21,6 +21,7 @@
 
 #include "core/base/rigid3.h"
 #include "core/slam/cost_functions.h"
+#include "core/slam/trust_region.h"
 
 namespace dygslam {
 
@@ -32,21 +33,10 @@ struct PoseObservation {
   bool stereo = false;
 };
 
-struct PoseSolverOptions {
-  int max_iterations = 10;
-  double initial_trust_radius = 1e4;
-  double function_tolerance = 1e-6;
-  double gradient_tolerance = 1e-10;
-  double parameter_tolerance = 1e-8;
+struct PoseSolverOptions : TrustRegionOptions {
   void Check() const;
 };
-
-struct PoseSolverSummary {
-  int iterations = 0;  // steps tried (accepted or not)
-  int successful_iterations = 0;
-  double initial_cost = 0;  // 0.5 sum rho(|r|^2)
-  double final_cost = 0;
-};
+using PoseSolverSummary = TrustRegionSummary;
 
 // Optimises cam_from_world over the observations whose `active` flag is set (active may be
 // nullptr: all). `huber_delta_mono` / `huber_delta_stereo` <= 0: no kernel (plain least squares).

@@ -163,7 +163,7 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
         }
         cv.notify_all();
       });
-  RepeatedWarning rival_warning(3);  // a rival announces itself again as peers join
+  RepeatedWarning rival_warning;  // a rival announces itself again as peers join
   StatusReader status_reader(
       participant, ComponentKind::kPlayer,
       [&](const ComponentStatus& s, const msg::StreamStatus& /*m*/, const WriterGuid& from) {

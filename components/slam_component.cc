@@ -135,7 +135,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
         }
         cv.notify_all();
       });
-  RepeatedWarning rival_warning(3);  // a rival announces itself again as peers join
+  RepeatedWarning rival_warning;  // a rival announces itself again as peers join
   StatusReader status_reader(
       participant, ComponentKind::kSlam,
       [&](const ComponentStatus& s, const msg::StreamStatus& m, const WriterGuid& from) {

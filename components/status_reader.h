@@ -19,6 +19,7 @@ namespace dygslam {
 
 class StatusReader {
  public:
+  static constexpr size_t kMalformedSaid = 3;  // malformed samples warned one by one, then totalled
   using Callback = std::function<void(const ComponentStatus& status, const msg::StreamStatus& m)>;
   // With the GUID of the status sample's writer (RunWriters::Announce tells a rival frame
   // source's statuses from the run's by it).
@@ -35,7 +36,7 @@ class StatusReader {
   StatusReader(std::shared_ptr<dds::Participant> participant, ComponentKind self,
                CallbackWithWriter callback)
       : self_(self),
-        malformed_(std::make_unique<RepeatedWarning>(3)),
+        malformed_(std::make_unique<RepeatedWarning>(kMalformedSaid)),
         reader_(std::move(participant), dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus,
                 [self, malformed = malformed_.get(), callback = std::move(callback)](
                     msg::StreamStatus&& m, const WriterGuid& writer) {
@@ -54,7 +55,8 @@ class StatusReader {
   ~StatusReader() {
     if (malformed_->suppressed() > 0)
       LOG_WARNING << ToString(self_) << ": ignored " << malformed_->count()
-                  << " malformed status samples in all (the first " << 3 << " said above)";
+                  << " malformed status samples in all (the first " << kMalformedSaid
+                  << " said above)";
   }
   StatusReader(const StatusReader&) = delete;
   StatusReader& operator=(const StatusReader&) = delete;

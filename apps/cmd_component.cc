@@ -39,7 +39,9 @@ int RunComponentCommand(const std::vector<std::string>& args) {
               "none | boxes | geometry | full | paper (+margin, +margin+demotion)", "full");
   p.AddOption("frames", "FIRST:LAST", "rgb.txt entries [FIRST, LAST) (player)", "0:");
   p.AddOption("rate", "R", "player: 0 = as fast as consumed, 1 = real time", "0");
-  p.AddOption("window", "N", "player back-pressure window in frames", "2");
+  p.AddOption(
+      "window", "N",
+      "player back-pressure window in frames (0: none, a camera does not wait: with --rate)", "2");
   p.AddOption("loop-minutes", "M", "player: replay the frames for M minutes (soak)", "0");
   p.AddOption("detection-wait-ms", "MS", "slam: longest wait for a frame's detections", "1000");
   p.AddOption("detector-model", "NAME", "detector model (DetectorOptionsForModel)",
@@ -148,7 +150,7 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   // Bad numbers are usage errors naming the option (exit 2), as on `dygslam run`.
   int64_t window = 0, wait_ms = 0, domain = 0;
   if (!p.GetNumber("rate", 0, 1e6, &o.rate) ||
-      !p.GetInt("window", 1, dds::kFrameHistoryDepth - 1, &window) ||
+      !p.GetInt("window", 0, dds::kFrameHistoryDepth - 1, &window) ||
       !p.GetNumber("loop-minutes", 0, 1e6, &o.loop_minutes) ||
       !p.GetInt("detection-wait-ms", 0, 3600000, &wait_ms) || !p.GetInt("domain", -1, 232, &domain))
     return p.exit_code();

@@ -101,6 +101,7 @@ struct RunOutcome {
   bool interrupted = false;
   int exit_code = 0;
   size_t ignored_samples = 0;  // DDS: samples of writers outside this run (components/protocol.h)
+  std::vector<Timestamp> stamps;  // DDS: the stamps of the frames processed (frames.csv)
 };
 
 RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset, RunOutputs& outputs) {
@@ -230,14 +231,20 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset, RunOutputs& 
                   static_cast<long long>(loop_frame));
   }
   RecreateOutputDirIfRemoved("run", "out", s.out);
-  outputs.Write("frames.csv", [&] { WriteFileAtomically(outputs.PathOf("frames.csv"), csv); });
-  outputs.Write("trajectory.txt",
-                [&] { WriteTumTrajectory(outputs.PathOf("trajectory.txt"), system.Trajectory()); });
-  outputs.Write("keyframes.txt", [&] {
-    WriteTumTrajectory(outputs.PathOf("keyframes.txt"), system.KeyframeTrajectory());
-  });
-  outputs.Write("trajectory_online.txt",
-                [&] { WriteTumTrajectory(outputs.PathOf("trajectory_online.txt"), online); });
+  // A run that processed no frame (stopped or failed before the first) has no trajectory: an
+  // earlier run's files stay as they were (listed apart in the summary), not replaced by empty
+  // ones.
+  if (outcome.processed > 0) {
+    outputs.Write("frames.csv", [&] { WriteFileAtomically(outputs.PathOf("frames.csv"), csv); });
+    outputs.Write("trajectory.txt", [&] {
+      WriteTumTrajectory(outputs.PathOf("trajectory.txt"), system.Trajectory());
+    });
+    outputs.Write("keyframes.txt", [&] {
+      WriteTumTrajectory(outputs.PathOf("keyframes.txt"), system.KeyframeTrajectory());
+    });
+    outputs.Write("trajectory_online.txt",
+                  [&] { WriteTumTrajectory(outputs.PathOf("trajectory_online.txt"), online); });
+  }
   // With --save-map, map.ot too (the OctoMap with probabilities, what --load-octomap continues).
   if (mapper) {
     outputs.Write("map.bt", [&] {
@@ -367,11 +374,22 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
       ++outcome.processed;
       if (line.tokens[1] == ToString(TrackingState::kLost)) ++outcome.lost;
       ++outcome.states[line.tokens[1]];
+      if (const std::optional<Timestamp> t = Timestamp::Parse(line.tokens[0]))
+        outcome.stamps.push_back(*t);
     }
   }
   return outcome;
 }
 #endif
+
+// The files a run writes (--save-map first), for the clash checks against its inputs.
+std::vector<NamedPath> RunOutputPaths(const ArgParser& p, const fs::path& out_dir) {
+  std::vector<NamedPath> outputs;
+  if (p.Has("save-map")) outputs.push_back({"--save-map", p.Get("save-map")});
+  for (const char* name : kRunOutputNames)
+    outputs.push_back({"the output " + std::string(name), (out_dir / name).string()});
+  return outputs;
+}
 
 int RunRun(const std::vector<std::string>& args) {
   ArgParser p(
@@ -452,6 +470,8 @@ int RunRun(const std::vector<std::string>& args) {
 
   RunSetup s;
   s.dataset_dir = p.Positional("DATASET_DIR");
+  if (p.Has("config") && p.Get("config").empty())
+    return p.UsageError("--config: the settings file path is empty");
   s.config = p.Has("config") ? p.Get("config") : DefaultSettingsPath(s.dataset_dir, ConfigDir());
   {
     const RunConfiguration c =
@@ -474,11 +494,8 @@ int RunRun(const std::vector<std::string>& args) {
     inputs.push_back({"the detector's cfg", s.system.detector.cfg_path});
     inputs.push_back({"the detector's weights", s.system.detector.weights_path});
     inputs.push_back({"the detector's names", s.system.detector.names_path});
-    std::vector<NamedPath> outputs;
-    for (const char* name : kRunOutputNames)
-      outputs.push_back({"the output " + std::string(name), (out_dir / name).string()});
-    if (p.Has("save-map")) outputs.insert(outputs.begin(), {"--save-map", p.Get("save-map")});
-    if (const std::string clash = FindOutputClash(inputs, outputs); !clash.empty())
+    if (const std::string clash = FindOutputClash(inputs, RunOutputPaths(p, out_dir));
+        !clash.empty())
       return p.UsageError(clash);
   }
   s.map = !p.Flag("no-map");
@@ -531,6 +548,19 @@ int RunRun(const std::vector<std::string>& args) {
   DatasetOptions dataset_options;
   dataset_options.refuse_outside_paths = p.Flag("strict-paths");
   const RgbdDataset dataset = RgbdDataset::Open(s.dataset_dir, dataset_options);
+  {
+    // Nor a dataset image (a --save-map onto rgb/….png would destroy it): checked once the
+    // lists are read, before any work (exit 2).
+    std::vector<NamedPath> images;
+    images.reserve(2 * dataset.frames().size());
+    for (const RgbdFrameEntry& f : dataset.frames()) {
+      images.push_back({"the dataset's image listed at " + f.rgb_listed_at, f.rgb_path});
+      images.push_back({"the dataset's image listed at " + f.depth_listed_at, f.depth_path});
+    }
+    if (const std::string clash = FindOutputAmongInputs(images, RunOutputPaths(p, out_dir));
+        !clash.empty())
+      return p.UsageError(clash);
+  }
   s.first = 0;
   s.last = dataset.num_rgb_entries();
   std::string frames_note;  // --frames beyond the dataset: cut, with a warning
@@ -592,6 +622,15 @@ int RunRun(const std::vector<std::string>& args) {
     if (!dataset.FrameForRgbEntry(k)) ++skipped;
   }
   const size_t requested = s.last - s.first - skipped;  // frames with a depth partner
+  if (skipped > 0) {
+    // Said before the run, not only counted in the summary: a depth.txt cut short or with a gap
+    // leaves frames out without any other sign.
+    std::fprintf(stderr,
+                 "dygslam run: warning: %zu of the %zu rgb.txt entries %zu to %zu have no depth "
+                 "image to pair with (depth.txt / associations): they are left out, %zu frames "
+                 "requested\n",
+                 skipped, s.last - s.first, s.first, s.last, requested);
+  }
   s.out = out_dir;
 
   bool direct = p.Flag("direct") || s.use_detection_file;
@@ -628,7 +667,29 @@ int RunRun(const std::vector<std::string>& args) {
 #endif
   if (mode.empty()) {
     mode = "direct (no DDS)";
-    outcome = RunDirect(s, dataset, outputs);
+    try {
+      outcome = RunDirect(s, dataset, outputs);
+    } catch (const std::exception& e) {
+      // Stopped by an error (a corrupt image mid-run): the outputs of the frames before it are
+      // written; eval.json says so, so that an earlier run's stays no longer beside them.
+      RunSummary failed;
+      failed.mode = mode;
+      failed.filter = p.Get("filter");
+      failed.deterministic = s.system.deterministic;
+      failed.first = s.first;
+      failed.last = s.last;
+      failed.requested = requested;
+      failed.without_depth_partner = skipped;
+      if (outputs.Fresh("frames.csv"))
+        failed.processed = ReadDataLines((s.out / "frames.csv").string()).size() - 1;
+      failed.error = e.what();
+      failed.ate_note = "not evaluated: the run stopped on an error";
+      failed.exit_code = 1;
+      outputs.Write("eval.json", [&] {
+        WriteFileAtomically(outputs.PathOf("eval.json"), RunSummaryJson(failed));
+      });
+      throw;
+    }
   }
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -660,6 +721,15 @@ int RunRun(const std::vector<std::string>& args) {
   summary.requested = requested;
   summary.without_depth_partner = skipped;
   summary.processed = outcome.processed;
+  if (!outcome.stamps.empty() && s.loop_minutes == 0) {
+    // Frames that are not this run's (another frame source on the same DDS partition): counted
+    // apart, never as this run's frames.
+    std::set<Timestamp> own;
+    for (size_t k = s.first; k < s.last; ++k)
+      if (const auto i = dataset.FrameForRgbEntry(k)) own.insert(dataset.frames()[*i].rgb_stamp);
+    for (const Timestamp& t : outcome.stamps) summary.foreign_frames += own.count(t) == 0;
+    summary.processed -= std::min(summary.processed, summary.foreign_frames);
+  }
   summary.states = outcome.states;
   summary.in_trajectory = trajectory.size();
   summary.seconds = elapsed;
@@ -690,13 +760,20 @@ int RunRun(const std::vector<std::string>& args) {
         count(TrackingState::kRelocalized), count(TrackingState::kLost),
         count(TrackingState::kNotInitialized));
   }
-  if (summary.Reason() == Shortfall::kNone) {
+  if (s.loop_minutes > 0) {
+    std::printf(
+        "integrity: %zu frames processed (the %zu requested frames replayed for %g min)%s\n",
+        summary.processed, summary.requested, s.loop_minutes,
+        summary.component_failed ? ": a pipeline component failed" : "");
+  } else if (summary.Reason() == Shortfall::kNone) {
     std::printf("integrity: %zu of %zu requested frames processed (complete)\n", summary.processed,
                 summary.requested);
   } else {
-    std::printf("integrity: %zu of %zu requested frames processed, %zu missing: %s\n",
-                summary.processed, summary.requested, summary.Missing(),
-                ToString(summary.Reason()));
+    std::printf(
+        "integrity: %zu of %zu requested frames processed, %zu missing, %zu not this run's: "
+        "%s\n",
+        summary.processed, summary.requested, summary.Missing(), summary.foreign_frames,
+        ToString(summary.Reason()));
   }
   std::printf("filter: %s%s\n", p.Get("filter").c_str(),
               s.system.deterministic ? " (deterministic)" : "");
@@ -750,7 +827,8 @@ int RunRun(const std::vector<std::string>& args) {
 #endif
   // The exit code, then eval.json (which holds it), then the list of what was written.
   const bool incomplete =
-      !outcome.interrupted && s.loop_minutes == 0 && s.rate == 0 && outcome.processed < requested;
+      !outcome.interrupted && s.loop_minutes == 0 &&
+      ((s.rate == 0 && summary.processed < requested) || summary.foreign_frames > 0);
   const bool tracking_failure =
       !outcome.interrupted && IsTrackingFailure(outcome.processed, trajectory.size());
   summary.exit_code = !outputs.failures().empty() || outcome.exit_code != 0 ? 1
@@ -788,14 +866,22 @@ int RunRun(const std::vector<std::string>& args) {
   // cut short (a peer gone, an end of stream from outside, a stalled component). Its outputs are
   // written, but the run is not the one asked for: a distinct exit code.
   // A camera-paced run (--rate) drops frames by design (realtime.txt counts them).
+  if (incomplete && summary.foreign_frames > 0) {
+    std::fprintf(stderr,
+                 "dygslam run: error: %zu of the processed frames are not this run's (another "
+                 "frame source publishes on its DDS partition): the outputs mix two streams; "
+                 "exit %d\n",
+                 summary.foreign_frames, kExitIncompleteRun);
+    return kExitIncompleteRun;
+  }
   if (incomplete) {
     std::printf("run incomplete: %zu of the %zu requested frames processed (%zu missing)\n",
-                outcome.processed, requested, requested - outcome.processed);
+                summary.processed, requested, requested - summary.processed);
     std::fprintf(stderr,
                  "dygslam run: error: the run ended with %zu of the %zu requested frames (rgb.txt "
                  "entries %zu to %zu with a depth partner): the stream was cut short (a component "
                  "stopped or stalled, or an end of stream came from outside the run); exit %d\n",
-                 outcome.processed, requested, s.first, s.last, kExitIncompleteRun);
+                 summary.processed, requested, s.first, s.last, kExitIncompleteRun);
     return kExitIncompleteRun;
   }
   // A run that tracked (almost) nothing has no trajectory to speak of: fail, and say why.

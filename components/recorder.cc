@@ -197,8 +197,9 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
     LOG_WARNING << "recorder: "
                 << IgnoredSamplesNote(std::to_string(stats.foreign_samples) + " samples");
   }
-  LOG_INFO << "recorder: wrote " << stats.trajectory_path
-           << (stats.final_trajectory ? " (final trajectory)" : " (online poses)");
+  if (!stats.trajectory_path.empty())
+    LOG_INFO << "recorder: wrote " << stats.trajectory_path
+             << (stats.final_trajectory ? " (final trajectory)" : " (online poses)");
   return stats;
 }
 

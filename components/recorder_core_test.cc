@@ -51,6 +51,24 @@ std::vector<std::string> Lines(const std::string& text) {
   return lines;
 }
 
+// A run that ends before its first frame (stopped, or a component failed at start-up) leaves an
+// earlier run's files as they were: no empty trajectory replaces a complete one.
+TEST(RecorderCore, NoFrameLeavesAnEarlierRunsFilesAsTheyWere) {
+  RecorderOptions options;
+  options.output_dir = testing::MakeTempDir("recorder_core_empty") + "/out";
+  {
+    RecorderCore earlier(options);
+    for (const FrameResult& r : SampleRun()) earlier.AddPose(CameraPoseToMsg(r, 0, false));
+    ASSERT_FALSE(earlier.Write().empty());
+  }
+  const std::vector<StampedPose> before = ReadTumTrajectory(options.output_dir + "/trajectory.txt");
+  ASSERT_EQ(before.size(), 3u);
+  RecorderCore empty(options);
+  EXPECT_EQ(empty.Write(), "");
+  EXPECT_EQ(ReadTumTrajectory(options.output_dir + "/trajectory.txt").size(), 3u);
+  EXPECT_EQ(ReadTumTrajectory(options.output_dir + "/trajectory_online.txt").size(), 3u);
+}
+
 TEST(RecorderCore, WritesTheRunFilesFromOnlinePoses) {
   RecorderOptions options;
   options.output_dir = testing::MakeTempDir("recorder_core") + "/out";

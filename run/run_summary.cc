@@ -16,6 +16,9 @@ const char* ToString(Shortfall shortfall) {
       return "dropped: the pipeline could not take them at the camera's rate (--rate)";
     case Shortfall::kComponentFailed:
       return "a pipeline component failed";
+    case Shortfall::kForeignFrames:
+      return "frames of another frame source on the run's DDS partition were processed (the "
+             "outputs mix two streams)";
     case Shortfall::kCutShort:
       return "the stream was cut short (a component stopped or stalled, or an end of stream came "
              "from outside the run)";
@@ -33,9 +36,10 @@ size_t RunSummary::WithPose() const {
 }
 
 Shortfall RunSummary::Reason() const {
+  if (foreign_frames > 0) return Shortfall::kForeignFrames;
+  if (component_failed || !error.empty()) return Shortfall::kComponentFailed;
   if (Missing() == 0) return Shortfall::kNone;
   if (interrupted) return Shortfall::kStoppedByUser;
-  if (component_failed) return Shortfall::kComponentFailed;
   if (realtime) return Shortfall::kDroppedByRate;
   return Shortfall::kCutShort;
 }
@@ -60,16 +64,16 @@ std::string RunSummaryJson(const RunSummary& s) {
   j << " \"frames\": {\"first\": " << s.first << ", \"last\": " << s.last
     << ", \"requested\": " << s.requested
     << ", \"without_depth_partner\": " << s.without_depth_partner
-    << ", \"processed\": " << s.processed << ", \"with_pose\": " << s.WithPose()
-    << ", \"in_trajectory\": " << s.in_trajectory << ", \"missing\": " << s.Missing()
-    << ", \"states\": {";
+    << ", \"processed\": " << s.processed << ", \"foreign\": " << s.foreign_frames
+    << ", \"with_pose\": " << s.WithPose() << ", \"in_trajectory\": " << s.in_trajectory
+    << ", \"missing\": " << s.Missing() << ", \"states\": {";
   bool first = true;
   for (const auto& [state, count] : s.states) {
     j << (first ? "" : ", ") << JsonString(state) << ": " << count;
     first = false;
   }
   j << "}},\n";
-  j << " \"complete\": " << (s.Missing() == 0 ? "true" : "false")
+  j << " \"complete\": " << (s.Complete() ? "true" : "false")
     << ", \"shortfall\": " << JsonString(ToString(s.Reason()))
     << ", \"interrupted\": " << (s.interrupted ? "true" : "false")
     << ", \"fps\": " << JsonNumber(s.seconds > 0 ? s.processed / s.seconds : 0) << ",\n";
@@ -85,8 +89,8 @@ std::string RunSummaryJson(const RunSummary& s) {
   }
   j << ",\n \"ate\": " << AteJson(s.ate) << ",\n \"online_ate\": " << AteJson(s.online_ate)
     << ",\n \"ate_note\": " << JsonString(s.ate_note)
-    << ", \"ignored_samples\": " << s.ignored_samples << ", \"exit_code\": " << s.exit_code
-    << "}\n";
+    << ", \"ignored_samples\": " << s.ignored_samples << ", \"error\": " << JsonString(s.error)
+    << ", \"exit_code\": " << s.exit_code << "}\n";
   return j.str();
 }
 

@@ -26,7 +26,9 @@ enum class Shortfall {
   kNone,             // every requested frame was processed
   kStoppedByUser,    // SIGINT / SIGTERM / SIGHUP: the user's stop
   kDroppedByRate,    // --rate: frames the pipeline could not take in time (by design, counted)
-  kComponentFailed,  // a pipeline component failed (its message is on stderr)
+  kComponentFailed,  // a pipeline component failed, or the run stopped on an error (its message
+                     // is on stderr and in RunSummary::error)
+  kForeignFrames,    // frames of another frame source on the run's DDS partition were processed
   kCutShort          // the stream ended early: a component stopped or stalled, or an end of
                      // stream came from outside the run
 };
@@ -39,7 +41,8 @@ struct RunSummary {
   size_t first = 0, last = 0;              // rgb.txt entries [first, last)
   size_t requested = 0;                    // of them, frames with a depth partner
   size_t without_depth_partner = 0;        // entries left out: no depth image to pair with
-  size_t processed = 0;                    // frames the SLAM processed
+  size_t processed = 0;                    // frames of this run the SLAM processed
+  size_t foreign_frames = 0;               // frames processed that are not this run's (DDS)
   std::map<std::string, size_t> states;    // frames by tracking state (ok, fallback, lost, ...)
   size_t in_trajectory = 0;                // frames in trajectory.txt
   double seconds = 0;                      // wall time of the frames
@@ -49,21 +52,26 @@ struct RunSummary {
   size_t ignored_samples = 0;  // DDS samples of participants outside the run
   bool interrupted = false;    // a stop signal ended the run
   bool component_failed = false;
+  std::string error;  // the error that stopped the run ("" when none)
   int exit_code = 0;
 
   // Frames with a pose: ok + fallback + relocalized.
   size_t WithPose() const;
   size_t Missing() const { return requested > processed ? requested - processed : 0; }
+  // Every requested frame processed and nothing else.
+  bool Complete() const { return Missing() == 0 && foreign_frames == 0; }
   // Why frames are missing (kNone when none are).
   Shortfall Reason() const;
 };
 
 // One JSON object:
 // {"mode": ..., "filter": ..., "deterministic": ..., "frames": {"first", "last", "requested",
-//  "without_depth_partner", "processed", "with_pose", "in_trajectory", "missing", "states": {..}},
+//  "without_depth_partner", "processed", "foreign", "with_pose", "in_trajectory", "missing",
+//  "states": {..}},
 //  "complete": bool, "shortfall": "none" | "stopped by the user" | ..., "fps": ...,
 //  "realtime": {...} | null, "ate": {"rmse", "mean", "median", "max", "pairs"} | null,
-//  "online_ate": {...} | null, "ate_note": "...", "ignored_samples": N, "exit_code": N}
+//  "online_ate": {...} | null, "ate_note": "...", "ignored_samples": N, "error": "...",
+//  "exit_code": N}
 std::string RunSummaryJson(const RunSummary& summary);
 
 }  // namespace dygslam

@@ -32,7 +32,7 @@ TEST(RunSummary, CompleteRunListsItsFramesAndBothAccuracies) {
   const std::string json = RunSummaryJson(s);
   EXPECT_TRUE(Has(json,
                   "\"requested\": 360, \"without_depth_partner\": 0, \"processed\": 360, "
-                  "\"with_pose\": 360, \"in_trajectory\": 360, \"missing\": 0"))
+                  "\"foreign\": 0, \"with_pose\": 360, \"in_trajectory\": 360, \"missing\": 0"))
       << json;
   EXPECT_TRUE(Has(json, "\"states\": {\"fallback\": 15, \"ok\": 343, \"relocalized\": 2}")) << json;
   EXPECT_TRUE(Has(json, "\"complete\": true, \"shortfall\": \"none\"")) << json;
@@ -52,10 +52,18 @@ TEST(RunSummary, EveryShortfallHasItsReason) {
   s.realtime = RealtimeReport{1.0, 360, 352, 0, 19.4, 76.3};
   EXPECT_EQ(s.Reason(), Shortfall::kDroppedByRate);
   EXPECT_TRUE(Has(RunSummaryJson(s), "\"dropped\": 8, \"late\": 0")) << RunSummaryJson(s);
-  s.component_failed = true;
-  EXPECT_EQ(s.Reason(), Shortfall::kComponentFailed);
-  s.interrupted = true;  // the user's stop explains the missing frames first
+  s.interrupted = true;  // the user's stop explains the missing frames
   EXPECT_EQ(s.Reason(), Shortfall::kStoppedByUser);
+  s.component_failed = true;  // a failed component comes first
+  EXPECT_EQ(s.Reason(), Shortfall::kComponentFailed);
+  // Frames of another frame source (a second player on the partition): never complete, even
+  // with as many frames as requested.
+  RunSummary mixed = Complete();
+  mixed.foreign_frames = 100;
+  EXPECT_EQ(mixed.Reason(), Shortfall::kForeignFrames);
+  EXPECT_FALSE(mixed.Complete());
+  EXPECT_TRUE(Has(RunSummaryJson(mixed), "\"foreign\": 100,")) << RunSummaryJson(mixed);
+  EXPECT_TRUE(Has(RunSummaryJson(mixed), "\"complete\": false")) << RunSummaryJson(mixed);
 }
 
 TEST(RunSummary, MissingAccuracyIsNullWithItsReason) {

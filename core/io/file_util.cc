@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "core/base/echo.h"
@@ -94,6 +95,40 @@ std::string FindOutputClash(const std::vector<NamedPath>& inputs,
              quote(outputs[j].path) + ", another output of this command: one of them would be " +
              "lost; choose another path";
     }
+  }
+  return "";
+}
+
+std::string FindOutputAmongInputs(const std::vector<NamedPath>& inputs,
+                                  const std::vector<NamedPath>& outputs) {
+  std::error_code ec;
+  const auto resolved = [&ec](const std::string& path) {
+    return fs::weakly_canonical(fs::absolute(path, ec), ec).lexically_normal().string();
+  };
+  const auto identity = [](const std::string& path) -> std::pair<uintmax_t, uintmax_t> {
+    struct stat st;
+    if (::stat(path.c_str(), &st) != 0) return {0, 0};
+    return {static_cast<uintmax_t>(st.st_dev), static_cast<uintmax_t>(st.st_ino)};
+  };
+  std::map<std::string, const NamedPath*> by_path;
+  std::map<std::pair<uintmax_t, uintmax_t>, const NamedPath*> by_inode;
+  for (const NamedPath& in : inputs) {
+    if (in.path.empty()) continue;
+    by_path.emplace(resolved(in.path), &in);
+    if (const auto id = identity(in.path); id.second != 0) by_inode.emplace(id, &in);
+  }
+  for (const NamedPath& out : outputs) {
+    if (out.path.empty()) continue;
+    const NamedPath* in = nullptr;
+    if (const auto it = by_path.find(resolved(out.path)); it != by_path.end()) in = it->second;
+    const auto id = identity(out.path);
+    if (in == nullptr && id.second != 0) {
+      if (const auto it = by_inode.find(id); it != by_inode.end()) in = it->second;
+    }
+    if (in != nullptr)
+      return out.role + " '" + EchoValue(out.path) + "' is " + in->role + " '" +
+             EchoValue(in->path) + "', an input: writing it would replace that file; choose " +
+             "another path";
   }
   return "";
 }

@@ -41,6 +41,11 @@ bool SameFile(const std::string& a, const std::string& b);
 std::string FindOutputClash(const std::vector<NamedPath>& inputs,
                             const std::vector<NamedPath>& outputs);
 
+// FindOutputClash for many inputs (a dataset's images): each path resolved once, so the cost
+// grows with inputs + outputs, not their product. Only output-onto-input clashes.
+std::string FindOutputAmongInputs(const std::vector<NamedPath>& inputs,
+                                  const std::vector<NamedPath>& outputs);
+
 // One non-empty, non-comment line of a text file, split on whitespace (and commas).
 struct TextLine {
   int line_number = 0;  // 1-based

@@ -151,7 +151,7 @@ TEST_F(CliContract, SmallUsageErrorsExitTwo) {
 TEST_F(CliContract, ComponentBadNumbersAreUsageErrorsNamingTheOption) {
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"window", "abc"},
-      {"window", "0"},
+      {"window", "-1"},
       {"domain", "233"},
       {"domain", "1e3"},
       {"rate", "1.5x"},

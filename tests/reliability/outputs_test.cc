@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -187,6 +188,69 @@ TEST_F(RunOutputsCli, AnEarlierRunsFileIsKeptAndNotListedAsThisRuns) {
       << r.out;
   EXPECT_TRUE(Contains(r.out, "outputs left from an earlier run, not replaced by this one: map.bt"))
       << r.out;
+}
+
+// The first `n` frames of `source` with their images copied into DIR/rgb and DIR/depth (the tests
+// below write onto or damage images: never the shared ones); returns DIR and the colour images.
+std::string CopiedDataset(const std::string& source, size_t n, const fs::path& dir,
+                          std::vector<fs::path>* rgb_images) {
+  fs::create_directories(dir / "rgb");
+  fs::create_directories(dir / "depth");
+  const RgbdDataset d = RgbdDataset::Open(source);
+  std::ofstream rgb(dir / "rgb.txt"), depth(dir / "depth.txt");
+  for (size_t i = 0; i < n; ++i) {
+    const fs::path r = fs::path("rgb") / fs::path(d.frame(i).rgb_path).filename();
+    const fs::path z = fs::path("depth") / fs::path(d.frame(i).depth_path).filename();
+    fs::copy_file(d.frame(i).rgb_path, dir / r);
+    fs::copy_file(d.frame(i).depth_path, dir / z);
+    rgb << d.frame(i).rgb_stamp.ToString() << " " << r.string() << "\n";
+    depth << d.frame(i).depth_stamp.ToString() << " " << z.string() << "\n";
+    rgb_images->push_back(dir / r);
+  }
+  return dir.string();
+}
+
+// --save-map onto one of the dataset's images would destroy the user's data: refused before any
+// work (exit 2), the image untouched. Before: the PNG became a map file, exit 0.
+TEST_F(RunOutputsCli, SaveMapOntoADatasetImageIsRefused) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  std::vector<fs::path> images;
+  const std::string data = CopiedDataset(source, 10, fs::path(dir_) / "data", &images);
+  const fs::path image = images.front();
+  const std::string before = ReadAll(image.string());
+  const auto r =
+      Run({"run", data, "--config", Config(), "--direct", "--filter", "none", "--quiet", "--no-map",
+           "--out", (fs::path(dir_) / "out").string(), "--save-map", image.string()});
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_TRUE(Contains(r.err, "--save-map")) << r.err;
+  EXPECT_TRUE(Contains(r.err, "the dataset's image listed at")) << r.err;
+  EXPECT_EQ(ReadAll(image.string()), before);
+}
+
+// A direct run stopped by a corrupt image mid-run writes the outputs of the frames before it and
+// an eval.json that says so (exit 1 and the error): an earlier run's eval.json does not stay
+// beside the new files claiming a complete run.
+TEST_F(RunOutputsCli, ARunStoppedByAnErrorReplacesTheEarlierEvalJson) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  std::vector<fs::path> images;
+  const std::string data = CopiedDataset(source, 20, fs::path(dir_) / "data", &images);
+  const fs::path out = fs::path(dir_) / "out";
+  const std::vector<std::string> args = {
+      "run",  data,      "--config", Config(),          "--direct", "--filter",
+      "none", "--quiet", "--no-map", "--deterministic", "--out",    out.string()};
+  ASSERT_EQ(Run(args).code, 0);
+  ASSERT_TRUE(Contains(ReadAll((out / "eval.json").string()), "\"complete\": true"));
+  // Frame 10's colour image (a copy) made unreadable.
+  ASSERT_EQ(images.size(), 20u);
+  fs::remove(images[10]);
+  WriteText(images[10], "not a png");
+  const auto r = Run(args);
+  EXPECT_EQ(r.code, 1) << r.err;
+  const std::string json = ReadAll((out / "eval.json").string());
+  EXPECT_TRUE(Contains(json, "\"complete\": false")) << json;
+  EXPECT_TRUE(Contains(json, "\"processed\": 10,")) << json;
+  EXPECT_TRUE(Contains(json, "\"exit_code\": 1}")) << json;
+  EXPECT_FALSE(Contains(json, "\"error\": \"\"")) << json;
 }
 
 }  // namespace

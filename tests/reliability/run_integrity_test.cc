@@ -34,6 +34,8 @@ using testing::ReadAll;
 constexpr int kKeepDomain = 141;
 constexpr int kIntruderDomain = 142;
 constexpr int kFailedDomain = 143;
+constexpr int kRateDomain = 144;
+constexpr int kRivalDomain = 145;
 
 class RunIntegrity : public testing::CliFixture {
  protected:
@@ -216,7 +218,7 @@ TEST_F(RunIntegrity, ARunCutShortNeverExitsZero) {
       EXPECT_TRUE(Contains(summary, "integrity: " + std::to_string(processed) +
                                         " of 150 requested frames processed, " +
                                         std::to_string(150 - processed) +
-                                        " missing: the stream was cut short"))
+                                        " missing, 0 not this run's: the stream was cut short"))
           << summary;
       const std::string json = ReadAll(dir_ + "/out/eval.json");
       EXPECT_TRUE(Contains(json, "\"missing\": " + std::to_string(150 - processed))) << json;
@@ -229,6 +231,58 @@ TEST_F(RunIntegrity, ARunCutShortNeverExitsZero) {
     }
   } else {
     EXPECT_EQ(code, 0) << summary << err;
+  }
+}
+
+// `--processes --rate 1`: the player paces the frames like a camera (no back-pressure window,
+// which the component command accepts as 0); every frame arrives and eval.json carries the
+// real-time report. Before, every component refused `--window 0` and the run failed.
+TEST_F(RunIntegrity, ProcessesRunAtCameraRate) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const auto r = RunWithin({"run", source, "--config", Config(), "--filter", "none", "--quiet",
+                            "--frames", "0:30", "--no-map", "--processes", "--rate", "1", "--out",
+                            dir_ + "/out", "--domain", std::to_string(kRateDomain)},
+                           120);
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_TRUE(Contains(r.out, "real time: rate 1.00x: 30 frames")) << r.out;
+  const std::string json = ReadAll(dir_ + "/out/eval.json");
+  EXPECT_TRUE(Contains(json, "\"realtime\": {\"rate\": 1, \"frames\": 30,")) << json;
+}
+
+// A frame source already playing on the run's partition (another robot's player, a second run):
+// the run must not pass that source's frames off as its own. It exits 3 and says how many
+// processed frames are not its own; eval.json is never "complete". Before: exit 0, "160 of 60
+// requested frames processed (complete)", the trajectory the other source's.
+TEST_F(RunIntegrity, FramesOfAnotherSourceOnThePartitionAreNotThisRuns) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string partition = "dygslam_integrity_rival";
+  const pid_t rival =
+      testing::SpawnDygslam({"component", "player", "--dataset", source, "--config", Config(),
+                             "--frames", "200:360", "--rate", "1", "--window", "0", "--partition",
+                             partition, "--domain", std::to_string(kRivalDomain)},
+                            dir_ + "/rival.out", dir_ + "/rival.err");
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  const auto r = RunWithin({"run", source, "--config", Config(), "--filter", "none", "--quiet",
+                            "--frames", "0:60", "--no-map", "--out", dir_ + "/out", "--partition",
+                            partition, "--domain", std::to_string(kRivalDomain)},
+                           150);
+  kill(rival, SIGTERM);
+  int code = -1;
+  for (int i = 0; i < 200 && !Exited(rival, &code); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  if (code == -1) kill(rival, SIGKILL);
+  const std::string json = ReadAll(dir_ + "/out/eval.json");
+  if (Contains(json, "\"foreign\": 0,")) {
+    // The run's own player won the partition (the rival's frames were all refused): then its
+    // frames are exactly its own.
+    EXPECT_EQ(r.code, 0) << r.out << r.err;
+    EXPECT_TRUE(Contains(r.out, "integrity: 60 of 60 requested frames processed (complete)"))
+        << r.out;
+  } else {
+    EXPECT_EQ(r.code, 3) << r.out << r.err;
+    EXPECT_TRUE(Contains(r.err, "of the processed frames are not this run's")) << r.err;
+    EXPECT_TRUE(Contains(json, "\"complete\": false")) << json;
+    EXPECT_FALSE(Contains(r.out, "(complete)")) << r.out;
   }
 }
 

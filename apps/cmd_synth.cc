@@ -30,9 +30,10 @@ rgb/, depth/ (16-bit, /5000 = m), rgb.txt, depth.txt (stamps offset ~4 ms), grou
 mask/ + mask.txt (255 = moving object), detections.txt (ground-truth person boxes
 't x y w h class score'), objects.txt (object poses per frame) and camera.yaml (ORB-SLAM2
 keys). The same seed gives byte-identical files.)");
-  p.AddPositional("OUT_DIR",
-                  "output folder (created if needed); a folder that holds a dataset (rgb.txt,\n"
-                  "depth.txt or groundtruth.txt) is refused unless --replace");
+  p.AddPositional(
+      "OUT_DIR",
+      "output folder (created if needed); a folder that holds any of the files the\n"
+      "sequence is made of (rgb.txt, rgb/, camera.yaml, ...) is refused unless --replace");
   p.AddFlag("replace", "replace the dataset files an earlier synth (or anyone) left in OUT_DIR");
   p.AddOption("frames", "N", "number of frames", "100");
   p.AddOption("objects", "K", "moving objects (people), 0..4", "2");
@@ -146,7 +147,9 @@ keys). The same seed gives byte-identical files.)");
   // without being asked to.
   if (!p.Flag("replace")) {
     std::string found;
-    for (const char* name : {"rgb.txt", "depth.txt", "groundtruth.txt"}) {
+    for (const char* name :
+         {"rgb.txt", "depth.txt", "groundtruth.txt", "mask.txt", "detections.txt", "objects.txt",
+          "camera.yaml", "rgb", "depth", "mask"}) {
       std::error_code ec;
       if (std::filesystem::exists(std::filesystem::path(out_dir) / name, ec))
         found += (found.empty() ? "" : ", ") + std::string(name);
@@ -161,12 +164,32 @@ keys). The same seed gives byte-identical files.)");
   auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  WriteSyntheticSequence(out_dir, options, [&](int done, int total) {
+  // Rendered into a staging folder beside OUT_DIR and moved in only when complete: a synth stopped
+  // midway (Ctrl-C, a full disk) leaves OUT_DIR as it was, never half one sequence, half another.
+  namespace fs = std::filesystem;
+  fs::path target = fs::path(out_dir).lexically_normal();
+  if (target.filename().empty()) target = target.parent_path();
+  const fs::path staging =
+      target.parent_path() / ("." + target.filename().string() + ".synth-partial");
+  std::error_code ec;
+  fs::remove_all(staging, ec);  // left by a synth that was stopped
+  WriteSyntheticSequence(staging.string(), options, [&](int done, int total) {
     if (quiet) return;
     std::fprintf(stderr, "\rsynth: frame %d/%d (%.1f frames/s)", done, total, done / elapsed());
     std::fflush(stderr);
   });
   if (!quiet) std::fprintf(stderr, "\n");
+  fs::create_directories(target, ec);
+  for (const auto& entry : fs::directory_iterator(staging)) {
+    const fs::path destination = target / entry.path().filename();
+    fs::remove_all(destination, ec);
+    fs::rename(entry.path(), destination, ec);
+    if (ec)
+      throw InputError(destination.string(), 0,
+                       "cannot move the rendered sequence into place: " + ec.message() +
+                           " (the rendered files are in " + staging.string() + ")");
+  }
+  fs::remove(staging, ec);
   std::printf("wrote %d frames (%dx%d, %d moving objects, seed %llu) to %s in %.2f s\n",
               options.num_frames, options.camera.width, options.camera.height,
               options.num_moving_objects, static_cast<unsigned long long>(options.seed),

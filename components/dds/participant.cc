@@ -167,7 +167,8 @@ std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& optio
   if (result->participant_ == nullptr && options.security.enabled) {
     throw InputError("DDS Security: participant '" + options.name +
                      "' not created: the credentials were rejected (certificate " +
-                     options.security.identity_certificate + ", permissions " +
+                     options.security.identity_certificate + ", private key " +
+                     options.security.private_key + ", permissions " +
                      options.security.permissions + ", governance " + options.security.governance +
                      ", CA " + options.security.identity_ca + ")");
   }

@@ -116,6 +116,20 @@ void SecurityOptions::Check() const {
                      "future; is the clock right?)");
   if (X509_cmp_current_time(X509_get0_notAfter(cert.get())) <= 0)
     throw InputError(identity_certificate, 0, "DDS Security identity_certificate: expired");
+  // The private key: readable as PEM, and the one of the certificate.
+  std::unique_ptr<FILE, int (*)(FILE*)> key_file(std::fopen(private_key.c_str(), "r"),
+                                                 &std::fclose);
+  EVP_PKEY* key =
+      key_file ? PEM_read_PrivateKey(key_file.get(), nullptr, nullptr, nullptr) : nullptr;
+  if (key == nullptr)
+    throw InputError(private_key, 0,
+                     "DDS Security private_key: not a PEM private key (an unencrypted one)");
+  const int matches = X509_check_private_key(cert.get(), key);
+  EVP_PKEY_free(key);
+  if (matches != 1)
+    throw InputError(private_key, 0,
+                     "DDS Security private_key: not the key of the identity certificate " +
+                         identity_certificate);
 }
 
 void CheckSameIdentityCa(const std::vector<std::pair<std::string, SecurityOptions>>& participants) {

@@ -266,6 +266,26 @@ TEST_F(DdsSecurity, CertificateFromAnotherCaIsRefusedByName) {
     EXPECT_NE(std::string(e.what()).find("not issued by the identity CA"), std::string::npos)
         << e.what();
   }
+  // A private key that is not PEM, or not the certificate's, is named.
+  fs::copy((*certs_ + "/recorder"), dir / "recorder");
+  std::ofstream(dir / "recorder" / "key.pem") << "garbage\n";
+  try {
+    dds::SecurityOptions::FromDirectory((dir / "recorder").string());
+    ADD_FAILURE() << "accepted a garbage private key";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("key.pem"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not a PEM private key"), std::string::npos) << e.what();
+  }
+  fs::copy_file(*certs_ + "/slam/key.pem", dir / "recorder" / "key.pem",
+                fs::copy_options::overwrite_existing);
+  try {
+    dds::SecurityOptions::FromDirectory((dir / "recorder").string());
+    ADD_FAILURE() << "accepted another identity's private key";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not the key of the identity certificate"),
+              std::string::npos)
+        << e.what();
+  }
   EXPECT_NO_THROW(
       dds::CheckSameIdentityCa({{"slam", Identity("slam")}, {"recorder", Identity("recorder")}}));
   try {

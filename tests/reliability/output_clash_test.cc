@@ -6,10 +6,13 @@
 // truth and `synth` into an existing dataset replaced the user's file (exit 0), and `--save-map
 // OUT/trajectory.txt` said "saved" and then lost the map.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -153,8 +156,51 @@ TEST_F(OutputClashCli, SynthRefusesAnExistingDatasetUnlessAskedToReplaceIt) {
   EXPECT_EQ(replaced.code, 0) << replaced.err;
   EXPECT_TRUE(fs::exists(target + "/rgb.txt"));
   EXPECT_NE(ReadAll(target + "/groundtruth.txt"), "1 0 0 0 0 0 0 1\n");
-  // A new folder needs no flag.
+  // A new folder needs no flag, and keeps no staging folder.
   EXPECT_EQ(Run({"synth", dir_ + "/fresh", "--frames", "2", "--quiet"}).code, 0);
+  EXPECT_FALSE(fs::exists(dir_ + "/.fresh.synth-partial"));
+  // Any file of the sequence is the user's until --replace: a camera.yaml alone too.
+  const std::string settings = dir_ + "/settings";
+  fs::create_directories(settings);
+  std::ofstream(settings + "/camera.yaml") << "%YAML:1.0\nCamera.fx: 500\n";
+  ExpectError(Run({"synth", settings, "--frames", "2", "--quiet"}), 2,
+              {"camera.yaml", "--replace"});
+  EXPECT_EQ(ReadAll(settings + "/camera.yaml"), "%YAML:1.0\nCamera.fx: 500\n");
+}
+
+// A synth --replace stopped midway (SIGTERM) leaves the folder's earlier sequence whole: the new
+// one is rendered beside it and moved in only when complete. Before: half the images were the new
+// seed's while the lists still described the old one.
+TEST_F(OutputClashCli, StoppedSynthLeavesTheEarlierSequenceWhole) {
+  const std::string target = dir_ + "/sequence";
+  ASSERT_EQ(Run({"synth", target, "--frames", "3", "--seed", "2", "--quiet"}).code, 0);
+  const std::string list = ReadAll(target + "/rgb.txt");
+  std::vector<std::string> images;
+  for (const auto& entry : fs::directory_iterator(target + "/rgb"))
+    images.push_back(ReadAll(entry.path().string()));
+  const pid_t pid = testing::SpawnDygslam(
+      {"synth", target, "--frames", "400", "--seed", "3", "--quiet", "--replace"},
+      dir_ + "/synth.out", dir_ + "/synth.err");
+  // Stopped once it has rendered a few frames.
+  const fs::path staging = dir_ + "/.sequence.synth-partial/rgb";
+  for (int i = 0; i < 600; ++i) {
+    std::error_code ec;
+    if (fs::is_directory(staging, ec) &&
+        std::distance(fs::directory_iterator(staging, ec), fs::directory_iterator()) >= 3)
+      break;
+    usleep(50 * 1000);
+  }
+  kill(pid, SIGTERM);
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  EXPECT_NE(status, 0);
+  EXPECT_EQ(ReadAll(target + "/rgb.txt"), list);
+  size_t k = 0;
+  for (const auto& entry : fs::directory_iterator(target + "/rgb")) {
+    ASSERT_LT(k, images.size());
+    EXPECT_EQ(ReadAll(entry.path().string()), images[k++]) << entry.path();
+  }
+  EXPECT_EQ(k, images.size());
 }
 
 }  // namespace

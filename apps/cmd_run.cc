@@ -233,8 +233,9 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset, RunOutputs& 
   RecreateOutputDirIfRemoved("run", "out", s.out);
   // A run that processed no frame (stopped or failed before the first) has no trajectory: an
   // earlier run's files stay as they were (listed apart in the summary), not replaced by empty
-  // ones.
-  if (outcome.processed > 0) {
+  // ones; where there is none, the empty (loadable) files are written.
+  std::error_code exists_error;
+  if (outcome.processed > 0 || !fs::exists(outputs.PathOf("trajectory.txt"), exists_error)) {
     outputs.Write("frames.csv", [&] { WriteFileAtomically(outputs.PathOf("frames.csv"), csv); });
     outputs.Write("trajectory.txt", [&] {
       WriteTumTrajectory(outputs.PathOf("trajectory.txt"), system.Trajectory());
@@ -557,6 +558,14 @@ int RunRun(const std::vector<std::string>& args) {
       images.push_back({"the dataset's image listed at " + f.rgb_listed_at, f.rgb_path});
       images.push_back({"the dataset's image listed at " + f.depth_listed_at, f.depth_path});
     }
+    // And every file in its image folders (entries without a partner are not in frames()).
+    for (const char* folder : {"rgb", "depth"}) {
+      std::error_code ec;
+      for (fs::directory_iterator it(fs::path(s.dataset_dir) / folder, ec), end; !ec && it != end;
+           it.increment(ec))
+        images.push_back(
+            {std::string("a file of the dataset's ") + folder + "/ folder", it->path().string()});
+    }
     if (const std::string clash = FindOutputAmongInputs(images, RunOutputPaths(p, out_dir));
         !clash.empty())
       return p.UsageError(clash);
@@ -727,7 +736,11 @@ int RunRun(const std::vector<std::string>& args) {
     std::set<Timestamp> own;
     for (size_t k = s.first; k < s.last; ++k)
       if (const auto i = dataset.FrameForRgbEntry(k)) own.insert(dataset.frames()[*i].rgb_stamp);
-    for (const Timestamp& t : outcome.stamps) summary.foreign_frames += own.count(t) == 0;
+    // A stamp seen twice is another stream's too (a second run of the same sequence, a second
+    // slam on the partition).
+    std::set<Timestamp> seen;
+    for (const Timestamp& t : outcome.stamps)
+      summary.foreign_frames += own.count(t) == 0 || !seen.insert(t).second;
     summary.processed -= std::min(summary.processed, summary.foreign_frames);
   }
   summary.states = outcome.states;

@@ -164,22 +164,21 @@ keys). The same seed gives byte-identical files.)");
   auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  // Rendered into a staging folder beside OUT_DIR and moved in only when complete: a synth stopped
-  // midway (Ctrl-C, a full disk) leaves OUT_DIR as it was, never half one sequence, half another.
+  // Rendered into a staging folder inside OUT_DIR (the same file system: the files move in by
+  // rename) and moved into place only when complete: a synth stopped midway (Ctrl-C, a full disk)
+  // leaves OUT_DIR's sequence as it was, never half one sequence, half another.
   namespace fs = std::filesystem;
-  fs::path target = fs::path(out_dir).lexically_normal();
-  if (target.filename().empty()) target = target.parent_path();
-  const fs::path staging =
-      target.parent_path() / ("." + target.filename().string() + ".synth-partial");
+  const fs::path target = fs::path(out_dir);
+  const fs::path staging = target / ".synth-partial";
   std::error_code ec;
   fs::remove_all(staging, ec);  // left by a synth that was stopped
+  fs::create_directories(target, ec);
   WriteSyntheticSequence(staging.string(), options, [&](int done, int total) {
     if (quiet) return;
     std::fprintf(stderr, "\rsynth: frame %d/%d (%.1f frames/s)", done, total, done / elapsed());
     std::fflush(stderr);
   });
   if (!quiet) std::fprintf(stderr, "\n");
-  fs::create_directories(target, ec);
   for (const auto& entry : fs::directory_iterator(staging)) {
     const fs::path destination = target / entry.path().filename();
     fs::remove_all(destination, ec);

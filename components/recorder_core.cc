@@ -118,13 +118,17 @@ std::string RecorderCore::Write() const {
   std::filesystem::create_directories(options_.output_dir);
   const std::filesystem::path dir(options_.output_dir);
   const std::string trajectory = (dir / "trajectory.txt").string();
-  if (frame_rows_.empty() && online_.empty() && !final_frames_) {
+  if (frame_rows_.empty() && online_.empty() && (!final_frames_ || final_frames_->empty())) {
     // No frame came (a run stopped or failed before its first): an earlier run's trajectories
-    // stay as they were instead of being replaced by empty files.
-    LOG_INFO << "recorder: no frame received; trajectory.txt, keyframes.txt and frames.csv not "
-                "written";
-    if (!ground_truth_.empty()) WriteGroundTruthCopy(dir / "groundtruth.txt");
-    return "";
+    // stay as they were instead of being replaced by empty files; where there is none, the empty
+    // (loadable) files are written.
+    std::error_code ec;
+    if (std::filesystem::exists(trajectory, ec)) {
+      LOG_INFO << "recorder: no frame received; the earlier trajectory.txt, keyframes.txt and "
+                  "frames.csv are left as they were";
+      if (!ground_truth_.empty()) WriteGroundTruthCopy(dir / "groundtruth.txt");
+      return "";
+    }
   }
   WriteTumTrajectory(trajectory, final_frames_ ? *final_frames_ : SortedUnique(online_));
   WriteTumTrajectory((dir / "trajectory_online.txt").string(), SortedUnique(online_));

@@ -44,8 +44,9 @@ class RecorderCore {
   size_t num_online_poses() const { return online_.size(); }
   size_t num_frames() const { return frame_rows_.size(); }
   size_t num_lost() const { return num_lost_; }
-  // Writes the files (see above). Returns the trajectory.txt path; "" when no frame came (then
-  // nothing but the ground-truth copy is written: an earlier run's files stay).
+  // Writes the files (see above). Returns the trajectory.txt path; "" when no frame came and an
+  // earlier run's trajectory.txt is there (then nothing but the ground-truth copy is written: the
+  // earlier run's files stay).
   std::string Write() const;
 
  private:

@@ -65,6 +65,10 @@ TEST(RecorderCore, NoFrameLeavesAnEarlierRunsFilesAsTheyWere) {
   ASSERT_EQ(before.size(), 3u);
   RecorderCore empty(options);
   EXPECT_EQ(empty.Write(), "");
+  // Also when slam sent its (empty) final trajectory, as it does when stopped before a frame.
+  RecorderCore empty_final(options);
+  empty_final.SetTrajectory(TrajectoryToMsg({}, false));
+  EXPECT_EQ(empty_final.Write(), "");
   EXPECT_EQ(ReadTumTrajectory(options.output_dir + "/trajectory.txt").size(), 3u);
   EXPECT_EQ(ReadTumTrajectory(options.output_dir + "/trajectory_online.txt").size(), 3u);
 }

@@ -58,8 +58,10 @@ struct RunSummary {
   // Frames with a pose: ok + fallback + relocalized.
   size_t WithPose() const;
   size_t Missing() const { return requested > processed ? requested - processed : 0; }
-  // Every requested frame processed and nothing else.
-  bool Complete() const { return Missing() == 0 && foreign_frames == 0; }
+  // Every requested frame processed and nothing else, and the run did not fail.
+  bool Complete() const {
+    return Missing() == 0 && foreign_frames == 0 && !component_failed && error.empty();
+  }
   // Why frames are missing (kNone when none are).
   Shortfall Reason() const;
 };

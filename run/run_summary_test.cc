@@ -56,6 +56,12 @@ TEST(RunSummary, EveryShortfallHasItsReason) {
   EXPECT_EQ(s.Reason(), Shortfall::kStoppedByUser);
   s.component_failed = true;  // a failed component comes first
   EXPECT_EQ(s.Reason(), Shortfall::kComponentFailed);
+  // A failed run is never complete, even with every frame processed (a looped run, a component
+  // that failed at the end).
+  RunSummary failed = Complete();
+  failed.component_failed = true;
+  EXPECT_FALSE(failed.Complete());
+  EXPECT_TRUE(Has(RunSummaryJson(failed), "\"complete\": false")) << RunSummaryJson(failed);
   // Frames of another frame source (a second player on the partition): never complete, even
   // with as many frames as requested.
   RunSummary mixed = Complete();

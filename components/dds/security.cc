@@ -29,6 +29,10 @@ void RequireFile(const std::string& option, const std::string& path) {
   if (!in.good()) throw InputError(path, 0, "DDS Security " + option + ": cannot read the file");
 }
 
+// An encrypted key is not asked for a passphrase on the terminal (the participant could not use
+// it either): it reads as no key.
+int NoPassphrase(char* /*buffer*/, int /*size*/, int /*rwflag*/, void* /*user*/) { return 0; }
+
 struct X509Free {
   void operator()(X509* x) const { X509_free(x); }
 };
@@ -120,7 +124,7 @@ void SecurityOptions::Check() const {
   std::unique_ptr<FILE, int (*)(FILE*)> key_file(std::fopen(private_key.c_str(), "r"),
                                                  &std::fclose);
   EVP_PKEY* key =
-      key_file ? PEM_read_PrivateKey(key_file.get(), nullptr, nullptr, nullptr) : nullptr;
+      key_file ? PEM_read_PrivateKey(key_file.get(), nullptr, NoPassphrase, nullptr) : nullptr;
   if (key == nullptr)
     throw InputError(private_key, 0,
                      "DDS Security private_key: not a PEM private key (an unencrypted one)");

@@ -158,7 +158,7 @@ TEST_F(OutputClashCli, SynthRefusesAnExistingDatasetUnlessAskedToReplaceIt) {
   EXPECT_NE(ReadAll(target + "/groundtruth.txt"), "1 0 0 0 0 0 0 1\n");
   // A new folder needs no flag, and keeps no staging folder.
   EXPECT_EQ(Run({"synth", dir_ + "/fresh", "--frames", "2", "--quiet"}).code, 0);
-  EXPECT_FALSE(fs::exists(dir_ + "/.fresh.synth-partial"));
+  EXPECT_FALSE(fs::exists(dir_ + "/fresh/.synth-partial"));
   // Any file of the sequence is the user's until --replace: a camera.yaml alone too.
   const std::string settings = dir_ + "/settings";
   fs::create_directories(settings);
@@ -182,7 +182,7 @@ TEST_F(OutputClashCli, StoppedSynthLeavesTheEarlierSequenceWhole) {
       {"synth", target, "--frames", "400", "--seed", "3", "--quiet", "--replace"},
       dir_ + "/synth.out", dir_ + "/synth.err");
   // Stopped once it has rendered a few frames.
-  const fs::path staging = dir_ + "/.sequence.synth-partial/rgb";
+  const fs::path staging = target + "/.synth-partial/rgb";
   for (int i = 0; i < 600; ++i) {
     std::error_code ec;
     if (fs::is_directory(staging, ec) &&

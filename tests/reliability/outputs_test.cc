@@ -225,6 +225,14 @@ TEST_F(RunOutputsCli, SaveMapOntoADatasetImageIsRefused) {
   EXPECT_TRUE(Contains(r.err, "--save-map")) << r.err;
   EXPECT_TRUE(Contains(r.err, "the dataset's image listed at")) << r.err;
   EXPECT_EQ(ReadAll(image.string()), before);
+  // Nor any file of the image folders (an image without a depth partner is in no frame).
+  const fs::path unpaired = fs::path(data) / "rgb" / "unpaired.png";
+  fs::copy_file(image, unpaired);
+  const auto r2 =
+      Run({"run", data, "--config", Config(), "--direct", "--filter", "none", "--quiet", "--no-map",
+           "--out", (fs::path(dir_) / "out").string(), "--save-map", unpaired.string()});
+  EXPECT_EQ(r2.code, 2) << r2.out << r2.err;
+  EXPECT_EQ(ReadAll(unpaired.string()), before);
 }
 
 // A direct run stopped by a corrupt image mid-run writes the outputs of the frames before it and

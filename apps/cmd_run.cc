@@ -674,6 +674,18 @@ int RunRun(const std::vector<std::string>& args) {
         "[run] this build has no DDS components: running the direct library loop (--direct)\n");
   }
 #endif
+  // What every summary of this run holds, whatever its end.
+  const auto summary_of_run = [&] {
+    RunSummary r;
+    r.mode = mode;
+    r.filter = p.Get("filter");
+    r.deterministic = s.system.deterministic;
+    r.first = s.first;
+    r.last = s.last;
+    r.requested = requested;
+    r.without_depth_partner = skipped;
+    return r;
+  };
   if (mode.empty()) {
     mode = "direct (no DDS)";
     try {
@@ -681,14 +693,7 @@ int RunRun(const std::vector<std::string>& args) {
     } catch (const std::exception& e) {
       // Stopped by an error (a corrupt image mid-run): the outputs of the frames before it are
       // written; eval.json says so, so that an earlier run's stays no longer beside them.
-      RunSummary failed;
-      failed.mode = mode;
-      failed.filter = p.Get("filter");
-      failed.deterministic = s.system.deterministic;
-      failed.first = s.first;
-      failed.last = s.last;
-      failed.requested = requested;
-      failed.without_depth_partner = skipped;
+      RunSummary failed = summary_of_run();
       if (outputs.Fresh("frames.csv"))
         failed.processed = ReadDataLines((s.out / "frames.csv").string()).size() - 1;
       failed.error = e.what();
@@ -721,14 +726,7 @@ int RunRun(const std::vector<std::string>& args) {
   const std::vector<StampedPose> trajectory = outputs.Fresh("trajectory.txt")
                                                   ? ReadTumTrajectory(trajectory_path.string())
                                                   : std::vector<StampedPose>{};
-  RunSummary summary;
-  summary.mode = mode;
-  summary.filter = p.Get("filter");
-  summary.deterministic = s.system.deterministic;
-  summary.first = s.first;
-  summary.last = s.last;
-  summary.requested = requested;
-  summary.without_depth_partner = skipped;
+  RunSummary summary = summary_of_run();
   summary.processed = outcome.processed;
   if (!outcome.stamps.empty() && s.loop_minutes == 0) {
     // Frames that are not this run's (another frame source on the same DDS partition): counted

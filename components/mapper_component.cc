@@ -1,9 +1,11 @@
 #include "components/mapper_component.h"
 
+#include <atomic>
 #include <chrono>
 #include <deque>
 #include <mutex>
 #include <optional>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -24,6 +26,20 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
                       const StopFlagPtr& stop) {
   MapperCore core(options);
   MapperStats stats;
+  // Two stages: received keyframe messages pass the gate and are reduced at once, on the prepare
+  // thread, to what the map keeps of them (the static cloud, ~30 KB, instead of ~2.4 MB of
+  // images); the loop below applies them to the map (ray casting, rebuilds, map updates). A map
+  // stage that falls behind the keyframe rate on a busy machine so queues clouds, not images:
+  // with images, such a backlog grew the run by ~0.2 MB per frame until the end.
+  struct Prepared {
+    KeyframeData keyframe;  // images released once the cloud is extracted
+    PinholeCamera camera;
+    std::optional<StaticCloud> cloud;
+  };
+  BlockingQueue<Prepared> prepared;
+  std::atomic<size_t> in_preparation{0};  // taken by the prepare thread, not yet in `prepared`
+  std::atomic<size_t> bad_samples{0};
+  std::atomic<bool> prepare_stop{false};
   BlockingQueue<std::pair<msg::Keyframe, WriterGuid>> queue;
   std::mutex mutex;
   bool slam_done = false;
@@ -80,6 +96,57 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
   WriterGoneWatch slam_gone(
       std::chrono::milliseconds(static_cast<int64_t>(options.writer_gone_s * 1000)));
   std::optional<std::chrono::steady_clock::time_point> flush_deadline;
+  std::thread prepare_thread([&] {
+    std::optional<PinholeCamera> cloud_camera;  // the map's camera: the first new keyframe's
+    while (!prepare_stop) {
+      std::optional<msg::Keyframe> sample;
+      {
+        // Received keyframes pass the gate; admitted ones are used in order.
+        std::optional<std::pair<msg::Keyframe, WriterGuid>> received;
+        {
+          std::lock_guard<std::mutex> lock(mutex);
+          if (admitted.empty()) {
+            std::vector<msg::Keyframe> ready;
+            gate.Release(Clock::now(), &ready);  // announced meanwhile, or expired
+            admitted.insert(admitted.end(), std::make_move_iterator(ready.begin()),
+                            std::make_move_iterator(ready.end()));
+          }
+        }
+        if (!admitted.empty() ||
+            (received = queue.Pop(std::chrono::milliseconds(gate.held() > 0 ? 5 : 50)))) {
+          std::lock_guard<std::mutex> lock(mutex);
+          if (received) {
+            std::vector<msg::Keyframe> ready;
+            gate.Offer(std::move(received->first), received->second, Clock::now(), &ready);
+            admitted.insert(admitted.end(), std::make_move_iterator(ready.begin()),
+                            std::make_move_iterator(ready.end()));
+          }
+          if (!admitted.empty()) {
+            sample = std::move(admitted.front());
+            admitted.pop_front();
+          }  // else held until its writer is announced (or ignored): idle for what follows
+        }
+      }
+      if (!sample) continue;
+      ++in_preparation;
+      try {
+        Prepared p;
+        p.keyframe = KeyframeFromMsg(*sample, &p.camera);
+        if (ChangeOf(p.keyframe) == KeyframeChange::kNew && !p.keyframe.depth.empty()) {
+          if (!cloud_camera) cloud_camera = p.camera;
+          p.cloud = ExtractStaticCloud(p.keyframe, *cloud_camera, options.octomap);
+          p.keyframe.rgb.release();
+          p.keyframe.depth.release();
+          p.keyframe.dynamic_mask.release();
+        }
+        prepared.Push(std::move(p));
+      } catch (const InputError& e) {
+        ++bad_samples;
+        LOG_WARNING << "mapper: dropped keyframe " << sample->id() << ": " << e.what();
+      }
+      --in_preparation;
+    }
+  });
   ReadyAnnouncer announcer(ComponentKind::kMapper);
   while (true) {
     started.Poll(status);
@@ -92,34 +159,7 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
       if (keyframes.matched() == 0) *flush_deadline = std::chrono::steady_clock::now();
     }
     const bool writer_gone = slam_gone.Update(keyframes.matched() > 0);
-    std::optional<msg::Keyframe> sample;
-    {
-      // Received keyframes pass the gate; admitted ones are used in order.
-      std::optional<std::pair<msg::Keyframe, WriterGuid>> received;
-      {
-        std::lock_guard<std::mutex> lock(mutex);
-        if (admitted.empty()) {
-          std::vector<msg::Keyframe> ready;
-          gate.Release(Clock::now(), &ready);  // announced meanwhile, or expired
-          admitted.insert(admitted.end(), std::make_move_iterator(ready.begin()),
-                          std::make_move_iterator(ready.end()));
-        }
-      }
-      if (!admitted.empty() ||
-          (received = queue.Pop(std::chrono::milliseconds(gate.held() > 0 ? 5 : 50)))) {
-        std::lock_guard<std::mutex> lock(mutex);
-        if (received) {
-          std::vector<msg::Keyframe> ready;
-          gate.Offer(std::move(received->first), received->second, Clock::now(), &ready);
-          admitted.insert(admitted.end(), std::make_move_iterator(ready.begin()),
-                          std::make_move_iterator(ready.end()));
-        }
-        if (!admitted.empty()) {
-          sample = std::move(admitted.front());
-          admitted.pop_front();
-        }  // else held until its writer is announced (or ignored): idle for what follows
-      }
-    }
+    std::optional<Prepared> sample = prepared.Pop(std::chrono::milliseconds(50));
     if (!sample) {
       if (writer_gone) {
         LOG_WARNING << "mapper: slam's keyframe writer left " << options.writer_gone_s
@@ -130,7 +170,9 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
       // slam's DONE is written after its last keyframe (and after waiting for acknowledgements);
       // order is only kept per writer, so allow a short grace period (300 ms without a keyframe
       // of this run) after DONE.
-      if (slam_done && !idle_counting) {
+      // Still being received or prepared: not idle.
+      if (queue.size() > 0 || in_preparation > 0) idle_counting = false;
+      if (slam_done && !idle_counting && queue.size() == 0 && in_preparation == 0) {
         idle_counting = true;
         idle_since = Clock::now();
       }
@@ -143,9 +185,8 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
     }
     idle_counting = false;
     try {
-      PinholeCamera camera;
-      const KeyframeData k = KeyframeFromMsg(*sample, &camera);
-      core.Process(k, camera);
+      const KeyframeData& k = sample->keyframe;
+      core.Process(k, sample->camera, std::move(sample->cloud));
       ++stats.keyframes_received;
       if (!k.pose_update_only) ++since_update;
       if (options.update_every_keyframes > 0 &&
@@ -156,9 +197,12 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
       }
     } catch (const InputError& e) {
       ++stats.bad_samples;
-      LOG_WARNING << "mapper: dropped keyframe " << sample->id() << ": " << e.what();
+      LOG_WARNING << "mapper: dropped keyframe " << sample->keyframe.id << ": " << e.what();
     }
   }
+  prepare_stop = true;
+  prepare_thread.join();
+  stats.bad_samples += bad_samples;
   {
     std::lock_guard<std::mutex> lock(mutex);
     gate.Close();  // their writer never announced itself

@@ -1,6 +1,7 @@
 #include "components/mapper_core.h"
 
 #include <sstream>
+#include <utility>
 
 #include "components/convert.h"
 #include "core/base/error.h"
@@ -20,13 +21,14 @@ MapperCore::MapperCore(const MapperOptions& options) : options_(options) {
   if (!options_.base_map_path.empty()) base_ = ReadOctoMap(options_.base_map_path);
 }
 
-void MapperCore::Process(const KeyframeData& keyframe, const PinholeCamera& camera) {
+void MapperCore::Process(const KeyframeData& keyframe, const PinholeCamera& camera,
+                         std::optional<StaticCloud> cloud) {
   if (consumer_ == nullptr) {
     if (ChangeOf(keyframe) != KeyframeChange::kNew) return;  // nothing to correct or remove yet
     consumer_ = std::make_unique<KeyframeConsumer>(camera, options_.octomap);
     if (base_) consumer_->builder().SetBaseMap(*base_, options_.base_map_path);
   }
-  const KeyframeApplied applied = consumer_->Apply(keyframe);
+  const KeyframeApplied applied = consumer_->Apply(keyframe, std::move(cloud));
   if (applied.change == KeyframeChange::kNew && keyframe.stamp > newest_) newest_ = keyframe.stamp;
 }
 

@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "core/base/camera.h"
@@ -50,8 +51,11 @@ class MapperCore {
  public:
   explicit MapperCore(const MapperOptions& options);
   // Applies a keyframe message (KeyframeConsumer::Apply; the consumer is made on the first new
-  // keyframe, from its camera). Corrections and removals of unknown keyframes are ignored.
-  void Process(const KeyframeData& keyframe, const PinholeCamera& camera);
+  // keyframe, from its camera). Corrections and removals of unknown keyframes are ignored. A new
+  // keyframe's static cloud may come extracted (ExtractStaticCloud with the first keyframe's
+  // camera and options.octomap; its images are then not read).
+  void Process(const KeyframeData& keyframe, const PinholeCamera& camera,
+               std::optional<StaticCloud> cloud = {});
   bool has_map() const { return consumer_ != nullptr || base_ != nullptr; }
   // Keyframes currently in the map (inserted minus removed).
   size_t num_keyframes() const;

@@ -1,5 +1,7 @@
 #include "mapping/keyframe_consumer.h"
 
+#include <utility>
+
 namespace dygslam {
 
 KeyframeChange ChangeOf(const KeyframeData& keyframe) {
@@ -23,7 +25,8 @@ const char* ToString(KeyframeChange change) {
 KeyframeConsumer::KeyframeConsumer(const PinholeCamera& camera, const OctoMapOptions& options)
     : builder_(camera, options) {}
 
-KeyframeApplied KeyframeConsumer::Apply(const KeyframeData& keyframe) {
+KeyframeApplied KeyframeConsumer::Apply(const KeyframeData& keyframe,
+                                        std::optional<StaticCloud> cloud) {
   KeyframeApplied result;
   result.change = ChangeOf(keyframe);
   switch (result.change) {
@@ -36,7 +39,11 @@ KeyframeApplied KeyframeConsumer::Apply(const KeyframeData& keyframe) {
       num_pose_updates_ += result.applied;
       break;
     case KeyframeChange::kNew:
-      builder_.Insert(keyframe);
+      if (cloud) {
+        builder_.Insert(keyframe, std::move(*cloud));
+      } else {
+        builder_.Insert(keyframe);
+      }
       result.applied = true;
       ++num_inserted_;
       break;

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 
 #include "core/base/camera.h"
 #include "core/base/types.h"
@@ -40,7 +41,9 @@ class KeyframeConsumer {
 
   // new -> OctoMapBuilder::Insert, pose update -> UpdatePoses, removed -> Remove. Throws what
   // the builder throws (InputError naming the keyframe and the field).
-  KeyframeApplied Apply(const KeyframeData& keyframe);
+  // A new keyframe's static cloud may come extracted (ExtractStaticCloud with the builder's camera
+  // and options; the keyframe's images are then not read).
+  KeyframeApplied Apply(const KeyframeData& keyframe, std::optional<StaticCloud> cloud = {});
 
   // Applied keyframes of each kind (updates and removals of unknown keyframes not counted).
   size_t num_inserted() const { return num_inserted_; }

@@ -14,7 +14,7 @@ double MsBetween(std::chrono::steady_clock::time_point a, std::chrono::steady_cl
 
 KeyframeData DeepCopy(const KeyframeData& in) {
   KeyframeData out = in;  // scalars, vectors
-  out.rgb = in.rgb.clone();
+  out.rgb = cv::Mat();  // the map reads depth and mask only
   out.depth = in.depth.clone();
   out.dynamic_mask = in.dynamic_mask.clone();
   return out;

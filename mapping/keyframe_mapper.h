@@ -76,7 +76,8 @@ class KeyframeMapper {
   KeyframeMapper(const KeyframeMapper&) = delete;
   KeyframeMapper& operator=(const KeyframeMapper&) = delete;
 
-  // Thread-safe. Copies the keyframe (images cloned). Does not throw the worker's errors.
+  // Thread-safe. Copies the keyframe (depth and mask cloned; the colour image, which the map
+  // does not read, is not kept). Does not throw the worker's errors.
   void Submit(const KeyframeData& keyframe);
   // Blocks until everything submitted so far is applied (and a due background rebuild is done).
   void Flush();

@@ -129,6 +129,11 @@ void OctoMapBuilder::ResetTree() {
 }
 
 StaticCloud OctoMapBuilder::ExtractStaticCloud(const KeyframeData& keyframe) const {
+  return dygslam::ExtractStaticCloud(keyframe, camera_, options_);
+}
+
+StaticCloud ExtractStaticCloud(const KeyframeData& keyframe, const PinholeCamera& camera_,
+                               const OctoMapOptions& options_) {
   const cv::Mat& depth = keyframe.depth;
   if (depth.empty()) throw InputError(KeyframeName(keyframe) + ": depth is empty");
   if (depth.type() != CV_32FC1) {
@@ -221,7 +226,7 @@ bool OctoMapBuilder::NeedsRebuild(const Rigid3d& a, const Rigid3d& b) const {
   return dt + angle * options_.max_range > options_.EffectiveRebuildDisplacement();
 }
 
-void OctoMapBuilder::Insert(const KeyframeData& keyframe) {
+void OctoMapBuilder::CheckInsertable(const KeyframeData& keyframe) {
   if (keyframe.removed || keyframe.pose_update_only) {
     throw InputError(KeyframeName(keyframe) + ": " +
                      (keyframe.removed ? "removed" : "pose_update_only") +
@@ -230,18 +235,32 @@ void OctoMapBuilder::Insert(const KeyframeData& keyframe) {
   if (!keyframe.world_from_cam.AllFinite()) {
     throw InputError(KeyframeName(keyframe) + ": world_from_cam is not finite");
   }
-  auto known = keyframes_.find(keyframe.id);
-  if (known != keyframes_.end() && keyframe.depth.empty()) {
+}
+
+void OctoMapBuilder::Insert(const KeyframeData& keyframe) {
+  CheckInsertable(keyframe);
+  if (keyframes_.count(keyframe.id) > 0 && keyframe.depth.empty()) {
     UpdatePoses({{keyframe.id, keyframe.world_from_cam}});
     return;
   }
+  InsertCloud(keyframe, std::nullopt);
+}
+
+void OctoMapBuilder::Insert(const KeyframeData& keyframe, StaticCloud cloud) {
+  CheckInsertable(keyframe);
+  InsertCloud(keyframe, std::move(cloud));
+}
+
+void OctoMapBuilder::InsertCloud(const KeyframeData& keyframe, std::optional<StaticCloud> cloud) {
+  auto known = keyframes_.find(keyframe.id);
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start = ThreadCpuMs();
   StoredKeyframe stored;
+  stored.points_cam =
+      cloud ? std::move(cloud->points_cam) : ExtractStaticCloud(keyframe).points_cam;
   stored.sequence = next_sequence_++;
   stored.world_from_cam = keyframe.world_from_cam;
   stored.inserted_world_from_cam = keyframe.world_from_cam;
-  stored.points_cam = ExtractStaticCloud(keyframe).points_cam;
 
   if (known != keyframes_.end()) {
     // Replacement: the old contribution has to go, which needs a rebuild.

@@ -40,8 +40,9 @@
 #include <cstdint>
 #include <map>
 #include <memory>
-#include <ostream>
 #include <opencv2/core.hpp>
+#include <optional>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -128,6 +129,12 @@ struct StaticCloud {
   size_t num_dynamic_pixels = 0;            // of those, left out as dynamic
 };
 
+// Filtering + back-projection + voxel grid of one keyframe for `camera` and `options`: what
+// OctoMapBuilder::Insert stores of it. Thread-safe (reads only its arguments); InputError names
+// the keyframe and the field (depth/mask of the wrong type or size).
+StaticCloud ExtractStaticCloud(const KeyframeData& keyframe, const PinholeCamera& camera,
+                               const OctoMapOptions& options);
+
 class OctoMapBuilder {
  public:
   // Throws InvalidOptions if camera or options fail Check().
@@ -143,6 +150,10 @@ class OctoMapBuilder {
   // as are depth/mask of the wrong type or size and a non-finite pose (the message names the
   // keyframe id and the field).
   void Insert(const KeyframeData& keyframe);
+  // The same with the keyframe's static cloud already extracted (ExtractStaticCloud with this
+  // builder's camera and options): the keyframe's images are not read and may be released, so a
+  // stage ahead of the map can keep clouds (~30 KB) queued instead of images (~2.4 MB).
+  void Insert(const KeyframeData& keyframe, StaticCloud cloud);
 
   // Sets the poses of known keyframes (unknown ids are ignored; returns how many were known).
   // Schedules a full rebuild if any keyframe moved by more than the rebuild threshold.
@@ -196,6 +207,10 @@ class OctoMapBuilder {
     std::vector<Eigen::Vector3f> points_cam;
   };
 
+  // InputError for a removed / pose_update_only keyframe or a non-finite pose.
+  static void CheckInsertable(const KeyframeData& keyframe);
+  // Insert with the cloud given (or extracted here when not).
+  void InsertCloud(const KeyframeData& keyframe, std::optional<StaticCloud> cloud);
   void InsertIntoTree(const StoredKeyframe& keyframe);
   void Rebuild();
   void ResetTree();

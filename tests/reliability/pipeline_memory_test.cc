@@ -8,7 +8,9 @@
 //
 // Before the fix (unbounded keyframe history, default malloc arenas) the default mode grew
 // 0.88 MB per frame in the second half (RSS 130 -> 382 MB); after it, 0.06-0.18 MB per frame
-// (the SLAM map itself grows: `--direct` ~0.05) and every --processes process <= 0.13. The margin
+// (the SLAM map itself grows: `--direct` ~0.05) and every --processes process <= 0.13. On a busy
+// machine (one more busy core) the mapper's backlog of keyframe images added up to 0.35; it now
+// queues static clouds: 0.13-0.18 with the busy core. The margin
 // (0.3 MB per frame, per process) sits between the two; figures in BENCHMARKS.md.
 // Filter `none` (no detector) keeps the test short: the growth came from keyframes, which every
 // filter mode makes.

@@ -125,8 +125,6 @@ int RunMap(const std::vector<std::string>& args) {
   const std::string dataset_dir = p.Positional("DATASET_DIR");
   const std::string config =
       p.Has("config") ? p.Get("config") : DefaultSettingsPath(dataset_dir, ConfigDir());
-  if (p.Has("config") && config.empty())
-    return p.UsageError("--config: the settings file path is empty");
   // The output folder first: a bad --out is found before the run, not after it.
   const fs::path out = PrepareOutputDir("out", p.Get("out"));
   // No output may replace an input or another output: checked before any work (exit 2).

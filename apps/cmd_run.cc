@@ -74,6 +74,8 @@ constexpr const char* kListedOutputNames[] = {"trajectory.txt", "trajectory_onli
 // A ground-truth coordinate beyond this (metres) is no camera trajectory (1e300 overflows the
 // error); `dygslam eval` refuses such files too.
 constexpr double kMaxGroundTruthCoordinate = 1e7;
+// --rate above 0: the slowest replay that is still a replay (0.01x = a 30 Hz frame every 3.3 s).
+constexpr double kMinRate = 0.01;
 
 struct RunSetup {
   std::string dataset_dir;
@@ -430,11 +432,12 @@ int RunRun(const std::vector<std::string>& args) {
               "DDS Security: make_dds_certs.sh's OUT_DIR (one identity folder per component) or "
               "one identity folder (default: $DYGSLAM_DDS_SECURITY_DIR; none = off)",
               security_env != nullptr ? security_env : "");
-  p.AddOption("rate", "R",
-              "play the frames as a camera would, at R times the dataset's frame rate (1: real\n"
-              "time); frames the pipeline cannot take in time are dropped and counted, latency\n"
-              "is measured (OUT/realtime.txt). 0: as fast as the pipeline takes them",
-              "0");
+  p.AddOption(
+      "rate", "R",
+      "play the frames as a camera would, at R times the dataset's frame rate (1: real\n"
+      "time, 0.01 to 1000); frames the pipeline cannot take in time are dropped and\n"
+      "counted, latency is measured (OUT/realtime.txt). 0: as fast as the pipeline takes them",
+      "0");
   p.AddOption("loop-minutes", "M",
               "DDS modes: the player replays the frames for M minutes, stamps continuing (soak)",
               "0");
@@ -471,8 +474,6 @@ int RunRun(const std::vector<std::string>& args) {
 
   RunSetup s;
   s.dataset_dir = p.Positional("DATASET_DIR");
-  if (p.Has("config") && p.Get("config").empty())
-    return p.UsageError("--config: the settings file path is empty");
   s.config = p.Has("config") ? p.Get("config") : DefaultSettingsPath(s.dataset_dir, ConfigDir());
   {
     const RunConfiguration c =
@@ -543,6 +544,12 @@ int RunRun(const std::vector<std::string>& args) {
       !p.GetNumber("loop-minutes", 0, 1e6, &s.loop_minutes) ||
       !p.GetInt("domain", -1, 232, &domain_id))
     return p.exit_code();
+  // Below 0.01x a 30 Hz sequence waits more than 3 s per frame: a mistyped rate, not a replay.
+  if (s.rate > 0 && s.rate < kMinRate) {
+    return p.UsageError("--rate " + p.Get("rate") +
+                        ": must be 0 (as fast as the pipeline takes "
+                        "the frames) or between 0.01 and 1000");
+  }
   if (s.loop_minutes > 0 && p.Flag("direct"))
     return p.UsageError("--loop-minutes works with the DDS modes only (not --direct)");
 

@@ -124,8 +124,15 @@ TEST_F(CliContract, ImplausibleCameraValuesAreErrorsNamingKeyAndLine) {
 // "internal error: filesystem error" without naming --out, or found after the run.
 TEST_F(CliContract, BadOutputFolderIsNamedBeforeTheRun) {
   std::ofstream(dir_ + "/a_file") << "x";
-  for (const std::string& out : {std::string(""), dir_ + "/a_file", std::string("/sys/kernel"),
-                                 std::string("/proc/dygslam_no/out")}) {
+  for (const char* command : {"run", "map"}) {
+    // An empty one is a usage error (exit 2), also before the dataset is looked at.
+    const auto r = Run({command, dir_ + "/missing", "--config", Config(), "--out", ""});
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_TRUE(Contains(r.err, "option --out needs a value")) << r.err;
+    EXPECT_FALSE(Contains(r.err, "dataset")) << r.err;
+  }
+  for (const std::string& out :
+       {dir_ + "/a_file", std::string("/sys/kernel"), std::string("/proc/dygslam_no/out")}) {
     for (const char* command : {"run", "map"}) {
       // The dataset does not exist either: --out must be reported first.
       const auto r = Run({command, dir_ + "/missing", "--config", Config(), "--out", out});

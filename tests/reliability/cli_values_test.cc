@@ -92,6 +92,38 @@ TEST_F(Cli, AnOptionIsNeverTakenAsTheValueOfTheOptionBeforeIt) {
   EXPECT_TRUE(fs::exists(fs::path(cwd) / "--aligned.txt"));
 }
 
+// An empty or blank value (`--config=`, `--out " "`) is a usage error naming the option, in
+// every command (an invisible path would only show up later as a name of spaces).
+TEST_F(Cli, AnEmptyOrBlankValueIsAUsageErrorNamingTheOption) {
+  const std::string cwd = dir_ + "/cwd_blank";
+  fs::create_directories(cwd);
+  const std::vector<std::vector<std::string>> cases = {
+      {"run", dir_, "--config="},         {"run", dir_, "--config", " "},
+      {"map", dir_, "--config="},         {"bench", dir_, "--config="},
+      {"run", dir_, "--out", "  "},       {"eval", dir_, dir_, "--save-aligned="},
+      {"synth", dir_ + "/s", "--frames="}};
+  for (const auto& args : cases) {
+    const auto r = RunIn(cwd, args, dir_ + "/cli.out");
+    const std::string& last = args.back();
+    const std::string option =
+        last.rfind("--", 0) == 0 ? last.substr(0, last.find('=')) : args[args.size() - 2];
+    ExpectError(r, 2, {"option " + option + " needs a value", "got"});
+  }
+  EXPECT_TRUE(fs::is_empty(cwd));
+}
+
+// --rate: 0 (as fast as taken) or 0.01 to 1000; a rate that would wait minutes per frame is a
+// usage error, not a run.
+TEST_F(Cli, RunRateBelowTheSlowestReplayIsAUsageError) {
+  const std::string cwd = dir_ + "/cwd_rate";
+  fs::create_directories(cwd);
+  for (const std::string value : {"0.0001", "0.009", "-1", "1001"}) {
+    const auto r = RunIn(cwd, {"run", dir_, "--rate", value, "--direct"}, dir_ + "/cli.out");
+    ExpectError(r, 2, {"--rate", value});
+  }
+  EXPECT_TRUE(fs::is_empty(cwd));
+}
+
 // A depth unit of 0 (every depth would be 0 m) is a usage error naming the option as typed,
 // before any DDS participant is made; so is one outside the range.
 TEST_F(Cli, BridgeDepthUnitZeroIsAUsageErrorNamingTheOption) {

@@ -222,10 +222,9 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset, RunOutputs& 
         lc.global_ba_runs, lc.global_ba_discarded, lc.keyframes_checked);
     std::printf(
         "loop checks: detection %.0f ms, geometry %.0f ms (%.0f ms of it holding the map lock), "
-        "%d loops dropped (map changed), %d global BA skipped (small correction), %d loops "
-        "fused only (no pose graph)\n",
+        "%d loops dropped (map changed), %d loops fused only (no pose graph, no global BA)\n",
         lc.detect_ms_total, lc.check_ms_total, lc.check_locked_ms_total, lc.loops_dropped,
-        lc.global_ba_skipped, lc.pose_graph_skipped);
+        lc.pose_graph_skipped);
     if (const std::string line = LoopRejectionSummary(lc); !line.empty())
       std::printf("%s\n", line.c_str());
     for (const auto& [frame, loop_frame] : lc.loop_frames)

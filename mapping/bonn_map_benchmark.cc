@@ -1,6 +1,6 @@
 // Mapping figures on the shared Bonn frames, with ground-truth poses and no dynamic mask:
 //   dygslam_mapping_benchmark [DATASET_DIR] [--resolution R] [--every N] [--out DIR]
-//                             [--pixel-stride N] [--discretize] [--check-marker] [--raw-gt]
+//                             [--pixel-stride N] [--check-marker] [--raw-gt]
 // Prints insertion time per keyframe (median), map memory and leaf counts for a people-free
 // reference map (frames 0-99) and a map from all frames, and the ghost-voxel counts between
 // them. Camera poses are ground truth * BonnMarkerFromCam() (--raw-gt: the body pose as the
@@ -100,7 +100,6 @@ int Main(int argc, char** argv) {
   int every = 1;
   bool check_marker = false;
   bool raw_gt = false;
-  bool discretize = false;
   int pixel_stride = OctoMapOptions().pixel_stride;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -110,8 +109,6 @@ int Main(int argc, char** argv) {
       every = std::max(1, std::atoi(argv[++i]));
     } else if (arg == "--out" && i + 1 < argc) {
       out_dir = argv[++i];
-    } else if (arg == "--discretize") {
-      discretize = true;
     } else if (arg == "--pixel-stride" && i + 1 < argc) {
       pixel_stride = std::atoi(argv[++i]);
     } else if (arg == "--raw-gt") {
@@ -134,7 +131,6 @@ int Main(int argc, char** argv) {
   OctoMapOptions options;
   options.resolution = resolution;
   options.use_dynamic_mask = false;
-  options.discretize = discretize;
   options.pixel_stride = pixel_stride;
   OctoMapBuilder reference(camera, options), all(camera, options);
   for (const Frame& f : frames) {

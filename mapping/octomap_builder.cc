@@ -215,7 +215,7 @@ void OctoMapBuilder::InsertIntoTree(const StoredKeyframe& keyframe) {
   }
   const octomap::point3d origin(translation.x(), translation.y(), translation.z());
   tree_->insertPointCloud(cloud, origin, options_.max_range, options_.lazy_eval,
-                          options_.discretize);
+                          /*discretize=*/false);
   if (options_.lazy_eval) inner_dirty_ = true;
   ++num_insertions_;
 }

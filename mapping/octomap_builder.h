@@ -86,8 +86,6 @@ struct OctoMapOptions {
   int dynamic_keypoint_radius_px = 8;
   // OctoMap: skip the inner-node update per scan and do it once before the tree is read.
   bool lazy_eval = true;
-  // OctoMap: discretise the scan into cells before ray casting (fewer rays, coarser).
-  bool discretize = false;
   // Rebuild when a pose correction moves a point at max_range by more than this (metres).
   // <= 0 means half a voxel.
   double rebuild_displacement = 0.0;

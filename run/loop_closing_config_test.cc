@@ -77,10 +77,9 @@ TEST(LoopClosingConfig, MissingVocabularyAndBadValuesAreNamed) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("LoopClosing.consistency"), std::string::npos) << e.what();
   }
-  for (const char* key :
-       {"min_inlier_ratio", "max_correction_m", "max_drift_per_meter", "max_correction_deg",
-        "max_drift_deg_per_meter", "global_ba_min_correction_m", "global_ba_min_correction_deg",
-        "pose_graph_min_correction_m", "pose_graph_min_correction_deg"}) {
+  for (const char* key : {"min_inlier_ratio", "max_correction_m", "max_drift_per_meter",
+                          "max_correction_deg", "max_drift_deg_per_meter",
+                          "pose_graph_min_correction_m", "pose_graph_min_correction_deg"}) {
     try {
       Options(std::string("LoopClosing:\n  ") + key + ": -1\n");
       ADD_FAILURE() << "expected InputError for " << key;
@@ -95,8 +94,7 @@ TEST(LoopClosingConfig, AcceptanceKeysAreReadAndKnown) {
   const SystemOptions o = Options(
       "LoopClosing:\n  min_ransac_inliers: 50\n  min_inlier_ratio: 0.5\n  max_correction_m: 0.2\n"
       "  max_drift_per_meter: 0.05\n  max_correction_deg: 4\n  max_drift_deg_per_meter: 1\n"
-      "  revisit_min_path_m: 0\n  global_ba_min_correction_m: 0.05\n"
-      "  global_ba_min_correction_deg: 2\n  pose_graph_min_correction_m: 0.03\n"
+      "  revisit_min_path_m: 0\n  pose_graph_min_correction_m: 0.03\n"
       "  pose_graph_min_correction_deg: 0.5\n");
   EXPECT_EQ(o.loop_closing.min_ransac_inliers, 50);
   EXPECT_EQ(o.loop_closing.min_inlier_ratio, 0.5);
@@ -105,14 +103,11 @@ TEST(LoopClosingConfig, AcceptanceKeysAreReadAndKnown) {
   EXPECT_EQ(o.loop_closing.max_correction_deg, 4);
   EXPECT_EQ(o.loop_closing.max_drift_deg_per_meter, 1);
   EXPECT_EQ(o.loop_closing.revisit_min_path_m, 0);
-  EXPECT_EQ(o.loop_closing.global_ba_min_correction_m, 0.05);
-  EXPECT_EQ(o.loop_closing.global_ba_min_correction_deg, 2);
   EXPECT_EQ(o.loop_closing.pose_graph_min_correction_m, 0.03);
   EXPECT_EQ(o.loop_closing.pose_graph_min_correction_deg, 0.5);
   // Every key of the section is a known settings key (no "unknown key" warning for them).
   for (const char* key : {"enabled", "min_ransac_inliers", "min_inlier_ratio", "max_correction_m",
                           "revisit_min_path_m", "global_ba_iterations",
-                          "global_ba_min_correction_m", "global_ba_min_correction_deg",
                           "pose_graph_min_correction_m", "pose_graph_min_correction_deg"}) {
     const std::string full = std::string("LoopClosing.") + key;
     EXPECT_NE(std::find(KnownSettingsKeys().begin(), KnownSettingsKeys().end(), full),

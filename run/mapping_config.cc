@@ -23,7 +23,6 @@ void ReadOptions(const ConfigReader& root, OctoMapOptions* options) {
   s.ReadIfPresent("dynamic_mask_dilation_px", &options->dynamic_mask_dilation_px);
   s.ReadIfPresent("dynamic_keypoint_radius_px", &options->dynamic_keypoint_radius_px);
   s.ReadIfPresent("lazy_eval", &options->lazy_eval);
-  s.ReadIfPresent("discretize", &options->discretize);
   s.ReadIfPresent("rebuild_displacement", &options->rebuild_displacement);
   // A misspelt key is reported where every other section's is: LoadSettings warns about it with
   // its line and the closest known key (an error with --strict-settings), KnownSettingsKeys().

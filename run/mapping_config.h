@@ -17,7 +17,6 @@
 //     dynamic_mask_dilation_px: 5
 //     dynamic_keypoint_radius_px: 8
 //     lazy_eval: true
-//     discretize: false
 //     rebuild_displacement: 0.0 # pose correction that triggers a rebuild (m); <= 0: half a voxel
 //
 // Flat keys ("OctoMap.resolution: 0.05") work too. Bad values: InputError "<file>:<line>: key

@@ -4,7 +4,6 @@
 
 #include <fstream>
 #include <sstream>
-
 #include <string>
 
 #include "core/config/settings.h"
@@ -47,7 +46,6 @@ TEST(MappingConfig, ReadsNestedAndFlatKeys) {
                                        "  pixel_stride: 4\n"
                                        "  use_dynamic_mask: false\n"
                                        "  dynamic_mask_dilation_px: 9\n"
-                                       "  discretize: on\n"
                                        "OctoMap.min_range: 0.5\n",
                                        "map.yaml"),
               &options);
@@ -61,7 +59,6 @@ TEST(MappingConfig, ReadsNestedAndFlatKeys) {
   EXPECT_EQ(options.pixel_stride, 4);
   EXPECT_FALSE(options.use_dynamic_mask);
   EXPECT_EQ(options.dynamic_mask_dilation_px, 9);
-  EXPECT_TRUE(options.discretize);
   EXPECT_TRUE(options.use_voxel_filter);  // untouched
 }
 

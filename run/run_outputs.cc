@@ -163,7 +163,7 @@ size_t WriteMapFileOctoMap(const std::string& directory, const std::string& map_
         cloud,
         octomap::point3d(static_cast<float>(centre.x()), static_cast<float>(centre.y()),
                          static_cast<float>(centre.z())),
-        octomap.max_range, octomap.lazy_eval, octomap.discretize);
+        octomap.max_range, octomap.lazy_eval, /*discretize=*/false);
     inserted += cloud.size();
   }
   if (inserted == 0) return 0;

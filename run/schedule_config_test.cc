@@ -1,6 +1,6 @@
-// Schedule settings: the local BA's lag and the final bundle adjustment are read and bad values
-// are named; so are the weak-frame keyframe rule and the fallback smoothing weight. The dataset
-// presets hold the sensor only: a dataset run gets the schedule a robot gets.
+// Schedule settings: the local BA's lag is read and bad values are named; keys that are no longer
+// settings are named with their reason. The dataset presets hold the sensor only: a dataset run
+// gets the schedule a robot gets.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -46,19 +46,40 @@ void ExpectNamed(const std::string& section, const std::string& field) {
   }
 }
 
-TEST(ScheduleConfig, BaLagAndFinalBundleAdjustmentAreReadAndChecked) {
+TEST(ScheduleConfig, BaLagIsReadAndChecked) {
   const SystemOptions defaults = Options("");
   EXPECT_EQ(defaults.local_mapping.ba_lag_frames, LocalMappingOptions{}.ba_lag_frames);
-  EXPECT_EQ(defaults.local_mapping.final_ba_iterations, 0);
-  const SystemOptions set =
-      Options("LocalMapping:\n  ba_lag_frames: 4\n  final_ba_iterations: 10\n");
+  const SystemOptions set = Options("LocalMapping:\n  ba_lag_frames: 4\n");
   EXPECT_EQ(set.local_mapping.ba_lag_frames, 4);
-  EXPECT_EQ(set.local_mapping.final_ba_iterations, 10);
   ExpectNamed("LocalMapping:\n  ba_lag_frames: -1\n", "LocalMapping.ba_lag_frames");
   ExpectNamed("LocalMapping:\n  ba_lag_frames: 31\n", "LocalMapping.ba_lag_frames");
-  ExpectNamed("LocalMapping:\n  final_ba_iterations: -3\n", "LocalMapping.final_ba_iterations");
 }
 
+// A file that still sets a key that is no longer a setting is told so, with the reason and the
+// line: a warning by default, an error where unknown keys are errors (--strict-settings).
+TEST(ScheduleConfig, RetiredKeysAreNamedWithTheirReason) {
+  const std::string path = PresetPath("bonn");
+  const std::string base = testing::WithoutSection(ReadText(path), "Tracking") + "\n";
+  for (const auto& [key, reason] : RetiredSettingsKeys()) {
+    const std::string text = base + key + ": 1\n";
+    const Settings s = ParseSettings(text, path);
+    ASSERT_EQ(s.warnings.size(), 1u) << key;
+    EXPECT_NE(s.warnings[0].find("key '" + key + "' is no longer a setting (" + reason + ")"),
+              std::string::npos)
+        << s.warnings[0];
+    EXPECT_EQ(s.warnings[0].find("unknown key"), std::string::npos) << s.warnings[0];
+    try {
+      ParseSettings(text, path, {UnknownKeyPolicy::kError, false});
+      ADD_FAILURE() << "expected InputError for " << key;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("no longer a setting"), std::string::npos) << e.what();
+    }
+  }
+  // A key never known is still "unknown".
+  const Settings unknown = ParseSettings(base + "LocalMapping.no_such_key: 1\n", path);
+  ASSERT_EQ(unknown.warnings.size(), 1u);
+  EXPECT_NE(unknown.warnings[0].find("unknown key"), std::string::npos) << unknown.warnings[0];
+}
 
 // Each preset sets camera, depth and ORB keys only, so `dygslam run` on a dataset runs the
 // schedule and detector cadence a robot runs (the shipped defaults).
@@ -79,17 +100,6 @@ TEST(ScheduleConfig, DatasetPresetsHoldTheSensorOnly) {
     EXPECT_EQ(preset.detector.input_height, defaults.detector.input_height) << path;
     EXPECT_EQ(preset.local_mapping.ba_lag_frames, defaults.local_mapping.ba_lag_frames) << path;
   }
-}
-
-TEST(ScheduleConfig, SmoothingWeightIsReadAndChecked) {
-  const SystemOptions defaults = Options("");
-  EXPECT_EQ(defaults.tracking.fallback_smoothing_dense_weight,
-            TrackingOptions{}.fallback_smoothing_dense_weight);
-  const SystemOptions set =
-      Options("Tracking:\n  fallback_smoothing_dense_weight: 0.2\n");
-  EXPECT_EQ(set.tracking.fallback_smoothing_dense_weight, 0.2);
-  ExpectNamed("Tracking:\n  fallback_smoothing_dense_weight: 1.5\n",
-              "Tracking.fallback_smoothing_dense_weight");
 }
 
 }  // namespace

@@ -104,6 +104,12 @@ std::string SettingsMarkdown() {
     text += "| `" + e.key + "` | " + (e.literal ? "`" + e.default_value + "`" : e.default_value) +
             " |\n";
   }
+  text += "\n### Keys no longer read\n\n";
+  text +=
+      "A file that sets one gets this reason in a warning (an error with --strict-settings).\n\n";
+  text += "| key | why |\n|---|---|\n";
+  for (const auto& [key, reason] : RetiredSettingsKeys())
+    text += "| `" + key + "` | " + reason + " |\n";
   return text;
 }
 

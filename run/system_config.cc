@@ -98,14 +98,12 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
        {"fallback_check_below_inliers", &options.tracking.fallback_check_below_inliers},
        {"fallback_override_fraction_gain", &options.tracking.fallback_override_fraction_gain},
        {"fallback_smoothing", &options.tracking.fallback_smoothing},
-       {"fallback_smoothing_weak_inliers", &options.tracking.fallback_smoothing_weak_inliers},
-       {"fallback_smoothing_dense_weight", &options.tracking.fallback_smoothing_dense_weight}});
+       {"fallback_smoothing_weak_inliers", &options.tracking.fallback_smoothing_weak_inliers}});
   tracking.CheckOptions(options.tracking);
   const ConfigReader mapping = root.Section("LocalMapping");
   ReadFields(mapping, {{"triangulation_neighbors", &options.local_mapping.triangulation_neighbors},
                        {"cull_keyframes", &options.local_mapping.cull_keyframes},
                        {"ba_lag_frames", &options.local_mapping.ba_lag_frames},
-                       {"final_ba_iterations", &options.local_mapping.final_ba_iterations},
                        {"redundancy_ratio", &options.local_mapping.redundancy_ratio}});
   mapping.CheckOptions(options.local_mapping);
 
@@ -165,9 +163,7 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                      DYGSLAM_SAME_NAME_FIELD(lc, pose_graph_min_correction_m),
                      DYGSLAM_SAME_NAME_FIELD(lc, pose_graph_min_correction_deg),
                      DYGSLAM_SAME_NAME_FIELD(lc, global_bundle_adjustment),
-                     DYGSLAM_SAME_NAME_FIELD(lc, global_ba_iterations),
-                     DYGSLAM_SAME_NAME_FIELD(lc, global_ba_min_correction_m),
-                     DYGSLAM_SAME_NAME_FIELD(lc, global_ba_min_correction_deg)});
+                     DYGSLAM_SAME_NAME_FIELD(lc, global_ba_iterations)});
   loops.CheckOptions(lc);
   CheckSettingAtMost(loops, "revisit_min_path_m", lc.revisit_min_path_m, 1e5, "m");
   CheckSettingAtMost(loops, "ransac_threshold_px", lc.ransac_threshold_px, 1000, "px");
@@ -175,8 +171,6 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   CheckSettingAtMost(loops, "max_drift_per_meter", lc.max_drift_per_meter, 100, "m per m");
   CheckSettingAtMost(loops, "max_drift_deg_per_meter", lc.max_drift_deg_per_meter, 360,
                      "degrees per m");
-  CheckSettingAtMost(loops, "global_ba_min_correction_m", lc.global_ba_min_correction_m, 10000,
-                     "m");
   CheckSettingAtMost(loops, "pose_graph_min_correction_m", lc.pose_graph_min_correction_m, 10000,
                      "m");
 
@@ -206,7 +200,6 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                       {"fundamental_threshold", &f.fundamental_threshold},
                       {"depth_residual", &f.depth_residual},
                       {"depth_residual_scale", &f.depth_residual_scale},
-                      {"depth_residual_weight", &f.depth_residual_weight},
                       {"anchor_max_age", &f.anchor_max_age},
                       {"outside_p_init", &f.outside_p_init},
                       {"world_anchors", &f.world_anchors},
@@ -223,7 +216,6 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   CheckSettingAtMost(filter, "box_margin", f.box_margin, 16384, "px");
   CheckSettingAtMost(filter, "fundamental_threshold", f.fundamental_threshold, 1000, "px");
   CheckSettingAtMost(filter, "depth_residual_scale", f.depth_residual_scale, 1000, "");
-  CheckSettingAtMost(filter, "depth_residual_weight", f.depth_residual_weight, 1e5, "px per m");
   CheckSettingAtMost(filter, "expansion_depth_gap", f.expansion_depth_gap, 1000, "m");
   CheckSettingAtMost(filter, "consensus_depth_gap", f.consensus_depth_gap, 1000, "m");
 
@@ -235,8 +227,9 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   // played instead).
   for (const char* key : {"weights", "names"}) {
     if (detector.Has(key) && !detector.Has("cfg")) {
-      detector.Fail(key, "given without Detector.cfg: give Detector.cfg, Detector.weights and "
-                         "Detector.names together, or a Detector.model");
+      detector.Fail(key,
+                    "given without Detector.cfg: give Detector.cfg, Detector.weights and "
+                    "Detector.names together, or a Detector.model");
     }
   }
   if (detector.Has("cfg")) {

@@ -75,7 +75,14 @@ Settings ReadSettings(ConfigReader reader, const SettingsReadOptions& read_optio
   Settings s;
   s.path = reader.path();
   for (const ConfigReader::UnknownKey& u : reader.UnknownKeys(KnownSettingsKeys())) {
-    const std::string message = reader.UnknownKeyMessage(u);
+    std::string message = reader.UnknownKeyMessage(u);
+    for (const auto& [key, reason] : RetiredSettingsKeys()) {
+      if (u.key == key) {
+        message = InputError::Format(
+            reader.path(), u.line,
+            "key '" + key + "' is no longer a setting (" + reason + "): remove it");
+      }
+    }
     if (read_options.unknown_keys == UnknownKeyPolicy::kError) {
       throw InputError(message + " [unknown settings keys are errors here]");
     }
@@ -137,6 +144,25 @@ Settings ReadSettings(ConfigReader reader, const SettingsReadOptions& read_optio
 
 }  // namespace
 
+const std::vector<std::pair<std::string, std::string>>& RetiredSettingsKeys() {
+  static const std::vector<std::pair<std::string, std::string>> kKeys = {
+      {"Tracking.handoff_wait_ms", "local mapping's results land at a fixed frame instead"},
+      {"Tracking.keyframe_wait_ms", "local mapping's results land at a fixed frame instead"},
+      {"Tracking.keyframe_weak_inliers", "measured no better; weak frames are re-anchored"},
+      {"Tracking.fallback_smoothing_dense_weight",
+       "measured no better; the correction is spread evenly over the stretch"},
+      {"LocalMapping.final_ba_iterations", "measured no better; loop closing runs a global BA"},
+      {"DynamicFilter.depth_residual_weight",
+       "measured worse: the depth noise outweighs the depth term"},
+      {"OctoMap.discretize", "measured no better; every ray is cast"},
+      {"LoopClosing.global_ba_min_correction_m",
+       "a global BA follows every loop above LoopClosing.pose_graph_min_correction_m / _deg"},
+      {"LoopClosing.global_ba_min_correction_deg",
+       "a global BA follows every loop above LoopClosing.pose_graph_min_correction_m / _deg"},
+  };
+  return kKeys;
+}
+
 const std::vector<std::string>& KnownSettingsKeys() {
   static const std::vector<std::string> kKeys = {
       // ORB-SLAM2 (RGB-D): read.
@@ -151,45 +177,40 @@ const std::vector<std::string>& KnownSettingsKeys() {
       "Tracking.max_frames_between_keyframes", "Tracking.ref_ratio",
       "Tracking.keyframe_counts_odometry_points", "Tracking.keyframe_min_map_inliers",
       "Tracking.localization_local_keyframes", "Tracking.fallback_smoothing",
-      "Tracking.fallback_smoothing_weak_inliers", "Tracking.fallback_smoothing_dense_weight",
-      "Tracking.dense_fallback",
+      "Tracking.fallback_smoothing_weak_inliers", "Tracking.dense_fallback",
       "Tracking.fallback_check_below_inliers", "Tracking.fallback_min_inlier_fraction",
       "Tracking.fallback_min_inliers", "Tracking.fallback_override_fraction_gain",
-      "LocalMapping.ba_lag_frames", "LocalMapping.final_ba_iterations",
-      "DynamicFilter.box_depth_band", "DynamicFilter.world_anchors",
-      "LocalMapping.triangulation_neighbors",
-      "LocalMapping.cull_keyframes", "LocalMapping.redundancy_ratio", "DynamicFilter.mode",
-      "DynamicFilter.C1", "DynamicFilter.alpha", "DynamicFilter.Q", "DynamicFilter.R",
-      "DynamicFilter.P_init", "DynamicFilter.C2", "DynamicFilter.delta", "DynamicFilter.threshold",
+      "LocalMapping.ba_lag_frames", "DynamicFilter.box_depth_band", "DynamicFilter.world_anchors",
+      "LocalMapping.triangulation_neighbors", "LocalMapping.cull_keyframes",
+      "LocalMapping.redundancy_ratio", "DynamicFilter.mode", "DynamicFilter.C1",
+      "DynamicFilter.alpha", "DynamicFilter.Q", "DynamicFilter.R", "DynamicFilter.P_init",
+      "DynamicFilter.C2", "DynamicFilter.delta", "DynamicFilter.threshold",
       "DynamicFilter.box_margin", "DynamicFilter.box_margin_fraction",
       "DynamicFilter.search_radius", "DynamicFilter.max_hamming",
       "DynamicFilter.fundamental_threshold", "DynamicFilter.depth_residual",
-      "DynamicFilter.depth_residual_scale", "DynamicFilter.depth_residual_weight",
-      "DynamicFilter.anchor_max_age", "DynamicFilter.outside_p_init",
-      "DynamicFilter.expansion_depth_gap", "DynamicFilter.consensus_radius",
-      "DynamicFilter.consensus_depth_gap", "DynamicFilter.expand_outside", "Detector.model",
-      "Detector.cfg", "Detector.weights", "Detector.names", "Detector.input_width",
-      "Detector.input_height", "Detector.confidence_threshold", "Detector.nms_threshold",
-      "Detector.num_threads", "Detector.every_n_frames", "Detector.shift_carried_boxes",
-      "Detector.dynamic_classes", "LoopClosing.vocabulary", "LoopClosing.enabled",
-      "LoopClosing.min_keyframe_gap", "LoopClosing.revisit_min_path_m", "LoopClosing.consistency",
-      "LoopClosing.min_bow_matches", "LoopClosing.ransac_iterations",
-      "LoopClosing.ransac_threshold_px", "LoopClosing.min_ransac_inliers",
-      "LoopClosing.min_inlier_ratio", "LoopClosing.min_projection_matches",
-      "LoopClosing.max_correction_m", "LoopClosing.max_drift_per_meter",
-      "LoopClosing.max_correction_deg", "LoopClosing.max_drift_deg_per_meter",
-      "LoopClosing.fusion_radius_px", "LoopClosing.essential_min_weight",
-      "LoopClosing.pose_graph_iterations", "LoopClosing.global_bundle_adjustment",
-      "LoopClosing.global_ba_iterations", "LoopClosing.global_ba_min_correction_m",
-      "LoopClosing.global_ba_min_correction_deg", "LoopClosing.pose_graph_min_correction_m",
-      "LoopClosing.pose_graph_min_correction_deg",
+      "DynamicFilter.depth_residual_scale", "DynamicFilter.anchor_max_age",
+      "DynamicFilter.outside_p_init", "DynamicFilter.expansion_depth_gap",
+      "DynamicFilter.consensus_radius", "DynamicFilter.consensus_depth_gap",
+      "DynamicFilter.expand_outside", "Detector.model", "Detector.cfg", "Detector.weights",
+      "Detector.names", "Detector.input_width", "Detector.input_height",
+      "Detector.confidence_threshold", "Detector.nms_threshold", "Detector.num_threads",
+      "Detector.every_n_frames", "Detector.shift_carried_boxes", "Detector.dynamic_classes",
+      "LoopClosing.vocabulary", "LoopClosing.enabled", "LoopClosing.min_keyframe_gap",
+      "LoopClosing.revisit_min_path_m", "LoopClosing.consistency", "LoopClosing.min_bow_matches",
+      "LoopClosing.ransac_iterations", "LoopClosing.ransac_threshold_px",
+      "LoopClosing.min_ransac_inliers", "LoopClosing.min_inlier_ratio",
+      "LoopClosing.min_projection_matches", "LoopClosing.max_correction_m",
+      "LoopClosing.max_drift_per_meter", "LoopClosing.max_correction_deg",
+      "LoopClosing.max_drift_deg_per_meter", "LoopClosing.fusion_radius_px",
+      "LoopClosing.essential_min_weight", "LoopClosing.pose_graph_iterations",
+      "LoopClosing.global_bundle_adjustment", "LoopClosing.global_ba_iterations",
+      "LoopClosing.pose_graph_min_correction_m", "LoopClosing.pose_graph_min_correction_deg",
       // run/mapping_config.cc.
       "OctoMap.resolution", "OctoMap.max_range", "OctoMap.min_range", "OctoMap.prob_hit",
       "OctoMap.prob_miss", "OctoMap.clamping_min", "OctoMap.clamping_max",
       "OctoMap.occupancy_threshold", "OctoMap.pixel_stride", "OctoMap.voxel_filter_size",
       "OctoMap.use_voxel_filter", "OctoMap.use_dynamic_mask", "OctoMap.dynamic_mask_dilation_px",
-      "OctoMap.dynamic_keypoint_radius_px", "OctoMap.lazy_eval", "OctoMap.discretize",
-      "OctoMap.rebuild_displacement"};
+      "OctoMap.dynamic_keypoint_radius_px", "OctoMap.lazy_eval", "OctoMap.rebuild_displacement"};
   return kKeys;
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/base/camera.h"
@@ -34,6 +35,9 @@ struct SettingsReadOptions {
 // DynamicFilter, Detector, OctoMap) and ORB-SLAM2 keys it accepts without using (Camera.RGB,
 // Viewer.*). A module that reads a new key adds it here.
 const std::vector<std::string>& KnownSettingsKeys();
+// Keys that were settings once, with why they are not: a file that still sets one gets that
+// reason (a warning, or an error where unknown keys are errors) instead of "unknown key".
+const std::vector<std::pair<std::string, std::string>>& RetiredSettingsKeys();
 
 // Reads ORB-SLAM2's keys:
 //   required: Camera.fx, Camera.fy, Camera.cx, Camera.cy, Camera.k1, Camera.k2, Camera.p1,

@@ -72,8 +72,7 @@ void DynamicFilterOptions::Check() const {
                        "DynamicFilter.homography_threshold_scale");
   DYGSLAM_CHECK_OPTION(homography_dominant_fraction > 0 && homography_dominant_fraction <= 1,
                        "DynamicFilter.homography_dominant_fraction");
-  DYGSLAM_CHECK_OPTION(depth_residual_weight >= 0 && std::isfinite(depth_residual_weight),
-                       "DynamicFilter.depth_residual_weight");
+
   DYGSLAM_CHECK_OPTION(depth_residual_scale > 0 && std::isfinite(depth_residual_scale),
                        "DynamicFilter.depth_residual_scale");
   DYGSLAM_CHECK_OPTION(anchor_max_age >= 1 && anchor_max_age <= 1000,
@@ -281,7 +280,6 @@ bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv
           const double du = fx * x[0] / x[2] + cx - geom[i].x;
           const double dv = fy * x[1] / x[2] + cy - geom[i].y;
           d = std::hypot(du, dv);
-          if (z > 0) d = std::hypot(d, o.depth_residual_weight * fx * std::abs(x[2] - z) / z);
         }
         // In units of the keypoint's pyramid scale (ORB keypoints are `31 * scale` px wide):
         // keypoints of coarse levels are localised less precisely.
@@ -520,11 +518,10 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
         o.mode == FilterMode::kGeometry || InAnyBox(kps[i].pt, input.detections, o);
     result.num_in_dynamic_region += f.in_dynamic_region;
   }
-  const bool depth_mode =
-      o.depth_residual &&
-      (o.mode == FilterMode::kGeometry || o.mode == FilterMode::kFull) &&
-      input.depths != nullptr && input.camera_matrix != nullptr &&
-      static_cast<int>(input.depths->size()) == n;
+  const bool depth_mode = o.depth_residual &&
+                          (o.mode == FilterMode::kGeometry || o.mode == FilterMode::kFull) &&
+                          input.depths != nullptr && input.camera_matrix != nullptr &&
+                          static_cast<int>(input.depths->size()) == n;
   if (depth_mode && o.mode == FilterMode::kFull && o.box_depth_band > 0 &&
       !input.detections.empty())
     SplitBoxesByDepth(input, &result);

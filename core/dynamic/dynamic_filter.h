@@ -116,18 +116,16 @@ struct DynamicFilterOptions {
   // replaces F: each matched feature carries a 3-D anchor (its back-projection when its track
   // started, moved along by the estimated camera motion) and its observation is the residual
   // (px, divided by the keypoint's pyramid scale) between the anchor projected into frame t and
-  // the feature, plus depth_residual_weight x the depth disagreement as an equivalent lateral
-  // shift (fx |z_pred - z| / z). A static point stays at ~1 px however long the track; a mover's
-  // residual grows with the track's age (the baseline grows: a slow walker at 30 Hz moves a few
-  // px per frame, tens of px over anchor_max_age frames). Features without depth get the epipolar
-  // distance under the estimated motion (E = [t]x R). When the motion cannot be estimated (too
-  // few matches with depth, or inliers below pnp_min_inliers / pnp_min_inlier_fraction) the
-  // filter abstains: prediction only. In full mode the features outside the boxes are tested too
-  // (a new track there starts from outside_p_init), so an undetected mover can be caught.
+  // the feature (a depth term was measured worse: Bonn's depth noise outweighs what it adds:
+  // geometry mode 0.063 m ATE without it, 0.188 m with 0.25 x fx |z_pred - z| / z). A static point
+  // stays at ~1 px however long the track; a mover's residual grows with the track's age (the
+  // baseline grows: a slow walker at 30 Hz moves a few px per frame, tens of px over anchor_max_age
+  // frames). Features without depth get the epipolar distance under the estimated motion (E = [t]x
+  // R). When the motion cannot be estimated (too few matches with depth, or inliers below
+  // pnp_min_inliers / pnp_min_inlier_fraction) the filter abstains: prediction only. In full mode
+  // the features outside the boxes are tested too (a new track there starts from outside_p_init),
+  // so an undetected mover can be caught.
   bool depth_residual = true;
-  // 0: the 2-D residual only (measured on bonn_crowd_part, geometry mode: 0.063 m ATE with 0,
-  // 0.188 m with 0.25: Bonn's depth noise outweighs what the depth term adds).
-  double depth_residual_weight = 0.0;
   // The residual enters eq. 5 divided by this (px): eq. 5's alpha and C1 were set for 1-D
   // epipolar distances; the 2-D residual of a static point over a longer baseline is larger.
   double depth_residual_scale = 1.0;

@@ -8,7 +8,6 @@ namespace dygslam {
 
 void DynamicMaskOptions::Check() const {
   DYGSLAM_CHECK_OPTION(depth_band > 0 && std::isfinite(depth_band), "DynamicMask.depth_band");
-  DYGSLAM_CHECK_OPTION(min_features_for_depth >= 1, "DynamicMask.min_features_for_depth");
   DYGSLAM_CHECK_OPTION(foreground_min_fraction > 0 && foreground_min_fraction <= 1,
                        "DynamicMask.foreground_min_fraction");
   DYGSLAM_CHECK_OPTION(histogram_bin > 0 && std::isfinite(histogram_bin),
@@ -99,15 +98,7 @@ cv::Mat ComputeDynamicMask(const cv::Size& image_size_in, const cv::Mat& depth,
       mask(rect).setTo(255);
       continue;
     }
-    // Object depth: the foreground mode (or the dynamic features' median, see options).
-    std::vector<double> feature_depths;
-    for (size_t k = 0; k < keypoints.size() && o.object_depth_from_features; ++k) {
-      if (keypoint_dynamic.empty() || !keypoint_dynamic[k]) continue;
-      const cv::Point p(static_cast<int>(keypoints[k].pt.x), static_cast<int>(keypoints[k].pt.y));
-      if (!rect.contains(p)) continue;
-      const float d = depth.at<float>(p);
-      if (ValidDepth(d)) feature_depths.push_back(d);
-    }
+    // Object depth: the box's foreground mode.
     std::vector<float> depths;
     depths.reserve(rect.area());
     for (int y = rect.y; y < rect.y + rect.height; ++y) {
@@ -119,9 +110,7 @@ cv::Mat ComputeDynamicMask(const cv::Size& image_size_in, const cv::Mat& depth,
       mask(rect).setTo(255);
       continue;
     }
-    const double object = static_cast<int>(feature_depths.size()) >= o.min_features_for_depth
-                              ? Median(feature_depths)
-                              : ForegroundDepth(depths, o);
+    const double object = ForegroundDepth(depths, o);
     if (!std::isfinite(object)) {
       mask(rect).setTo(255);
       continue;

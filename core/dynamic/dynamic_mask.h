@@ -2,13 +2,11 @@
 // boxes refined by depth, plus disks around the features the filter judged dynamic. The map then
 // leaves the people out without deleting the wall behind them.
 //
-// Inside each box the object's depth is estimated as
-//   - with object_depth_from_features (off by default): the median depth of the dynamic features
-//     inside the box (>= min_features_for_depth), else
-//   - the box's foreground depth: the nearest depth d whose band [d, d + depth_band] holds at
-//     least foreground_min_fraction of the box's valid depth pixels (BoxObjectDepth).
-// The default does not depend on which in-box features the filter kept (labels that
-// keep more in-box features static must not shrink the map's masks);
+// Inside each box the object's depth is the box's foreground depth: the nearest depth d whose band
+// [d, d + depth_band] holds at least foreground_min_fraction of the box's valid depth pixels
+// (BoxObjectDepth). It does not depend on which in-box features the filter kept (labels that
+// keep more in-box features static must not shrink the map's masks; the median depth of the
+// dynamic features was measured no better);
 // and the box pixels whose depth is within [object - depth_band, object + depth_band] are masked,
 // as are the box pixels without depth (they carry nothing for the map anyway). A box without any
 // valid depth is masked entirely. Finally the mask is dilated by dilation_px and disks of
@@ -26,16 +24,11 @@ namespace dygslam {
 
 struct DynamicMaskOptions {
   double depth_band = 0.5;  // m, half-width of the object depth band (a person is ~0.3-0.5 m deep)
-  int min_features_for_depth = 3;
   double foreground_min_fraction = 0.15;
   double histogram_bin = 0.05;  // m
   int dilation_px = 3;
   int feature_radius = 8;   // px
   double box_margin = 0.0;  // px added on each side of the boxes
-  // true: the object depth is the median depth of the box's dynamic features when it has
-  // min_features_for_depth of them (the earlier behaviour); false: always the box's
-  // foreground depth, independent of the filter's labels.
-  bool object_depth_from_features = false;
   void Check() const;
 };
 

@@ -44,10 +44,10 @@ TEST(DynamicMask, BoxRefinedByForegroundDepth) {
   EXPECT_EQ(cv::countNonZero(mask(cv::Rect(0, 0, 200, 480))), 0);  // outside the box
 }
 
-TEST(DynamicMask, DynamicFeaturesDefineTheObjectDepth) {
+TEST(DynamicMask, TheObjectDepthIsTheBoxForegroundWhateverTheFilterFlagged) {
   Scene s;
-  // A nearer table top (1.0 m) covers the bottom of the box and is the foreground mode; the
-  // dynamic features on the person pick the person's depth instead.
+  // A nearer table top (1.0 m) covers the bottom of the box and is the foreground mode: it is the
+  // object, whichever features the filter flagged (labels must not change the map's masks).
   cv::Mat table(480, 640, CV_8UC1, cv::Scalar(0));
   table(cv::Rect(230, 330, 140, 100)).setTo(255);
   s.depth.setTo(1.0f, table);
@@ -61,19 +61,16 @@ TEST(DynamicMask, DynamicFeaturesDefineTheObjectDepth) {
   kps.emplace_back(cv::Point2f(240, 120), 31.f);  // static feature on the wall inside the box
   dyn.push_back(0);
   DynamicMaskOptions o;
-  o.feature_radius = 0;
-  o.object_depth_from_features = true;  // opt-in
-  const cv::Mat mask = ComputeDynamicMask(s.depth.size(), s.depth, s.detections, kps, dyn, o);
+  o.feature_radius = 0;  // no disks: the mask is the box refined by depth alone
   cv::Mat table_eroded;
   cv::erode(table, table_eroded, cv::Mat(), cv::Point(-1, -1), 5);
-  EXPECT_GT(s.Coverage(mask, person_visible), 0.99);
-  EXPECT_LT(s.Coverage(mask, table_eroded), 0.01);
-  EXPECT_EQ(mask.at<uint8_t>(120, 240), 0);
-  // The default ignores the filter's labels: the box's foreground band (here the table) is the
-  // object, whichever features the filter flagged.
-  o.object_depth_from_features = false;
   const cv::Mat by_depth = ComputeDynamicMask(s.depth.size(), s.depth, s.detections, kps, dyn, o);
   EXPECT_GT(s.Coverage(by_depth, table_eroded), 0.99);
+  EXPECT_LT(s.Coverage(by_depth, person_visible), 0.01);  // 1.5 m behind the table's band
+  const std::vector<uint8_t> none_flagged(dyn.size(), 0);
+  const cv::Mat unlabelled =
+      ComputeDynamicMask(s.depth.size(), s.depth, s.detections, kps, none_flagged, o);
+  EXPECT_EQ(cv::countNonZero(by_depth != unlabelled), 0);
   EXPECT_NEAR(BoxObjectDepth(s.depth, cv::Rect(s.detections[0].box), o), 1.0, 0.05);
 }
 

@@ -41,28 +41,27 @@ struct LocalMappingOptions {
   int fusion_second_neighbors = 5;
   double fusion_radius_px = 3.0;
   double min_found_ratio = 0.25;
-  double redundancy_ratio = 0.9;  // keyframe culled if this share of its points is seen >= 3 times elsewhere
+  double redundancy_ratio =
+      0.9;  // keyframe culled if this share of its points is seen >= 3 times elsewhere
   int redundancy_observations = 3;
   bool cull_keyframes = true;
   // Frames tracked on the map as it was while a keyframe's local BA is solved: its result lands
   // before frame k + ba_lag_frames (k: the keyframe's frame). 0: at once, in tracking's thread.
   int ba_lag_frames = 2;
-  // At shutdown (System::Shutdown), a bundle adjustment of the whole map with this many
-  // iterations per round (0: none); the trajectory follows its keyframes.
-  int final_ba_iterations = 0;
   OptimizerOptions optimizer;
   MatcherOptions matcher;
   void Check() const {
     DYGSLAM_CHECK_OPTION(triangulation_neighbors >= 1, "LocalMapping.triangulation_neighbors");
-    DYGSLAM_CHECK_OPTION(redundancy_ratio > 0 && redundancy_ratio <= 1, "LocalMapping.redundancy_ratio");
+    DYGSLAM_CHECK_OPTION(redundancy_ratio > 0 && redundancy_ratio <= 1,
+                         "LocalMapping.redundancy_ratio");
     DYGSLAM_CHECK_OPTION(redundancy_observations >= 1, "LocalMapping.redundancy_observations");
-    DYGSLAM_CHECK_OPTION(fusion_neighbors >= 0 && fusion_second_neighbors >= 0, "LocalMapping.fusion_neighbors");
-    DYGSLAM_CHECK_OPTION(fusion_radius_px > 0 && std::isfinite(fusion_radius_px), "LocalMapping.fusion_radius_px");
-    DYGSLAM_CHECK_OPTION(min_found_ratio >= 0 && min_found_ratio <= 1, "LocalMapping.min_found_ratio");
-    DYGSLAM_CHECK_OPTION(ba_lag_frames >= 0 && ba_lag_frames <= 30,
-                         "LocalMapping.ba_lag_frames");
-    DYGSLAM_CHECK_OPTION(final_ba_iterations >= 0 && final_ba_iterations <= 1000,
-                         "LocalMapping.final_ba_iterations");
+    DYGSLAM_CHECK_OPTION(fusion_neighbors >= 0 && fusion_second_neighbors >= 0,
+                         "LocalMapping.fusion_neighbors");
+    DYGSLAM_CHECK_OPTION(fusion_radius_px > 0 && std::isfinite(fusion_radius_px),
+                         "LocalMapping.fusion_radius_px");
+    DYGSLAM_CHECK_OPTION(min_found_ratio >= 0 && min_found_ratio <= 1,
+                         "LocalMapping.min_found_ratio");
+    DYGSLAM_CHECK_OPTION(ba_lag_frames >= 0 && ba_lag_frames <= 30, "LocalMapping.ba_lag_frames");
     optimizer.Check();
     matcher.Check();
   }
@@ -73,15 +72,15 @@ struct LocalMappingStats {
   int points_triangulated = 0;
   int points_culled = 0;
   int keyframes_culled = 0;
-  double total_ms = 0;                // in tracking's thread and on the mapping thread
+  double total_ms = 0;  // in tracking's thread and on the mapping thread
   std::vector<double> per_keyframe_ms;
-  std::vector<double> insert_ms;      // per keyframe: the part in tracking's thread
-  std::vector<double> solve_ms;       // per keyframe: the local BA's solve (mapping thread)
-  std::vector<int> ba_keyframes;      // per keyframe: keyframes the local BA optimised
-  std::vector<int> ba_observations;   // per keyframe: observations in the local BA
+  std::vector<double> insert_ms;     // per keyframe: the part in tracking's thread
+  std::vector<double> solve_ms;      // per keyframe: the local BA's solve (mapping thread)
+  std::vector<int> ba_keyframes;     // per keyframe: keyframes the local BA optimised
+  std::vector<int> ba_observations;  // per keyframe: observations in the local BA
   // Local BAs whose solve was not done when their result was due: tracking waited for them.
   int late_bundle_adjustments = 0;
-  double late_wait_ms = 0;            // time tracking waited for them, in all
+  double late_wait_ms = 0;  // time tracking waited for them, in all
   // Local BAs landed early because the next keyframe came before ba_lag_frames frames.
   int early_landings = 0;
 };
@@ -104,7 +103,8 @@ class LocalMapper {
   void Finish();
   // Called (tracking's thread) after each landed keyframe with the ids of keyframes whose pose
   // bundle adjustment changed and the ids of keyframes culled.
-  using MapChangedCallback = std::function<void(const std::vector<int64_t>& moved, const std::vector<int64_t>& culled)>;
+  using MapChangedCallback =
+      std::function<void(const std::vector<int64_t>& moved, const std::vector<int64_t>& culled)>;
   void SetPosesChangedCallback(MapChangedCallback callback);
   // Called (tracking's thread) with each keyframe once local mapping is done with it (loop
   // closing takes it from there).

@@ -380,19 +380,6 @@ void LoopCloser::Process(const std::shared_ptr<KeyFrame>& kf) {
   }
   // Nothing moved when the loop was only fused: nothing for a global BA to spread.
   if (!applied || fused_only || !options_.global_bundle_adjustment) return;
-  // A small correction is left to the pose graph: a global BA would move the map about as much
-  // as the loop did (there and back: 2 mm).
-  if (loop.correction_m < options_.global_ba_min_correction_m &&
-      loop.correction_deg < options_.global_ba_min_correction_deg) {
-    LOG_INFO << "global BA skipped: correction " << loop.correction_m << " m / "
-             << loop.correction_deg
-             << " deg is below LoopClosing.global_ba_min_correction_m / _deg ("
-             << options_.global_ba_min_correction_m << " m / "
-             << options_.global_ba_min_correction_deg << " deg)";
-    std::lock_guard<std::mutex> lock(stats_mutex_);
-    stats_.global_ba_skipped++;
-    return;
-  }
   StartGlobalBundleAdjustment(kf->id);
 }
 

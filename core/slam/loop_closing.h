@@ -69,7 +69,6 @@ struct LoopClosingStats {
   double detect_ms_total = 0;  // candidate detection (index query), under the map lock
   int global_ba_runs = 0;
   int global_ba_discarded = 0;  // finished after a newer loop: not written back
-  int global_ba_skipped = 0;    // correction below LoopClosing.global_ba_min_correction_*
   // Loops closed by fusion only (no keyframe moved, no pose graph): correction below
   // LoopClosing.pose_graph_min_correction_*.
   int pose_graph_skipped = 0;

@@ -54,12 +54,9 @@ struct LoopClosingOptions {
   // they corrected (BENCHMARKS.md). 0 / 0: every loop runs the pose graph.
   double pose_graph_min_correction_m = 0.02;
   double pose_graph_min_correction_deg = 1.0;
-  bool global_bundle_adjustment = true;  // after a loop, in the background
-  // ...unless the loop's correction is below both of these: then the pose graph step is enough
-  // (a 2 mm correction on the there-and-back sequence was followed by a global BA that moved
-  // the trajectory about as much again; BENCHMARKS.md).
-  double global_ba_min_correction_m = 0.02;
-  double global_ba_min_correction_deg = 1.0;
+  // After a loop that moved the map (above pose_graph_min_correction_*), in the background. A
+  // fused-only loop moved nothing, so there is nothing for it to spread.
+  bool global_bundle_adjustment = true;
   int global_ba_iterations = 10;
   PlaceRecognitionOptions place;
   void Check() const {
@@ -93,11 +90,6 @@ struct LoopClosingOptions {
     DYGSLAM_CHECK_OPTION(pose_graph_min_correction_deg >= 0 && pose_graph_min_correction_deg <= 180,
                          "LoopClosing.pose_graph_min_correction_deg");
     DYGSLAM_CHECK_OPTION(global_ba_iterations >= 1, "LoopClosing.global_ba_iterations");
-    DYGSLAM_CHECK_OPTION(
-        global_ba_min_correction_m >= 0 && std::isfinite(global_ba_min_correction_m),
-        "LoopClosing.global_ba_min_correction_m");
-    DYGSLAM_CHECK_OPTION(global_ba_min_correction_deg >= 0 && global_ba_min_correction_deg <= 180,
-                         "LoopClosing.global_ba_min_correction_deg");
     place.Check();
   }
 };

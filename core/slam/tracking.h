@@ -65,10 +65,6 @@ struct TrackingOptions {
   // the stretch (plus the weakly held feature frames just before it) is moved by that correction.
   bool fallback_smoothing = true;
   int fallback_smoothing_weak_inliers = 150;  // feature frames below this before a stretch join it
-  // The share of the correction a fallback frame takes, relative to a weakly held feature frame
-  // (1: the correction spread evenly over the stretch; 0: all of it on the weak feature frames
-  // before the stretch, the dense chain moved as a whole).
-  double fallback_smoothing_dense_weight = 1.0;
   double fallback_smoothing_max_translation = 0.15;  // metres: larger corrections are not applied
   double fallback_smoothing_max_rotation_deg = 10.0;
   void Check() const {
@@ -99,9 +95,6 @@ struct TrackingOptions {
                          "Tracking.fallback_override_rmse_ratio");
     DYGSLAM_CHECK_OPTION(fallback_smoothing_weak_inliers >= 0,
                          "Tracking.fallback_smoothing_weak_inliers");
-    DYGSLAM_CHECK_OPTION(
-        fallback_smoothing_dense_weight >= 0 && fallback_smoothing_dense_weight <= 1,
-        "Tracking.fallback_smoothing_dense_weight");
     DYGSLAM_CHECK_OPTION(fallback_smoothing_max_translation > 0,
                          "Tracking.fallback_smoothing_max_translation");
     DYGSLAM_CHECK_OPTION(fallback_smoothing_max_rotation_deg > 0,

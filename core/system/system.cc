@@ -281,18 +281,6 @@ class SystemImpl {
   void Shutdown() {
     local_mapper_.Finish();
     if (loop_closer_) loop_closer_->Finish();
-    const int iterations = options_.local_mapping.final_ba_iterations;
-    if (iterations > 0 && !options_.localization && !final_ba_done_ && map_->NumKeyFrames() > 2) {
-      final_ba_done_ = true;
-      GlobalBundleAdjustment(*map_, options_.local_mapping.optimizer, iterations, iterations);
-      std::vector<int64_t> moved;
-      {
-        std::lock_guard<std::mutex> lock(map_->mutex());
-        for (const auto& [id, kf] : map_->keyframes())
-          if (!kf->bad) moved.push_back(id);
-      }
-      EmitMapChanges(moved, {});
-    }
     FlushCallbacks();
   }
 
@@ -331,7 +319,6 @@ class SystemImpl {
   std::shared_ptr<KeyFrameDatabase> database_;
   std::unique_ptr<LoopCloser> loop_closer_;  // declared before the mapper: outlives its callback
   LocalMapper local_mapper_;
-  bool final_ba_done_ = false;  // Shutdown's final bundle adjustment (once)
   Tracker tracker_;
   DynamicFilter filter_;
   std::unique_ptr<DetectionWorker> detection_worker_;  // created on first use
@@ -358,7 +345,7 @@ class SystemImpl {
   std::exception_ptr emit_error_;  // guarded by callback_mutex_
   // The keyframe callback's thread (Post). Last: finishes its jobs before anything they use goes.
   WorkQueue<std::function<void()>> emitter_{[](std::function<void()>& job) { job(); },
-                                             !options_.deterministic, /*capacity=*/16};
+                                            !options_.deterministic, /*capacity=*/16};
 };
 
 namespace {
@@ -377,7 +364,7 @@ struct SystemImpl::PreparedFrame {
   // Boxes given with the frame, found by the own detector or carried from its last frame;
   // nullopt: none (the filter mode needs none, or none were given).
   std::optional<std::vector<Detection>> detections;
-  bool propagate_boxes = false;       // own detector on every n-th frame: carry boxes in between
+  bool propagate_boxes = false;  // own detector on every n-th frame: carry boxes in between
   // The detector skipped this frame (the own detector's cadence, or one outside that skips
   // frames: FeedRgbdFrameCarryingBoxes): its boxes are carried.
   bool detector_skipped = false;
@@ -589,7 +576,8 @@ void SystemImpl::RememberPoints(const PreparedFrame& prepared, const FilteredFra
     return;
   previous_points_.resize(prepared.features.keypoints.size());
   for (size_t k = 0; k < filtered.kept_source.size(); ++k)
-    if (filtered.kept_source[k] >= 0) previous_points_[filtered.kept_source[k]] = tracked.map_points[k];
+    if (filtered.kept_source[k] >= 0)
+      previous_points_[filtered.kept_source[k]] = tracked.map_points[k];
 }
 
 // A new keyframe: to the keyframe callback (the map), then to local mapping.

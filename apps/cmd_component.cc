@@ -75,6 +75,7 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   p.AddFlag("no-detector", "no detector component (slam runs the System's own detector)");
   p.AddFlag("no-mapper", "no mapper component");
   p.AddFlag("processes", "NAME = pipeline: one process per component (else threads)");
+  p.AllowEmptyValues();
   if (!p.Parse(args)) return p.exit_code();
   if (!CheckFilterOption(&p)) return 2;
   // Everything the command line can get wrong is a usage error (exit 2) naming the option as the

@@ -309,7 +309,7 @@ bool ArgParser::Parse(const std::vector<std::string>& args) {
       }
       // `--config=` or `--out " "`: no option takes an empty or blank value (a path of spaces
       // would only show up as an invisible name in a later error).
-      if (value.find_first_not_of(" \t\n\r\f\v") == std::string::npos) {
+      if (!allow_empty_values_ && value.find_first_not_of(" \t\n\r\f\v") == std::string::npos) {
         exit_code_ = UsageError("option --" + name + " needs a value (" + spec->value_name +
                                 "), got " + (value.empty() ? "an empty one" : "only blanks"));
         return false;

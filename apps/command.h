@@ -86,6 +86,11 @@ class ArgParser {
   bool GetInt(const std::string& option, int64_t min_value, int64_t max_value, int64_t* value);
   bool GetInt(const std::string& option, int min_value, int max_value, int* value);
   bool GetNumber(const std::string& option, double min_value, double max_value, double* value);
+  // An empty or blank option value is a usage error unless allowed here: `dygslam component`
+  // allows it, as compose files pass optional settings as empty variables (`--load-octomap ""`:
+  // none); the user-facing commands do not (`--config=` would only show up later as a nameless
+  // file).
+  void AllowEmptyValues() { allow_empty_values_ = true; }
 
  private:
   struct Spec {
@@ -99,6 +104,7 @@ class ArgParser {
   std::map<std::string, std::string> positional_values_;
   std::map<std::string, std::string> option_values_;
   int exit_code_ = 0;
+  bool allow_empty_values_ = false;
 };
 
 // Directory of the scripts (scripts/): $DYGSLAM_SCRIPTS_DIR, else the source tree's

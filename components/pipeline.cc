@@ -150,18 +150,7 @@ std::vector<std::string> ComponentArgs(const PipelineOptions& o) {
              {"--detector-cfg", o.system.detector.cfg_path, "--detector-weights",
               o.system.detector.weights_path, "--detector-names", o.system.detector.names_path});
   }
-  // An option with an empty value is left out (the component's default applies): the command
-  // line refuses empty values.
-  std::vector<std::string> given;
-  for (size_t i = 0; i < a.size(); ++i) {
-    const bool takes_value = i + 1 < a.size() && a[i + 1].rfind("--", 0) != 0;
-    if (takes_value && a[i + 1].empty()) {
-      ++i;
-      continue;
-    }
-    given.push_back(a[i]);
-  }
-  return given;
+  return a;
 }
 
 namespace {

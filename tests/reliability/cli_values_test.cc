@@ -110,6 +110,11 @@ TEST_F(Cli, AnEmptyOrBlankValueIsAUsageErrorNamingTheOption) {
     ExpectError(r, 2, {"option " + option + " needs a value", "got"});
   }
   EXPECT_TRUE(fs::is_empty(cwd));
+  // `dygslam component` takes empty values as "not given": compose files pass optional settings
+  // as empty variables.
+  const auto component =
+      RunIn(cwd, {"component", "mapper", "--load-octomap", "", "--help"}, dir_ + "/cli.out");
+  EXPECT_EQ(component.code, 0) << component.err;
 }
 
 // --rate: 0 (as fast as taken) or 0.01 to 1000; a rate that would wait minutes per frame is a

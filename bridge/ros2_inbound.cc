@@ -5,6 +5,7 @@
 #include "components/dds/qos.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
+#include "core/base/thread_setup.h"
 
 namespace dygslam::ros2 {
 
@@ -49,7 +50,10 @@ void RosInbound::CreateWriters() {
 }
 
 void RosInbound::StartThread() {
-  thread_ = std::thread([this] { Loop(); });
+  thread_ = std::thread([this] {
+    SetCurrentThreadName("ros2 in");
+    Loop();
+  });
 }
 
 void RosInbound::CreateReaders() {

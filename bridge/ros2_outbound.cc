@@ -6,6 +6,7 @@
 #include "components/convert.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
+#include "core/base/thread_setup.h"
 
 namespace dygslam::ros2 {
 
@@ -48,7 +49,10 @@ void RosOutbound::CreateWriters() {
 }
 
 void RosOutbound::StartThread() {
-  thread_ = std::thread([this] { Loop(); });
+  thread_ = std::thread([this] {
+    SetCurrentThreadName("ros2 out");
+    Loop();
+  });
 }
 
 void RosOutbound::CreateReaders() {

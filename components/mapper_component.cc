@@ -16,6 +16,7 @@
 #include "components/status_reader.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
+#include "core/base/thread_setup.h"
 #include "dygslam_msg/KeyframePubSubTypes.h"
 #include "dygslam_msg/MapUpdatePubSubTypes.h"
 #include "dygslam_msg/StreamStatusPubSubTypes.h"
@@ -97,6 +98,8 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
       std::chrono::milliseconds(static_cast<int64_t>(options.writer_gone_s * 1000)));
   std::optional<std::chrono::steady_clock::time_point> flush_deadline;
   std::thread prepare_thread([&] {
+    SetCurrentThreadName("map prepare");
+    LowerCurrentThreadPriority();               // the map has no deadline: tracking goes first
     std::optional<PinholeCamera> cloud_camera;  // the map's camera: the first new keyframe's
     while (!prepare_stop) {
       std::optional<msg::Keyframe> sample;
@@ -148,6 +151,10 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
     }
   });
   ReadyAnnouncer announcer(ComponentKind::kMapper);
+  // The map stage has no deadline: on a busy machine it takes the CPU time that the player,
+  // the detector and slam leave, instead of delaying the poses (with the mapper at the same
+  // priority, keyframe bursts in a crowd made poses late at the camera's rate).
+  LowerCurrentThreadPriority();
   while (true) {
     started.Poll(status);
     announcer.Poll(status, keyframes.matched() > 0);

@@ -29,6 +29,7 @@
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "core/base/stop_signal.h"
+#include "core/base/thread_setup.h"
 #include "dygslam_msg/StreamStatusPubSubTypes.h"
 #include "run/realtime_report.h"
 
@@ -327,6 +328,7 @@ int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop,
   std::vector<std::thread> threads;
   for (const ComponentKind kind : PipelineComponents(options)) {
     threads.emplace_back([&, kind] {
+      SetCurrentThreadName(ToString(kind));
       int code = 1;
       size_t ignored = 0;
       try {

@@ -4,6 +4,7 @@
 #include <chrono>
 
 #include "core/base/error.h"
+#include "core/base/thread_setup.h"
 
 namespace dygslam {
 namespace {
@@ -14,7 +15,7 @@ double MsBetween(std::chrono::steady_clock::time_point a, std::chrono::steady_cl
 
 KeyframeData DeepCopy(const KeyframeData& in) {
   KeyframeData out = in;  // scalars, vectors
-  out.rgb = cv::Mat();  // the map reads depth and mask only
+  out.rgb = cv::Mat();    // the map reads depth and mask only
   out.depth = in.depth.clone();
   out.dynamic_mask = in.dynamic_mask.clone();
   return out;
@@ -32,7 +33,12 @@ KeyframeMapper::KeyframeMapper(const PinholeCamera& camera, const OctoMapOptions
                                const KeyframeMapperOptions& mapper_options)
     : mapper_options_(mapper_options), consumer_(camera, options) {
   mapper_options_.Check();
-  worker_ = std::thread([this] { Run(); });
+  worker_ = std::thread([this] {
+    SetCurrentThreadName("mapper");
+    // The map has no deadline: on a busy machine it takes the CPU time that tracking leaves.
+    LowerCurrentThreadPriority();
+    Run();
+  });
 }
 
 KeyframeMapper::~KeyframeMapper() {

@@ -4,14 +4,15 @@
 #include <chrono>
 #include <condition_variable>
 #include <deque>
-#include <mutex>
-#include <optional>
-#include <thread>
 #include <exception>
 #include <filesystem>
+#include <mutex>
+#include <optional>
 #include <string>
+#include <thread>
 
 #include "core/base/error.h"
+#include "core/base/thread_setup.h"
 #include "core/io/detections_io.h"
 
 namespace dygslam {
@@ -41,7 +42,10 @@ class FrameLoader {
  public:
   FrameLoader(const RgbdDataset& dataset, const DatasetRunOptions& options)
       : dataset_(dataset), options_(options), capacity_(std::max(1, options.decode_ahead)) {
-    thread_ = std::thread([this] { Load(); });
+    thread_ = std::thread([this] {
+      SetCurrentThreadName("frame loader");
+      Load();
+    });
   }
   ~FrameLoader() { Stop(); }
   FrameLoader(const FrameLoader&) = delete;
@@ -188,7 +192,8 @@ DatasetRunSummary RunDatasetFrames(const RgbdDataset& dataset, System& system,
     ++summary.processed;
     if (paced) {
       const auto now = Clock::now();
-      summary.latency_ms.push_back(std::chrono::duration<double, std::milli>(now - arrived).count());
+      summary.latency_ms.push_back(
+          std::chrono::duration<double, std::milli>(now - arrived).count());
     }
     if (r.state == TrackingState::kLost) ++summary.lost;
     if (on_frame) on_frame(frame->entry, r);

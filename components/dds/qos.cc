@@ -70,6 +70,14 @@ DataWriterQos WriterQos(TopicKind kind) {
   Apply(PolicyFor(kind), &qos);
   // Frames: the writer never waits long for a slow reader (keep-last); bound the blocking time.
   qos.reliability().max_blocking_time = eprosima::fastrtps::Duration_t(1, 0);
+  // Status: a component waits for its last status (DONE, FAILED) to be acknowledged before it
+  // goes. Readers acknowledge in answer to the writer's heartbeat, by default every 3 s, so
+  // each run's end waited for that heartbeat (2 s, then gave up) although every reader had the
+  // sample. Status samples are few and small: a heartbeat every 50 ms costs nothing.
+  if (kind == TopicKind::kStreamStatus) {
+    qos.reliable_writer_qos().times.heartbeatPeriod =
+        eprosima::fastrtps::Duration_t(0, kStatusHeartbeatNs);
+  }
   return qos;
 }
 

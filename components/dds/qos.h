@@ -41,6 +41,7 @@
 // keyframe writer (DYNAMIC_RESERVE, see above).
 #pragma once
 
+#include <cstdint>
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
 #include <string>
@@ -74,6 +75,8 @@ enum class TopicKind {
 inline constexpr int kFrameHistoryDepth = 4;
 // Bound of the keyframe topic's transient-local history (messages), see above.
 inline constexpr int kKeyframeHistoryDepth = 64;
+// Heartbeat period of the status writers (ns): how soon a reader acknowledges a status sample.
+inline constexpr uint32_t kStatusHeartbeatNs = 50'000'000;
 
 eprosima::fastdds::dds::DataWriterQos WriterQos(TopicKind kind);
 eprosima::fastdds::dds::DataReaderQos ReaderQos(TopicKind kind);

@@ -1,4 +1,6 @@
 // DDS round trips on loopback (run inside run_in_netns.sh; distinct domain ids per test).
+#include <gtest/gtest.h>
+
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -6,13 +8,13 @@
 #include <thread>
 #include <vector>
 
-#include <gtest/gtest.h>
-
 #include "components/convert.h"
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
+#include "components/protocol.h"
 #include "dygslam_msg/KeyframePubSubTypes.h"
 #include "dygslam_msg/RgbdFramePubSubTypes.h"
+#include "dygslam_msg/StreamStatusPubSubTypes.h"
 
 namespace dygslam {
 namespace {
@@ -29,7 +31,8 @@ std::shared_ptr<dds::Participant> MakeParticipant(int domain, const std::string&
 
 RgbdFrameData FullSizeFrame(uint64_t seq) {
   RgbdFrameData f;
-  f.stamp = Timestamp::FromNanoseconds(1548339823898123000LL + static_cast<int64_t>(seq) * 33333333);
+  f.stamp =
+      Timestamp::FromNanoseconds(1548339823898123000LL + static_cast<int64_t>(seq) * 33333333);
   f.seq = seq;
   f.camera.fx = 542.822841;
   f.camera.fy = 542.576870;
@@ -55,6 +58,37 @@ TEST(Transport, ParticipantOptionsAreChecked) {
 
 // 30 full-size RGB-D frames between two participants (SHM + 127.0.0.1): every frame arrives,
 // bit-identical, in order.
+// A component waits for its last status (DONE) to be acknowledged before it goes; the readers
+// acknowledge in answer to the writer's heartbeat. With the default heartbeat (3 s) every run's
+// end waited 2 s for that; the status writers' short heartbeat answers within a few periods.
+TEST(Transport, AStatusSampleIsAcknowledgedWellWithinASecond) {
+  const int domain = 104;
+  auto pub = MakeParticipant(domain, "test_status_pub");
+  auto sub = MakeParticipant(domain, "test_status_sub");
+  std::atomic<int> received_here{0}, received_there{0};
+  dds::Reader<msg::StreamStatusPubSubType> same(pub, dds::topics::kStreamStatus,
+                                                dds::TopicKind::kStreamStatus,
+                                                [&](msg::StreamStatus&&) { ++received_here; });
+  dds::Reader<msg::StreamStatusPubSubType> other(sub, dds::topics::kStreamStatus,
+                                                 dds::TopicKind::kStreamStatus,
+                                                 [&](msg::StreamStatus&&) { ++received_there; });
+  dds::Writer<msg::StreamStatusPubSubType> writer(pub, dds::topics::kStreamStatus,
+                                                  dds::TopicKind::kStreamStatus);
+  ASSERT_TRUE(writer.WaitForReaders(2, 10s));
+  ASSERT_TRUE(other.WaitForWriters(1, 10s));
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_TRUE(writer.Write(ToMsg(ComponentStatus::Done(ComponentKind::kSlam, 10 + i))));
+    const auto start = std::chrono::steady_clock::now();
+    EXPECT_TRUE(writer.WaitForAcknowledgments(1000ms)) << "sample " << i;
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_LT(ms, 1000) << "sample " << i;
+    std::this_thread::sleep_for(20ms);
+  }
+  EXPECT_EQ(received_here.load(), 3);
+  EXPECT_EQ(received_there.load(), 3);
+}
+
 TEST(Transport, RgbdFramesRoundTripBetweenParticipants) {
   const int domain = 101;
   auto pub = MakeParticipant(domain, "test_pub");
@@ -62,15 +96,15 @@ TEST(Transport, RgbdFramesRoundTripBetweenParticipants) {
   std::mutex mutex;
   std::condition_variable cv;
   std::vector<RgbdFrameData> received;
-  dds::Reader<msg::RgbdFramePubSubType> reader(
-      sub, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame, [&](msg::RgbdFrame&& m) {
-        RgbdFrameData f = RgbdFrameFromMsg(m);
-        std::lock_guard<std::mutex> lock(mutex);
-        received.push_back(std::move(f));
-        cv.notify_all();
-      });
+  dds::Reader<msg::RgbdFramePubSubType> reader(sub, dds::topics::kRgbdFrame,
+                                               dds::TopicKind::kRgbdFrame, [&](msg::RgbdFrame&& m) {
+                                                 RgbdFrameData f = RgbdFrameFromMsg(m);
+                                                 std::lock_guard<std::mutex> lock(mutex);
+                                                 received.push_back(std::move(f));
+                                                 cv.notify_all();
+                                               });
   dds::Writer<msg::RgbdFramePubSubType> writer(pub, dds::topics::kRgbdFrame,
-                                              dds::TopicKind::kRgbdFrame);
+                                               dds::TopicKind::kRgbdFrame);
   ASSERT_TRUE(writer.WaitForReaders(1, 10s));
   ASSERT_TRUE(reader.WaitForWriters(1, 10s));
   std::vector<RgbdFrameData> sent;
@@ -116,20 +150,21 @@ TEST(Transport, LateKeyframeSubscriberReceivesHistory) {
   dds::Writer<msg::KeyframePubSubType> writer(pub, dds::topics::kKeyframe,
                                               dds::TopicKind::kKeyframe);
   const int kCount = 25;
-  for (int i = 0; i < kCount; ++i) ASSERT_TRUE(writer.Write(KeyframeToMsg(SmallKeyframe(i), camera)));
+  for (int i = 0; i < kCount; ++i)
+    ASSERT_TRUE(writer.Write(KeyframeToMsg(SmallKeyframe(i), camera)));
 
   std::this_thread::sleep_for(300ms);
   auto sub = MakeParticipant(domain, "test_late_mapper");
   std::mutex mutex;
   std::condition_variable cv;
   std::vector<int64_t> ids;
-  dds::Reader<msg::KeyframePubSubType> reader(
-      sub, dds::topics::kKeyframe, dds::TopicKind::kKeyframe, [&](msg::Keyframe&& m) {
-        const KeyframeData k = KeyframeFromMsg(m);
-        std::lock_guard<std::mutex> lock(mutex);
-        ids.push_back(k.id);
-        cv.notify_all();
-      });
+  dds::Reader<msg::KeyframePubSubType> reader(sub, dds::topics::kKeyframe,
+                                              dds::TopicKind::kKeyframe, [&](msg::Keyframe&& m) {
+                                                const KeyframeData k = KeyframeFromMsg(m);
+                                                std::lock_guard<std::mutex> lock(mutex);
+                                                ids.push_back(k.id);
+                                                cv.notify_all();
+                                              });
   std::unique_lock<std::mutex> lock(mutex);
   ASSERT_TRUE(cv.wait_for(lock, 20s, [&] { return ids.size() >= kCount; }))
       << "late subscriber got " << ids.size() << " of " << kCount;
@@ -160,13 +195,13 @@ TEST(Transport, LateKeyframeSubscriberReceivesBoundedHistory) {
   std::mutex mutex;
   std::condition_variable cv;
   std::vector<int64_t> ids;
-  dds::Reader<msg::KeyframePubSubType> reader(
-      sub, dds::topics::kKeyframe, dds::TopicKind::kKeyframe, [&](msg::Keyframe&& m) {
-        const KeyframeData k = KeyframeFromMsg(m);
-        std::lock_guard<std::mutex> lock(mutex);
-        ids.push_back(k.id);
-        cv.notify_all();
-      });
+  dds::Reader<msg::KeyframePubSubType> reader(sub, dds::topics::kKeyframe,
+                                              dds::TopicKind::kKeyframe, [&](msg::Keyframe&& m) {
+                                                const KeyframeData k = KeyframeFromMsg(m);
+                                                std::lock_guard<std::mutex> lock(mutex);
+                                                ids.push_back(k.id);
+                                                cv.notify_all();
+                                              });
   std::unique_lock<std::mutex> lock(mutex);
   ASSERT_TRUE(cv.wait_for(lock, 20s, [&] { return ids.size() >= dds::kKeyframeHistoryDepth; }))
       << "late subscriber got " << ids.size() << " of " << dds::kKeyframeHistoryDepth;

@@ -16,8 +16,11 @@
 #include <deque>
 #include <functional>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <utility>
+
+#include "core/base/thread_setup.h"
 
 namespace dygslam {
 
@@ -26,9 +29,15 @@ class WorkQueue {
  public:
   using Handler = std::function<void(T&)>;
 
-  WorkQueue(Handler handler, bool threaded, size_t capacity = 0)
+  // `name` names the worker thread (SetCurrentThreadName) when there is one.
+  WorkQueue(Handler handler, bool threaded, size_t capacity = 0, std::string name = "")
       : handler_(std::move(handler)), threaded_(threaded), capacity_(capacity) {
-    if (threaded_) worker_ = std::thread([this] { Serve(); });
+    if (threaded_) {
+      worker_ = std::thread([this, name = std::move(name)] {
+        if (!name.empty()) SetCurrentThreadName(name);
+        Serve();
+      });
+    }
   }
   ~WorkQueue() { Finish(); }
   WorkQueue(const WorkQueue&) = delete;

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 #include <future>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -22,6 +23,16 @@ TEST(WorkQueue, ThreadedProcessesEveryItemInOrderBeforeFinishReturns) {
   EXPECT_FALSE(queue.Push(7));  // refused once finished
   queue.Finish();               // twice is fine
   EXPECT_EQ(seen.size(), 500u);
+}
+
+TEST(WorkQueue, TheWorkerThreadCarriesItsNameSoToolsCanTellTheStagesApart) {
+  std::string seen;
+  WorkQueue<int> queue([&](int&) { seen = CurrentThreadName(); }, /*threaded=*/true,
+                       /*capacity=*/0, "a long stage name");
+  queue.Push(1);
+  queue.Finish();
+  EXPECT_EQ(seen, "a long stage na");  // Linux keeps 15 characters
+  EXPECT_NE(CurrentThreadName(), seen);
 }
 
 TEST(WorkQueue, UnthreadedRunsOnlyInDrainInTheCallersThread) {

@@ -4,12 +4,17 @@
 #include <exception>
 #include <utility>
 
+#include "core/base/thread_setup.h"
+
 namespace dygslam {
 
 DetectionWorker::DetectionWorker(std::unique_ptr<YoloDetector> detector)
     : detector_(std::move(detector)) {
   if (!detector_) throw InvalidOptions("DetectionWorker: no detector");
-  thread_ = std::thread([this] { Run(); });
+  thread_ = std::thread([this] {
+    SetCurrentThreadName("detector");
+    Run();
+  });
 }
 
 DetectionWorker::~DetectionWorker() {

@@ -14,6 +14,7 @@
 
 #include "core/base/log.h"
 #include "core/base/memory.h"
+#include "core/base/thread_setup.h"
 #include "core/slam/cost_functions.h"
 #include "core/slam/pose_graph.h"
 
@@ -301,7 +302,8 @@ LoopCloser::LoopCloser(std::shared_ptr<Map> map, std::shared_ptr<KeyFrameDatabas
       optimizer_(optimizer),
       matcher_(matcher),
       threaded_(threaded),
-      queue_([this](std::shared_ptr<KeyFrame>& kf) { Process(kf); }, threaded && threaded_checks) {
+      queue_([this](std::shared_ptr<KeyFrame>& kf) { Process(kf); }, threaded && threaded_checks,
+             /*capacity=*/0, "loop closing") {
   options_.Check();
 }
 
@@ -950,6 +952,7 @@ void LoopCloser::StartGlobalBundleAdjustment(int64_t loop_kf_id) {
     return;
   }
   global_ba_thread_ = std::thread([this, epoch] {
+    SetCurrentThreadName("global BA");
     RunGlobalBundleAdjustment(epoch);
     ReleaseFreedMemory();
   });

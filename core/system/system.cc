@@ -345,7 +345,8 @@ class SystemImpl {
   std::exception_ptr emit_error_;  // guarded by callback_mutex_
   // The keyframe callback's thread (Post). Last: finishes its jobs before anything they use goes.
   WorkQueue<std::function<void()>> emitter_{[](std::function<void()>& job) { job(); },
-                                            !options_.deterministic, /*capacity=*/16};
+                                            !options_.deterministic, /*capacity=*/16,
+                                            "keyframe out"};
 };
 
 namespace {

@@ -364,6 +364,10 @@ std::unique_ptr<YoloDetector> YoloDetector::Create(const DetectorOptions& option
   det->impl_->net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
   det->impl_->net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
   det->impl_->output_names = det->impl_->net.getUnconnectedOutLayersNames();
+  // OpenCV sets the network up (layer fusion, buffers) on its first forward pass, which takes
+  // several times a normal one: done here, at start-up, not on the first frames of a run, which
+  // would otherwise reach their poses late at the camera's rate.
+  det->Detect(cv::Mat(480, 640, CV_8UC3, cv::Scalar(0, 0, 0)));
   return det;
 }
 

@@ -783,8 +783,15 @@ int RunRun(const std::vector<std::string>& args) {
         summary.processed, summary.requested, s.loop_minutes,
         summary.component_failed ? ": a pipeline component failed" : "");
   } else if (summary.Reason() == Shortfall::kNone) {
-    std::printf("integrity: %zu of %zu requested frames processed (complete)\n", summary.processed,
-                summary.requested);
+    // Entries without a depth partner are not requested frames; said here as well as before the
+    // run, so that a depth.txt cut short cannot read as a complete run.
+    const std::string left_out =
+        summary.without_depth_partner == 0
+            ? ""
+            : "; " + std::to_string(summary.without_depth_partner) +
+                  " rgb.txt entries of the range left out: no depth image to pair with";
+    std::printf("integrity: %zu of %zu requested frames processed (complete%s)\n",
+                summary.processed, summary.requested, left_out.c_str());
   } else {
     std::printf(
         "integrity: %zu of %zu requested frames processed, %zu missing, %zu not this run's: "

@@ -89,7 +89,6 @@ void OctoMapOptions::Check() const {
   DYGSLAM_CHECK_OPTION(occupancy_threshold > 0 && occupancy_threshold < 1,
                        "OctoMap.occupancy_threshold");
   DYGSLAM_CHECK_OPTION(pixel_stride >= 1 && pixel_stride <= 64, "OctoMap.pixel_stride");
-  DYGSLAM_CHECK_OPTION(std::isfinite(voxel_filter_size), "OctoMap.voxel_filter_size");
   DYGSLAM_CHECK_OPTION(dynamic_mask_dilation_px >= 0 && dynamic_mask_dilation_px <= 200,
                        "OctoMap.dynamic_mask_dilation_px");
   DYGSLAM_CHECK_OPTION(dynamic_keypoint_radius_px >= 0 && dynamic_keypoint_radius_px <= 200,
@@ -198,9 +197,8 @@ StaticCloud ExtractStaticCloud(const KeyframeData& keyframe, const PinholeCamera
       points.push_back(camera_.Unproject(u, v, d).cast<float>());
     }
   }
-  result.points_cam = options_.use_voxel_filter
-                          ? VoxelGridFilter(points, options_.EffectiveVoxelFilterSize())
-                          : std::move(points);
+  result.points_cam =
+      options_.use_voxel_filter ? VoxelGridFilter(points, options_.resolution) : std::move(points);
   return result;
 }
 

@@ -72,9 +72,9 @@ struct OctoMapOptions {
   double occupancy_threshold = 0.5;
   // Use every pixel_stride-th pixel in u and v (1 = all).
   int pixel_stride = 2;
-  // Voxel-grid filter (centroid per cell, camera frame) before insertion, in metres. A value
-  // <= 0 means "same as resolution"; to disable it set use_voxel_filter = false.
-  double voxel_filter_size = 0.0;
+  // Voxel-grid filter before insertion: one point (the centroid) per cell of the map's
+  // resolution, in the camera frame. Rays to points of one cell end in the same voxel, so
+  // finer cells only cost time.
   bool use_voxel_filter = true;
   // Leave out dynamic pixels (dynamic_mask and dynamic keypoints). false = the 'no filter'
   // baseline: every valid depth pixel goes in.
@@ -90,9 +90,6 @@ struct OctoMapOptions {
   // <= 0 means half a voxel.
   double rebuild_displacement = 0.0;
 
-  double EffectiveVoxelFilterSize() const {
-    return voxel_filter_size > 0 ? voxel_filter_size : resolution;
-  }
   double EffectiveRebuildDisplacement() const {
     return rebuild_displacement > 0 ? rebuild_displacement : 0.5 * resolution;
   }

@@ -17,7 +17,6 @@ void ReadOptions(const ConfigReader& root, OctoMapOptions* options) {
   s.ReadIfPresent("clamping_max", &options->clamping_max);
   s.ReadIfPresent("occupancy_threshold", &options->occupancy_threshold);
   s.ReadIfPresent("pixel_stride", &options->pixel_stride);
-  s.ReadIfPresent("voxel_filter_size", &options->voxel_filter_size);
   s.ReadIfPresent("use_voxel_filter", &options->use_voxel_filter);
   s.ReadIfPresent("use_dynamic_mask", &options->use_dynamic_mask);
   s.ReadIfPresent("dynamic_mask_dilation_px", &options->dynamic_mask_dilation_px);
@@ -27,7 +26,6 @@ void ReadOptions(const ConfigReader& root, OctoMapOptions* options) {
   // A misspelt key is reported where every other section's is: LoadSettings warns about it with
   // its line and the closest known key (an error with --strict-settings), KnownSettingsKeys().
   s.CheckOptions(*options);
-  CheckSettingAtMost(s, "voxel_filter_size", options->voxel_filter_size, 100, "m");
   CheckSettingAtMost(s, "rebuild_displacement", options->rebuild_displacement, 1000, "m");
 }
 

@@ -11,8 +11,7 @@
 //     clamping_max: 0.97
 //     occupancy_threshold: 0.5
 //     pixel_stride: 2           # every n-th pixel in u and v
-//     voxel_filter_size: 0.0    # voxel grid before insertion (m); <= 0: = resolution
-//     use_voxel_filter: true
+//     use_voxel_filter: true    # one point per cell of the map's resolution before insertion
 //     use_dynamic_mask: true    # false: every valid depth pixel goes in (no filter)
 //     dynamic_mask_dilation_px: 5
 //     dynamic_keypoint_radius_px: 8

@@ -155,6 +155,9 @@ const std::vector<std::pair<std::string, std::string>>& RetiredSettingsKeys() {
       {"DynamicFilter.depth_residual_weight",
        "measured worse: the depth noise outweighs the depth term"},
       {"OctoMap.discretize", "measured no better; every ray is cast"},
+      {"OctoMap.voxel_filter_size",
+       "the voxel filter's cell is the map's resolution (OctoMap.resolution); "
+       "OctoMap.use_voxel_filter turns it off"},
       {"LoopClosing.global_ba_min_correction_m",
        "a global BA follows every loop above LoopClosing.pose_graph_min_correction_m / _deg"},
       {"LoopClosing.global_ba_min_correction_deg",
@@ -208,8 +211,8 @@ const std::vector<std::string>& KnownSettingsKeys() {
       // run/mapping_config.cc.
       "OctoMap.resolution", "OctoMap.max_range", "OctoMap.min_range", "OctoMap.prob_hit",
       "OctoMap.prob_miss", "OctoMap.clamping_min", "OctoMap.clamping_max",
-      "OctoMap.occupancy_threshold", "OctoMap.pixel_stride", "OctoMap.voxel_filter_size",
-      "OctoMap.use_voxel_filter", "OctoMap.use_dynamic_mask", "OctoMap.dynamic_mask_dilation_px",
+      "OctoMap.occupancy_threshold", "OctoMap.pixel_stride", "OctoMap.use_voxel_filter",
+      "OctoMap.use_dynamic_mask", "OctoMap.dynamic_mask_dilation_px",
       "OctoMap.dynamic_keypoint_radius_px", "OctoMap.lazy_eval", "OctoMap.rebuild_displacement"};
   return kKeys;
 }

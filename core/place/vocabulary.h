@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "core/base/descriptor.h"
 #include "core/base/error.h"
-#include "core/slam/orb_extractor.h"  // Descriptor, HammingDistance (header-only types)
 
 namespace dygslam {
 

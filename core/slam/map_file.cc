@@ -329,6 +329,16 @@ std::string EncodeMapFile(const Map& map, const MapFileSettings& settings) {
 }
 
 MapFileInfo SaveMapFile(const std::string& path, const Map& map, const MapFileSettings& settings) {
+  // A run stopped before its first keyframe has nothing to save; writing its empty map would
+  // replace an earlier map file at the same path with nothing.
+  {
+    std::lock_guard<std::mutex> lock(map.mutex());
+    if (map.NumKeyFrames() == 0) {
+      throw InputError(path, 0,
+                       "not saved: the map has no keyframe (the run ended before its first); "
+                       "the file is left as it was");
+    }
+  }
   const std::string bytes = EncodeMapFile(map, settings);
   WriteFileAtomically(path, bytes);
   MapFileInfo info;

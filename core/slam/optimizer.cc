@@ -124,57 +124,6 @@ int OptimizePose(Frame& frame, const OptimizerOptions& options) {
   return inliers;
 }
 
-int OptimizePoseWithCeres(Frame& frame, const OptimizerOptions& options) {
-  std::vector<PoseObservation> observations;
-  std::vector<size_t> index;
-  CollectPoseObservations(frame, &observations, &index);
-  if (observations.size() < 3) return 0;
-  const ProjectionModel model = ModelOf(*frame.geometry);
-  double pose[7];
-  PoseToParameters(frame.cam_from_world, pose);
-  const double delta_mono = std::sqrt(options.chi2_mono),
-               delta_stereo = std::sqrt(options.chi2_stereo);
-  int inliers = 0;
-  for (int round = 0; round < options.pose_rounds; ++round) {
-    ceres::Problem::Options problem_options;
-    problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    ceres::Problem problem(problem_options);
-    PoseManifold manifold;
-    problem.AddParameterBlock(pose, 7, &manifold);
-    const bool robust = round < options.pose_rounds - 1;  // last round without the kernel
-    int added = 0;
-    for (size_t k = 0; k < observations.size(); ++k) {
-      if (frame.outlier[index[k]]) continue;
-      const PoseObservation& o = observations[k];
-      const double sqrt_info = std::sqrt(o.information);
-      ceres::CostFunction* cost;
-      if (o.stereo) {
-        cost = new StereoPoseCost(o.measurement, o.point, sqrt_info, model);
-      } else {
-        cost = new MonoPoseCost(o.measurement.head<2>(), o.point, sqrt_info, model);
-      }
-      problem.AddResidualBlock(
-          cost, robust ? new ceres::HuberLoss(o.stereo ? delta_stereo : delta_mono) : nullptr,
-          pose);
-      ++added;
-    }
-    if (added < 3) break;
-    ceres::Solver::Options solver_options;
-    solver_options.linear_solver_type = ceres::DENSE_QR;
-    solver_options.max_num_iterations = options.pose_iterations;
-    solver_options.num_threads = 1;
-    solver_options.minimizer_progress_to_stdout = false;
-    solver_options.logging_type = ceres::SILENT;
-    ceres::Solver::Summary summary;
-    ceres::Solve(solver_options, &problem, &summary);
-    inliers = ClassifyPoseObservations(observations, index, PoseFromParameters(pose), model,
-                                       options, frame);
-    if (inliers < 10) break;
-  }
-  frame.cam_from_world = PoseFromParameters(pose);
-  return inliers;
-}
-
 namespace {
 
 // The keyframes of the local window around `kf`: it and its covisible keyframes (empty when kf

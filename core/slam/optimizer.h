@@ -1,9 +1,9 @@
-// Pose-only optimisation (a dedicated 6-dof solver) and local bundle adjustment with Ceres (robust Huber kernel,
-// outlier-rejection rounds with chi-square thresholds as in ORB-SLAM2's RGB-D mode).
+// Pose-only optimisation (a dedicated 6-dof solver) and local bundle adjustment with Ceres (robust
+// Huber kernel, outlier-rejection rounds with chi-square thresholds as in ORB-SLAM2's RGB-D mode).
 #pragma once
 
-#include <atomic>
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -35,10 +35,6 @@ struct OptimizerOptions {
 // Levenberg-Marquardt iterations (core/slam/pose_solver.h), Huber kernel in all but the last,
 // every observation re-classified by its chi2 after each round.
 int OptimizePose(Frame& frame, const OptimizerOptions& options);
-
-// The same rounds with a new Ceres problem per round (the earlier implementation): the
-// reference the dedicated solver is tested against; not used by the system.
-int OptimizePoseWithCeres(Frame& frame, const OptimizerOptions& options);
 
 // A bundle adjustment in three steps, so that the solve can run on another thread while the map
 // goes on being used: PrepareBundle copies the problem in (under the map lock), SolveBundle works

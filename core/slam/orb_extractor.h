@@ -7,8 +7,8 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "core/base/descriptor.h"
 #include "core/base/error.h"
-#include "core/base/popcount.h"
 
 namespace dygslam {
 
@@ -30,14 +30,6 @@ struct OrbExtractorOptions {
 }  // namespace dygslam
 
 namespace dygslam {
-
-// 256-bit binary descriptor.
-using Descriptor = std::array<uint64_t, 4>;
-
-// With the CPU's POPCNT instruction when it has one (core/base/popcount.h).
-inline int HammingDistance(const Descriptor& a, const Descriptor& b) {
-  return HammingDistance256Words(a.data(), b.data());
-}
 
 struct OrbFeatures {
   // Level-0 pixel coordinates in the (distorted) input image; octave = pyramid level,

@@ -1,6 +1,6 @@
 // Dataset files through the command line: a groundtruth.txt that is a FIFO, a folder or a link to
-// /dev/zero and --frames beyond the dataset are warned; --detections that match no frame are
-// warned, a class_id outside the detector's classes is an error.
+// /dev/zero, a depth.txt cut short and --frames beyond the dataset are warned; --detections that
+// match no frame are warned, a class_id outside the detector's classes is an error.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -69,6 +69,35 @@ TEST_F(DatasetCli, NonRegularGroundTruthAndFramesBeyondTheDatasetWarn) {
     EXPECT_TRUE(Contains(r.err, "warning: --frames '0:5000'")) << r.err;
     EXPECT_TRUE(Contains(r.err, "12 rgb.txt entries")) << r.err;
   }
+}
+
+// A depth.txt cut short at a line boundary (every line well-formed) leaves the last rgb.txt
+// entries without a depth image: said before the run and in the summary's integrity line, so the
+// run cannot read as a complete run of the whole range; eval.json counts them.
+TEST_F(DatasetCli, ADepthListCutShortIsSaidBeforeAndAfterTheRun) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string dataset = SmallDataset(source, 20, "depth_cut", true);
+  std::istringstream lines(testing::ReadAll(dataset + "/depth.txt"));
+  std::string kept, line;
+  int entries = 0;
+  while (std::getline(lines, line)) {
+    const bool entry = !line.empty() && line[0] != '#';
+    if (entry && entries == 14) break;
+    entries += entry ? 1 : 0;
+    kept += line + "\n";
+  }
+  std::ofstream(dataset + "/depth.txt") << kept;
+  const auto r = Run({"run", dataset, "--config", Config(), "--out", dir_ + "/o_cut", "--filter",
+                      "none", "--direct", "--quiet"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(Contains(r.err, "warning: 6 of the 20 rgb.txt entries 0 to 20 have no depth image"))
+      << r.err;
+  EXPECT_TRUE(Contains(r.out,
+                       "integrity: 14 of 14 requested frames processed (complete; 6 rgb.txt "
+                       "entries of the range left out: no depth image to pair with)"))
+      << r.out;
+  EXPECT_TRUE(Contains(testing::ReadAll(dir_ + "/o_cut/eval.json"),
+                       "\"requested\": 14, \"without_depth_partner\": 6,"));
 }
 
 // A detections file that matches no frame warns with the counts; a class id outside the

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 
@@ -133,6 +134,25 @@ TEST_F(MapFileTest, SaveLoadSaveIsByteIdentical) {
     loaded.SaveMap(again);
     EXPECT_TRUE(ReadBytes(again) == first) << "localization " << localization;
   }
+}
+
+// A run stopped before its first keyframe saves nothing: an earlier map file at the path stays
+// as it was (before, it was replaced by an empty 184-byte map and the run said "saved").
+TEST_F(MapFileTest, AnEmptyMapIsNotSavedOverAnEarlierMapFile) {
+  const std::string path = *dir_ + "/kept.dygmap";
+  std::filesystem::copy_file(MapPath(), path, std::filesystem::copy_options::overwrite_existing);
+  const std::string before = ReadBytes(path);
+  System empty(Options());  // no frame fed
+  try {
+    empty.SaveMap(path);
+    ADD_FAILURE() << "an empty map was saved";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no keyframe"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(ReadBytes(path) == before);
+  EXPECT_THROW(empty.SaveMap(*dir_ + "/never.dygmap"), InputError);
+  EXPECT_FALSE(std::filesystem::exists(*dir_ + "/never.dygmap"));
 }
 
 TEST_F(MapFileTest, LocalizationTracksEveryFrameDeterministicallyWithoutGrowing) {

@@ -135,6 +135,22 @@ KeyframeData SmallKeyframe(int64_t id) {
   return k;
 }
 
+// A late mapper's keyframe reader: the ids of the keyframe messages it receives, in order.
+struct KeyframeIds {
+  explicit KeyframeIds(std::shared_ptr<dds::Participant> participant)
+      : reader(std::move(participant), dds::topics::kKeyframe, dds::TopicKind::kKeyframe,
+               [this](msg::Keyframe&& m) {
+                 const KeyframeData k = KeyframeFromMsg(m);
+                 std::lock_guard<std::mutex> lock(mutex);
+                 ids.push_back(k.id);
+                 cv.notify_all();
+               }) {}
+  std::mutex mutex;
+  std::condition_variable cv;
+  std::vector<int64_t> ids;                     // guarded by mutex
+  dds::Reader<msg::KeyframePubSubType> reader;  // last: its callback uses the members above
+};
+
 // Keyframes are transient-local with a bounded history: a mapper that subscribes after all
 // keyframes were published still receives every one of them, in order (fewer than
 // kKeyframeHistoryDepth here).
@@ -155,17 +171,10 @@ TEST(Transport, LateKeyframeSubscriberReceivesHistory) {
 
   std::this_thread::sleep_for(300ms);
   auto sub = MakeParticipant(domain, "test_late_mapper");
-  std::mutex mutex;
-  std::condition_variable cv;
-  std::vector<int64_t> ids;
-  dds::Reader<msg::KeyframePubSubType> reader(sub, dds::topics::kKeyframe,
-                                              dds::TopicKind::kKeyframe, [&](msg::Keyframe&& m) {
-                                                const KeyframeData k = KeyframeFromMsg(m);
-                                                std::lock_guard<std::mutex> lock(mutex);
-                                                ids.push_back(k.id);
-                                                cv.notify_all();
-                                              });
-  std::unique_lock<std::mutex> lock(mutex);
+  KeyframeIds received(sub);
+  std::unique_lock<std::mutex> lock(received.mutex);
+  std::vector<int64_t>& ids = received.ids;
+  std::condition_variable& cv = received.cv;
   ASSERT_TRUE(cv.wait_for(lock, 20s, [&] { return ids.size() >= kCount; }))
       << "late subscriber got " << ids.size() << " of " << kCount;
   for (int i = 0; i < kCount; ++i) EXPECT_EQ(ids[i], i);
@@ -192,17 +201,10 @@ TEST(Transport, LateKeyframeSubscriberReceivesBoundedHistory) {
   }
   std::this_thread::sleep_for(300ms);
   auto sub = MakeParticipant(domain, "test_late_mapper");
-  std::mutex mutex;
-  std::condition_variable cv;
-  std::vector<int64_t> ids;
-  dds::Reader<msg::KeyframePubSubType> reader(sub, dds::topics::kKeyframe,
-                                              dds::TopicKind::kKeyframe, [&](msg::Keyframe&& m) {
-                                                const KeyframeData k = KeyframeFromMsg(m);
-                                                std::lock_guard<std::mutex> lock(mutex);
-                                                ids.push_back(k.id);
-                                                cv.notify_all();
-                                              });
-  std::unique_lock<std::mutex> lock(mutex);
+  KeyframeIds received(sub);
+  std::unique_lock<std::mutex> lock(received.mutex);
+  std::vector<int64_t>& ids = received.ids;
+  std::condition_variable& cv = received.cv;
   ASSERT_TRUE(cv.wait_for(lock, 20s, [&] { return ids.size() >= dds::kKeyframeHistoryDepth; }))
       << "late subscriber got " << ids.size() << " of " << dds::kKeyframeHistoryDepth;
   cv.wait_for(lock, 500ms);  // nothing more arrives

@@ -2,6 +2,8 @@
 
 #include <pthread.h>
 
+#include <optional>
+
 #if defined(__linux__)
 #include <sys/resource.h>
 #include <sys/syscall.h>
@@ -14,7 +16,20 @@ namespace dygslam {
 
 namespace {
 constexpr int kBackgroundNiceness = 10;
+
+#if defined(__linux__)
+// On Linux the nice value belongs to the thread (its kernel task id), not the process.
+id_t CurrentTaskId() { return static_cast<id_t>(syscall(SYS_gettid)); }
+
+// The calling thread's nice value, or nothing when the system does not say.
+std::optional<int> ReadNiceness() {
+  errno = 0;
+  const int now = getpriority(PRIO_PROCESS, CurrentTaskId());
+  if (now == -1 && errno != 0) return std::nullopt;
+  return now;
 }
+#endif
+}  // namespace
 
 void SetCurrentThreadName(const std::string& name) {
 #if defined(__linux__)
@@ -35,13 +50,10 @@ std::string CurrentThreadName() {
 
 bool LowerCurrentThreadPriority() {
 #if defined(__linux__)
-  // On Linux the nice value belongs to the thread (its kernel task id), not the process.
-  const auto tid = static_cast<id_t>(syscall(SYS_gettid));
-  errno = 0;
-  const int now = getpriority(PRIO_PROCESS, tid);
-  if (now == -1 && errno != 0) return false;
-  if (now >= kBackgroundNiceness) return true;
-  return setpriority(PRIO_PROCESS, tid, kBackgroundNiceness) == 0;
+  const std::optional<int> now = ReadNiceness();
+  if (!now) return false;
+  if (*now >= kBackgroundNiceness) return true;
+  return setpriority(PRIO_PROCESS, CurrentTaskId(), kBackgroundNiceness) == 0;
 #else
   return false;
 #endif
@@ -49,9 +61,7 @@ bool LowerCurrentThreadPriority() {
 
 int CurrentThreadNiceness() {
 #if defined(__linux__)
-  errno = 0;
-  const int now = getpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)));
-  return (now == -1 && errno != 0) ? 0 : now;
+  return ReadNiceness().value_or(0);
 #else
   return 0;
 #endif

@@ -352,6 +352,7 @@ int RunBench(const std::vector<std::string>& args) {
   // evenly over the configurations).
   const std::string self = SelfExecutable();
   const int total_jobs = static_cast<int>(prepared.size() * runs * all_configs.size());
+  int runs_left_out = 0;  // workers that failed or left unreadable outputs
   int done_jobs = 0;
   std::vector<BenchRun> all_runs;
   std::vector<std::string> notes;
@@ -424,6 +425,7 @@ int RunBench(const std::vector<std::string>& args) {
                                    std::to_string(child.exit_code) + "), run left out";
           std::cerr << "\ndygslam bench: " << note << "\n";
           notes.push_back(note);
+          ++runs_left_out;
           continue;
         }
         BenchRun scored;
@@ -435,6 +437,7 @@ int RunBench(const std::vector<std::string>& args) {
                                    "), run left out";
           std::cerr << "\ndygslam bench: " << note << "\n";
           notes.push_back(note);
+          ++runs_left_out;
           continue;
         }
         scored.sequence = pr.sequence.name;
@@ -642,10 +645,17 @@ int RunBench(const std::vector<std::string>& args) {
   WriteFileAtomically((out_dir / "report.md").string(), report);
   // Runs cut short by a stop signal give a partial report (OUT/report.md says so): it never
   // replaces the benchmark section of the file, which keeps the last complete one.
+  // Likewise runs that failed or left unreadable outputs: the file's section would lose their rows
+  // and misstate its run count.
   if (p.Has("update-benchmarks") && stopped_by != 0) {
     std::cerr << "dygslam bench: " << p.Get("update-benchmarks")
               << " not updated: the runs were stopped by signal " << stopped_by
               << " (the partial report is " << (out_dir / "report.md").string() << ")\n";
+  } else if (p.Has("update-benchmarks") && runs_left_out > 0) {
+    std::cerr << "dygslam bench: " << p.Get("update-benchmarks")
+              << " not updated: " << runs_left_out << " of " << total_jobs
+              << " runs failed and were left out (the partial report is "
+              << (out_dir / "report.md").string() << ")\n";
   } else if (p.Has("update-benchmarks")) {
     const fs::path target = fs::absolute(p.Get("update-benchmarks"));
     std::ifstream in(target);
@@ -677,6 +687,7 @@ int RunBench(const std::vector<std::string>& args) {
   std::printf("report: %s\nruns:   %s\n", (out_dir / "report.md").string().c_str(),
               (out_dir / "runs.csv").string().c_str());
   if (p.Has("update-benchmarks") && stopped_by != 0) return 128 + stopped_by;
+  if (p.Has("update-benchmarks") && runs_left_out > 0) return 1;
   return notes.empty() || all_runs.size() > 0 ? 0 : 1;
 }
 

@@ -131,6 +131,15 @@ int RunComponentCommand(const std::vector<std::string>& args) {
     o.system.localization = true;
   }
   o.save_map = p.Get("save-map");
+  // No output may replace an input or another output (a --save-map onto its --config).
+  if (const std::string clash = FindDatasetRunOutputClash(
+          DatasetRunInputs(p, o.dataset_dir, "--config", o.settings_path, o.system,
+                           {"load-map", "localization-map", "load-octomap"}),
+          p, o.output_dir);
+      !clash.empty())
+    return p.UsageError(clash);
+  if (const std::string foreign = FindForeignFileAtSaveMap(p); !foreign.empty())
+    return p.UsageError(foreign);
   o.load_octomap = p.Get("load-octomap");
   if (p.Has("detector-cfg")) {
     o.system.detector.cfg_path = p.Get("detector-cfg");

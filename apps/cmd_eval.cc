@@ -154,6 +154,11 @@ int RunEval(const std::vector<std::string>& args) {
   if (p.Flag("calibrated-ate") && calibration == "none")
     return p.UsageError(
         "--calibrated-ate needs a ground-truth calibration (--gt-calibration bonn)");
+  // One file given twice scores nothing (ATE 0 would read as a perfect run).
+  if (SameFile(gt_path, est_path))
+    return p.UsageError("ESTIMATE '" + EchoValue(est_path) + "' is GROUNDTRUTH '" +
+                        EchoValue(gt_path) +
+                        "': the same file; give the trajectory to score (e.g. out/trajectory.txt)");
   // The outputs never replace an input or each other (exit 2, before any work).
   {
     std::vector<NamedPath> outputs;
@@ -162,6 +167,12 @@ int RunEval(const std::vector<std::string>& args) {
     const std::string clash =
         FindOutputClash({{"GROUNDTRUTH", gt_path}, {"ESTIMATE", est_path}}, outputs);
     if (!clash.empty()) return p.UsageError(clash);
+    // A plot replaces an earlier picture, never another kind of file given by mistake.
+    if (p.Has("plot")) {
+      const std::string foreign =
+          FindForeignFileAtOutput({"--plot", p.Get("plot")}, "\x89PNG\r\n\x1a\n", "a PNG picture");
+      if (!foreign.empty()) return p.UsageError(foreign);
+    }
   }
   if (p.Has("plot")) {
     std::error_code ec;

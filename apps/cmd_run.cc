@@ -62,18 +62,11 @@ namespace dygslam::cli {
 namespace {
 namespace fs = std::filesystem;
 
-// The files a run writes into --out (groundtruth.txt: the DDS recorder's copy of the player's
-// ground truth), and those the summary lists.
-constexpr const char* kRunOutputNames[] = {
-    "trajectory.txt", "trajectory_online.txt", "keyframes.txt",     "frames.csv", "map.bt",
-    "map.ot",         "groundtruth.txt",       kRealtimeReportFile, "eval.json"};
+// The files the summary lists.
 constexpr const char* kListedOutputNames[] = {"trajectory.txt", "trajectory_online.txt",
                                               "keyframes.txt",  "frames.csv",
                                               "map.bt",         "eval.json"};
 
-// A ground-truth coordinate beyond this (metres) is no camera trajectory (1e300 overflows the
-// error); `dygslam eval` refuses such files too.
-constexpr double kMaxGroundTruthCoordinate = 1e7;
 // --rate above 0: the slowest replay that is still a replay (0.01x = a 30 Hz frame every 3.3 s).
 constexpr double kMinRate = 0.01;
 
@@ -103,6 +96,7 @@ struct RunOutcome {
   bool interrupted = false;
   int exit_code = 0;
   size_t ignored_samples = 0;  // DDS: samples of writers outside this run (components/protocol.h)
+  std::vector<std::string> stopped_components;  // --processes: stopped by a signal of their own
   std::vector<Timestamp> stamps;  // DDS: the stamps of the frames processed (frames.csv)
 };
 
@@ -370,6 +364,7 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
   outcome.exit_code = RunPipeline(o, &report);
   outcome.interrupted = report.signaled;
   outcome.ignored_samples = report.ignored_samples;
+  outcome.stopped_components = report.stopped_components;
   if (outputs.Fresh("frames.csv")) {
     for (const TextLine& line : ReadDataLines((s.out / "frames.csv").string())) {
       if (line.tokens.size() < 2 || line.tokens[0] == "stamp") continue;
@@ -385,14 +380,6 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
 #endif
 
 // The files a run writes (--save-map first), for the clash checks against its inputs.
-std::vector<NamedPath> RunOutputPaths(const ArgParser& p, const fs::path& out_dir) {
-  std::vector<NamedPath> outputs;
-  if (p.Has("save-map")) outputs.push_back({"--save-map", p.Get("save-map")});
-  for (const char* name : kRunOutputNames)
-    outputs.push_back({"the output " + std::string(name), (out_dir / name).string()});
-  return outputs;
-}
-
 int RunRun(const std::vector<std::string>& args) {
   ArgParser p(
       "run",
@@ -483,22 +470,13 @@ int RunRun(const std::vector<std::string>& args) {
   }
   ::setenv("DYGSLAM_SETTINGS_WARNED", "1", 1);  // --processes: components do not repeat them
   // No output may replace an input or another output: checked before any work (exit 2).
-  {
-    const fs::path data(p.Positional("DATASET_DIR"));
-    std::vector<NamedPath> inputs;
-    for (const char* name : {"rgb.txt", "depth.txt", "groundtruth.txt", "associations.txt"})
-      inputs.push_back({std::string("the dataset's ") + name, (data / name).string()});
-    inputs.push_back({p.Has("config") ? "--config" : "the settings file", s.config});
-    for (const char* option : {"load-map", "load-octomap", "detections"})
-      if (p.Has(option)) inputs.push_back({std::string("--") + option, p.Get(option)});
-    inputs.push_back({"the vocabulary (LoopClosing.vocabulary)", s.system.loop_closing.vocabulary});
-    inputs.push_back({"the detector's cfg", s.system.detector.cfg_path});
-    inputs.push_back({"the detector's weights", s.system.detector.weights_path});
-    inputs.push_back({"the detector's names", s.system.detector.names_path});
-    if (const std::string clash = FindOutputClash(inputs, RunOutputPaths(p, out_dir));
-        !clash.empty())
-      return p.UsageError(clash);
-  }
+  if (const std::string clash = FindDatasetRunOutputClash(
+          DatasetRunInputs(p, p.Positional("DATASET_DIR"),
+                           p.Has("config") ? "--config" : "the settings file", s.config, s.system,
+                           {"load-map", "load-octomap", "detections"}),
+          p, out_dir);
+      !clash.empty())
+    return p.UsageError(clash);
   s.map = !p.Flag("no-map");
   if (p.Flag("localization") && !p.Has("load-map"))
     return p.UsageError("--localization needs --load-map FILE");
@@ -572,10 +550,12 @@ int RunRun(const std::vector<std::string>& args) {
         images.push_back(
             {std::string("a file of the dataset's ") + folder + "/ folder", it->path().string()});
     }
-    if (const std::string clash = FindOutputAmongInputs(images, RunOutputPaths(p, out_dir));
+    if (const std::string clash = FindOutputAmongInputs(images, DatasetRunOutputs(p, out_dir));
         !clash.empty())
       return p.UsageError(clash);
   }
+  if (const std::string foreign = FindForeignFileAtSaveMap(p); !foreign.empty())
+    return p.UsageError(foreign);
   s.first = 0;
   s.last = dataset.num_rgb_entries();
   std::string frames_note;  // --frames beyond the dataset: cut, with a warning
@@ -595,19 +575,6 @@ int RunRun(const std::vector<std::string>& args) {
   if (dataset.has_groundtruth()) {
     try {
       groundtruth = ReadTumTrajectory(dataset.groundtruth_path());
-      // Coordinates no camera reaches (1e300 m) overflow the error: refused like a malformed
-      // file, as `dygslam eval` refuses them.
-      for (const StampedPose& pose : groundtruth) {
-        const double largest = pose.world_from_cam.translation.cwiseAbs().maxCoeff();
-        if (!(largest <= kMaxGroundTruthCoordinate)) {
-          char why[200];
-          std::snprintf(why, sizeof(why),
-                        "the pose at %s s has a coordinate of %g m (beyond %g m: not a camera "
-                        "trajectory)",
-                        pose.stamp.ToString().c_str(), largest, kMaxGroundTruthCoordinate);
-          throw InputError(dataset.groundtruth_path(), 0, why);
-        }
-      }
     } catch (const InputError& e) {
       groundtruth.clear();
       std::fprintf(stderr,
@@ -656,8 +623,7 @@ int RunRun(const std::vector<std::string>& args) {
   if (direct && !s.use_detection_file) ResolveDetectorModel(&s.system);
 
   // This run's outputs: written atomically, nothing deleted up front (see RunOutputs).
-  RunOutputs outputs(
-      s.out, std::vector<std::string>(std::begin(kRunOutputNames), std::end(kRunOutputNames)));
+  RunOutputs outputs(s.out, RunOutputNames());
   if (!s.save_map.empty()) outputs.AddFile(s.save_map);
   std::string mode;
   RunOutcome outcome;
@@ -753,6 +719,11 @@ int RunRun(const std::vector<std::string>& args) {
   summary.interrupted = outcome.interrupted;
   summary.component_failed = outcome.exit_code != 0;
   summary.ignored_samples = outcome.ignored_samples;
+  summary.stopped_components = outcome.stopped_components;
+  // A looped replay (--loop-minutes) lasts its minutes: one that ended sooner was cut short (the
+  // run's clock starts before the player's, so a complete replay always takes longer).
+  summary.loop_ended_early =
+      s.loop_minutes > 0 && !outcome.interrupted && elapsed < 60.0 * s.loop_minutes;
   if (s.rate > 0 && outputs.Fresh(kRealtimeReportFile))
     summary.realtime = ReadRealtimeReport((s.out / kRealtimeReportFile).string());
   std::printf("mode: %s%s\n", mode.c_str(),
@@ -781,7 +752,12 @@ int RunRun(const std::vector<std::string>& args) {
     std::printf(
         "integrity: %zu frames processed (the %zu requested frames replayed for %g min)%s\n",
         summary.processed, summary.requested, s.loop_minutes,
-        summary.component_failed ? ": a pipeline component failed" : "");
+        summary.Reason() == Shortfall::kNone
+            ? ""
+            : (std::string(": ") + ToString(summary.Reason())).c_str());
+  } else if (summary.Reason() == Shortfall::kComponentStopped) {
+    std::printf("integrity: %zu of %zu requested frames processed: %s\n", summary.processed,
+                summary.requested, ToString(summary.Reason()));
   } else if (summary.Reason() == Shortfall::kNone) {
     // Entries without a depth partner are not requested frames; said here as well as before the
     // run, so that a depth.txt cut short cannot read as a complete run.
@@ -851,14 +827,21 @@ int RunRun(const std::vector<std::string>& args) {
 #endif
   // The exit code, then eval.json (which holds it), then the list of what was written.
   const bool incomplete =
-      !outcome.interrupted && s.loop_minutes == 0 &&
-      ((s.rate == 0 && summary.processed < requested) || summary.foreign_frames > 0);
+      !outcome.interrupted &&
+      ((s.loop_minutes == 0 &&
+        ((s.rate == 0 && summary.processed < requested) || summary.foreign_frames > 0)) ||
+       summary.loop_ended_early || !summary.stopped_components.empty());
   const bool tracking_failure =
       !outcome.interrupted && IsTrackingFailure(outcome.processed, trajectory.size());
-  summary.exit_code = !outputs.failures().empty() || outcome.exit_code != 0 ? 1
-                      : incomplete                                          ? kExitIncompleteRun
-                      : tracking_failure                                    ? 1
-                                                                            : 0;
+  // Frames of another source explain a failed component (the run's player, whose frames the
+  // consumers refused): that reason first.
+  const bool mixed = incomplete && summary.foreign_frames > 0;
+  summary.exit_code = !outputs.failures().empty() ? 1
+                      : mixed                     ? kExitIncompleteRun
+                      : outcome.exit_code != 0    ? 1
+                      : incomplete                ? kExitIncompleteRun
+                      : tracking_failure          ? 1
+                                                  : 0;
   outputs.Write("eval.json",
                 [&] { WriteFileAtomically(outputs.PathOf("eval.json"), RunSummaryJson(summary)); });
   // The files this run wrote; a file an earlier run left (not replaced) is named apart.
@@ -882,10 +865,7 @@ int RunRun(const std::vector<std::string>& args) {
                  "dygslam run: the other outputs are written (see the list above); exit 1\n");
     return 1;
   }
-  if (outcome.exit_code != 0) {
-    std::fprintf(stderr, "dygslam run: a pipeline component failed (see the messages above)\n");
-    return 1;
-  }
+
   // Fewer frames than requested, without a stop the user gave (Ctrl-C, SIGTERM): the stream was
   // cut short (a peer gone, an end of stream from outside, a stalled component). Its outputs are
   // written, but the run is not the one asked for: a distinct exit code.
@@ -896,6 +876,29 @@ int RunRun(const std::vector<std::string>& args) {
                  "frame source publishes on its DDS partition): the outputs mix two streams; "
                  "exit %d\n",
                  summary.foreign_frames, kExitIncompleteRun);
+    return kExitIncompleteRun;
+  }
+  if (outcome.exit_code != 0) {
+    std::fprintf(stderr, "dygslam run: a pipeline component failed (see the messages above)\n");
+    return 1;
+  }
+  if (incomplete && !summary.stopped_components.empty()) {
+    std::string names;
+    for (const std::string& c : summary.stopped_components)
+      names += (names.empty() ? "" : ", ") + c;
+    std::fprintf(stderr,
+                 "dygslam run: error: %s stopped by a signal sent to it alone before the end of "
+                 "the run: its part of the outputs (map.bt for the mapper, the boxes for the "
+                 "detector) ends there; exit %d\n",
+                 names.c_str(), kExitIncompleteRun);
+    return kExitIncompleteRun;
+  }
+  if (incomplete && summary.loop_ended_early) {
+    std::fprintf(stderr,
+                 "dygslam run: error: the replay ended after %.0f s of the %g minutes asked for "
+                 "(--loop-minutes): the stream was cut short (a component stopped or stalled, or "
+                 "an end of stream came from outside the run); exit %d\n",
+                 elapsed, s.loop_minutes, kExitIncompleteRun);
     return kExitIncompleteRun;
   }
   if (incomplete) {

@@ -8,6 +8,7 @@
 
 #include "apps/command.h"
 #include "core/base/error.h"
+#include "core/io/file_util.h"
 #include "core/place/vocabulary.h"
 #include "tools/vocab/synthetic_training.h"
 
@@ -44,6 +45,12 @@ with the defaults.)");
       !p.GetInt("first-seed", 0, 1000000000, &first_seed))
     return p.exit_code();
   training.first_seed = static_cast<uint64_t>(first_seed);
+  // An earlier vocabulary is replaced; any other file given by mistake is not.
+  if (const std::string foreign =
+          FindForeignFileAtOutput({"OUT_FILE", p.Positional("OUT_FILE")}, kVocabularyFileSignature,
+                                  "a dygslam vocabulary file");
+      !foreign.empty())
+    return p.UsageError(foreign);
   const bool quiet = p.Flag("quiet");
 
   const auto start = std::chrono::steady_clock::now();

@@ -16,7 +16,9 @@
 #include "core/base/error.h"
 #include "core/base/number_option.h"
 #include "core/io/file_util.h"
+#include "core/slam/map_file.h"
 #include "core/system/system.h"
+#include "run/realtime_report.h"
 
 namespace dygslam::cli {
 namespace {
@@ -379,6 +381,54 @@ std::string ShellQuote(const std::string& s) {
     }
   }
   return out + "'";
+}
+
+std::vector<NamedPath> DatasetRunInputs(const ArgParser& p, const std::string& dataset_dir,
+                                        const std::string& settings_role,
+                                        const std::string& settings_path,
+                                        const SystemOptions& system,
+                                        const std::vector<std::string>& file_options) {
+  std::vector<NamedPath> inputs;
+  if (!dataset_dir.empty() && dataset_dir != "-") {
+    for (const char* name : {"rgb.txt", "depth.txt", "groundtruth.txt", "associations.txt"})
+      inputs.push_back({std::string("the dataset's ") + name,
+                        (std::filesystem::path(dataset_dir) / name).string()});
+  }
+  inputs.push_back({settings_role, settings_path});
+  for (const std::string& option : file_options)
+    if (p.Has(option) && !p.Get(option).empty()) inputs.push_back({"--" + option, p.Get(option)});
+  inputs.push_back({"the vocabulary (LoopClosing.vocabulary)", system.loop_closing.vocabulary});
+  inputs.push_back({"the detector's cfg", system.detector.cfg_path});
+  inputs.push_back({"the detector's weights", system.detector.weights_path});
+  inputs.push_back({"the detector's names", system.detector.names_path});
+  return inputs;
+}
+
+const std::vector<std::string>& RunOutputNames() {
+  static const std::vector<std::string> names = {
+      "trajectory.txt", "trajectory_online.txt", "keyframes.txt",     "frames.csv", "map.bt",
+      "map.ot",         "groundtruth.txt",       kRealtimeReportFile, "eval.json"};
+  return names;
+}
+
+std::vector<NamedPath> DatasetRunOutputs(const ArgParser& p, const std::filesystem::path& out_dir) {
+  std::vector<NamedPath> outputs;
+  if (p.Has("save-map") && !p.Get("save-map").empty())
+    outputs.push_back({"--save-map", p.Get("save-map")});
+  for (const std::string& name : RunOutputNames())
+    outputs.push_back({"the output " + name, (out_dir / name).string()});
+  return outputs;
+}
+
+std::string FindDatasetRunOutputClash(const std::vector<NamedPath>& inputs, const ArgParser& p,
+                                      const std::filesystem::path& out_dir) {
+  return FindOutputClash(inputs, DatasetRunOutputs(p, out_dir));
+}
+
+std::string FindForeignFileAtSaveMap(const ArgParser& p) {
+  if (!p.Has("save-map") || p.Get("save-map").empty()) return "";
+  return FindForeignFileAtOutput({"--save-map", p.Get("save-map")}, kMapFileSignature,
+                                 "a dygslam map file");
 }
 
 }  // namespace dygslam::cli

@@ -3,10 +3,6 @@
 // A subcommand lives in apps/cmd_<name>.cc and registers itself:
 //
 //   namespace dygslam::cli {
-
-// `run`: the stream ended before every requested frame was processed, and no stop signal asked
-// for that (a component stopped or stalled, an end of stream from outside the run).
-inline constexpr int kExitIncompleteRun = 3;
 //   namespace {
 //   int RunEval(const std::vector<std::string>& args) {
 //     ArgParser p("eval", "GROUNDTRUTH ESTIMATE [--json] [--plot FILE.png]", "Prints ATE / RPE.");
@@ -35,8 +31,17 @@ inline constexpr int kExitIncompleteRun = 3;
 #include <vector>
 
 #include "core/config/settings.h"
+#include "core/io/file_util.h"
+
+namespace dygslam {
+struct SystemOptions;
+}  // namespace dygslam
 
 namespace dygslam::cli {
+
+// `run`: the stream ended before every requested frame was processed, and no stop signal asked
+// for that (a component stopped or stalled, an end of stream from outside the run).
+inline constexpr int kExitIncompleteRun = 3;
 
 struct Command {
   std::string name;
@@ -146,6 +151,28 @@ bool IsTrackingFailure(size_t processed, size_t tracked);
 // "dygslam <command>: error: tracking failed: 0 of 30 frames tracked ..." with the likely causes.
 void PrintTrackingFailure(const std::string& command, size_t processed, size_t tracked,
                           size_t lost);
+
+// The files of a SLAM run on a dataset folder, named as the user knows them, for FindOutputClash:
+// the dataset's lists, the settings file (`settings_role`: "--config" or "the settings file"), the
+// files given to the options `file_options` (--load-map, ...) and the model files the settings
+// name. `dataset_dir` "" or "-": no dataset.
+std::vector<NamedPath> DatasetRunInputs(const ArgParser& p, const std::string& dataset_dir,
+                                        const std::string& settings_role,
+                                        const std::string& settings_path,
+                                        const SystemOptions& system,
+                                        const std::vector<std::string>& file_options);
+// The files a run writes into its --out folder (trajectories, frames.csv, maps, reports,
+// eval.json), and those the summary lists.
+const std::vector<std::string>& RunOutputNames();
+// --save-map (when given) and every file of RunOutputNames() in `out_dir`.
+std::vector<NamedPath> DatasetRunOutputs(const ArgParser& p, const std::filesystem::path& out_dir);
+// The first output of a dataset run that is an input or another output (FindOutputClash), ""
+// when there is none.
+std::string FindDatasetRunOutputClash(const std::vector<NamedPath>& inputs, const ArgParser& p,
+                                      const std::filesystem::path& out_dir);
+// Why --save-map may not be written, "" when it may: it names an existing file that is not a map
+// file (a user's file given by mistake is never replaced).
+std::string FindForeignFileAtSaveMap(const ArgParser& p);
 
 // `s` as one POSIX shell word: unchanged when it has only safe characters, else single-quoted.
 std::string ShellQuote(const std::string& s);

@@ -166,6 +166,12 @@ std::vector<ComponentKind> PipelineComponents(const PipelineOptions& options) {
   return kinds;
 }
 
+// A player whose frames the run's consumers refused (another frame source started first): it
+// failed, but says so to no one on the partition (a FAILED would end the other source's run).
+struct FrameSourceRefused : std::runtime_error {
+  FrameSourceRefused() : std::runtime_error("the frames of this player were refused") {}
+};
+
 // Returns the samples the component ignored (writers outside this run).
 size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
                         std::shared_ptr<dds::Participant> participant, const StopFlagPtr& stop) {
@@ -199,6 +205,7 @@ size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
         fs::create_directories(options.output_dir, ec);
         WriteRealtimeReport((fs::path(options.output_dir) / kRealtimeReportFile).string(), report);
       }
+      if (stats.refused) throw FrameSourceRefused();
       return 0;
     }
     case ComponentKind::kDetector:
@@ -272,6 +279,8 @@ int RunComponentOn(ComponentKind kind, const PipelineOptions& options,
   try {
     const size_t ignored = RunComponentKind(kind, options, participant, stop);
     if (ignored_samples != nullptr) *ignored_samples += ignored;
+  } catch (const FrameSourceRefused&) {
+    return 1;  // the player said why
   } catch (const std::exception& e) {
     try {
       dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
@@ -364,17 +373,18 @@ bool ComponentCatchesSignal(pid_t pid, ComponentKind component, int sig) {
 }
 
 // --processes: each child tells the runner how many samples of foreign writers it ignored (for
-// the run summary, as in the single-process mode) through a pipe whose write end it inherits;
-// the descriptor's number is in this environment variable.
+// the run summary, as in the single-process mode) and the stop signal it received, if any,
+// through a pipe whose write end it inherits; the descriptor's number is in this environment
+// variable.
 constexpr const char* kReportFdVariable = "DYGSLAM_COMPONENT_REPORT_FD";
 
-void ReportIgnoredSamples(size_t ignored) {
+void ReportToRunner(size_t ignored, int stop_signal) {
   const char* fd_text = std::getenv(kReportFdVariable);
   if (fd_text == nullptr) return;
   char* end = nullptr;
   const long fd = std::strtol(fd_text, &end, 10);
   if (end == fd_text || *end != '\0' || fd < 0) return;
-  const std::string line = std::to_string(ignored) + "\n";
+  const std::string line = std::to_string(ignored) + " " + std::to_string(stop_signal) + "\n";
   if (write(static_cast<int>(fd), line.data(), line.size()) < 0) {
     LOG_WARNING << "could not report the ignored-sample count to the runner: "
                 << std::strerror(errno);
@@ -382,19 +392,29 @@ void ReportIgnoredSamples(size_t ignored) {
   close(static_cast<int>(fd));
 }
 
-// What a child reported (0 when nothing: it died before reporting). Closes `fd`.
-size_t ReadIgnoredSamples(int fd) {
+// What a child reported (zeros when nothing: it died before reporting). Closes `fd`.
+struct ChildReport {
+  size_t ignored_samples = 0;
+  int stop_signal = 0;  // the stop signal the child received (0: none)
+};
+ChildReport ReadChildReport(int fd) {
   std::string text;
   char buffer[64];
   ssize_t n = 0;
   while ((n = read(fd, buffer, sizeof(buffer))) > 0) text.append(buffer, n);
   close(fd);
+  ChildReport report;
   char* end = nullptr;
   const unsigned long long value = std::strtoull(text.c_str(), &end, 10);
-  return end == text.c_str() ? 0 : static_cast<size_t>(value);
+  if (end == text.c_str()) return report;
+  report.ignored_samples = static_cast<size_t>(value);
+  char* sig_end = nullptr;
+  const long sig = std::strtol(end, &sig_end, 10);
+  if (sig_end != end && sig > 0 && sig < 65) report.stop_signal = static_cast<int>(sig);
+  return report;
 }
 
-int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop, size_t* ignored_samples) {
+int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop, StopReport* report) {
   const std::string exe =
       options.executable.empty() ? fs::read_symlink("/proc/self/exe").string() : options.executable;
   const std::vector<std::string> args = ComponentArgs(options);
@@ -450,8 +470,18 @@ int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop, size_t
       const ComponentKind kind = children[pid];
       const char* name = ToString(kind);
       children.erase(pid);
-      *ignored_samples += ReadIgnoredSamples(reports[pid]);
+      const ChildReport child = ReadChildReport(reports[pid]);
       reports.erase(pid);
+      report->ignored_samples += child.ignored_samples;
+      // A stop signal sent to this component alone (not the run's: the runner had not forwarded
+      // one and received none itself) ended it before the stream did: its part of the run (the
+      // map, the detections) covers the frames until then.
+      if (child.stop_signal != 0 && !forwarded && !stop->requested()) {
+        LOG_WARNING << "component " << name << " (pid " << pid << ") was stopped by signal "
+                    << child.stop_signal << " sent to it alone, before the end of the run";
+        report->stopped_components.push_back(std::string(name) + " (signal " +
+                                             std::to_string(child.stop_signal) + ")");
+      }
       const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
       // After the outputs are written the runner stops the others with SIGTERM; a component that
       // was already tearing down (its handler restored) then dies of that signal: not a failure.
@@ -516,7 +546,7 @@ int RunComponent(const std::string& name, const PipelineOptions& options, const 
   const ComponentKind kind = ComponentKindOrThrow(name);
   size_t ignored = 0;
   const int code = RunComponentOn(kind, options, MakeParticipant(options, name), stop, &ignored);
-  ReportIgnoredSamples(ignored);
+  ReportToRunner(ignored, stop->signal());
   return code;
 }
 
@@ -537,15 +567,16 @@ int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
   }
   fs::create_directories(options.output_dir);
   auto stop = std::make_shared<StopFlag>(StopFlag::Signals::kStop);
-  size_t ignored_samples = 0;
-  const int code = options.processes ? RunProcesses(options, stop, &ignored_samples)
-                                     : RunSingleProcess(options, stop, &ignored_samples);
+  StopReport local;
+  StopReport* out = report != nullptr ? report : &local;
+  *out = StopReport{};
+  const int code = options.processes ? RunProcesses(options, stop, out)
+                                     : RunSingleProcess(options, stop, &out->ignored_samples);
   if (const int sig = stop->signal(); sig != 0) {
     LOG_INFO << "stopped by signal " << sig << "; outputs flushed";
   }
   if (report != nullptr) {
     report->signaled = stop->signal() != 0;
-    report->ignored_samples = ignored_samples;
   }
   return code;
 }

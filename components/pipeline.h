@@ -85,6 +85,9 @@ struct StopReport {
   // (components/protocol.h). With --processes each child reports its count to the runner when it
   // ends (a pipe); a child that died before reporting counts 0.
   size_t ignored_samples = 0;
+  // --processes: components that ended on a stop signal sent to them alone before the end of the
+  // run ("mapper (signal 15)"): their part of the outputs covers the frames until then.
+  std::vector<std::string> stopped_components;
 };
 // Runs the whole pipeline until the end of the data or a signal. Returns 0 on success (also when
 // stopped by a signal), 1 if a component failed.

@@ -21,6 +21,13 @@
 #include "dygslam_msg/StreamStatusPubSubTypes.h"
 
 namespace dygslam {
+namespace {
+
+// Poses of another frame source's frames (a second of them at 30 Hz) with none for this player's:
+// the run's consumers took the other source, and this player's frames are refused.
+constexpr size_t kRefusedAfterForeignPoses = 30;
+
+}  // namespace
 
 void PlayerOptions::Check() const {
   DYGSLAM_CHECK_OPTION(!dataset_dir.empty(), "player.dataset_dir");
@@ -127,6 +134,12 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   int64_t acked = -1;  // highest seq whose pose was received
   // End-to-end latency: when each frame was published, and from it to its pose's arrival here.
   std::map<uint64_t, Clock::time_point> sent;
+  // The stamp of each frame published and not yet acknowledged: a pose is for one of this
+  // player's frames only when its seq and stamp are one of them (another frame source on the
+  // partition numbers its frames from 0 too).
+  std::map<uint64_t, Timestamp> sent_stamps;
+  size_t own_poses = 0, foreign_poses = 0;
+  bool refused = false;  // the run's slam takes another frame source's frames, not ours
   LatencyReservoir latency_ms;
   // Paced runs: the frame period at the played rate, from the stamps; later poses are late.
   double late_after_ms = 0;
@@ -150,8 +163,26 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
       [&](msg::CameraPose&& pose) {
         {
           std::lock_guard<std::mutex> lock(mutex);
-          acked = std::max<int64_t>(acked, static_cast<int64_t>(pose.header().seq()));
-          const auto it = sent.find(pose.header().seq());
+          const uint64_t seq = pose.header().seq();
+          const auto stamp_it = sent_stamps.find(seq);
+          Timestamp stamp;
+          try {
+            stamp = TimeFromMsg(pose.header().stamp(), "CameraPose.header.stamp");
+          } catch (const InputError&) {
+            return;  // a malformed sample (the reader's own checks report those)
+          }
+          if (stamp_it == sent_stamps.end() || stamp_it->second != stamp) {
+            // Not ours: a pose for another frame source's frame. Many of them while none of
+            // ours came back: the consumers took the other source (it started first).
+            ++foreign_poses;
+            if (own_poses == 0 && foreign_poses >= kRefusedAfterForeignPoses) refused = true;
+            cv.notify_all();
+            return;
+          }
+          ++own_poses;
+          sent_stamps.erase(sent_stamps.begin(), std::next(stamp_it));
+          acked = std::max<int64_t>(acked, static_cast<int64_t>(seq));
+          const auto it = sent.find(seq);
           if (it != sent.end()) {
             const auto now = Clock::now();
             const double ms = std::chrono::duration<double, std::milli>(now - it->second).count();
@@ -272,10 +303,11 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
       const auto deadline = Clock::now() + std::chrono::milliseconds(
                                                static_cast<int64_t>(options.ack_timeout_s * 1000));
       std::unique_lock<std::mutex> lock(mutex);
-      while (acked < need && !stop->requested() && Clock::now() < deadline && !slam_gone()) {
+      while (acked < need && !stop->requested() && Clock::now() < deadline && !slam_gone() &&
+             !refused) {
         cv.wait_for(lock, std::chrono::milliseconds(20));
       }
-      if (acked < need && !stop->requested() && !slam_gone()) {
+      if (acked < need && !stop->requested() && !slam_gone() && !refused) {
         ++stats.ack_timeouts;
         LOG_WARNING << "player: no acknowledgement of frame " << need << " after "
                     << options.ack_timeout_s << " s; sending frame " << n;
@@ -284,8 +316,17 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
     if (stop->requested()) break;
     {
       std::lock_guard<std::mutex> lock(mutex);
+      if (refused) {
+        stats.refused = true;
+        LOG_ERROR << "player: the consumers on this partition take the frames of another frame "
+                  << "source (" << foreign_poses << " poses for its frames, none for this "
+                  << "player's " << n << "): this player's frames are refused; stopping (give "
+                  << "each run its own --partition)";
+        break;
+      }
       const auto now = Clock::now();
       sent[n] = now;
+      sent_stamps[n] = frame.stamp;
       if (!first_sent) first_sent = now;
     }
     if (!frames.Write(RgbdFrameToMsg(frame))) {

@@ -105,6 +105,9 @@ struct PlayerStats {
   // Paced runs (rate > 0): poses that came more than kLateFramePeriods frame periods (at the
   // played rate) after their frame was published.
   size_t late = 0;
+  // The consumers took another frame source's frames (it started first on the partition) and
+  // none of this player's: it stopped publishing (the component then fails).
+  bool refused = false;
 };
 
 // Publishes the dataset; returns when slam reported done, or stop was requested.

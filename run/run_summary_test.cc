@@ -70,6 +70,20 @@ TEST(RunSummary, EveryShortfallHasItsReason) {
   EXPECT_FALSE(mixed.Complete());
   EXPECT_TRUE(Has(RunSummaryJson(mixed), "\"foreign\": 100,")) << RunSummaryJson(mixed);
   EXPECT_TRUE(Has(RunSummaryJson(mixed), "\"complete\": false")) << RunSummaryJson(mixed);
+  // Every frame processed, but the mapper was stopped on its own: its map ends early.
+  RunSummary stopped = Complete();
+  stopped.stopped_components = {"mapper (signal 15)"};
+  EXPECT_EQ(stopped.Reason(), Shortfall::kComponentStopped);
+  EXPECT_FALSE(stopped.Complete());
+  EXPECT_TRUE(Has(RunSummaryJson(stopped), "\"stopped_components\": [\"mapper (signal 15)\"]"))
+      << RunSummaryJson(stopped);
+  // A looped replay that ended before its time: cut short, though more frames than the sequence
+  // holds were processed.
+  RunSummary looped = Complete();
+  looped.processed = 3 * looped.requested;
+  looped.loop_ended_early = true;
+  EXPECT_EQ(looped.Reason(), Shortfall::kCutShort);
+  EXPECT_FALSE(looped.Complete());
 }
 
 TEST(RunSummary, MissingAccuracyIsNullWithItsReason) {

@@ -99,6 +99,20 @@ std::string FindOutputClash(const std::vector<NamedPath>& inputs,
   return "";
 }
 
+std::string FindForeignFileAtOutput(const NamedPath& output, const std::string& signature,
+                                    const std::string& kind) {
+  struct stat st {};
+  if (output.path.empty() || ::stat(output.path.c_str(), &st) != 0 || !S_ISREG(st.st_mode) ||
+      st.st_size == 0)
+    return "";
+  std::ifstream in(output.path, std::ios::binary);
+  std::string head(signature.size(), '\0');
+  if (in && in.read(head.data(), static_cast<std::streamsize>(head.size())) && head == signature)
+    return "";
+  return output.role + " '" + EchoValue(output.path) + "' exists and is not " + kind +
+         ": it is not replaced; remove it first or choose another path";
+}
+
 std::string FindOutputAmongInputs(const std::vector<NamedPath>& inputs,
                                   const std::vector<NamedPath>& outputs) {
   std::error_code ec;

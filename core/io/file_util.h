@@ -41,6 +41,13 @@ bool SameFile(const std::string& a, const std::string& b);
 std::string FindOutputClash(const std::vector<NamedPath>& inputs,
                             const std::vector<NamedPath>& outputs);
 
+// An output replaces an existing file only when that file is of the kind the command writes: it
+// starts with `signature` (a map file's "DYGSLMAP", a PNG's header) or is empty. Returns "" when
+// `path` may be written, else why not, naming `role` and the path (a user's file given by mistake
+// as the output is never replaced).
+std::string FindForeignFileAtOutput(const NamedPath& output, const std::string& signature,
+                                    const std::string& kind);
+
 // FindOutputClash for many inputs (a dataset's images): each path resolved once, so the cost
 // grows with inputs + outputs, not their product. Only output-onto-input clashes.
 std::string FindOutputAmongInputs(const std::vector<NamedPath>& inputs,

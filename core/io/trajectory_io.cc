@@ -48,6 +48,15 @@ std::vector<StampedPose> ReadTumTrajectory(const std::string& path) {
                        "malformed timestamp '" + Abbreviate(l.tokens[0]) + "'");
     double v[7];
     for (int c = 0; c < 7; ++c) v[c] = ParseValue(path, l.line_number, c + 2, l.tokens[c + 1]);
+    for (int c = 0; c < 3; ++c) {
+      if (std::abs(v[c]) > kMaxTrajectoryCoordinate) {
+        char why[160];
+        std::snprintf(why, sizeof(why),
+                      "column %d: coordinate %g m is beyond %g m (not a camera trajectory)", c + 2,
+                      v[c], kMaxTrajectoryCoordinate);
+        throw InputError(path, l.line_number, why);
+      }
+    }
     const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);  // (w, x, y, z)
     const double norm = q.norm();
     if (std::abs(norm - 1.0) > kQuaternionNormTolerance) {

@@ -9,8 +9,13 @@
 
 namespace dygslam {
 
-// Throws InputError naming file and line (wrong column count, non-numeric, non-finite,
-// unsorted or duplicate stamps, non-unit quaternion beyond tolerance).
+// A position beyond this (metres, on any axis) is no camera trajectory: 1e300 would overflow
+// every error computed from it.
+inline constexpr double kMaxTrajectoryCoordinate = 1e7;
+
+// Throws InputError naming file and line (wrong column count, non-numeric, non-finite, a
+// coordinate beyond kMaxTrajectoryCoordinate, unsorted or duplicate stamps, non-unit quaternion
+// beyond tolerance).
 std::vector<StampedPose> ReadTumTrajectory(const std::string& path);
 // Writes atomically (temporary file + rename). Quaternions normalised, qw >= 0 not enforced.
 void WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses);

@@ -91,6 +91,8 @@ TEST(TrajectoryIo, BadInputNamesFileAndLine) {
   ExpectError(ok + "2.0 0 0 nan 0 0 0 1\n", ":2: column 4: non-finite");
   ExpectError(ok + "2.0 0 0 inf 0 0 0 1\n", ":2: column 4: non-finite");
   ExpectError(ok + "2.0 0 0 0 0 0 0 2\n", ":2: quaternion is not unit length");
+  ExpectError(ok + "2.0 0 -1e30 0 0 0 0 1\n",
+              ":2: column 3: coordinate -1e+30 m is beyond 1e+07 m");
   ExpectError(ok + "0.5 0 0 0 0 0 0 1\n", ":2: timestamps not sorted");
   ExpectError(ok + ok, ":2: duplicate timestamp");
   EXPECT_THROW(ReadTumTrajectory("/nonexistent/traj.txt"), InputError);

@@ -39,6 +39,9 @@ struct VocabularyOptions {
   }
 };
 
+// The first bytes of every vocabulary file.
+inline constexpr char kVocabularyFileSignature[] = "DYGVOCAB";
+
 class Vocabulary {
  public:
   Vocabulary() = default;

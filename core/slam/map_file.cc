@@ -19,7 +19,7 @@
 namespace dygslam {
 namespace {
 
-constexpr char kMagic[8] = {'D', 'Y', 'G', 'S', 'L', 'M', 'A', 'P'};
+constexpr char kMagic[8] = {'D', 'Y', 'G', 'S', 'L', 'M', 'A', 'P'};  // kMapFileSignature
 constexpr size_t kHeaderBytes = 8 + 4 + 8;  // magic, version, payload size
 constexpr size_t kTrailerBytes = 8;         // checksum
 // Coordinates of keypoints beyond this are not from an image: corrupt.

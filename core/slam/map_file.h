@@ -96,6 +96,8 @@ LoadedMap LoadMapFile(const std::string& path, const MapFileSettings& run_settin
 // One line for logs and summaries: "12 keyframes, 3456 map points, 1.2 MB, id 0123abcd...".
 std::string DescribeMapFile(const MapFileInfo& info);
 
+// The first bytes of every map file.
+inline constexpr char kMapFileSignature[] = "DYGSLMAP";
 // Checks before a run that `path` can be written at the end: not empty, not a folder, its folder
 // exists. Throws InputError naming the path.
 void CheckMapFileWritable(const std::string& path);

@@ -187,7 +187,7 @@ TEST_F(CliContract, EvalWithOverflowingCoordinatesFails) {
     std::vector<std::string> args = {"eval", dir_ + "/gt.txt", dir_ + "/est.txt"};
     args.insert(args.end(), extra.begin(), extra.end());
     const auto r = Run(args);
-    ExpectInputError(r, {dir_ + "/est.txt", "not a finite number"});
+    ExpectInputError(r, {dir_ + "/est.txt", "not a camera trajectory"});
     EXPECT_FALSE(Contains(r.out, "inf")) << r.out;
   }
 }

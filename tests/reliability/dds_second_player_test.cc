@@ -1,7 +1,8 @@
-// A second frame source on a run's partition, end to end (review leftover of item 3):
+// A second frame source on a run's partition, end to end:
 // `dygslam component player` on another stretch of the dataset, started while `dygslam run`
 // plays, must not feed the run. slam names the rival ("rejected a second frame source"), the
-// run's player warns, and the run's outputs hold only the run's own frames. The unit half is
+// run's player warns, the second player stops by itself (its frames refused) and fails, and the
+// run's outputs hold only the run's own frames. The unit half is
 // components/protocol_test.cc (Protocol.RunWritersRejectASecondFrameSource). Runs in a private
 // network namespace (the test emulator), on DDS domain 194.
 #include <gtest/gtest.h>
@@ -75,8 +76,10 @@ TEST(DdsSecondPlayer, RunRejectsASecondFrameSourceOnItsPartition) {
 
   std::string diagnostics;
   const int run_code = testing::WaitForExit(run, 240, &diagnostics);
-  kill(rival, SIGTERM);
-  testing::WaitForExit(rival, 30, &diagnostics);
+  // The second player sees the poses of the run's frames and none of its own: it stops by itself
+  // and fails (before, it waited 30 s for the acknowledgement of each frame).
+  std::string rival_diagnostics;
+  const int rival_code = testing::WaitForExit(rival, 30, &rival_diagnostics);
   const std::string log = testing::ReadAll(dir + "/run.out") + testing::ReadAll(dir + "/run.err");
   const std::string rival_log =
       testing::ReadAll(dir + "/rival.out") + testing::ReadAll(dir + "/rival.err");
@@ -88,10 +91,13 @@ TEST(DdsSecondPlayer, RunRejectsASecondFrameSourceOnItsPartition) {
       << log << "\n--- second player:\n"
       << rival_log;
   EXPECT_TRUE(Contains(log, "player: another frame source (player)")) << log;
-  // The second player's frames reached slam and were dropped, counted in the summary (without
-  // the check they would have been tracked).
+  EXPECT_EQ(rival_code, 1) << rival_diagnostics << rival_log;
+  EXPECT_TRUE(Contains(rival_log, "this player's frames are refused; stopping")) << rival_log;
+  // The second player's samples (the frames it sent before it stopped, its ground truth) reached
+  // the run and were dropped, counted in the summary (without the check its frames would have
+  // been tracked).
   std::smatch ignored;
-  ASSERT_TRUE(std::regex_search(log, ignored, std::regex(R"(slam: ignored (\d+) frames)"))) << log;
+  ASSERT_TRUE(std::regex_search(log, ignored, std::regex(R"(dds: ignored (\d+) samples)"))) << log;
   EXPECT_GT(std::stol(ignored[1]), 0) << log;
 
   // Only the run's frames: every pose is at a stamp of frames [0, kRunFrames).

@@ -126,6 +126,15 @@ TEST_F(OutputClashCli, EvalRefusesToWriteOverItsInputs) {
   ExpectClash({"eval", gt, est, "--plot", gt}, gt, {"--plot '" + gt + "' is GROUNDTRUTH"});
   ExpectClash({"eval", gt, est, "--plot", dir_ + "/x.png", "--save-aligned", dir_ + "/x.png"}, gt,
               {"is also --save-aligned"});
+  // One file as both trajectories scores nothing.
+  ExpectError(Run({"eval", gt, dir_ + "/../" + fs::path(dir_).filename().string() + "/gt.txt"}), 2,
+              {"is GROUNDTRUTH '" + gt + "': the same file"});
+  // --plot onto an existing file that is not a picture (a trajectory given by mistake): kept.
+  const std::string notes = dir_ + "/notes.txt";
+  std::ofstream(notes) << "the user's notes\n";
+  const auto foreign = Run({"eval", gt, est, "--plot", notes});
+  ExpectError(foreign, 2, {"--plot '" + notes + "' exists and is not a PNG picture"});
+  EXPECT_EQ(ReadAll(notes), "the user's notes\n");
   // Distinct files: written.
   const auto r = Run({"eval", gt, est, "--save-aligned", dir_ + "/aligned.txt"});
   EXPECT_EQ(r.code, 0) << r.err;
@@ -201,6 +210,44 @@ TEST_F(OutputClashCli, StoppedSynthLeavesTheEarlierSequenceWhole) {
     EXPECT_EQ(ReadAll(entry.path().string()), images[k++]) << entry.path();
   }
   EXPECT_EQ(k, images.size());
+}
+
+// The component command checks its files as `run` does: a slam's --save-map onto its own
+// --config (or onto any file that is not a map file) is refused before any DDS work.
+TEST_F(OutputClashCli, ComponentRefusesAnOutputOntoAnInputOrAForeignFile) {
+  const std::string config = dir_ + "/settings.yaml";
+  fs::copy_file(Config(), config);
+  ExpectClash(
+      {"component", "slam", "--config", config, "--out", dir_ + "/out", "--save-map", config},
+      config, {"--save-map '" + config + "' is --config"});
+  const std::string notes = dir_ + "/notes.txt";
+  std::ofstream(notes) << "the user's notes\n";
+  const auto r =
+      Run({"component", "slam", "--config", config, "--out", dir_ + "/out", "--save-map", notes});
+  ExpectError(r, 2, {"--save-map '" + notes + "' exists and is not a dygslam map file"});
+  EXPECT_EQ(ReadAll(notes), "the user's notes\n");
+}
+
+// `run --save-map` replaces an earlier map file, never another kind of file.
+TEST_F(OutputClashCli, SaveMapNeverReplacesAFileThatIsNotAMap) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string data = SmallDataset(source, 10, "data");
+  const std::string notes = dir_ + "/notes.txt";
+  std::ofstream(notes) << "the user's notes\n";
+  const auto r = Run({"run", data, "--config", Config(), "--direct", "--quiet", "--no-map", "--out",
+                      dir_ + "/out", "--save-map", notes});
+  ExpectError(r, 2, {"--save-map '" + notes + "' exists and is not a dygslam map file"});
+  EXPECT_EQ(ReadAll(notes), "the user's notes\n");
+}
+
+// `vocab OUT_FILE` replaces an earlier vocabulary, never another kind of file (before: any file,
+// exit 0).
+TEST_F(OutputClashCli, VocabNeverReplacesAFileThatIsNotAVocabulary) {
+  const std::string notes = dir_ + "/notes.txt";
+  std::ofstream(notes) << "the user's notes\n";
+  const auto r = Run({"vocab", notes, "--scenes", "1", "--frames-per-scene", "1", "--quiet"});
+  ExpectError(r, 2, {"OUT_FILE '" + notes + "' exists and is not a dygslam vocabulary file"});
+  EXPECT_EQ(ReadAll(notes), "the user's notes\n");
 }
 
 }  // namespace

@@ -142,7 +142,7 @@ TEST_F(RunOutputsCli, AFailedMapSaveDoesNotStopTheOtherOutputs) {
   const fs::path out = fs::path(dir_) / "out";
   fs::create_directories(out);
   const std::string map_file = (out / "run.map").string();
-  WriteText(map_file, "earlier map file\n");
+  WriteText(map_file, "DYGSLMAP: an earlier map file\n");
   // 160 KiB: above the text outputs of 20 frames (a few KiB each) and map.bt at 5 cm (measured
   // 60-70 KiB), below the SLAM map file (measured above 1 MiB: descriptors and depth of every
   // keyframe).
@@ -154,7 +154,7 @@ TEST_F(RunOutputsCli, AFailedMapSaveDoesNotStopTheOtherOutputs) {
   EXPECT_TRUE(Contains(r.err, "dygslam run: error: " + map_file + " not written: ")) << r.err;
   EXPECT_FALSE(Contains(r.err, "internal error")) << r.err;
   // The old map file is whole; every other output is this run's.
-  EXPECT_EQ(ReadAll(map_file), "earlier map file\n");
+  EXPECT_EQ(ReadAll(map_file), "DYGSLMAP: an earlier map file\n");
   EXPECT_GE(ReadTumTrajectory((out / "trajectory.txt").string()).size(), 10u) << r.out;
   EXPECT_TRUE(Contains(ReadAll((out / "frames.csv").string()), "stamp,state"));
   EXPECT_TRUE(fs::exists(out / "keyframes.txt"));
@@ -259,6 +259,31 @@ TEST_F(RunOutputsCli, ARunStoppedByAnErrorReplacesTheEarlierEvalJson) {
   EXPECT_TRUE(Contains(json, "\"processed\": 10,")) << json;
   EXPECT_TRUE(Contains(json, "\"exit_code\": 1}")) << json;
   EXPECT_FALSE(Contains(json, "\"error\": \"\"")) << json;
+}
+
+// `bench --update-benchmarks FILE` whose run failed (a worker stopped by a corrupt image) keeps
+// the last complete figures in FILE: a partial report would drop that run's rows and misstate the
+// run count. Before, the section was replaced, exit 0. It says why and exits 1; OUT/report.md
+// holds the partial report.
+TEST_F(RunOutputsCli, ABenchWithAFailedRunLeavesTheBenchmarksFileAsItWas) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  std::vector<fs::path> images;
+  const fs::path data = fs::path(dir_) / "data";
+  CopiedDataset(source, 12, data / "seq", &images);
+  fs::copy_file(RgbdDataset::Open(source).groundtruth_path(), data / "seq" / "groundtruth.txt");
+  fs::remove(images[6]);
+  WriteText(images[6], "not a png");
+  const std::string before =
+      "# Benchmarks\n<!-- bench:begin -->\nthe last complete figures\n<!-- bench:end -->\n";
+  const fs::path file = fs::path(dir_) / "BENCHMARKS.md";
+  WriteText(file, before);
+  const auto r = Run({"bench", data.string(), "--runs", "1", "--configs", "none", "--no-baseline",
+                      "--no-pictures", "--quiet", "--out", (fs::path(dir_) / "b").string(),
+                      "--update-benchmarks", file.string()});
+  EXPECT_EQ(r.code, 1) << r.out << r.err;
+  EXPECT_EQ(ReadAll(file.string()), before);
+  EXPECT_TRUE(Contains(r.err, "not updated: 1 of 1 runs failed and were left out")) << r.err;
+  EXPECT_TRUE(fs::exists(fs::path(dir_) / "b" / "report.md"));
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -21,6 +22,7 @@
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
 #include "components/protocol.h"
+#include "core/base/stop_signal.h"
 #include "dygslam_msg/StreamStatusPubSubTypes.h"
 #include "tests/support/cli_fixture.h"
 #include "tests/support/test_support.h"
@@ -36,6 +38,8 @@ constexpr int kIntruderDomain = 142;
 constexpr int kFailedDomain = 143;
 constexpr int kRateDomain = 144;
 constexpr int kRivalDomain = 145;
+constexpr int kStoppedDomain = 146;
+constexpr int kLoopDomain = 147;
 
 class RunIntegrity : public testing::CliFixture {
  protected:
@@ -51,6 +55,21 @@ bool Exited(pid_t pid, int* code) {
   if (waitpid(pid, &status, WNOHANG) != pid) return false;
   *code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   return true;
+}
+
+// The pid of `dygslam component NAME` whose command line holds `marker` (the run's --out), or 0.
+pid_t ComponentPid(const std::string& name, const std::string& marker) {
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string pid_text = entry.path().filename().string();
+    if (pid_text.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream cmdline_file(entry.path() / "cmdline");
+    std::vector<std::string> argv;
+    for (std::string arg; std::getline(cmdline_file, arg, '\0');) argv.push_back(arg);
+    if (argv.size() > 2 && argv[1] == "component" && argv[2] == name &&
+        std::find(argv.begin(), argv.end(), marker) != argv.end())
+      return static_cast<pid_t>(std::stol(pid_text));
+  }
+  return 0;
 }
 
 WriterGuid GuidOf(uint8_t participant, uint8_t entity) {
@@ -284,6 +303,73 @@ TEST_F(RunIntegrity, FramesOfAnotherSourceOnThePartitionAreNotThisRuns) {
     EXPECT_TRUE(Contains(json, "\"complete\": false")) << json;
     EXPECT_FALSE(Contains(r.out, "(complete)")) << r.out;
   }
+}
+
+// --processes: the mapper stopped by a SIGTERM of its own mid-run (an operator's kill, a
+// supervisor) flushes a map of the keyframes until then and exits 0. Before, the run then ended
+// with every frame tracked, "complete" and exit 0, its map.bt covering part of the run. Now the
+// run names the component and exits 3, and eval.json is not complete.
+TEST_F(RunIntegrity, AComponentStoppedOnItsOwnIsNotACompleteRun) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string out = dir_ + "/out";
+  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet",
+                           "--frames", "0:150", "--processes", "--rate", "1", "--out", out,
+                           "--domain", std::to_string(kStoppedDomain)});
+  ASSERT_GT(pid, 0);
+  // Once the mapper catches SIGTERM (its main() runs) and the frames flow (1 s at 30 Hz).
+  pid_t mapper = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while ((mapper == 0 || !ProcessCatchesSignal(mapper, SIGTERM)) &&
+         std::chrono::steady_clock::now() < deadline) {
+    mapper = ComponentPid("mapper", out);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_GT(mapper, 0) << ReadAll(dir_ + "/run.err");
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  kill(mapper, SIGTERM);
+  std::string diagnostics;
+  const int code = testing::WaitForExit(pid, 120, &diagnostics);
+  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  EXPECT_EQ(code, 3) << summary << err << diagnostics;
+  EXPECT_TRUE(Contains(err, "mapper (signal 15) stopped by a signal sent to it alone")) << err;
+  EXPECT_TRUE(Contains(summary, "a component was stopped by a signal sent to it alone")) << summary;
+  EXPECT_FALSE(Contains(summary, "(complete)")) << summary;
+  const std::string json = ReadAll(out + "/eval.json");
+  EXPECT_TRUE(Contains(json, "\"stopped_components\": [\"mapper (signal 15)\"]")) << json;
+  EXPECT_TRUE(Contains(json, "\"complete\": false")) << json;
+  EXPECT_TRUE(Contains(json, "\"exit_code\": 3}")) << json;
+}
+
+// A looped replay (--loop-minutes 0.25) whose player is stopped after 3 s: before, exit 0
+// ("replayed for 0.25 min"). Now the run says it was cut short and exits 3.
+TEST_F(RunIntegrity, ALoopedReplayEndedBeforeItsTimeIsNotComplete) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string out = dir_ + "/out";
+  const auto start = std::chrono::steady_clock::now();
+  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet",
+                           "--frames", "0:30", "--no-map", "--processes", "--loop-minutes", "0.25",
+                           "--out", out, "--domain", std::to_string(kLoopDomain)});
+  ASSERT_GT(pid, 0);
+  pid_t player = 0;
+  while ((player == 0 || !ProcessCatchesSignal(player, SIGTERM)) &&
+         std::chrono::steady_clock::now() < start + std::chrono::seconds(60)) {
+    player = ComponentPid("player", out);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_GT(player, 0) << ReadAll(dir_ + "/run.err");
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  kill(player, SIGTERM);
+  std::string diagnostics;
+  const int code = testing::WaitForExit(pid, 120, &diagnostics);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  ASSERT_LT(seconds, 15.0) << "the replay was not cut short: " << summary;
+  EXPECT_EQ(code, 3) << summary << err << diagnostics;
+  EXPECT_TRUE(Contains(summary, "replayed for 0.25 min): ")) << summary;
+  const std::string json = ReadAll(out + "/eval.json");
+  EXPECT_TRUE(Contains(json, "\"complete\": false")) << json;
+  EXPECT_TRUE(Contains(json, "\"exit_code\": 3}")) << json;
 }
 
 }  // namespace

@@ -341,6 +341,11 @@ int RunBench(const std::vector<std::string>& args) {
       pr.last = pr.first + 60;
     }
     pr.groundtruth = ReadTumTrajectory(dataset.groundtruth_path());
+    {
+      const SystemOptions options = SystemOptionsFromSettings(pr.settings);
+      WarnAboutDataset("bench", dataset, pr.first, pr.last, options.sensor.depth_map_factor,
+                       options.camera.width, options.camera.height, &pr.groundtruth);
+    }
     std::error_code ec;
     if (fs::is_regular_file(fs::path(s.directory) / "detections.txt", ec))
       std::cerr << "dygslam bench: " << s.name << ": person boxes from " << s.directory

@@ -155,7 +155,7 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
     if (!p.Has("config")) return p.UsageError("--run-slam needs --config FILE");
     pipeline.dataset_dir = "-";
     pipeline.settings_path = p.Get("config");
-    pipeline.output_dir = p.Get("out");
+    pipeline.output_dir = PrepareOutputDir("out", p.Get("out")).string();
     pipeline.system = LoadRunConfiguration(
                           {pipeline.settings_path, CliSettingsReadOptions(false), p.Get("filter")})
                           .system;

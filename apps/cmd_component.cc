@@ -100,6 +100,10 @@ int RunComponentCommand(const std::vector<std::string>& args) {
                         " needs --dataset DIR: the dataset folder that holds rgb.txt and "
                         "depth.txt (e.g. --dataset data/bonn_crowd_part)");
   if (o.output_dir.empty()) return p.UsageError("--out: empty folder name");
+  // The folder the recorder and the mapper write into, checked as run's --out before any DDS
+  // work: never a dataset folder, writable.
+  if (name == "recorder" || name == "mapper" || name == "pipeline")
+    PrepareOutputDir("out", o.output_dir);
   if (o.dataset_dir.empty()) o.dataset_dir = "-";  // only the player reads it
   if (p.Get("partition").find_first_of("*?[]") != std::string::npos)
     return p.UsageError("--partition '" + EchoValue(p.Get("partition")) +

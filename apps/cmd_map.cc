@@ -198,6 +198,8 @@ int RunMap(const std::vector<std::string>& args) {
       reference_until =
           Timestamp::FromNanoseconds(dataset.frames().back().rgb_stamp.nanoseconds() + 1);
   }
+  WarnAboutDataset("map", dataset, first, last, options.sensor.depth_map_factor,
+                   options.camera.width, options.camera.height, nullptr);
   std::vector<StampedPose> given_poses;
   if (from_trajectory) {
     given_poses = ReadTumTrajectory(p.Get("trajectory"));

@@ -589,16 +589,9 @@ int RunRun(const std::vector<std::string>& args) {
                  EchoValue(dataset.groundtruth_problem(), 500).c_str());
   }
   if (s.use_detection_file) WarnUnmatchedDetections(p.Get("detections"), s, dataset);
-  // Depth that no RGB-D sensor measures on most pixels (every pixel saturated, DepthMapFactor off
-  // by orders of magnitude) would run to the end with a meaningless map and trajectory: said
-  // before the run.
-  if (const std::string why = ImplausibleDepth(
-          SampleDepthRange(dataset, s.first, s.last, s.system.sensor.depth_map_factor,
-                           s.system.camera.width, s.system.camera.height),
-          s.system.sensor.depth_map_factor);
-      !why.empty()) {
-    std::fprintf(stderr, "dygslam run: warning: implausible depth: %s\n", why.c_str());
-  }
+  WarnAboutDataset("run", dataset, s.first, s.last, s.system.sensor.depth_map_factor,
+                   s.system.camera.width, s.system.camera.height,
+                   groundtruth.empty() ? nullptr : &groundtruth);
   size_t skipped = 0;
   for (size_t k = s.first; k < s.last; ++k) {
     if (!dataset.FrameForRgbEntry(k)) ++skipped;

@@ -15,6 +15,7 @@
 #include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/base/number_option.h"
+#include "core/io/dataset.h"
 #include "core/io/file_util.h"
 #include "core/slam/map_file.h"
 #include "core/system/system.h"
@@ -429,6 +430,27 @@ std::string FindForeignFileAtSaveMap(const ArgParser& p) {
   if (!p.Has("save-map") || p.Get("save-map").empty()) return "";
   return FindForeignFileAtOutput({"--save-map", p.Get("save-map")}, kMapFileSignature,
                                  "a dygslam map file");
+}
+
+void WarnAboutDataset(const std::string& command, const RgbdDataset& dataset, size_t first,
+                      size_t last, double depth_map_factor, int width, int height,
+                      const std::vector<StampedPose>* groundtruth) {
+  const auto warn = [&](const std::string& text) {
+    std::fprintf(stderr, "dygslam %s: warning: %s\n", command.c_str(), text.c_str());
+  };
+  if (!dataset.listing_problem().empty()) warn(EchoValue(dataset.listing_problem(), 600));
+  // Depth that no RGB-D sensor measures on most pixels (every pixel saturated, DepthMapFactor off
+  // by orders of magnitude) would run to the end with a meaningless map and trajectory.
+  if (const std::string why =
+          ImplausibleDepth(SampleDepthRange(dataset, first, last, depth_map_factor, width, height),
+                           depth_map_factor);
+      !why.empty())
+    warn("implausible depth: " + why);
+  if (groundtruth != nullptr) {
+    if (const std::string note = GroundTruthCoverageNote(dataset, first, last, *groundtruth);
+        !note.empty())
+      warn(EchoValue(note, 600));
+  }
 }
 
 }  // namespace dygslam::cli

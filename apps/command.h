@@ -34,6 +34,8 @@
 #include "core/io/file_util.h"
 
 namespace dygslam {
+class RgbdDataset;
+struct StampedPose;
 struct SystemOptions;
 }  // namespace dygslam
 
@@ -173,6 +175,15 @@ std::string FindDatasetRunOutputClash(const std::vector<NamedPath>& inputs, cons
 // Why --save-map may not be written, "" when it may: it names an existing file that is not a map
 // file (a user's file given by mistake is never replaced).
 std::string FindForeignFileAtSaveMap(const ArgParser& p);
+
+// What a command says about a dataset before it runs on rgb entries [first, last), each as
+// "dygslam COMMAND: warning: ..." on stderr (the run goes on; each is something to check): images
+// in rgb/ or depth/ that the lists leave out, depth outside any sensor's range on most pixels, and
+// a ground truth (when given) that does not cover the frames. Throws what reading a depth image
+// throws.
+void WarnAboutDataset(const std::string& command, const RgbdDataset& dataset, size_t first,
+                      size_t last, double depth_map_factor, int width, int height,
+                      const std::vector<StampedPose>* groundtruth);
 
 // `s` as one POSIX shell word: unchanged when it has only safe characters, else single-quoted.
 std::string ShellQuote(const std::string& s);

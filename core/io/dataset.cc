@@ -1,12 +1,14 @@
 #include "core/io/dataset.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
 
 #include "core/base/echo.h"
 #include "core/base/error.h"
@@ -132,6 +134,34 @@ std::vector<ListEntry> ReadImageList(const fs::path& directory, const std::strin
 
 }  // namespace
 
+namespace {
+
+// Images in DIR/`folder` that `list` does not name, as a note ("" when every one is listed): a
+// list cut short at a line boundary reads as a shorter sequence, and nothing else tells.
+std::string UnlistedImagesNote(const fs::path& dir, const std::string& folder,
+                               const std::string& list, const std::vector<ListEntry>& entries) {
+  std::error_code ec;
+  if (!fs::is_directory(dir / folder, ec)) return "";
+  std::set<std::string> listed;
+  for (const ListEntry& e : entries) listed.insert(fs::path(e.path).lexically_normal().string());
+  size_t images = 0, unlisted = 0;
+  for (fs::directory_iterator it(dir / folder, ec), end; !ec && it != end; it.increment(ec)) {
+    std::string ext = it->path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return std::tolower(c); });
+    if (ext != ".png" && ext != ".jpg" && ext != ".jpeg") continue;
+    if (!it->is_regular_file(ec)) continue;
+    ++images;
+    unlisted += listed.count(it->path().lexically_normal().string()) == 0;
+  }
+  if (unlisted == 0) return "";
+  return (dir / list).string() + " lists " + std::to_string(images - unlisted) + " of the " +
+         std::to_string(images) + " images in " + folder + "/ (" + std::to_string(unlisted) +
+         " not listed): a list cut short? The run uses the listed images only";
+}
+
+}  // namespace
+
 RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions& options) {
   options.Check();
   std::error_code ec;
@@ -195,6 +225,11 @@ RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions
   } else {
     const std::vector<ListEntry> depth =
         ReadImageList(dir, "depth.txt", options.refuse_outside_paths);
+    for (const std::string& note : {UnlistedImagesNote(dir, "rgb", "rgb.txt", rgb),
+                                    UnlistedImagesNote(dir, "depth", "depth.txt", depth)}) {
+      if (!note.empty())
+        dataset.listing_problem_ += (dataset.listing_problem_.empty() ? "" : "; ") + note;
+    }
     std::vector<Timestamp> rgb_stamps, depth_stamps;
     for (const ListEntry& e : rgb) rgb_stamps.push_back(e.stamp);
     for (const ListEntry& e : depth) depth_stamps.push_back(e.stamp);
@@ -224,6 +259,30 @@ RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions
     dataset.groundtruth_problem_ = gt.string() + ": " + reason;
   }
   return dataset;
+}
+
+std::string GroundTruthCoverageNote(const RgbdDataset& dataset, size_t first, size_t last,
+                                    const std::vector<StampedPose>& groundtruth,
+                                    double tolerance_s) {
+  if (groundtruth.empty()) return "";
+  const Timestamp begin = groundtruth.front().stamp, end = groundtruth.back().stamp;
+  size_t frames = 0, before = 0, after = 0;
+  for (size_t k = first; k < last; ++k) {
+    const std::optional<size_t> i = dataset.FrameForRgbEntry(k);
+    if (!i) continue;
+    ++frames;
+    const Timestamp t = dataset.frame(*i).rgb_stamp;
+    before += SecondsBetween(t, begin) > tolerance_s;
+    after += SecondsBetween(end, t) > tolerance_s;
+  }
+  if (before + after == 0) return "";
+  char text[400];
+  std::snprintf(text, sizeof(text),
+                "covers %.1f s (%s to %s); %zu of the %zu frames lie outside it (%zu before, %zu "
+                "after): a ground truth cut short? The ATE covers the frames within it",
+                SecondsBetween(begin, end), begin.ToString().c_str(), end.ToString().c_str(),
+                before + after, frames, before, after);
+  return dataset.groundtruth_path() + " " + text;
 }
 
 std::optional<size_t> RgbdDataset::FrameForRgbEntry(size_t k) const {

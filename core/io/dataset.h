@@ -78,6 +78,10 @@ class RgbdDataset {
   // Why a groundtruth.txt that is there is not used: "DIR/groundtruth.txt: not a regular file: a
   // FIFO" (a directory, a device, a link to /dev/zero); empty when it is a regular file or absent.
   const std::string& groundtruth_problem() const { return groundtruth_problem_; }
+  // Images in rgb/ or depth/ that rgb.txt / depth.txt do not list ("DIR/rgb.txt lists 200 of the
+  // 360 images in rgb/ ..."): a list cut short at a line boundary. Empty when every image is
+  // listed.
+  const std::string& listing_problem() const { return listing_problem_; }
 
  private:
   std::string directory_;
@@ -86,7 +90,16 @@ class RgbdDataset {
   size_t num_rgb_entries_ = 0;
   std::string groundtruth_path_;
   std::string groundtruth_problem_;
+  std::string listing_problem_;
 };
+
+// "" when the ground truth's time span covers every frame of rgb entries [first, last) (within
+// `tolerance_s`); else how many frames lie before or after it ("DIR/groundtruth.txt covers 12.1 s
+// (1548339823.86 to 1548339835.96); 40 of the 360 frames lie outside it ..."): a ground truth
+// cut short reads as a scored run with fewer pairs, and nothing else tells.
+std::string GroundTruthCoverageNote(const RgbdDataset& dataset, size_t first, size_t last,
+                                    const std::vector<StampedPose>& groundtruth,
+                                    double tolerance_s = 0.02);
 
 // The range an RGB-D sensor measures (metres): structured light and time of flight reach 4 to
 // 10 m (Kinect v1 / v2, RealSense D4xx), none beyond 12 m; a saturated 16-bit pixel at the TUM

@@ -328,6 +328,15 @@ TEST_F(CliContract, OutputFolderThatIsADatasetIsRefusedAndNothingIsOverwritten) 
   }
   const auto r = Run({"map", dataset.string(), "--config", Config(), "--out", dataset.string()});
   ExpectInputError(r, {"--out", "dataset folder"});
+  // The components that write into --out, and the bridge's SLAM run.
+  for (const char* component : {"recorder", "mapper", "pipeline"}) {
+    const auto c = Run({"component", component, "--dataset", dataset.string(), "--config", Config(),
+                        "--out", dataset.string()});
+    ExpectInputError(c, {"--out", "dataset folder"});
+  }
+  const auto b = Run({"bridge", "--run-slam", "--config", Config(), "--out", dataset.string()});
+  ExpectInputError(b, {"--out", "dataset folder"});
+  EXPECT_EQ(ReadAll((dataset / "groundtruth.txt").string()), groundtruth);
 }
 
 TEST_F(CliContract, SettingsFileThatIsADeviceIsRefused) {

@@ -34,10 +34,11 @@ class CliOutputFiles : public testing::CliFixture {
 TEST_F(CliOutputFiles, OutputFileThatIsAFifoIsLeftAlone) {
   const std::string fifo = dir_ + "/out.fifo";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-  // eval --save-aligned: ground truth against itself (a valid evaluation).
+  // eval --save-aligned: ground truth against a copy of itself (a valid evaluation).
   std::ofstream(dir_ + "/gt.txt") << "1 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n3 1 1 0 0 0 0 1\n"
                                   << "4 0 1 1 0 0 0 1\n";
-  const auto r = Run({"eval", dir_ + "/gt.txt", dir_ + "/gt.txt", "--save-aligned", fifo});
+  fs::copy_file(dir_ + "/gt.txt", dir_ + "/est.txt");
+  const auto r = Run({"eval", dir_ + "/gt.txt", dir_ + "/est.txt", "--save-aligned", fifo});
   ExpectError(r, 1, {fifo, "a FIFO, not a regular file"});
   EXPECT_TRUE(fs::is_fifo(fifo)) << "the FIFO was replaced";
   // vocab OUT_FILE: the smallest vocabulary, refused before or after training, never renamed over.

@@ -1,5 +1,6 @@
 // Dataset files through the command line: a groundtruth.txt that is a FIFO, a folder or a link to
-// /dev/zero, a depth.txt cut short and --frames beyond the dataset are warned; --detections that
+// /dev/zero, a depth.txt cut short, an rgb.txt or groundtruth.txt cut at a line boundary and
+// --frames beyond the dataset are warned; --detections that
 // match no frame are warned, a class_id outside the detector's classes is an error.
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -122,6 +123,65 @@ TEST_F(DatasetCli, DetectionsThatMatchNoFrameWarnAndBadClassIdsFail) {
                    "boxes", "--quiet", "--detections", det}),
               1, {det + ":2", "class_id 999", "0..79"});
   EXPECT_FALSE(fs::exists(dir_ + "/o_det2"));
+}
+
+// A list or ground truth cut at a line boundary reads as a shorter sequence: before, `run`
+// said nothing (exit 0, "complete"). Now it names the images the list leaves out and the frames
+// the ground truth does not cover.
+TEST_F(DatasetCli, ListsAndGroundTruthCutAtALineBoundaryAreWarned) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const RgbdDataset d = RgbdDataset::Open(source);
+  // A dataset of 10 frames laid out as TUM's: rgb/ and depth/ beside the lists (links to the
+  // shared images).
+  const fs::path dir = fs::path(dir_) / "cut";
+  fs::create_directories(dir / "rgb");
+  fs::create_directories(dir / "depth");
+  std::string rgb, depth;
+  for (size_t i = 0; i < 10; ++i) {
+    const fs::path r = fs::path("rgb") / fs::path(d.frame(i).rgb_path).filename();
+    const fs::path z = fs::path("depth") / fs::path(d.frame(i).depth_path).filename();
+    fs::create_symlink(d.frame(i).rgb_path, dir / r);
+    fs::create_symlink(d.frame(i).depth_path, dir / z);
+    rgb += d.frame(i).rgb_stamp.ToString() + " " + r.string() + "\n";
+    depth += d.frame(i).depth_stamp.ToString() + " " + z.string() + "\n";
+  }
+  std::ofstream(dir / "depth.txt") << depth;
+  // The ground truth up to frame 5 (the frames after it have none).
+  std::string gt;
+  for (const StampedPose& p : ReadTumTrajectory(d.groundtruth_path()))
+    if (p.stamp <= d.frame(5).rgb_stamp) {
+      const Eigen::Quaterniond q = p.world_from_cam.rotation;
+      const Eigen::Vector3d& t = p.world_from_cam.translation;
+      std::ostringstream line;
+      line.precision(12);
+      line << p.stamp.ToString() << " " << t.x() << " " << t.y() << " " << t.z() << " " << q.x()
+           << " " << q.y() << " " << q.z() << " " << q.w() << "\n";
+      gt += line.str();
+    }
+  std::ofstream(dir / "groundtruth.txt") << gt;
+  // rgb.txt whole: the ground truth's end is warned.
+  std::ofstream(dir / "rgb.txt") << rgb;
+  const std::vector<std::string> args = {"run",      dir.string(), "--config",   Config(),
+                                         "--direct", "--filter",   "none",       "--quiet",
+                                         "--no-map", "--out",      dir_ + "/out"};
+  const auto whole = Run(args);
+  EXPECT_EQ(whole.code, 0) << whole.err;
+  EXPECT_TRUE(Contains(whole.err, (dir / "groundtruth.txt").string() + " covers")) << whole.err;
+  EXPECT_TRUE(Contains(whole.err, "4 of the 10 frames lie outside it (0 before, 4 after)"))
+      << whole.err;
+  EXPECT_FALSE(Contains(whole.err, "images in rgb/")) << whole.err;
+  // rgb.txt cut after its 6th line: the 4 images it leaves out are warned.
+  std::ofstream(dir / "rgb.txt") << rgb.substr(0, [&] {
+    size_t pos = 0;
+    for (int line = 0; line < 6; ++line) pos = rgb.find('\n', pos) + 1;
+    return pos;
+  }());
+  const auto cut = Run(args);
+  EXPECT_EQ(cut.code, 0) << cut.err;
+  EXPECT_TRUE(Contains(
+      cut.err, (dir / "rgb.txt").string() + " lists 6 of the 10 images in rgb/ (4 not listed)"))
+      << cut.err;
+  EXPECT_FALSE(Contains(cut.err, "lie outside it")) << cut.err;  // the 6 frames are covered
 }
 
 }  // namespace

@@ -4,6 +4,7 @@ usage errors exit 2, bad input exits 1 with a message naming the file and line).
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 
@@ -63,7 +64,7 @@ def main():
     rc, out, err = run(exe, "eval", "a", "b", "--gt-calibration", "none", "--calibrated-ate")
     expect(rc == 2 and "--calibrated-ate" in err, "eval --calibrated-ate without calibration: exit 2")
     missing = os.path.join(a.tmp, "missing.txt")
-    rc, out, err = run(exe, "eval", missing, missing)
+    rc, out, err = run(exe, "eval", missing, missing + ".estimate")
     expect(rc == 1 and missing in err and "not found" in err, "eval missing file: exit 1 naming it")
 
     gt = os.path.join(a.tmp, "gt.txt")
@@ -82,9 +83,14 @@ def main():
     rc, out, err = run(exe, "eval", gt, far)
     expect(rc == 1 and "pairs" in err, "eval without overlapping stamps: exit 1")
 
+    # One file as both trajectories is a usage error; an identical copy scores 0.
     rc, out, err = run(exe, "eval", gt, gt)
-    expect(rc == 0 and "ATE" in out and "rmse 0.000000" in out, "eval self: text output, ATE 0")
-    rc, out, err = run(exe, "eval", gt, gt, "--json")
+    expect(rc == 2 and "the same file" in err, "eval of one file against itself: exit 2")
+    same = os.path.join(a.tmp, "same.txt")
+    shutil.copyfile(gt, same)
+    rc, out, err = run(exe, "eval", gt, same)
+    expect(rc == 0 and "ATE" in out and "rmse 0.000000" in out, "eval of a copy: text output, ATE 0")
+    rc, out, err = run(exe, "eval", gt, same, "--json")
     try:
         j = json.loads(out)
         keys = ("pairs", "ate_rmse", "ate_mean", "ate_median", "ate_sd", "ate_min", "ate_max",
@@ -93,9 +99,9 @@ def main():
     except ValueError:
         expect(False, "eval --json prints JSON: " + out)
     aligned = os.path.join(a.tmp, "aligned.txt")
-    rc, out, err = run(exe, "eval", gt, gt, "--save-aligned", aligned)
+    rc, out, err = run(exe, "eval", gt, same, "--save-aligned", aligned)
     expect(rc == 0 and os.path.exists(aligned), "eval --save-aligned writes a trajectory")
-    rc, out, err = run(exe, "eval", gt, gt, "--plot", os.path.join(a.tmp, "no_dir", "x.png"))
+    rc, out, err = run(exe, "eval", gt, same, "--plot", os.path.join(a.tmp, "no_dir", "x.png"))
     expect(rc == 1 and "does not exist" in err, "eval --plot into a missing directory: exit 1")
 
     print("%d failure(s)" % len(FAILURES))

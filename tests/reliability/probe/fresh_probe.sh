@@ -283,7 +283,7 @@ if family commands; then
   probe e_save_dir 1 30 "$DYG" eval "$gt" est.txt --save-aligned /tmp
   probe e_save_proc 1 30 "$DYG" eval "$gt" est.txt --save-aligned /proc/version
   probe e_extra_arg 2 30 "$DYG" eval "$gt" est.txt extra
-  probe e_same_file 0 30 "$DYG" eval "$gt" "$gt"
+  probe e_same_file 2 30 "$DYG" eval "$gt" "$gt"
   probe b_runs_zero 2 30 "$DYG" bench ds --runs 0 --out o_b
   probe b_runs_huge 2 30 "$DYG" bench ds --runs 99999999999 --out o_b
   probe b_configs_bad 2 30 "$DYG" bench ds --configs none,bogus --out o_b --runs 1

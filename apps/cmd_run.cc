@@ -96,7 +96,7 @@ struct RunOutcome {
   bool interrupted = false;
   int exit_code = 0;
   size_t ignored_samples = 0;  // DDS: samples of writers outside this run (components/protocol.h)
-  std::vector<std::string> stopped_components;  // --processes: stopped by a signal of their own
+  std::vector<std::string> components_cut_short;  // --processes: ended before the run did
   std::vector<Timestamp> stamps;  // DDS: the stamps of the frames processed (frames.csv)
 };
 
@@ -364,7 +364,7 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
   outcome.exit_code = RunPipeline(o, &report);
   outcome.interrupted = report.signaled;
   outcome.ignored_samples = report.ignored_samples;
-  outcome.stopped_components = report.stopped_components;
+  outcome.components_cut_short = report.components_cut_short;
   if (outputs.Fresh("frames.csv")) {
     for (const TextLine& line : ReadDataLines((s.out / "frames.csv").string())) {
       if (line.tokens.size() < 2 || line.tokens[0] == "stamp") continue;
@@ -712,7 +712,7 @@ int RunRun(const std::vector<std::string>& args) {
   summary.interrupted = outcome.interrupted;
   summary.component_failed = outcome.exit_code != 0;
   summary.ignored_samples = outcome.ignored_samples;
-  summary.stopped_components = outcome.stopped_components;
+  summary.components_cut_short = outcome.components_cut_short;
   // A looped replay (--loop-minutes) lasts its minutes: one that ended sooner was cut short (the
   // run's clock starts before the player's, so a complete replay always takes longer).
   summary.loop_ended_early =
@@ -748,7 +748,7 @@ int RunRun(const std::vector<std::string>& args) {
         summary.Reason() == Shortfall::kNone
             ? ""
             : (std::string(": ") + ToString(summary.Reason())).c_str());
-  } else if (summary.Reason() == Shortfall::kComponentStopped) {
+  } else if (summary.Reason() == Shortfall::kComponentCutShort) {
     std::printf("integrity: %zu of %zu requested frames processed: %s\n", summary.processed,
                 summary.requested, ToString(summary.Reason()));
   } else if (summary.Reason() == Shortfall::kNone) {
@@ -823,7 +823,7 @@ int RunRun(const std::vector<std::string>& args) {
       !outcome.interrupted &&
       ((s.loop_minutes == 0 &&
         ((s.rate == 0 && summary.processed < requested) || summary.foreign_frames > 0)) ||
-       summary.loop_ended_early || !summary.stopped_components.empty());
+       summary.loop_ended_early || !summary.components_cut_short.empty());
   const bool tracking_failure =
       !outcome.interrupted && IsTrackingFailure(outcome.processed, trajectory.size());
   // Frames of another source explain a failed component (the run's player, whose frames the
@@ -875,14 +875,13 @@ int RunRun(const std::vector<std::string>& args) {
     std::fprintf(stderr, "dygslam run: a pipeline component failed (see the messages above)\n");
     return 1;
   }
-  if (incomplete && !summary.stopped_components.empty()) {
+  if (incomplete && !summary.components_cut_short.empty()) {
     std::string names;
-    for (const std::string& c : summary.stopped_components)
+    for (const std::string& c : summary.components_cut_short)
       names += (names.empty() ? "" : ", ") + c;
     std::fprintf(stderr,
-                 "dygslam run: error: %s stopped by a signal sent to it alone before the end of "
-                 "the run: its part of the outputs (map.bt for the mapper, the boxes for the "
-                 "detector) ends there; exit %d\n",
+                 "dygslam run: error: %s ended before the run did: its part of the outputs "
+                 "(map.bt for the mapper, the boxes for the detector) ends there; exit %d\n",
                  names.c_str(), kExitIncompleteRun);
     return kExitIncompleteRun;
   }

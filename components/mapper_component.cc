@@ -155,7 +155,9 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
   // the detector and slam leave, instead of delaying the poses (with the mapper at the same
   // priority, keyframe bursts in a crowd made poses late at the camera's rate).
   LowerCurrentThreadPriority();
+  PauseWatch pause;
   while (true) {
+    pause.Tick();
     started.Poll(status);
     announcer.Poll(status, keyframes.matched() > 0);
     if (stop->requested() && !flush_deadline) {
@@ -169,8 +171,15 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
     std::optional<Prepared> sample = prepared.Pop(std::chrono::milliseconds(50));
     if (!sample) {
       if (writer_gone) {
-        LOG_WARNING << "mapper: slam's keyframe writer left " << options.writer_gone_s
-                    << " s ago without announcing the end of its run; writing the map";
+        stats.input_cut_short = true;
+        if (pause.WasPaused()) {
+          LOG_WARNING << "mapper: this process did not run for " << pause.LongestSeconds()
+                      << " s (paused, e.g. SIGSTOP, or starved of CPU) and slam left meanwhile; "
+                      << "the keyframes it sent then are lost: writing the map without them";
+        } else {
+          LOG_WARNING << "mapper: slam's keyframe writer left " << options.writer_gone_s
+                      << " s ago without announcing the end of its run; writing the map";
+        }
         break;
       }
       std::lock_guard<std::mutex> lock(mutex);

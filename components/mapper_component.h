@@ -29,6 +29,9 @@ struct MapperStats {
   size_t foreign_samples = 0;
   size_t updates_published = 0;
   size_t map_writes = 0;
+  // slam's keyframe writer left without the end of its run reaching the mapper (this process
+  // paused or starved while slam finished, slam killed): the map may lack its last keyframes.
+  bool input_cut_short = false;
 };
 
 MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const MapperOptions& options,

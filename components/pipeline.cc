@@ -172,9 +172,17 @@ struct FrameSourceRefused : std::runtime_error {
   FrameSourceRefused() : std::runtime_error("the frames of this player were refused") {}
 };
 
-// Returns the samples the component ignored (writers outside this run).
-size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
-                        std::shared_ptr<dds::Participant> participant, const StopFlagPtr& stop) {
+// What a component reports when it ends: the samples it ignored (writers outside this run), and
+// whether its input ended without the end of the run reaching it (its outputs may lack the last
+// samples).
+struct ComponentOutcome {
+  size_t ignored_samples = 0;
+  bool input_cut_short = false;
+};
+
+ComponentOutcome RunComponentKind(ComponentKind kind, const PipelineOptions& options,
+                                  std::shared_ptr<dds::Participant> participant,
+                                  const StopFlagPtr& stop) {
   switch (kind) {
     case ComponentKind::kPlayer: {
       PlayerOptions p;
@@ -206,12 +214,12 @@ size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
         WriteRealtimeReport((fs::path(options.output_dir) / kRealtimeReportFile).string(), report);
       }
       if (stats.refused) throw FrameSourceRefused();
-      return 0;
+      return {};
     }
     case ComponentKind::kDetector:
       RunDetector(participant, DetectorOptionsFor(options), stop,
                   options.system.detection_every_n_frames);
-      return 0;
+      return {};
     case ComponentKind::kSlam: {
       SlamComponentOptions s;
       s.system = options.system;
@@ -241,7 +249,7 @@ size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
       const SlamStats stats = RunSlam(participant, s, stop);
       // The final trajectories are out (the recorder writes them): now the map file's failure.
       if (!stats.save_map_error.empty()) throw InputError(stats.save_map_error);
-      return stats.foreign_frames + stats.foreign_detections + stats.foreign_statuses;
+      return {stats.foreign_frames + stats.foreign_detections + stats.foreign_statuses, false};
     }
     case ComponentKind::kMapper: {
       MapperOptions m;
@@ -254,14 +262,16 @@ size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
       m.flush_timeout_s = options.flush_timeout_s;
       m.octomap = options.octomap;
       fs::create_directories(options.output_dir);
-      return RunMapper(participant, m, stop).foreign_samples;
+      const MapperStats stats = RunMapper(participant, m, stop);
+      return {stats.foreign_samples, stats.input_cut_short};
     }
     case ComponentKind::kRecorder: {
       RecorderOptions r;
       r.output_dir = options.output_dir;
       r.flush_timeout_s = options.flush_timeout_s;
       r.progress = options.progress;
-      return RunRecorder(participant, r, stop).foreign_samples;
+      const RecorderStats stats = RunRecorder(participant, r, stop);
+      return {stats.foreign_samples, stats.input_cut_short};
     }
     case ComponentKind::kRos2Bridge:
       break;
@@ -273,12 +283,15 @@ size_t RunComponentKind(ComponentKind kind, const PipelineOptions& options,
 // Runs component `kind`; one that fails announces FAILED with the reason on the status topic
 // (its peers react: slam finishes when the frame source failed, mapper and recorder write what
 // they have when slam failed) and the error goes on to the caller.
+// 0, or kExitComponentCutShort when the component's input ended without the end of the run (its
+// outputs are written, the run is incomplete). Throws when the component failed.
 int RunComponentOn(ComponentKind kind, const PipelineOptions& options,
                    std::shared_ptr<dds::Participant> participant, const StopFlagPtr& stop,
                    size_t* ignored_samples = nullptr) {
   try {
-    const size_t ignored = RunComponentKind(kind, options, participant, stop);
-    if (ignored_samples != nullptr) *ignored_samples += ignored;
+    const ComponentOutcome outcome = RunComponentKind(kind, options, participant, stop);
+    if (ignored_samples != nullptr) *ignored_samples += outcome.ignored_samples;
+    if (outcome.input_cut_short) return kExitComponentCutShort;
   } catch (const FrameSourceRefused&) {
     return 1;  // the player said why
   } catch (const std::exception& e) {
@@ -479,15 +492,21 @@ int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop, StopRe
       if (child.stop_signal != 0 && !forwarded && !stop->requested()) {
         LOG_WARNING << "component " << name << " (pid " << pid << ") was stopped by signal "
                     << child.stop_signal << " sent to it alone, before the end of the run";
-        report->stopped_components.push_back(std::string(name) + " (signal " +
-                                             std::to_string(child.stop_signal) + ")");
+        report->components_cut_short.push_back(std::string(name) + " (signal " +
+                                               std::to_string(child.stop_signal) + ")");
       }
       const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
       // After the outputs are written the runner stops the others with SIGTERM; a component that
       // was already tearing down (its handler restored) then dies of that signal: not a failure.
       const bool stopped_by_runner =
           forwarded && WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM;
-      if (stopped_by_runner) {
+      // Its outputs are written, but its input ended without the end of the run.
+      const bool cut_short = WIFEXITED(status) && WEXITSTATUS(status) == kExitComponentCutShort;
+      if (cut_short) {
+        LOG_WARNING << "component " << name << " (pid " << pid << ") wrote its outputs, but its "
+                    << "input ended without the end of the run (see its warning above)";
+        report->components_cut_short.push_back(std::string(name) + " (its input ended early)");
+      } else if (stopped_by_runner) {
         LOG_INFO << "component " << name << " (pid " << pid << ") stopped at the end of the run";
       } else if (!ok) {
         LOG_WARNING << "component " << name << " (pid " << pid << ") "

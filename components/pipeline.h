@@ -85,10 +85,15 @@ struct StopReport {
   // (components/protocol.h). With --processes each child reports its count to the runner when it
   // ends (a pipe); a child that died before reporting counts 0.
   size_t ignored_samples = 0;
-  // --processes: components that ended on a stop signal sent to them alone before the end of the
-  // run ("mapper (signal 15)"): their part of the outputs covers the frames until then.
-  std::vector<std::string> stopped_components;
+  // --processes: components that ended before the run did, with why: a stop signal sent to them
+  // alone ("mapper (signal 15)"), or an input that ended without the end of the run ("mapper (its
+  // input ended early)": the process was paused while slam finished). Their part of the outputs
+  // covers the frames until then.
+  std::vector<std::string> components_cut_short;
 };
+// The exit code of a component whose outputs are written but whose input ended without the end
+// of the run (the mapper or recorder missed slam's last samples): the run is incomplete.
+inline constexpr int kExitComponentCutShort = 3;
 // Runs the whole pipeline until the end of the data or a signal. Returns 0 on success (also when
 // stopped by a signal), 1 if a component failed.
 int RunPipeline(const PipelineOptions& options, StopReport* report = nullptr);

@@ -24,6 +24,7 @@
 // as a component: that is what DDS Security (--security) is for.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdint>
@@ -306,6 +307,26 @@ class ReadyAnnouncer {
 // or its announcement was missed): Update(matched) is true once the peer's writers were matched
 // and have been unmatched for longer than `after`. Used by the components that would otherwise
 // wait for the peer's END_OF_STREAM / COMPONENT_DONE for ever.
+// How long the calling loop did not run: the longest gap between two Tick()s. A loop that polls
+// every 50 ms and sees a gap of seconds was paused (SIGSTOP) or starved of CPU; samples and
+// statuses sent meanwhile may have been missed, which its warnings then say instead of blaming
+// the peer.
+class PauseWatch {
+ public:
+  using Clock = std::chrono::steady_clock;
+  void Tick(Clock::time_point now = Clock::now()) {
+    if (last_) longest_ = std::max(longest_, now - *last_);
+    last_ = now;
+  }
+  double LongestSeconds() const { return std::chrono::duration<double>(longest_).count(); }
+  // Paused long enough to miss a peer's end (its status writers wait 2 s for acknowledgements).
+  bool WasPaused() const { return longest_ > std::chrono::seconds(2); }
+
+ private:
+  std::optional<Clock::time_point> last_;
+  Clock::duration longest_{0};
+};
+
 class WriterGoneWatch {
  public:
   using Clock = std::chrono::steady_clock;

@@ -140,7 +140,9 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
     std::optional<std::chrono::steady_clock::time_point> done_at, flush_deadline;
     WriterGoneWatch slam_watch(std::chrono::seconds(5));
     ReadyAnnouncer announcer(ComponentKind::kRecorder);
+    PauseWatch pause;
     while (true) {
+      pause.Tick();
       if (!announcer.done()) {
         // Never write while holding `mutex`: intra-process delivery runs our own listeners
         // (which take it) on this thread.
@@ -164,8 +166,15 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
       // unmatched for 5 s; write what came.
       const bool slam_gone = slam_watch.Update(poses.matched() > 0 || trajectories.matched() > 0);
       if (slam_gone && !slam_done) {
-        LOG_WARNING << "recorder: slam left without announcing that it is done; writing the "
-                       "poses that came";
+        stats.input_cut_short = true;
+        if (pause.WasPaused()) {
+          LOG_WARNING << "recorder: this process did not run for " << pause.LongestSeconds()
+                      << " s (paused, e.g. SIGSTOP, or starved of CPU) and slam left meanwhile; "
+                      << "the poses it sent then are lost: writing the poses that came";
+        } else {
+          LOG_WARNING << "recorder: slam left without announcing that it is done; writing the "
+                         "poses that came";
+        }
         break;
       }
       if (slam_done && !done_at) done_at = std::chrono::steady_clock::now();

@@ -33,6 +33,9 @@ struct RecorderStats {
   size_t foreign_samples = 0;
   bool final_trajectory = false;
   std::string trajectory_path;
+  // slam left without its end reaching the recorder (this process paused or starved while slam
+  // finished, slam killed): the trajectory may lack its last frames.
+  bool input_cut_short = false;
 };
 
 RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,

@@ -19,9 +19,9 @@ const char* ToString(Shortfall shortfall) {
     case Shortfall::kForeignFrames:
       return "frames of another frame source on the run's DDS partition were processed (the "
              "outputs mix two streams)";
-    case Shortfall::kComponentStopped:
-      return "a component was stopped by a signal sent to it alone, before the end of the run "
-             "(its part of the outputs ends there)";
+    case Shortfall::kComponentCutShort:
+      return "a component ended before the run did (stopped by a signal sent to it alone, or its "
+             "input ended without the end of the run): its part of the outputs ends there";
     case Shortfall::kCutShort:
       return "the stream was cut short (a component stopped or stalled, or an end of stream came "
              "from outside the run)";
@@ -41,7 +41,7 @@ size_t RunSummary::WithPose() const {
 Shortfall RunSummary::Reason() const {
   if (foreign_frames > 0) return Shortfall::kForeignFrames;
   if (component_failed || !error.empty()) return Shortfall::kComponentFailed;
-  if (!stopped_components.empty()) return Shortfall::kComponentStopped;
+  if (!components_cut_short.empty()) return Shortfall::kComponentCutShort;
   if (Missing() == 0 && !loop_ended_early) return Shortfall::kNone;
   if (interrupted) return Shortfall::kStoppedByUser;
   if (realtime && !loop_ended_early) return Shortfall::kDroppedByRate;
@@ -93,9 +93,9 @@ std::string RunSummaryJson(const RunSummary& s) {
   }
   j << ",\n \"ate\": " << AteJson(s.ate) << ",\n \"online_ate\": " << AteJson(s.online_ate)
     << ",\n \"ate_note\": " << JsonString(s.ate_note)
-    << ", \"ignored_samples\": " << s.ignored_samples << ", \"stopped_components\": [";
-  for (size_t i = 0; i < s.stopped_components.size(); ++i)
-    j << (i == 0 ? "" : ", ") << JsonString(s.stopped_components[i]);
+    << ", \"ignored_samples\": " << s.ignored_samples << ", \"components_cut_short\": [";
+  for (size_t i = 0; i < s.components_cut_short.size(); ++i)
+    j << (i == 0 ? "" : ", ") << JsonString(s.components_cut_short[i]);
   j << "], \"error\": " << JsonString(s.error) << ", \"exit_code\": " << s.exit_code << "}\n";
   return j.str();
 }

@@ -24,16 +24,17 @@ struct AteFigures {
 
 // Why a run delivered fewer frames than it was asked for.
 enum class Shortfall {
-  kNone,              // every requested frame was processed
-  kStoppedByUser,     // SIGINT / SIGTERM / SIGHUP: the user's stop
-  kDroppedByRate,     // --rate: frames the pipeline could not take in time (by design, counted)
-  kComponentFailed,   // a pipeline component failed, or the run stopped on an error (its message
-                      // is on stderr and in RunSummary::error)
-  kForeignFrames,     // frames of another frame source on the run's DDS partition were processed
-  kComponentStopped,  // a component was stopped by a signal sent to it alone (--processes): its
-                      // part of the outputs (the map, the detections) ends early
-  kCutShort           // the stream ended early: a component stopped or stalled, or an end of
-                      // stream came from outside the run
+  kNone,               // every requested frame was processed
+  kStoppedByUser,      // SIGINT / SIGTERM / SIGHUP: the user's stop
+  kDroppedByRate,      // --rate: frames the pipeline could not take in time (by design, counted)
+  kComponentFailed,    // a pipeline component failed, or the run stopped on an error (its message
+                       // is on stderr and in RunSummary::error)
+  kForeignFrames,      // frames of another frame source on the run's DDS partition were processed
+  kComponentCutShort,  // a component ended before the run did (--processes: a stop signal sent to
+                       // it alone, or its input ended without the end of the run): its part of
+                       // the outputs (the map, the detections) ends early
+  kCutShort            // the stream ended early: a component stopped or stalled, or an end of
+                       // stream came from outside the run
 };
 const char* ToString(Shortfall shortfall);
 
@@ -55,8 +56,8 @@ struct RunSummary {
   size_t ignored_samples = 0;  // DDS samples of participants outside the run
   bool interrupted = false;    // a stop signal ended the run
   bool component_failed = false;
-  // --processes: components stopped by a signal sent to them alone ("mapper (signal 15)").
-  std::vector<std::string> stopped_components;
+  // --processes: components that ended before the run did, with why ("mapper (signal 15)").
+  std::vector<std::string> components_cut_short;
   bool loop_ended_early = false;  // --loop-minutes: the replay ended before its time was up
   std::string error;              // the error that stopped the run ("" when none)
   int exit_code = 0;
@@ -67,7 +68,7 @@ struct RunSummary {
   // Every requested frame processed and nothing else, and the run did not fail.
   bool Complete() const {
     return Missing() == 0 && foreign_frames == 0 && !component_failed && error.empty() &&
-           stopped_components.empty() && !loop_ended_early;
+           components_cut_short.empty() && !loop_ended_early;
   }
   // Why frames are missing (kNone when none are).
   Shortfall Reason() const;
@@ -80,7 +81,7 @@ struct RunSummary {
 //  "complete": bool, "shortfall": "none" | "stopped by the user" | ..., "fps": ...,
 //  "realtime": {...} | null, "ate": {"rmse", "mean", "median", "max", "pairs"} | null,
 //  "online_ate": {...} | null, "ate_note": "...", "ignored_samples": N,
-//  "stopped_components": [...], "error": "...",
+//  "components_cut_short": [...], "error": "...",
 //  "exit_code": N}
 std::string RunSummaryJson(const RunSummary& summary);
 

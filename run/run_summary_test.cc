@@ -72,10 +72,10 @@ TEST(RunSummary, EveryShortfallHasItsReason) {
   EXPECT_TRUE(Has(RunSummaryJson(mixed), "\"complete\": false")) << RunSummaryJson(mixed);
   // Every frame processed, but the mapper was stopped on its own: its map ends early.
   RunSummary stopped = Complete();
-  stopped.stopped_components = {"mapper (signal 15)"};
-  EXPECT_EQ(stopped.Reason(), Shortfall::kComponentStopped);
+  stopped.components_cut_short = {"mapper (signal 15)"};
+  EXPECT_EQ(stopped.Reason(), Shortfall::kComponentCutShort);
   EXPECT_FALSE(stopped.Complete());
-  EXPECT_TRUE(Has(RunSummaryJson(stopped), "\"stopped_components\": [\"mapper (signal 15)\"]"))
+  EXPECT_TRUE(Has(RunSummaryJson(stopped), "\"components_cut_short\": [\"mapper (signal 15)\"]"))
       << RunSummaryJson(stopped);
   // A looped replay that ended before its time: cut short, though more frames than the sequence
   // holds were processed.

@@ -101,8 +101,16 @@ TEST_F(Faults, MapperKilledAndRestartedGetsKeyframeHistoryBack) {
   EXPECT_EQ(Wait(player), 0) << ReadAll(tmp + "/player.log");
   EXPECT_EQ(Wait(slam), 0) << ReadAll(tmp + "/slam.log");
   EXPECT_EQ(Wait(recorder), 0) << ReadAll(tmp + "/recorder.log");
-  EXPECT_EQ(Wait(mapper2), 0) << ReadAll(tmp + "/mapper2.log");
+  // The restarted mapper is a late joiner: when slam's end of run does not reach it (late-joiner
+  // discovery under load), it writes its map once slam has gone and exits 3 (cut short), saying
+  // so; else 0.
+  const int mapper2_code = Wait(mapper2);
   const std::string mapper_log = ReadAll(tmp + "/mapper2.log");
+  EXPECT_TRUE(
+      mapper2_code == 0 ||
+      (mapper2_code == 3 && mapper_log.find("without announcing the end") != std::string::npos))
+      << "exit " << mapper2_code << "\n"
+      << mapper_log;
   const long in_map = Extract(mapper_log, R"((\d+) keyframes in the map)");
   const auto keyframes = ReadTumTrajectory(tmp + "/out/keyframes.txt");
   ASSERT_GT(keyframes.size(), 3u);
@@ -120,7 +128,8 @@ TEST_F(Faults, MapperKilledAndRestartedGetsKeyframeHistoryBack) {
 
 // slam dies (SIGKILL: no COMPONENT_DONE is ever sent): the mapper does not wait forever; once
 // slam's keyframe writer is gone (participant lease) and stays gone for writer_gone_s it writes
-// the map with what it received and exits 0, saying why.
+// the map with what it received and exits 3 (its map may lack slam's last keyframes: a run cut
+// short, never 0), saying why.
 TEST_F(Faults, MapperEndsWhenSlamDiesWithoutAnnouncingTheEnd) {
   const std::string tmp = testing::MakeTempDir("fault_slam_gone");
   const int domain = 124;
@@ -139,7 +148,7 @@ TEST_F(Faults, MapperEndsWhenSlamDiesWithoutAnnouncingTheEnd) {
   kill(player, SIGINT);
   Wait(player);
   const auto t0 = std::chrono::steady_clock::now();
-  EXPECT_EQ(Wait(mapper), 0) << ReadAll(tmp + "/mapper.log");
+  EXPECT_EQ(Wait(mapper), 3) << ReadAll(tmp + "/mapper.log");  // kExitComponentCutShort
   const double waited =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const std::string log = ReadAll(tmp + "/mapper.log");
@@ -150,7 +159,8 @@ TEST_F(Faults, MapperEndsWhenSlamDiesWithoutAnnouncingTheEnd) {
 
 // slam dies (SIGKILL, no COMPONENT_DONE): the recorder and the player do not wait for ever either;
 // once slam's writers are gone (participant lease) and stay gone for 5 s, the recorder writes the
-// poses that came and the player ends, both exit 0 and say why.
+// poses that came (exit 3: cut short) and the player ends (exit 0: it published every frame), and
+// both say why.
 TEST_F(Faults, RecorderAndPlayerEndWhenSlamDiesWithoutAnnouncingTheEnd) {
   const std::string tmp = testing::MakeTempDir("fault_slam_gone_recorder");
   const int domain = 132;
@@ -161,7 +171,7 @@ TEST_F(Faults, RecorderAndPlayerEndWhenSlamDiesWithoutAnnouncingTheEnd) {
   kill(slam, SIGKILL);
   EXPECT_EQ(Wait(slam), 128 + SIGKILL);
   EXPECT_EQ(Wait(player), 0) << ReadAll(tmp + "/player.log");
-  EXPECT_EQ(Wait(recorder), 0) << ReadAll(tmp + "/recorder.log");
+  EXPECT_EQ(Wait(recorder), 3) << ReadAll(tmp + "/recorder.log");  // kExitComponentCutShort
   EXPECT_NE(ReadAll(tmp + "/player.log").find("slam left without announcing"), std::string::npos)
       << ReadAll(tmp + "/player.log");
   const std::string log = ReadAll(tmp + "/recorder.log");

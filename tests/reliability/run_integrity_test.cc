@@ -40,6 +40,7 @@ constexpr int kRateDomain = 144;
 constexpr int kRivalDomain = 145;
 constexpr int kStoppedDomain = 146;
 constexpr int kLoopDomain = 147;
+constexpr int kPausedDomain = 148;
 
 class RunIntegrity : public testing::CliFixture {
  protected:
@@ -331,13 +332,58 @@ TEST_F(RunIntegrity, AComponentStoppedOnItsOwnIsNotACompleteRun) {
   const int code = testing::WaitForExit(pid, 120, &diagnostics);
   const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
   EXPECT_EQ(code, 3) << summary << err << diagnostics;
-  EXPECT_TRUE(Contains(err, "mapper (signal 15) stopped by a signal sent to it alone")) << err;
-  EXPECT_TRUE(Contains(summary, "a component was stopped by a signal sent to it alone")) << summary;
+  EXPECT_TRUE(Contains(err, "mapper (signal 15) ended before the run did")) << err;
+  EXPECT_TRUE(Contains(summary,
+                       "a component ended before the run did (stopped by a signal sent "
+                       "to it alone"))
+      << summary;
   EXPECT_FALSE(Contains(summary, "(complete)")) << summary;
   const std::string json = ReadAll(out + "/eval.json");
-  EXPECT_TRUE(Contains(json, "\"stopped_components\": [\"mapper (signal 15)\"]")) << json;
+  EXPECT_TRUE(Contains(json, "\"components_cut_short\": [\"mapper (signal 15)\"]")) << json;
   EXPECT_TRUE(Contains(json, "\"complete\": false")) << json;
   EXPECT_TRUE(Contains(json, "\"exit_code\": 3}")) << json;
+}
+
+// --processes: the mapper paused (SIGSTOP) while slam finishes the run and leaves. Before, the
+// mapper wrote a map without slam's last keyframes, blamed slam ("left without announcing the
+// end") and the run said "complete", exit 0. Now the mapper names its own pause and the run is
+// incomplete (exit 3).
+TEST_F(RunIntegrity, AMapperPausedWhileSlamFinishesMakesTheRunIncomplete) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string out = dir_ + "/out";
+  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet",
+                           "--frames", "0:150", "--processes", "--rate", "1", "--out", out,
+                           "--domain", std::to_string(kPausedDomain)});
+  ASSERT_GT(pid, 0);
+  pid_t mapper = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while ((mapper == 0 || !ProcessCatchesSignal(mapper, SIGTERM)) &&
+         std::chrono::steady_clock::now() < deadline) {
+    mapper = ComponentPid("mapper", out);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_GT(mapper, 0) << ReadAll(dir_ + "/run.err");
+  // Once the frames flow (the mapper has matched slam and announced READY; 5 s of frames at 30 Hz).
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  // Paused until slam has sent its last frame's pose (the recorder has written the trajectory)
+  // and some seconds more (slam leaves 2 s after its end at the latest).
+  kill(mapper, SIGSTOP);
+  const auto paused = std::chrono::steady_clock::now();
+  while (!fs::exists(out + "/trajectory.txt") &&
+         std::chrono::steady_clock::now() < paused + std::chrono::seconds(90))
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  std::this_thread::sleep_for(std::chrono::seconds(6));
+  kill(mapper, SIGCONT);
+  std::string diagnostics;
+  const int code = testing::WaitForExit(pid, 120, &diagnostics);
+  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  EXPECT_EQ(code, 3) << summary << err << diagnostics;
+  EXPECT_TRUE(Contains(err, "mapper: this process did not run for")) << err;
+  EXPECT_TRUE(Contains(err, "mapper (its input ended early) ended before the run did")) << err;
+  EXPECT_FALSE(Contains(summary, "(complete)")) << summary;
+  const std::string json = ReadAll(out + "/eval.json");
+  EXPECT_TRUE(Contains(json, "\"components_cut_short\": [\"mapper (its input ended early)\"]"))
+      << json;
 }
 
 // A looped replay (--loop-minutes 0.25) whose player is stopped after 3 s: before, exit 0

@@ -579,10 +579,10 @@ int RunBench(const std::vector<std::string>& args) {
         SystemOptions options = SystemOptionsFromSettings(pr.settings);
         const FeatureFigure figure = DrawFeatureFigure(dataset, entry, options);
         const std::string png = base + "_features.png";
-        const fs::path tmp = out_dir / ("." + png + ".tmp.png");
-        if (!cv::imwrite(tmp.string(), figure.image))
-          throw InputError(tmp.string(), 0, "cannot write PNG");
-        fs::rename(tmp, out_dir / png);
+        std::vector<uchar> encoded;
+        if (!cv::imencode(".png", figure.image, encoded))
+          throw InputError((out_dir / png).string(), 0, "cannot encode PNG");
+        WriteFileAtomically((out_dir / png).string(), std::string(encoded.begin(), encoded.end()));
         pics.features_png = png;
         pics.features_caption = figure.caption;
       } catch (const InputError& e) {

@@ -366,7 +366,7 @@ RunOutcome RunThroughPipeline(const RunSetup& s, bool processes, int domain_id,
   outcome.ignored_samples = report.ignored_samples;
   outcome.components_cut_short = report.components_cut_short;
   if (outputs.Fresh("frames.csv")) {
-    for (const TextLine& line : ReadDataLines((s.out / "frames.csv").string())) {
+    for (const TextLine& line : ReadDataLines(outputs.PathOf("frames.csv"))) {
       if (line.tokens.size() < 2 || line.tokens[0] == "stamp") continue;
       ++outcome.processed;
       if (line.tokens[1] == ToString(TrackingState::kLost)) ++outcome.lost;
@@ -660,7 +660,7 @@ int RunRun(const std::vector<std::string>& args) {
       // written; eval.json says so, so that an earlier run's stays no longer beside them.
       RunSummary failed = summary_of_run();
       if (outputs.Fresh("frames.csv"))
-        failed.processed = ReadDataLines((s.out / "frames.csv").string()).size() - 1;
+        failed.processed = ReadDataLines(outputs.PathOf("frames.csv")).size() - 1;
       failed.error = e.what();
       failed.ate_note = "not evaluated: the run stopped on an error";
       failed.exit_code = 1;
@@ -687,7 +687,7 @@ int RunRun(const std::vector<std::string>& args) {
           s.system.load_map.c_str(), points);
   }
 
-  const fs::path trajectory_path = s.out / "trajectory.txt";
+  const fs::path trajectory_path = outputs.PathOf("trajectory.txt");
   const std::vector<StampedPose> trajectory = outputs.Fresh("trajectory.txt")
                                                   ? ReadTumTrajectory(trajectory_path.string())
                                                   : std::vector<StampedPose>{};
@@ -718,7 +718,7 @@ int RunRun(const std::vector<std::string>& args) {
   summary.loop_ended_early =
       s.loop_minutes > 0 && !outcome.interrupted && elapsed < 60.0 * s.loop_minutes;
   if (s.rate > 0 && outputs.Fresh(kRealtimeReportFile))
-    summary.realtime = ReadRealtimeReport((s.out / kRealtimeReportFile).string());
+    summary.realtime = ReadRealtimeReport(outputs.PathOf(kRealtimeReportFile));
   std::printf("mode: %s%s\n", mode.c_str(),
               outcome.interrupted ? " (interrupted by a signal)" : "");
   std::printf("frames: %zu processed, %zu tracked, %zu lost, %zu without depth partner; %.1f fps\n",
@@ -782,7 +782,7 @@ int RunRun(const std::vector<std::string>& args) {
                                ate.num_pairs};
       // The pose each frame got when it was tracked (what a robot receives at the moment),
       // against the final trajectory above, which later bundle adjustments refined.
-      const fs::path online_path = s.out / "trajectory_online.txt";
+      const fs::path online_path = outputs.PathOf("trajectory_online.txt");
       const std::vector<StampedPose> online = outputs.Fresh("trajectory_online.txt")
                                                   ? ReadTumTrajectory(online_path.string())
                                                   : std::vector<StampedPose>{};
@@ -843,11 +843,12 @@ int RunRun(const std::vector<std::string>& args) {
     for (const char* name : kListedOutputNames) {
       if (outputs.Fresh(name)) {
         written += (written.empty() ? "" : ",") + std::string(name);
-      } else if (fs::exists(s.out / name)) {
+      } else if (fs::exists(outputs.PathOf(name))) {
         stale += (stale.empty() ? "" : ", ") + std::string(name);
       }
     }
-    std::printf("outputs: %s/{%s}\n", s.out.string().c_str(), written.c_str());
+    std::printf("outputs: %s/{%s}\n", fs::path(outputs.PathOf("")).parent_path().string().c_str(),
+                written.c_str());
     if (!stale.empty())
       std::printf("outputs left from an earlier run, not replaced by this one: %s\n",
                   stale.c_str());

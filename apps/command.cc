@@ -101,6 +101,7 @@ std::filesystem::path PrepareOutputDir(const std::string& option, const std::str
   }
   std::fclose(f);
   fs::remove(probe, ec);
+  PinOutputFolder(dir.string());  // a folder replaced while the command runs is not written into
   return dir;
 }
 
@@ -108,6 +109,13 @@ void RecreateOutputDirIfRemoved(const std::string& command, const std::string& o
                                 const std::filesystem::path& dir) {
   std::error_code ec;
   if (std::filesystem::is_directory(dir, ec)) return;
+  if (std::filesystem::exists(std::filesystem::symlink_status(dir, ec))) {
+    std::fprintf(stderr,
+                 "dygslam %s: warning: --%s '%s' was replaced by something that is not a folder "
+                 "while the command ran; the outputs cannot be written there\n",
+                 command.c_str(), option.c_str(), EchoValue(dir.string()).c_str());
+    return;
+  }
   std::fprintf(stderr,
                "dygslam %s: warning: --%s '%s' was removed while the command ran; made it again "
                "for the outputs\n",

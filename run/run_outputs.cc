@@ -7,6 +7,7 @@
 #include <map>
 #include <memory>
 
+#include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 #include "core/place/vocabulary.h"
 #include "core/slam/frame.h"
@@ -22,8 +23,7 @@ RunOutputs::RunOutputs(std::filesystem::path directory, std::vector<std::string>
     : directory_(std::move(directory)) {
   for (const std::string& name : names) {
     names_.push_back(name);
-    paths_[name] = (directory_ / name).string();
-    before_[name] = FileVersionOf(paths_[name]);
+    before_[name] = FileVersionOf((directory_ / name).string());
   }
 }
 
@@ -36,7 +36,11 @@ void RunOutputs::AddFile(const std::string& path) {
 
 std::string RunOutputs::PathOf(const std::string& name) const {
   const auto it = paths_.find(name);
-  return it != paths_.end() ? it->second : (directory_ / name).string();
+  // The folder where it is now (PinOutputFolder: replaced while the run went, the outputs went
+  // into the folder the run started with).
+  return it != paths_.end()
+             ? it->second
+             : (std::filesystem::path(PinnedFolderNow(directory_.string())) / name).string();
 }
 
 bool RunOutputs::Write(const std::string& name, const std::function<void()>& write) {

@@ -67,7 +67,7 @@ class RunOutputs {
  private:
   std::filesystem::path directory_;
   std::vector<std::string> names_;
-  std::map<std::string, std::string> paths_;  // name -> path
+  std::map<std::string, std::string> paths_;  // name -> path of the files of AddFile
   std::map<std::string, FileVersion> before_;
   std::vector<std::pair<std::string, std::string>> failures_;  // name, reason
 };

@@ -1,14 +1,19 @@
 #include "core/io/file_util.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <mutex>
+#include <random>
+#include <set>
 #include <sstream>
 
 #include "core/base/echo.h"
@@ -18,9 +23,117 @@
 namespace dygslam {
 namespace fs = std::filesystem;
 
+namespace {
+
+// A folder's spelling for the pin registry: "out/run/", "out/run" and "out//run" alike.
+std::string FolderKey(const fs::path& dir) {
+  std::string key = dir.lexically_normal().string();
+  while (key.size() > 1 && key.back() == '/') key.pop_back();
+  return key;
+}
+
+struct PinnedFolders {
+  std::mutex mutex;
+  std::map<std::string, int> fds;  // by FolderKey, an open descriptor of the folder pinned
+};
+PinnedFolders& Pins() {
+  static PinnedFolders* pins = new PinnedFolders;  // lives as long as the process
+  return *pins;
+}
+
+bool IsEmptyFolder(const fs::path& dir) {
+  std::error_code ec;
+  return fs::is_empty(dir, ec) && !ec;
+}
+
+// The folder to write `path`'s file into: `dir`, unless `dir` is pinned and no longer names the
+// folder pinned (see PinOutputFolder). Then the pinned folder where it now is (renamed away: the
+// outputs go there, said once), or, when the pinned folder was removed, an empty folder made
+// again under its name (pinned in its place); anything else there is refused (InputError).
+fs::path PinnedFolderFor(const fs::path& dir, const std::string& path) {
+  PinnedFolders& pins = Pins();
+  std::lock_guard<std::mutex> lock(pins.mutex);
+  const auto it = pins.fds.find(FolderKey(dir));
+  if (it == pins.fds.end()) return dir;
+  struct stat pinned {
+  }, now{}, link{};
+  if (::fstat(it->second, &pinned) != 0) return dir;
+  const bool exists = ::stat(dir.c_str(), &now) == 0;
+  if (exists && pinned.st_dev == now.st_dev && pinned.st_ino == now.st_ino) return dir;
+  const bool is_link = ::lstat(dir.c_str(), &link) == 0 && S_ISLNK(link.st_mode);
+  if (pinned.st_nlink > 0) {
+    // Still there under another name: the outputs go where the folder is now.
+    std::error_code ec;
+    const fs::path moved = fs::read_symlink("/proc/self/fd/" + std::to_string(it->second), ec);
+    if (!ec && fs::is_directory(moved, ec)) {
+      static std::set<std::string> said;
+      if (said.insert(FolderKey(dir)).second)
+        std::fprintf(stderr,
+                     "warning: the output folder %s was replaced while the command ran (it now "
+                     "%s): the outputs are written into the folder the command started with, now "
+                     "%s\n",
+                     EchoValue(dir.string()).c_str(),
+                     is_link ? "is a link" : "names another folder",
+                     EchoValue(moved.string()).c_str());
+      return moved;
+    }
+  }
+  // Removed, and made again (empty) under its name: pinned in its place.
+  if (exists && !is_link && S_ISDIR(now.st_mode) && IsEmptyFolder(dir)) {
+    const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd >= 0) {
+      ::close(it->second);
+      it->second = fd;
+    }
+    return dir;
+  }
+  if (!exists) return dir;  // the caller says that it does not exist
+  throw InputError(path, 0,
+                   "not written: the output folder " + EchoValue(dir.string()) +
+                       " was removed while the command ran and something else put in its place "
+                       "(" +
+                       (is_link ? std::string("a link") : std::string("a folder with files")) +
+                       "); nothing is written into it");
+}
+
+}  // namespace
+
+std::string PinnedFolderNow(const std::string& dir) {
+  PinnedFolders& pins = Pins();
+  std::lock_guard<std::mutex> lock(pins.mutex);
+  const auto it = pins.fds.find(FolderKey(dir));
+  if (it == pins.fds.end()) return dir;
+  struct stat pinned {
+  }, now{};
+  if (::fstat(it->second, &pinned) != 0 || pinned.st_nlink == 0) return dir;
+  if (::stat(dir.c_str(), &now) == 0 && pinned.st_dev == now.st_dev && pinned.st_ino == now.st_ino)
+    return dir;
+  std::error_code ec;
+  const fs::path moved = fs::read_symlink("/proc/self/fd/" + std::to_string(it->second), ec);
+  return ec ? dir : moved.string();
+}
+
+void PinOutputFolder(const std::string& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0)
+    throw InputError(dir, 0, std::string("cannot open the folder: ") + std::strerror(errno));
+  PinnedFolders& pins = Pins();
+  std::lock_guard<std::mutex> lock(pins.mutex);
+  auto [it, inserted] = pins.fds.emplace(FolderKey(dir), fd);
+  if (!inserted) {
+    ::close(it->second);
+    it->second = fd;
+  }
+}
+
 void WriteFileAtomically(const std::string& path, const std::string& content) {
   const fs::path target(path);
   const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  const fs::path into = PinnedFolderFor(dir, path);
+  if (into != dir) {
+    WriteFileAtomically((into / target.filename()).string(), content);
+    return;
+  }
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) {
     throw InputError(path, 0, "cannot write: directory " + dir.string() + " does not exist");
@@ -39,21 +152,37 @@ void WriteFileAtomically(const std::string& path, const std::string& content) {
                      std::string("cannot write: it exists and is ") + kind +
                          ", not a regular file (it is left as it is)");
   }
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (f == nullptr) {
-    throw InputError(path, 0, std::string("cannot write: ") + std::strerror(errno));
+  // The temporary file is made new (O_EXCL, O_NOFOLLOW) under a name no one can plant in advance:
+  // a file or a symbolic link already there under that name is never written through.
+  static std::atomic<uint64_t> counter{0};
+  std::string tmp;
+  int fd = -1;
+  for (int attempt = 0; fd < 0; ++attempt) {
+    const uint64_t salt = std::random_device{}() ^ (counter.fetch_add(1) << 32);
+    char suffix[64];
+    std::snprintf(suffix, sizeof(suffix), ".tmp.%d.%016llx", static_cast<int>(::getpid()),
+                  static_cast<unsigned long long>(salt));
+    tmp = path + suffix;
+    fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+    if (fd < 0 && (errno != EEXIST || attempt >= 16))
+      throw InputError(path, 0, std::string("cannot write: ") + std::strerror(errno));
   }
-  const size_t written = std::fwrite(content.data(), 1, content.size(), f);
-  const bool flushed = std::fflush(f) == 0 && ::fsync(::fileno(f)) == 0;
-  const bool closed = std::fclose(f) == 0;
+  size_t written = 0;
+  while (written < content.size()) {
+    const ssize_t n = ::write(fd, content.data() + written, content.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    written += static_cast<size_t>(n);
+  }
+  const bool flushed = ::fsync(fd) == 0;
+  const bool closed = ::close(fd) == 0;
   if (written != content.size() || !flushed || !closed) {
-    std::remove(tmp.c_str());
+    ::unlink(tmp.c_str());
     throw InputError(path, 0, "cannot write: short write (disk full?)");
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     const std::string reason = std::strerror(errno);
-    std::remove(tmp.c_str());
+    ::unlink(tmp.c_str());
     throw InputError(path, 0, "cannot rename temporary file into place: " + reason);
   }
 }

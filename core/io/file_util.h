@@ -6,10 +6,23 @@
 
 namespace dygslam {
 
-// Writes `content` to `path` atomically: a temporary file in the same directory, flushed, then
-// renamed over `path`. A reader never sees a half-written file. Throws InputError naming the path
+// Writes `content` to `path` atomically: a new temporary file in the same directory (a name with a
+// random part, created exclusively, never through a symbolic link), flushed, then renamed over
+// `path`. A reader never sees a half-written file. Throws InputError naming the path
 // when the directory does not exist or is not writable.
 void WriteFileAtomically(const std::string& path, const std::string& content);
+
+// Pins `dir` as an output folder of this process: WriteFileAtomically into it (by this spelling)
+// checks that the path still names the folder pinned, so that a folder replaced while the command
+// runs (renamed away and a link to another folder put in its place) is never written into. A
+// pinned folder that was removed may be made again, empty, under its name (the writes then pin
+// the new one). Throws InputError when `dir` cannot be opened.
+void PinOutputFolder(const std::string& dir);
+
+// Where the folder pinned as `dir` is now: `dir` itself while it still names it (or when `dir` is
+// not pinned, or the folder was removed), else the folder's new path (renamed away while the
+// command ran; the writes went there).
+std::string PinnedFolderNow(const std::string& dir);
 
 // Which version of a file a path names: a file replaced by WriteFileAtomically (a rename) is a new
 // inode, so a version taken before a run tells whether the run (or another process of it) wrote

@@ -71,6 +71,23 @@ TEST(RunOutputsFiles, AFailedWriteIsReportedAndTheOthersAreWritten) {
 }
 
 // A failed rename or write leaves the old file whole and no temporary file behind.
+// The temporary file of an atomic write is made new under a name with a random part: a symbolic
+// link planted under the name it used to have (FILE.tmp.PID) is never written through. Before,
+// `eval --save-aligned` replaced the file such a link pointed to (a dataset's ground truth).
+TEST(RunOutputsFiles, AnAtomicWriteNeverWritesThroughAPlantedTemporaryName) {
+  const fs::path dir = testing::MakeTempDir("outputs_planted");
+  const fs::path victim = dir / "groundtruth.txt";
+  WriteText(victim, "the user's ground truth\n");
+  const fs::path out = dir / "aligned.txt";
+  const fs::path planted = out.string() + ".tmp." + std::to_string(::getpid());
+  fs::create_symlink(victim, planted);
+  WriteFileAtomically(out.string(), "the output\n");
+  EXPECT_EQ(ReadAll(victim.string()), "the user's ground truth\n");
+  EXPECT_EQ(ReadAll(out.string()), "the output\n");
+  EXPECT_FALSE(fs::is_symlink(out));
+  EXPECT_TRUE(fs::is_symlink(planted));  // left as it was
+}
+
 TEST(RunOutputsFiles, AnIncompleteWriteLeavesTheOldFileAndNoTemporary) {
   const fs::path dir = testing::MakeTempDir("outputs_incomplete");
   WriteText(dir / "frames.csv", "earlier\n");

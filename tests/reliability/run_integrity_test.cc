@@ -23,6 +23,7 @@
 #include "components/dds/pubsub.h"
 #include "components/protocol.h"
 #include "core/base/stop_signal.h"
+#include "core/io/trajectory_io.h"
 #include "dygslam_msg/StreamStatusPubSubTypes.h"
 #include "tests/support/cli_fixture.h"
 #include "tests/support/test_support.h"
@@ -41,6 +42,7 @@ constexpr int kRivalDomain = 145;
 constexpr int kStoppedDomain = 146;
 constexpr int kLoopDomain = 147;
 constexpr int kPausedDomain = 148;
+constexpr int kSwappedDomain = 149;
 
 class RunIntegrity : public testing::CliFixture {
  protected:
@@ -384,6 +386,42 @@ TEST_F(RunIntegrity, AMapperPausedWhileSlamFinishesMakesTheRunIncomplete) {
   const std::string json = ReadAll(out + "/eval.json");
   EXPECT_TRUE(Contains(json, "\"components_cut_short\": [\"mapper (its input ended early)\"]"))
       << json;
+}
+
+// --out replaced while the run goes (renamed away, a link to a dataset folder put in its place):
+// before, the recorder wrote into the dataset and replaced its groundtruth.txt, exit 0. The
+// folder is pinned when the run starts: the outputs go into it where it now is, the run says so,
+// and the dataset is untouched.
+TEST_F(RunIntegrity, AnOutputFolderReplacedMidRunIsNeverWrittenThrough) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string data = SmallDataset(source, 90, "data", /*with_groundtruth=*/true);
+  const std::string groundtruth = ReadAll(data + "/groundtruth.txt");
+  const std::string out = dir_ + "/out", moved = dir_ + "/out.moved";
+  const pid_t pid =
+      Spawn({"run", data, "--config", Config(), "--filter", "none", "--quiet", "--rate", "1",
+             "--out", out, "--domain", std::to_string(kSwappedDomain)});
+  ASSERT_GT(pid, 0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!Contains(ReadAll(dir_ + "/run.err"), "DDS partition") &&
+         std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  std::this_thread::sleep_for(std::chrono::seconds(2));  // 3 s of frames at 30 Hz
+  fs::rename(out, moved);
+  fs::create_directory_symlink(data, out);
+  std::string diagnostics;
+  const int code = testing::WaitForExit(pid, 120, &diagnostics);
+  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  EXPECT_EQ(ReadAll(data + "/groundtruth.txt"), groundtruth) << "the dataset was written into";
+  EXPECT_FALSE(fs::exists(data + "/trajectory.txt"));
+  EXPECT_FALSE(fs::exists(data + "/map.bt"));
+  EXPECT_TRUE(Contains(err, "the output folder " + out + " was replaced while the command ran"))
+      << err;
+  EXPECT_GE(ReadTumTrajectory(moved + "/trajectory.txt").size(), 80u) << summary << err;
+  EXPECT_TRUE(fs::exists(moved + "/map.bt")) << err;
+  EXPECT_EQ(code, 0) << summary << err << diagnostics;
+  EXPECT_TRUE(Contains(summary, "integrity: 90 of 90 requested frames processed (complete)"))
+      << summary;
+  EXPECT_TRUE(Contains(summary, "outputs: " + moved + "/{trajectory.txt")) << summary;
 }
 
 // A looped replay (--loop-minutes 0.25) whose player is stopped after 3 s: before, exit 0

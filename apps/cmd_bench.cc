@@ -305,6 +305,23 @@ int RunBench(const std::vector<std::string>& args) {
                                  : PrepareOutputDir("out", (out_dir / "runs").string()))
           .lexically_normal();
 
+  // The file the section goes into: never one of this bench's own outputs (the report would be
+  // written over it first), and its markers checked now, not after the runs.
+  if (p.Has("update-benchmarks")) {
+    const std::string target = p.Get("update-benchmarks");
+    std::vector<NamedPath> outputs;
+    for (const char* name : {"report.md", "runs.csv", "bench_context.txt"})
+      outputs.push_back({std::string("the output ") + name, (out_dir / name).string()});
+    if (const std::string clash = FindOutputClash({{"--update-benchmarks", target}}, outputs);
+        !clash.empty())
+      return p.UsageError(clash);
+    std::ifstream in(target);
+    if (!in) throw InputError(target, 0, "--update-benchmarks: cannot read");
+    std::stringstream text;
+    text << in.rdbuf();
+    ReplaceBetweenMarkers(text.str(), "", target);  // throws naming the file and the marker
+  }
+
   const std::string config_dir = (fs::path(ScriptsDir()).parent_path() / "config").string();
   std::vector<std::string> skipped;
   const std::vector<BenchSequence> sequences =

@@ -167,6 +167,14 @@ int RunEval(const std::vector<std::string>& args) {
     const std::string clash =
         FindOutputClash({{"GROUNDTRUTH", gt_path}, {"ESTIMATE", est_path}}, outputs);
     if (!clash.empty()) return p.UsageError(clash);
+    // Never a file of a dataset (its images, lists or ground truth).
+    for (const char* option : {"save-aligned", "plot"}) {
+      if (!p.Has(option)) continue;
+      if (const std::string dataset = DatasetFolderOf(p.Get(option)); !dataset.empty())
+        return p.UsageError(std::string("--") + option + " '" + EchoValue(p.Get(option)) +
+                            "' is a file of the dataset " + EchoValue(dataset) +
+                            " (it holds rgb.txt and depth.txt): choose another path");
+    }
     // A plot replaces an earlier picture, never another kind of file given by mistake.
     if (p.Has("plot")) {
       const std::string foreign =

@@ -62,10 +62,11 @@ namespace dygslam::cli {
 namespace {
 namespace fs = std::filesystem;
 
-// The files the summary lists.
-constexpr const char* kListedOutputNames[] = {"trajectory.txt", "trajectory_online.txt",
-                                              "keyframes.txt",  "frames.csv",
-                                              "map.bt",         "eval.json"};
+// The frames a camera-paced run (--rate) dropped by design: those the pipeline could not take in
+// time (realtime.txt). Missing frames beyond them were cut short.
+size_t DroppedByRate(const RunSummary& summary) {
+  return summary.realtime ? summary.realtime->dropped() : 0;
+}
 
 // --rate above 0: the slowest replay that is still a replay (0.01x = a 30 Hz frame every 3.3 s).
 constexpr double kMinRate = 0.01;
@@ -822,7 +823,7 @@ int RunRun(const std::vector<std::string>& args) {
   const bool incomplete =
       !outcome.interrupted &&
       ((s.loop_minutes == 0 &&
-        ((s.rate == 0 && summary.processed < requested) || summary.foreign_frames > 0)) ||
+        (summary.processed + DroppedByRate(summary) < requested || summary.foreign_frames > 0)) ||
        summary.loop_ended_early || !summary.components_cut_short.empty());
   const bool tracking_failure =
       !outcome.interrupted && IsTrackingFailure(outcome.processed, trajectory.size());
@@ -840,7 +841,7 @@ int RunRun(const std::vector<std::string>& args) {
   // The files this run wrote; a file an earlier run left (not replaced) is named apart.
   {
     std::string written, stale;
-    for (const char* name : kListedOutputNames) {
+    for (const std::string& name : RunOutputNames()) {
       if (outputs.Fresh(name)) {
         written += (written.empty() ? "" : ",") + std::string(name);
       } else if (fs::exists(outputs.PathOf(name))) {

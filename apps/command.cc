@@ -392,6 +392,18 @@ std::string ShellQuote(const std::string& s) {
   return out + "'";
 }
 
+std::string DatasetFolderOf(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return "";
+  const fs::path folder = fs::absolute(path, ec).parent_path();
+  for (const fs::path& dir : {folder, folder.parent_path()}) {
+    if (fs::is_regular_file(dir / "rgb.txt", ec) && fs::is_regular_file(dir / "depth.txt", ec))
+      return dir.string();
+  }
+  return "";
+}
+
 std::vector<NamedPath> DatasetRunInputs(const ArgParser& p, const std::string& dataset_dir,
                                         const std::string& settings_role,
                                         const std::string& settings_path,

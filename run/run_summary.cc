@@ -44,7 +44,9 @@ Shortfall RunSummary::Reason() const {
   if (!components_cut_short.empty()) return Shortfall::kComponentCutShort;
   if (Missing() == 0 && !loop_ended_early) return Shortfall::kNone;
   if (interrupted) return Shortfall::kStoppedByUser;
-  if (realtime && !loop_ended_early) return Shortfall::kDroppedByRate;
+  // The camera's pace explains the frames the pipeline dropped, not more.
+  if (realtime && !loop_ended_early && Missing() <= realtime->dropped())
+    return Shortfall::kDroppedByRate;
   return Shortfall::kCutShort;
 }
 

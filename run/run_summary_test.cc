@@ -50,8 +50,12 @@ TEST(RunSummary, EveryShortfallHasItsReason) {
   EXPECT_TRUE(Has(RunSummaryJson(s), "\"missing\": 210")) << RunSummaryJson(s);
   EXPECT_TRUE(Has(RunSummaryJson(s), "\"complete\": false, \"shortfall\": \"the stream was cut"));
   s.realtime = RealtimeReport{1.0, 360, 352, 0, 19.4, 76.3};
+  // The camera's pace explains 8 dropped frames, not 210 missing ones.
+  EXPECT_EQ(s.Reason(), Shortfall::kCutShort);
+  s.processed = 352;
   EXPECT_EQ(s.Reason(), Shortfall::kDroppedByRate);
   EXPECT_TRUE(Has(RunSummaryJson(s), "\"dropped\": 8, \"late\": 0")) << RunSummaryJson(s);
+  s.processed = 150;
   s.interrupted = true;  // the user's stop explains the missing frames
   EXPECT_EQ(s.Reason(), Shortfall::kStoppedByUser);
   s.component_failed = true;  // a failed component comes first

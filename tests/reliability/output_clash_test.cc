@@ -250,5 +250,48 @@ TEST_F(OutputClashCli, VocabNeverReplacesAFileThatIsNotAVocabulary) {
   EXPECT_EQ(ReadAll(notes), "the user's notes\n");
 }
 
+// `eval --plot` / `--save-aligned` onto a file of a dataset (one of its images: a PNG, so the
+// kind check alone would let it be replaced): refused, the image kept.
+TEST_F(OutputClashCli, EvalNeverWritesOverAFileOfADataset) {
+  const fs::path ds = fs::path(dir_) / "ds";
+  fs::create_directories(ds / "rgb");
+  std::ofstream(ds / "rgb.txt") << "1.0 rgb/1.png\n";
+  std::ofstream(ds / "depth.txt") << "1.0 depth/1.png\n";
+  const std::string image = (ds / "rgb" / "1.png").string();
+  std::ofstream(image, std::ios::binary) << "\x89PNG\r\n\x1a\n the user's image";
+  const std::string gt = dir_ + "/gt.txt", est = dir_ + "/est.txt";
+  {
+    std::ofstream g(gt), e(est);
+    for (int i = 0; i < 40; ++i) {
+      g << 100 + 0.1 * i << " " << 0.01 * i << " 0 0 0 0 0 1\n";
+      e << 100 + 0.1 * i << " " << 0.5 + 0.01 * i << " 0 0 0 0 0 1\n";
+    }
+  }
+  const std::string before = ReadAll(image);
+  ExpectError(Run({"eval", gt, est, "--plot", image}), 2,
+              {"--plot '" + image + "' is a file of the dataset " + ds.string()});
+  ExpectError(Run({"eval", gt, est, "--save-aligned", (ds / "rgb.txt").string()}), 2,
+              {"is a file of the dataset"});
+  EXPECT_EQ(ReadAll(image), before);
+}
+
+// `bench --update-benchmarks FILE`: FILE is never one of the bench's own outputs (before: the
+// report was written over it, then "marker not found", its text gone), and its markers are
+// checked before any run.
+TEST_F(OutputClashCli, BenchUpdateFileIsCheckedBeforeAnyRun) {
+  const fs::path out = fs::path(dir_) / "b";
+  fs::create_directories(out);
+  const std::string own = (out / "report.md").string();
+  std::ofstream(own) << "the user's notes\n";
+  ExpectClash({"bench", dir_, "--out", out.string(), "--update-benchmarks", own}, own,
+              {"is --update-benchmarks '" + own + "', an input"});
+  const std::string unmarked = dir_ + "/NOTES.md";
+  std::ofstream(unmarked) << "no markers here\n";
+  const auto r = Run({"bench", dir_, "--out", out.string(), "--update-benchmarks", unmarked});
+  ExpectError(r, 1, {unmarked, "marker <!-- bench:begin --> not found"});
+  EXPECT_EQ(ReadAll(unmarked), "no markers here\n");
+  EXPECT_FALSE(Contains(r.err, "no sequence found")) << r.err;  // before the data is looked at
+}
+
 }  // namespace
 }  // namespace dygslam

@@ -179,7 +179,7 @@ TEST_F(RunOutputsCli, AFailedMapSaveDoesNotStopTheOtherOutputs) {
   EXPECT_TRUE(fs::exists(out / "map.bt"));
   EXPECT_TRUE(Contains(r.out, "outputs: " + out.string() +
                                   "/{trajectory.txt,trajectory_online.txt,keyframes.txt,"
-                                  "frames.csv,map.bt,eval.json}"))
+                                  "frames.csv,map.bt,map.ot,eval.json}"))  // map.ot: --save-map
       << r.out;
   for (const auto& entry : fs::directory_iterator(out))
     EXPECT_FALSE(Contains(entry.path().filename().string(), ".tmp.")) << entry.path();

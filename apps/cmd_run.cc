@@ -64,8 +64,9 @@ namespace fs = std::filesystem;
 
 // The frames a camera-paced run (--rate) dropped by design: those the pipeline could not take in
 // time (realtime.txt). Missing frames beyond them were cut short.
+// A stall (no result for seconds while frames arrived: a component paused) explains none.
 size_t DroppedByRate(const RunSummary& summary) {
-  return summary.realtime ? summary.realtime->dropped() : 0;
+  return summary.realtime && !summary.realtime->Stalled() ? summary.realtime->dropped() : 0;
 }
 
 // --rate above 0: the slowest replay that is still a replay (0.01x = a 30 Hz frame every 3.3 s).

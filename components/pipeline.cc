@@ -209,6 +209,7 @@ ComponentOutcome RunComponentKind(ComponentKind kind, const PipelineOptions& opt
         report.late = stats.late;
         report.latency_median_ms = stats.latency_median_ms;
         report.latency_p99_ms = stats.latency_p99_ms;
+        report.longest_gap_s = stats.longest_gap_s;
         std::error_code ec;  // the player may end before the recorder made the folder
         fs::create_directories(options.output_dir, ec);
         WriteRealtimeReport((fs::path(options.output_dir) / kRealtimeReportFile).string(), report);

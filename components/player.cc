@@ -150,6 +150,7 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
                     static_cast<double>(player.num_frames() - 1) / options.rate;
   }
   std::optional<Clock::time_point> first_sent, last_pose;
+  std::chrono::duration<double> longest_gap{0};
   bool slam_done = false;
   std::set<ComponentKind> ready;  // components that announced READY
   dds::Writer<msg::RgbdFramePubSubType> frames(participant, dds::topics::kRgbdFrame,
@@ -188,6 +189,8 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
             const double ms = std::chrono::duration<double, std::milli>(now - it->second).count();
             latency_ms.Add(ms);
             if (late_after_ms > 0 && ms > late_after_ms) ++late;
+            if (last_pose)
+              longest_gap = std::max(longest_gap, std::chrono::duration<double>(now - *last_pose));
             last_pose = now;
             sent.erase(sent.begin(), std::next(it));
           }
@@ -334,6 +337,13 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
       continue;
     }
     ++stats.frames_published;
+  }
+  {
+    // Frames published after the last pose that came back: a gap too.
+    std::lock_guard<std::mutex> lock(mutex);
+    if (last_pose)
+      longest_gap = std::max(longest_gap, std::chrono::duration<double>(Clock::now() - *last_pose));
+    stats.longest_gap_s = longest_gap.count();
   }
   const uint64_t last_seq = stats.frames_published == 0 ? 0 : stats.frames_published - 1;
   status.Write(ToMsg(

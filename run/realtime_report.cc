@@ -16,7 +16,15 @@ std::string RealtimeReport::Summary() const {
                 "rate %.2fx: %zu frames, %zu dropped, %zu late; latency median %.1f ms, 99th "
                 "percentile %.1f ms",
                 rate, frames, dropped(), late, latency_median_ms, latency_p99_ms);
-  return line;
+  std::string text = line;
+  if (Stalled()) {
+    std::snprintf(line, sizeof(line),
+                  "; stalled: no result for %.1f s while frames arrived (a component paused or "
+                  "stopped)",
+                  longest_gap_s);
+    text += line;
+  }
+  return text;
 }
 
 RealtimeReport MakeRealtimeReport(double rate, size_t frames, const std::vector<double>& latency_ms,
@@ -44,7 +52,7 @@ void WriteRealtimeReport(const std::string& path, const RealtimeReport& r) {
   std::ostringstream out;
   out << "rate " << r.rate << "\nframes " << r.frames << "\nresults " << r.results << "\nlate "
       << r.late << "\nlatency_median_ms " << r.latency_median_ms << "\nlatency_p99_ms "
-      << r.latency_p99_ms << "\n";
+      << r.latency_p99_ms << "\nlongest_gap_s " << r.longest_gap_s << "\n";
   WriteFileAtomically(path, out.str());
 }
 
@@ -67,6 +75,7 @@ RealtimeReport ReadRealtimeReport(const std::string& path) {
     if (key == "late") r.late = static_cast<size_t>(value);
     if (key == "latency_median_ms") r.latency_median_ms = value;
     if (key == "latency_p99_ms") r.latency_p99_ms = value;
+    if (key == "longest_gap_s") r.longest_gap_s = value;
   }
   return r;
 }

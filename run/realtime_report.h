@@ -15,14 +15,21 @@ inline constexpr const char* kRealtimeReportFile = "realtime.txt";
 // pipeline is then behind the camera, not just pipelined.
 inline constexpr double kLateFramePeriods = 3.0;
 
+// A stretch this long without any result while frames kept arriving is a stall (a component
+// paused or stopped), not the pipeline falling behind the camera: the frames dropped then are not
+// explained by the camera's pace.
+inline constexpr double kStallSeconds = 3.0;
+
 struct RealtimeReport {
-  double rate = 0;       // times the dataset's frame rate
-  size_t frames = 0;     // frames that arrived
-  size_t results = 0;    // of them, frames with a result (a pose or a lost state)
-  size_t late = 0;       // results later than kLateFramePeriods frame periods
+  double rate = 0;     // times the dataset's frame rate
+  size_t frames = 0;   // frames that arrived
+  size_t results = 0;  // of them, frames with a result (a pose or a lost state)
+  size_t late = 0;     // results later than kLateFramePeriods frame periods
   double latency_median_ms = 0;
   double latency_p99_ms = 0;
+  double longest_gap_s = 0;  // the longest time without a result while frames arrived
   size_t dropped() const { return frames > results ? frames - results : 0; }
+  bool Stalled() const { return longest_gap_s > kStallSeconds; }
   // "rate 1.0x: 360 frames, 0 dropped, 0 late; latency median 31.2 ms, 99th percentile 52.0 ms"
   std::string Summary() const;
 };

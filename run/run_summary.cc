@@ -45,7 +45,7 @@ Shortfall RunSummary::Reason() const {
   if (Missing() == 0 && !loop_ended_early) return Shortfall::kNone;
   if (interrupted) return Shortfall::kStoppedByUser;
   // The camera's pace explains the frames the pipeline dropped, not more.
-  if (realtime && !loop_ended_early && Missing() <= realtime->dropped())
+  if (realtime && !loop_ended_early && Missing() <= realtime->dropped() && !realtime->Stalled())
     return Shortfall::kDroppedByRate;
   return Shortfall::kCutShort;
 }
@@ -89,7 +89,8 @@ std::string RunSummaryJson(const RunSummary& s) {
     j << "{\"rate\": " << JsonNumber(r.rate) << ", \"frames\": " << r.frames
       << ", \"dropped\": " << r.dropped() << ", \"late\": " << r.late
       << ", \"latency_median_ms\": " << JsonNumber(r.latency_median_ms)
-      << ", \"latency_p99_ms\": " << JsonNumber(r.latency_p99_ms) << "}";
+      << ", \"latency_p99_ms\": " << JsonNumber(r.latency_p99_ms)
+      << ", \"longest_gap_s\": " << JsonNumber(r.longest_gap_s) << "}";
   } else {
     j << "null";
   }

@@ -54,6 +54,11 @@ TEST(RunSummary, EveryShortfallHasItsReason) {
   EXPECT_EQ(s.Reason(), Shortfall::kCutShort);
   s.processed = 352;
   EXPECT_EQ(s.Reason(), Shortfall::kDroppedByRate);
+  // Dropped during a stall (no result for 25 s: a component paused): not the camera's pace.
+  s.realtime->longest_gap_s = 25;
+  EXPECT_EQ(s.Reason(), Shortfall::kCutShort);
+  EXPECT_TRUE(Has(s.realtime->Summary(), "stalled: no result for 25.0 s")) << s.realtime->Summary();
+  s.realtime->longest_gap_s = 0.2;
   EXPECT_TRUE(Has(RunSummaryJson(s), "\"dropped\": 8, \"late\": 0")) << RunSummaryJson(s);
   s.processed = 150;
   s.interrupted = true;  // the user's stop explains the missing frames

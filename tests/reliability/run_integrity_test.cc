@@ -43,6 +43,7 @@ constexpr int kStoppedDomain = 146;
 constexpr int kLoopDomain = 147;
 constexpr int kPausedDomain = 148;
 constexpr int kSwappedDomain = 149;
+constexpr int kStallDomain = 150;
 
 class RunIntegrity : public testing::CliFixture {
  protected:
@@ -422,6 +423,37 @@ TEST_F(RunIntegrity, AnOutputFolderReplacedMidRunIsNeverWrittenThrough) {
   EXPECT_TRUE(Contains(summary, "integrity: 90 of 90 requested frames processed (complete)"))
       << summary;
   EXPECT_TRUE(Contains(summary, "outputs: " + moved + "/{trajectory.txt")) << summary;
+}
+
+// --processes --rate 1 with slam paused (SIGSTOP) for 6 s: the frames the player sent meanwhile
+// are lost. Before, they counted as dropped by the camera's pace and the run exited 0. A stretch
+// without any pose while frames arrive is a stall: the run is incomplete (exit 3) and says so.
+TEST_F(RunIntegrity, AStallAtCameraRateIsNotTheCamerasPace) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string out = dir_ + "/out";
+  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet",
+                           "--frames", "0:300", "--no-map", "--processes", "--rate", "1", "--out",
+                           out, "--domain", std::to_string(kStallDomain)});
+  ASSERT_GT(pid, 0);
+  pid_t slam = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while ((slam == 0 || !ProcessCatchesSignal(slam, SIGTERM)) &&
+         std::chrono::steady_clock::now() < deadline) {
+    slam = ComponentPid("slam", out);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_GT(slam, 0) << ReadAll(dir_ + "/run.err");
+  std::this_thread::sleep_for(std::chrono::seconds(3));  // the frames flow
+  kill(slam, SIGSTOP);
+  std::this_thread::sleep_for(std::chrono::seconds(6));
+  kill(slam, SIGCONT);
+  std::string diagnostics;
+  const int code = testing::WaitForExit(pid, 120, &diagnostics);
+  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  EXPECT_EQ(code, 3) << summary << err << diagnostics;
+  EXPECT_TRUE(Contains(summary, "stalled: no result for")) << summary;
+  const std::string json = ReadAll(out + "/eval.json");
+  EXPECT_TRUE(Contains(json, "\"complete\": false, \"shortfall\": \"the stream was cut")) << json;
 }
 
 // A looped replay (--loop-minutes 0.25) whose player is stopped after 3 s: before, exit 0

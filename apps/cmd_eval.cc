@@ -19,6 +19,7 @@
 #include "core/base/error.h"
 #include "core/base/json.h"
 #include "core/eval/trajectory_eval.h"
+#include "core/io/dataset.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 
@@ -190,6 +191,10 @@ int RunEval(const std::vector<std::string>& args) {
   }
   const std::vector<StampedPose> gt = ReadTumTrajectory(gt_path);
   const std::vector<StampedPose> est = ReadTumTrajectory(est_path);
+  for (const auto& [path, poses] : {std::pair{gt_path, &gt}, std::pair{est_path, &est}}) {
+    if (const std::string note = ImplausibleGroundTruthNote(path, *poses); !note.empty())
+      std::fprintf(stderr, "dygslam eval: warning: %s\n", EchoValue(note, 600).c_str());
+  }
   if (est.empty()) throw InputError(est_path, 0, "estimate has no poses");
   if (gt.empty()) throw InputError(gt_path, 0, "ground truth has no poses");
   const std::vector<StampedPose> gt_camera =

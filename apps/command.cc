@@ -470,6 +470,10 @@ void WarnAboutDataset(const std::string& command, const RgbdDataset& dataset, si
     if (const std::string note = GroundTruthCoverageNote(dataset, first, last, *groundtruth);
         !note.empty())
       warn(EchoValue(note, 600));
+    if (const std::string note =
+            ImplausibleGroundTruthNote(dataset.groundtruth_path(), *groundtruth);
+        !note.empty())
+      warn(EchoValue(note, 600));
   }
 }
 

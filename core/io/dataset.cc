@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <set>
@@ -266,23 +267,57 @@ std::string GroundTruthCoverageNote(const RgbdDataset& dataset, size_t first, si
                                     double tolerance_s) {
   if (groundtruth.empty()) return "";
   const Timestamp begin = groundtruth.front().stamp, end = groundtruth.back().stamp;
-  size_t frames = 0, before = 0, after = 0;
+  size_t frames = 0, before = 0, after = 0, in_gaps = 0;
   for (size_t k = first; k < last; ++k) {
     const std::optional<size_t> i = dataset.FrameForRgbEntry(k);
     if (!i) continue;
     ++frames;
     const Timestamp t = dataset.frame(*i).rgb_stamp;
-    before += SecondsBetween(t, begin) > tolerance_s;
-    after += SecondsBetween(end, t) > tolerance_s;
+    if (SecondsBetween(t, begin) > tolerance_s) {
+      ++before;
+    } else if (SecondsBetween(end, t) > tolerance_s) {
+      ++after;
+    } else {
+      // The nearest pose: the first at or after t, or the one before it.
+      const auto next =
+          std::lower_bound(groundtruth.begin(), groundtruth.end(), t,
+                           [](const StampedPose& p, Timestamp stamp) { return p.stamp < stamp; });
+      double nearest = std::numeric_limits<double>::infinity();
+      if (next != groundtruth.end()) nearest = std::abs(SecondsBetween(t, next->stamp));
+      if (next != groundtruth.begin())
+        nearest = std::min(nearest, std::abs(SecondsBetween(std::prev(next)->stamp, t)));
+      in_gaps += nearest > tolerance_s;
+    }
   }
-  if (before + after == 0) return "";
-  char text[400];
+  if (before + after + in_gaps == 0) return "";
+  char text[500];
   std::snprintf(text, sizeof(text),
-                "covers %.1f s (%s to %s); %zu of the %zu frames lie outside it (%zu before, %zu "
-                "after): a ground truth cut short? The ATE covers the frames within it",
+                "covers %.1f s (%s to %s); %zu of the %zu frames have no pose of it within %g s "
+                "(%zu before it, %zu after it, %zu in its gaps): a ground truth cut short or with "
+                "holes? The ATE covers the other frames",
                 SecondsBetween(begin, end), begin.ToString().c_str(), end.ToString().c_str(),
-                before + after, frames, before, after);
+                before + after + in_gaps, frames, tolerance_s, before, after, in_gaps);
   return dataset.groundtruth_path() + " " + text;
+}
+
+std::string ImplausibleGroundTruthNote(const std::string& path,
+                                       const std::vector<StampedPose>& groundtruth) {
+  for (size_t i = 1; i < groundtruth.size(); ++i) {
+    const double dt = SecondsBetween(groundtruth[i - 1].stamp, groundtruth[i].stamp);
+    const double distance =
+        (groundtruth[i].world_from_cam.translation - groundtruth[i - 1].world_from_cam.translation)
+            .norm();
+    if (dt > 0 && distance > kMaxGroundTruthSpeed * std::max(dt, 0.01)) {
+      char text[400];
+      std::snprintf(text, sizeof(text),
+                    ": the pose at %s s is %g m from the one %.3f s before it (%g m/s; a camera "
+                    "moves a few m/s): another unit (millimetres?) or a corrupt line? The ATE "
+                    "against it would mean nothing",
+                    groundtruth[i].stamp.ToString().c_str(), distance, dt, distance / dt);
+      return path + text;
+    }
+  }
+  return "";
 }
 
 std::optional<size_t> RgbdDataset::FrameForRgbEntry(size_t k) const {

@@ -93,13 +93,22 @@ class RgbdDataset {
   std::string listing_problem_;
 };
 
-// "" when the ground truth's time span covers every frame of rgb entries [first, last) (within
-// `tolerance_s`); else how many frames lie before or after it ("DIR/groundtruth.txt covers 12.1 s
-// (1548339823.86 to 1548339835.96); 40 of the 360 frames lie outside it ..."): a ground truth
-// cut short reads as a scored run with fewer pairs, and nothing else tells.
+// "" when every frame of rgb entries [first, last) has a ground-truth pose within `tolerance_s`
+// (the ATE's association); else how many have none, before the ground truth's start, after its
+// end or in its gaps ("DIR/groundtruth.txt covers 12.1 s (...); 40 of the 360 frames have no
+// pose of it within 0.02 s (0 before it, 40 after it, 0 in its gaps) ..."): a ground truth cut
+// short or with holes reads as a scored run with fewer pairs, and nothing else tells.
 std::string GroundTruthCoverageNote(const RgbdDataset& dataset, size_t first, size_t last,
                                     const std::vector<StampedPose>& groundtruth,
                                     double tolerance_s = 0.02);
+
+// A hand-held or robot camera moves at a few m/s; a ground truth faster than this between two
+// consecutive poses is in another unit (millimetres) or has a corrupt line.
+inline constexpr double kMaxGroundTruthSpeed = 50.0;  // m/s
+// "" when no two consecutive poses of `groundtruth` are farther apart than kMaxGroundTruthSpeed
+// allows; else the first such pair, named by `path` and stamp.
+std::string ImplausibleGroundTruthNote(const std::string& path,
+                                       const std::vector<StampedPose>& groundtruth);
 
 // The range an RGB-D sensor measures (metres): structured light and time of flight reach 4 to
 // 10 m (Kinect v1 / v2, RealSense D4xx), none beyond 12 m; a saturated 16-bit pixel at the TUM

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -146,19 +147,23 @@ TEST_F(DatasetCli, ListsAndGroundTruthCutAtALineBoundaryAreWarned) {
     depth += d.frame(i).depth_stamp.ToString() + " " + z.string() + "\n";
   }
   std::ofstream(dir / "depth.txt") << depth;
-  // The ground truth up to frame 5 (the frames after it have none).
-  std::string gt;
-  for (const StampedPose& p : ReadTumTrajectory(d.groundtruth_path()))
-    if (p.stamp <= d.frame(5).rgb_stamp) {
+  // The ground truth's poses for which `keep` holds, positions times `scale`.
+  const auto write_groundtruth = [&](const std::function<bool(Timestamp)>& keep, double scale) {
+    std::string gt;
+    for (const StampedPose& p : ReadTumTrajectory(d.groundtruth_path())) {
+      if (!keep(p.stamp)) continue;
       const Eigen::Quaterniond q = p.world_from_cam.rotation;
-      const Eigen::Vector3d& t = p.world_from_cam.translation;
+      const Eigen::Vector3d t = scale * p.world_from_cam.translation;
       std::ostringstream line;
       line.precision(12);
       line << p.stamp.ToString() << " " << t.x() << " " << t.y() << " " << t.z() << " " << q.x()
            << " " << q.y() << " " << q.z() << " " << q.w() << "\n";
       gt += line.str();
     }
-  std::ofstream(dir / "groundtruth.txt") << gt;
+    std::ofstream(dir / "groundtruth.txt") << gt;
+  };
+  // The ground truth up to frame 5 (the frames after it have none).
+  write_groundtruth([&](Timestamp t) { return t <= d.frame(5).rgb_stamp; }, 1.0);
   // rgb.txt whole: the ground truth's end is warned.
   std::ofstream(dir / "rgb.txt") << rgb;
   const std::vector<std::string> args = {"run",      dir.string(), "--config",   Config(),
@@ -167,9 +172,29 @@ TEST_F(DatasetCli, ListsAndGroundTruthCutAtALineBoundaryAreWarned) {
   const auto whole = Run(args);
   EXPECT_EQ(whole.code, 0) << whole.err;
   EXPECT_TRUE(Contains(whole.err, (dir / "groundtruth.txt").string() + " covers")) << whole.err;
-  EXPECT_TRUE(Contains(whole.err, "4 of the 10 frames lie outside it (0 before, 4 after)"))
+  EXPECT_TRUE(Contains(whole.err,
+                       "4 of the 10 frames have no pose of it within 0.02 s (0 before it, 4 "
+                       "after it, 0 in its gaps)"))
       << whole.err;
   EXPECT_FALSE(Contains(whole.err, "images in rgb/")) << whole.err;
+  // A hole: no pose from frame 3 to frame 5 (inclusive).
+  write_groundtruth(
+      [&](Timestamp t) {
+        return SecondsBetween(t, d.frame(3).rgb_stamp) > 0.025 ||
+               SecondsBetween(d.frame(5).rgb_stamp, t) > 0.025;
+      },
+      1.0);
+  const auto hole = Run(args);
+  EXPECT_TRUE(Contains(hole.err,
+                       "3 of the 10 frames have no pose of it within 0.02 s (0 before "
+                       "it, 0 after it, 3 in its gaps)"))
+      << hole.err;
+  // In millimetres: a camera does not move 190 m/s.
+  write_groundtruth([](Timestamp) { return true; }, 1000.0);
+  const auto millimetres = Run(args);
+  EXPECT_TRUE(Contains(millimetres.err, "another unit (millimetres?) or a corrupt line?"))
+      << millimetres.err;
+  write_groundtruth([&](Timestamp t) { return t <= d.frame(5).rgb_stamp; }, 1.0);
   // rgb.txt cut after its 6th line: the 4 images it leaves out are warned.
   std::ofstream(dir / "rgb.txt") << rgb.substr(0, [&] {
     size_t pos = 0;
@@ -181,7 +206,7 @@ TEST_F(DatasetCli, ListsAndGroundTruthCutAtALineBoundaryAreWarned) {
   EXPECT_TRUE(Contains(
       cut.err, (dir / "rgb.txt").string() + " lists 6 of the 10 images in rgb/ (4 not listed)"))
       << cut.err;
-  EXPECT_FALSE(Contains(cut.err, "lie outside it")) << cut.err;  // the 6 frames are covered
+  EXPECT_FALSE(Contains(cut.err, "have no pose of it")) << cut.err;  // the 6 frames are covered
 }
 
 }  // namespace

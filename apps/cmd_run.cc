@@ -868,8 +868,9 @@ int RunRun(const std::vector<std::string>& args) {
   // A camera-paced run (--rate) drops frames by design (realtime.txt counts them).
   if (incomplete && summary.foreign_frames > 0) {
     std::fprintf(stderr,
-                 "dygslam run: error: %zu of the processed frames are not this run's (another "
-                 "frame source publishes on its DDS partition): the outputs mix two streams; "
+                 "dygslam run: error: %zu of the processed frames are not this run's or came twice "
+                 "(another frame source or a second slam publishes on its DDS partition): the "
+                 "outputs mix two streams; "
                  "exit %d\n",
                  summary.foreign_frames, kExitIncompleteRun);
     return kExitIncompleteRun;

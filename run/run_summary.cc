@@ -17,8 +17,8 @@ const char* ToString(Shortfall shortfall) {
     case Shortfall::kComponentFailed:
       return "a pipeline component failed";
     case Shortfall::kForeignFrames:
-      return "frames of another frame source on the run's DDS partition were processed (the "
-             "outputs mix two streams)";
+      return "frames that are not this run's were processed, or frames twice (another frame "
+             "source or a second slam on the run's DDS partition: the outputs mix two streams)";
     case Shortfall::kComponentCutShort:
       return "a component ended before the run did (stopped by a signal sent to it alone, or its "
              "input ended without the end of the run): its part of the outputs ends there";

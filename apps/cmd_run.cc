@@ -245,8 +245,8 @@ RunOutcome RunDirect(const RunSetup& s, const RgbdDataset& dataset, RunOutputs& 
   }
   // With --save-map, map.ot too (the OctoMap with probabilities, what --load-octomap continues).
   if (mapper) {
-    outputs.Write("map.bt", [&] {
-      WriteMapperBinary(s.out.string(), *mapper, /*with_full_map=*/!s.save_map.empty());
+    outputs.Write("map.bt", [&] {  // a failure before the files (the mapper's) is map.bt's
+      WriteMapperBinary(outputs, *mapper, /*with_full_map=*/!s.save_map.empty());
     });
   }
   if (failure) {

@@ -116,14 +116,15 @@ void WriteSystemTrajectories(const std::string& directory, const System& system)
   WriteTumTrajectory((fs::path(directory) / "keyframes.txt").string(), system.KeyframeTrajectory());
 }
 
-void WriteMapperBinary(const std::string& directory, KeyframeMapper& mapper, bool with_full_map) {
+void WriteMapperBinary(RunOutputs& outputs, KeyframeMapper& mapper, bool with_full_map) {
   mapper.Flush();
   mapper.WithBuilder([&](OctoMapBuilder& b) {
     // A continued map (--load-octomap) is written even when no keyframe was added to it.
     if (b.KeyframeIds().empty() && !b.has_base_map()) return;
     b.Finalize();
-    b.WriteBinary((fs::path(directory) / "map.bt").string());
-    if (with_full_map) b.WriteFull((fs::path(directory) / "map.ot").string());
+    // Each file a failure of its own (a full disk can take one and not the other).
+    outputs.Write("map.bt", [&] { b.WriteBinary(outputs.PathOf("map.bt")); });
+    if (with_full_map) outputs.Write("map.ot", [&] { b.WriteFull(outputs.PathOf("map.ot")); });
   });
 }
 

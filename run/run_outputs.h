@@ -80,8 +80,8 @@ std::string FramesCsvRow(const FrameRow& row);
 void WriteSystemTrajectories(const std::string& directory, const System& system);
 // Waits for the mapper's queue, then writes DIR/map.bt when the map has a keyframe or a loaded
 // base map (and DIR/map.ot, the OctoMap with probabilities, with `with_full_map`).
-void WriteMapperBinary(const std::string& directory, KeyframeMapper& mapper,
-                       bool with_full_map = false);
+// Each file through `outputs` (a failure is recorded under its own name).
+void WriteMapperBinary(RunOutputs& outputs, KeyframeMapper& mapper, bool with_full_map = false);
 
 // The static map of a SLAM map file (--load-map) as DIR/map.bt, for a run that added no keyframe
 // of its own (--localization): the file's map points, each inserted by ray casting from the

@@ -171,7 +171,12 @@ keys). The same seed gives byte-identical files.)");
   const fs::path target = fs::path(out_dir);
   const fs::path staging = target / ".synth-partial";
   std::error_code ec;
-  fs::remove_all(staging, ec);  // left by a synth that was stopped
+  if (fs::exists(fs::symlink_status(staging, ec)))  // left by a synth that was stopped: said
+    std::fprintf(stderr,
+                 "synth: warning: removing %s (the unfinished render of a synth that was "
+                 "stopped)\n",
+                 EchoValue(staging.string()).c_str());
+  fs::remove_all(staging, ec);
   fs::create_directories(target, ec);
   WriteSyntheticSequence(staging.string(), options, [&](int done, int total) {
     if (quiet) return;

@@ -173,9 +173,9 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
       if (writer_gone) {
         stats.input_cut_short = true;
         if (pause.WasPaused()) {
-          LOG_WARNING << "mapper: this process did not run for " << pause.LongestSeconds()
-                      << " s (paused, e.g. SIGSTOP, or starved of CPU) and slam left meanwhile; "
-                      << "the keyframes it sent then are lost: writing the map without them";
+          LOG_WARNING << "mapper: this process was stopped (SIGSTOP) and continued, for about "
+                      << pause.LongestSeconds() << " s, and slam left meanwhile; the keyframes "
+                      << "it sent then are lost: writing the map without them";
         } else {
           LOG_WARNING << "mapper: slam's keyframe writer left " << options.writer_gone_s
                       << " s ago without announcing the end of its run; writing the map";

@@ -1,6 +1,9 @@
 #include "components/protocol.h"
 
+#include <signal.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cstdio>
 #include <sstream>
 
@@ -336,6 +339,23 @@ std::string IgnoredSamplesNote(const std::string& counted) {
   return "ignored " + counted +
          " from writers outside this run (another process on the DDS domain published into it; "
          "without --security any local process can: see docs/dds_components.md)";
+}
+
+namespace {
+std::atomic<unsigned> continued_count{0};
+void CountContinue(int) { continued_count.fetch_add(1, std::memory_order_relaxed); }
+}  // namespace
+
+unsigned TimesContinued() {
+  static const bool installed = [] {
+    struct sigaction action {};
+    action.sa_handler = CountContinue;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESTART;
+    return sigaction(SIGCONT, &action, nullptr) == 0;
+  }();
+  (void)installed;
+  return continued_count.load(std::memory_order_relaxed);
 }
 
 }  // namespace dygslam

@@ -307,22 +307,27 @@ class ReadyAnnouncer {
 // or its announcement was missed): Update(matched) is true once the peer's writers were matched
 // and have been unmatched for longer than `after`. Used by the components that would otherwise
 // wait for the peer's END_OF_STREAM / COMPONENT_DONE for ever.
-// How long the calling loop did not run: the longest gap between two Tick()s. A loop that polls
-// every 50 ms and sees a gap of seconds was paused (SIGSTOP) or starved of CPU; samples and
-// statuses sent meanwhile may have been missed, which its warnings then say instead of blaming
-// the peer.
+// How many times this process was continued after a stop (SIGSTOP, Ctrl-Z): a SIGCONT handler,
+// installed on the first call, counts them.
+unsigned TimesContinued();
+
+// Whether this process was stopped and continued since the watch began, and the longest gap
+// between two Tick()s of the calling loop (about how long it was stopped). A component stopped
+// while its peer finished may have missed the peer's last samples and its end, which its warnings
+// then say instead of blaming the peer.
 class PauseWatch {
  public:
   using Clock = std::chrono::steady_clock;
+  PauseWatch() : continued_at_start_(TimesContinued()) {}
   void Tick(Clock::time_point now = Clock::now()) {
     if (last_) longest_ = std::max(longest_, now - *last_);
     last_ = now;
   }
   double LongestSeconds() const { return std::chrono::duration<double>(longest_).count(); }
-  // Paused long enough to miss a peer's end (its status writers wait 2 s for acknowledgements).
-  bool WasPaused() const { return longest_ > std::chrono::seconds(2); }
+  bool WasPaused() const { return TimesContinued() > continued_at_start_; }
 
  private:
+  unsigned continued_at_start_;
   std::optional<Clock::time_point> last_;
   Clock::duration longest_{0};
 };

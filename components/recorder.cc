@@ -168,9 +168,9 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
       if (slam_gone && !slam_done) {
         stats.input_cut_short = true;
         if (pause.WasPaused()) {
-          LOG_WARNING << "recorder: this process did not run for " << pause.LongestSeconds()
-                      << " s (paused, e.g. SIGSTOP, or starved of CPU) and slam left meanwhile; "
-                      << "the poses it sent then are lost: writing the poses that came";
+          LOG_WARNING << "recorder: this process was stopped (SIGSTOP) and continued, for about "
+                      << pause.LongestSeconds() << " s, and slam left meanwhile; the poses it "
+                      << "sent then are lost: writing the poses that came";
         } else {
           LOG_WARNING << "recorder: slam left without announcing that it is done; writing the "
                          "poses that came";

@@ -381,7 +381,7 @@ TEST_F(RunIntegrity, AMapperPausedWhileSlamFinishesMakesTheRunIncomplete) {
   const int code = testing::WaitForExit(pid, 120, &diagnostics);
   const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
   EXPECT_EQ(code, 3) << summary << err << diagnostics;
-  EXPECT_TRUE(Contains(err, "mapper: this process did not run for")) << err;
+  EXPECT_TRUE(Contains(err, "mapper: this process was stopped (SIGSTOP) and continued")) << err;
   EXPECT_TRUE(Contains(err, "mapper (its input ended early) ended before the run did")) << err;
   EXPECT_FALSE(Contains(summary, "(complete)")) << summary;
   const std::string json = ReadAll(out + "/eval.json");

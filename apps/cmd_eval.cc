@@ -176,6 +176,11 @@ int RunEval(const std::vector<std::string>& args) {
                             "' is a file of the dataset " + EchoValue(dataset) +
                             " (it holds rgb.txt and depth.txt): choose another path");
     }
+    if (p.Has("save-aligned")) {
+      const std::string foreign =
+          FindForeignFileAtTrajectoryOutput({"--save-aligned", p.Get("save-aligned")});
+      if (!foreign.empty()) return p.UsageError(foreign);
+    }
     // A plot replaces an earlier picture, never another kind of file given by mistake.
     if (p.Has("plot")) {
       const std::string foreign =

@@ -558,6 +558,8 @@ int RunRun(const std::vector<std::string>& args) {
   }
   if (const std::string foreign = FindForeignFileAtSaveMap(p); !foreign.empty())
     return p.UsageError(foreign);
+  if (const std::string foreign = FindForeignFileInRunOutputs(out_dir); !foreign.empty())
+    return p.UsageError(foreign);
   s.first = 0;
   s.last = dataset.num_rgb_entries();
   std::string frames_note;  // --frames beyond the dataset: cut, with a warning
@@ -858,7 +860,9 @@ int RunRun(const std::vector<std::string>& args) {
   if (!outputs.failures().empty()) {
     std::fprintf(stderr, "%s", outputs.FailureReport("run").c_str());
     std::fprintf(stderr,
-                 "dygslam run: the other outputs are written (see the list above); exit 1\n");
+                 outputs.FreshNames().empty()
+                     ? "dygslam run: no output could be written; exit 1\n"
+                     : "dygslam run: the other outputs are written (see the list above); exit 1\n");
     return 1;
   }
 

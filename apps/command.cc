@@ -1,5 +1,6 @@
 #include "apps/command.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include "core/base/number_option.h"
 #include "core/io/dataset.h"
 #include "core/io/file_util.h"
+#include "core/io/trajectory_io.h"
 #include "core/slam/map_file.h"
 #include "core/system/system.h"
 #include "run/realtime_report.h"
@@ -444,6 +446,41 @@ std::vector<NamedPath> DatasetRunOutputs(const ArgParser& p, const std::filesyst
 std::string FindDatasetRunOutputClash(const std::vector<NamedPath>& inputs, const ArgParser& p,
                                       const std::filesystem::path& out_dir) {
   return FindOutputClash(inputs, DatasetRunOutputs(p, out_dir));
+}
+
+std::string FindForeignFileAtTrajectoryOutput(const NamedPath& output) {
+  struct stat st {};
+  if (::stat(output.path.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || st.st_size == 0) return "";
+  try {
+    ReadTumTrajectory(output.path);
+    return "";
+  } catch (const InputError&) {
+    return output.role + " '" + EchoValue(output.path) +
+           "' exists and is not a TUM trajectory: it is not replaced; remove it first or choose "
+           "another path";
+  }
+}
+
+std::string FindForeignFileInRunOutputs(const std::filesystem::path& out_dir) {
+  // The first bytes of each output ("" for the TUM trajectories, read whole).
+  const std::vector<std::pair<std::string, std::string>> kinds = {
+      {"trajectory.txt", ""},
+      {"trajectory_online.txt", ""},
+      {"keyframes.txt", ""},
+      {"groundtruth.txt", ""},
+      {"frames.csv", "stamp,"},
+      {"map.bt", "# Octomap OcTree binary file"},
+      {"map.ot", "# Octomap OcTree file"},
+      {kRealtimeReportFile, "rate "},
+      {"eval.json", "{"}};
+  for (const auto& [name, signature] : kinds) {
+    const NamedPath output{"the output " + name, (out_dir / name).string()};
+    const std::string why =
+        signature.empty() ? FindForeignFileAtTrajectoryOutput(output)
+                          : FindForeignFileAtOutput(output, signature, "an earlier run's " + name);
+    if (!why.empty()) return why;
+  }
+  return "";
 }
 
 std::string FindForeignFileAtSaveMap(const ArgParser& p) {

@@ -172,6 +172,14 @@ std::vector<NamedPath> DatasetRunOutputs(const ArgParser& p, const std::filesyst
 // when there is none.
 std::string FindDatasetRunOutputClash(const std::vector<NamedPath>& inputs, const ArgParser& p,
                                       const std::filesystem::path& out_dir);
+// The first file in `out_dir` with the name of one of the run's outputs (RunOutputNames) that is
+// of another kind than that output (a settings file named map.bt, a picture named frames.csv):
+// why it is not replaced, "" when there is none. A run replaces its own earlier outputs only.
+std::string FindForeignFileInRunOutputs(const std::filesystem::path& out_dir);
+// Why `path` (given as `role`) may not be written as a TUM trajectory: it exists and is not one
+// (nor empty). "" when it may.
+std::string FindForeignFileAtTrajectoryOutput(const NamedPath& output);
+
 // Why --save-map may not be written, "" when it may: it names an existing file that is not a map
 // file (a user's file given by mistake is never replaced).
 std::string FindForeignFileAtSaveMap(const ArgParser& p);

@@ -428,6 +428,10 @@ ChildReport ReadChildReport(int fd) {
   return report;
 }
 
+// How long the others may go on with the frames a frame source sent before it was stopped on its
+// own (slam's final bundle adjustment included).
+constexpr std::chrono::seconds kSourceCutShortGrace(60);
+
 int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop, StopReport* report) {
   const std::string exe =
       options.executable.empty() ? fs::read_symlink("/proc/self/exe").string() : options.executable;
@@ -476,7 +480,18 @@ int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop, StopRe
   std::set<pid_t> signalled;
   auto stop_time = std::chrono::steady_clock::time_point::max();
   bool run_failed = false;
+  // A frame source stopped on its own before its peers had matched it: they never see its end of
+  // stream and would wait for ever. The run is incomplete anyway; after a grace period for the
+  // frames it sent, the others are stopped (they write what they have).
+  std::optional<std::chrono::steady_clock::time_point> source_cut_short_at;
   while (!children.empty()) {
+    if (source_cut_short_at && !forwarded &&
+        std::chrono::steady_clock::now() - *source_cut_short_at > kSourceCutShortGrace) {
+      LOG_WARNING << "the frame source was stopped on its own " << kSourceCutShortGrace.count()
+                  << " s ago and the run has not ended: stopping the other components";
+      stop->Request();
+      source_cut_short_at.reset();
+    }
     int status = 0;
     const pid_t pid = waitpid(-1, &status, WNOHANG);
     if (pid > 0) {
@@ -495,6 +510,7 @@ int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop, StopRe
                     << child.stop_signal << " sent to it alone, before the end of the run";
         report->components_cut_short.push_back(std::string(name) + " (signal " +
                                                std::to_string(child.stop_signal) + ")");
+        if (IsFrameSource(kind)) source_cut_short_at = std::chrono::steady_clock::now();
       }
       const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
       // After the outputs are written the runner stops the others with SIGTERM; a component that

@@ -293,5 +293,46 @@ TEST_F(OutputClashCli, BenchUpdateFileIsCheckedBeforeAnyRun) {
   EXPECT_FALSE(Contains(r.err, "no sequence found")) << r.err;  // before the data is looked at
 }
 
+// `eval --save-aligned` replaces an earlier trajectory, never another kind of file (before: a
+// settings file given by mistake became a trajectory, exit 0).
+TEST_F(OutputClashCli, SaveAlignedNeverReplacesAFileThatIsNotATrajectory) {
+  const std::string gt = dir_ + "/gt.txt", est = dir_ + "/est.txt";
+  {
+    std::ofstream g(gt), e(est);
+    for (int i = 0; i < 40; ++i) {
+      g << 100 + 0.1 * i << " " << 0.01 * i << " 0 0 0 0 0 1\n";
+      e << 100 + 0.1 * i << " " << 0.5 + 0.01 * i << " 0 0 0 0 0 1\n";
+    }
+  }
+  const std::string settings = dir_ + "/my.yaml";
+  fs::copy_file(Config(), settings);
+  const std::string before = ReadAll(settings);
+  ExpectError(Run({"eval", gt, est, "--save-aligned", settings}), 2,
+              {"--save-aligned '" + settings + "' exists and is not a TUM trajectory"});
+  EXPECT_EQ(ReadAll(settings), before);
+  // An earlier aligned trajectory is replaced.
+  fs::copy_file(est, dir_ + "/aligned.txt");
+  EXPECT_EQ(Run({"eval", gt, est, "--save-aligned", dir_ + "/aligned.txt"}).code, 0);
+}
+
+// A run replaces its own earlier outputs only: a file in --out with an output's name but of
+// another kind (a settings file named map.bt, notes named keyframes.txt) is refused before any
+// work, and kept.
+TEST_F(OutputClashCli, RunNeverReplacesAFileOfAnotherKindInItsOutputFolder) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string data = SmallDataset(source, 10, "data");
+  const fs::path out = fs::path(dir_) / "out";
+  fs::create_directories(out);
+  for (const char* name : {"map.bt", "keyframes.txt", "frames.csv"}) {
+    const std::string file = (out / name).string();
+    fs::copy_file(Config(), file, fs::copy_options::overwrite_existing);
+    ExpectError(Run({"run", data, "--config", Config(), "--direct", "--quiet", "--filter", "none",
+                     "--out", out.string()}),
+                2, {"the output " + std::string(name) + " '" + file + "' exists and is not"});
+    EXPECT_EQ(ReadAll(file), ReadAll(Config())) << name;
+    fs::remove(file);
+  }
+}
+
 }  // namespace
 }  // namespace dygslam

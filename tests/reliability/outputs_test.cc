@@ -192,12 +192,12 @@ TEST_F(RunOutputsCli, AnEarlierRunsFileIsKeptAndNotListedAsThisRuns) {
   const std::string data = SmallDataset(source, 20, "data");
   const fs::path out = fs::path(dir_) / "out";
   fs::create_directories(out);
-  WriteText(out / "map.bt", "earlier map\n");
-  WriteText(out / "trajectory.txt", "earlier trajectory\n");
+  WriteText(out / "map.bt", "# Octomap OcTree binary file\nearlier map\n");
+  WriteText(out / "trajectory.txt", "# earlier trajectory\n");
   const auto r = Run({"run", data, "--config", Config(), "--direct", "--filter", "none",
                       "--deterministic", "--quiet", "--no-map", "--out", out.string()});
   EXPECT_EQ(r.code, 0) << r.err;
-  EXPECT_EQ(ReadAll((out / "map.bt").string()), "earlier map\n");
+  EXPECT_EQ(ReadAll((out / "map.bt").string()), "# Octomap OcTree binary file\nearlier map\n");
   EXPECT_GE(ReadTumTrajectory((out / "trajectory.txt").string()).size(), 10u);
   EXPECT_TRUE(Contains(r.out, "outputs: " + out.string() +
                                   "/{trajectory.txt,trajectory_online.txt,keyframes.txt,"

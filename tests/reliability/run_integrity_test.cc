@@ -14,6 +14,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <string>
 #include <thread>
@@ -114,10 +115,17 @@ TEST_F(RunIntegrity, EarlierOutputsStayUntilTheRunReplacesThem) {
   const std::string data = SmallDataset(source, 40, "data");
   const fs::path out = fs::path(dir_) / "out";
   fs::create_directories(out);
-  const std::string earlier = "# an earlier run's file\n";
-  const std::vector<std::string> names = {"trajectory.txt", "keyframes.txt", "frames.csv",
-                                          "map.bt"};
-  for (const std::string& name : names) std::ofstream(out / name) << earlier;
+  // An earlier run's files (each of its kind: a run replaces only its own outputs).
+  const std::map<std::string, std::string> earlier = {
+      {"trajectory.txt", "# an earlier run's file\n"},
+      {"keyframes.txt", "# an earlier run's file\n"},
+      {"frames.csv", "stamp,state\n"},
+      {"map.bt", "# Octomap OcTree binary file\n# an earlier run's file\n"}};
+  std::vector<std::string> names;
+  for (const auto& [name, text] : earlier) {
+    std::ofstream(out / name) << text;
+    names.push_back(name);
+  }
   const pid_t pid = Spawn({"run", data, "--config", Config(), "--filter", "none", "--quiet",
                            "--out", out.string(), "--domain", std::to_string(kKeepDomain)});
   // Until the run ends, every output is there: the earlier file or a complete new one.
@@ -130,7 +138,7 @@ TEST_F(RunIntegrity, EarlierOutputsStayUntilTheRunReplacesThem) {
       const std::string text = ReadAll((out / name).string());
       ASSERT_FALSE(text.empty()) << name << " missing or empty during the run (check " << checks
                                  << ")";
-      if (text == earlier) continue;
+      if (text == earlier.at(name)) continue;
       // Replaced: complete (a TUM file or frames.csv ends with a newline; map.bt holds a tree).
       if (name != "map.bt") EXPECT_EQ(text.back(), '\n') << name;
     }
@@ -141,7 +149,7 @@ TEST_F(RunIntegrity, EarlierOutputsStayUntilTheRunReplacesThem) {
   ASSERT_EQ(code, 0) << ReadAll(dir_ + "/run.err");
   // This run replaced each of them.
   for (const std::string& name : names)
-    EXPECT_NE(ReadAll((out / name).string()), earlier) << name << " not replaced";
+    EXPECT_NE(ReadAll((out / name).string()), earlier.at(name)) << name << " not replaced";
   const std::string summary = ReadAll(dir_ + "/run.out");
   EXPECT_TRUE(Contains(summary,
                        "/{trajectory.txt,trajectory_online.txt,keyframes.txt,frames.csv,"

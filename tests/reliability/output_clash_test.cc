@@ -62,6 +62,15 @@ TEST(OutputClash, NamesBothFilesOfTheFirstClash) {
   EXPECT_TRUE(Contains(output, "is also --save-map '/o/trajectory.txt', another output")) << output;
 }
 
+// A ground truth and an estimate of 40 poses each (the estimate offset by 0.5 m).
+void WriteTrajectories(const std::string& gt, const std::string& est) {
+  std::ofstream g(gt), e(est);
+  for (int i = 0; i < 40; ++i) {
+    g << 100 + 0.1 * i << " " << 0.01 * i << " 0 0 0 0 0 1\n";
+    e << 100 + 0.1 * i << " " << 0.5 + 0.01 * i << " 0 0 0 0 0 1\n";
+  }
+}
+
 class OutputClashCli : public testing::CliFixture {
  protected:
   OutputClashCli() : CliFixture("clash_cli") {}
@@ -113,13 +122,7 @@ TEST_F(OutputClashCli, RunRefusesAnOutputOntoAnInputOrAnotherOutput) {
 
 TEST_F(OutputClashCli, EvalRefusesToWriteOverItsInputs) {
   const std::string gt = dir_ + "/gt.txt", est = dir_ + "/est.txt";
-  {
-    std::ofstream g(gt), e(est);
-    for (int i = 0; i < 40; ++i) {
-      g << 100 + 0.1 * i << " " << 0.01 * i << " 0 0 0 0 0 1\n";
-      e << 100 + 0.1 * i << " " << 0.5 + 0.01 * i << " 0 0 0 0 0 1\n";
-    }
-  }
+  WriteTrajectories(gt, est);
   ExpectClash({"eval", gt, est, "--save-aligned", gt}, gt,
               {"--save-aligned '" + gt + "' is GROUNDTRUTH"});
   ExpectClash({"eval", gt, est, "--save-aligned", est}, est, {"is ESTIMATE"});
@@ -260,13 +263,7 @@ TEST_F(OutputClashCli, EvalNeverWritesOverAFileOfADataset) {
   const std::string image = (ds / "rgb" / "1.png").string();
   std::ofstream(image, std::ios::binary) << "\x89PNG\r\n\x1a\n the user's image";
   const std::string gt = dir_ + "/gt.txt", est = dir_ + "/est.txt";
-  {
-    std::ofstream g(gt), e(est);
-    for (int i = 0; i < 40; ++i) {
-      g << 100 + 0.1 * i << " " << 0.01 * i << " 0 0 0 0 0 1\n";
-      e << 100 + 0.1 * i << " " << 0.5 + 0.01 * i << " 0 0 0 0 0 1\n";
-    }
-  }
+  WriteTrajectories(gt, est);
   const std::string before = ReadAll(image);
   ExpectError(Run({"eval", gt, est, "--plot", image}), 2,
               {"--plot '" + image + "' is a file of the dataset " + ds.string()});
@@ -297,13 +294,7 @@ TEST_F(OutputClashCli, BenchUpdateFileIsCheckedBeforeAnyRun) {
 // settings file given by mistake became a trajectory, exit 0).
 TEST_F(OutputClashCli, SaveAlignedNeverReplacesAFileThatIsNotATrajectory) {
   const std::string gt = dir_ + "/gt.txt", est = dir_ + "/est.txt";
-  {
-    std::ofstream g(gt), e(est);
-    for (int i = 0; i < 40; ++i) {
-      g << 100 + 0.1 * i << " " << 0.01 * i << " 0 0 0 0 0 1\n";
-      e << 100 + 0.1 * i << " " << 0.5 + 0.01 * i << " 0 0 0 0 0 1\n";
-    }
-  }
+  WriteTrajectories(gt, est);
   const std::string settings = dir_ + "/my.yaml";
   fs::copy_file(Config(), settings);
   const std::string before = ReadAll(settings);

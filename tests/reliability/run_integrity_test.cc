@@ -77,6 +77,19 @@ pid_t ComponentPid(const std::string& name, const std::string& marker) {
   return 0;
 }
 
+// The pid of the run's `component NAME` once it catches SIGTERM (its main() runs), waiting at most
+// 60 s; 0 when it did not come.
+pid_t RunningComponentPid(const std::string& name, const std::string& marker) {
+  pid_t pid = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while ((pid == 0 || !ProcessCatchesSignal(pid, SIGTERM)) &&
+         std::chrono::steady_clock::now() < deadline) {
+    pid = ComponentPid(name, marker);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return pid != 0 && ProcessCatchesSignal(pid, SIGTERM) ? pid : 0;
+}
+
 WriterGuid GuidOf(uint8_t participant, uint8_t entity) {
   WriterGuid g{};
   g.fill(participant);
@@ -329,13 +342,7 @@ TEST_F(RunIntegrity, AComponentStoppedOnItsOwnIsNotACompleteRun) {
                            "--domain", std::to_string(kStoppedDomain)});
   ASSERT_GT(pid, 0);
   // Once the mapper catches SIGTERM (its main() runs) and the frames flow (1 s at 30 Hz).
-  pid_t mapper = 0;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while ((mapper == 0 || !ProcessCatchesSignal(mapper, SIGTERM)) &&
-         std::chrono::steady_clock::now() < deadline) {
-    mapper = ComponentPid("mapper", out);
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
+  const pid_t mapper = RunningComponentPid("mapper", out);
   ASSERT_GT(mapper, 0) << ReadAll(dir_ + "/run.err");
   std::this_thread::sleep_for(std::chrono::seconds(1));
   kill(mapper, SIGTERM);
@@ -366,13 +373,7 @@ TEST_F(RunIntegrity, AMapperPausedWhileSlamFinishesMakesTheRunIncomplete) {
                            "--frames", "0:150", "--processes", "--rate", "1", "--out", out,
                            "--domain", std::to_string(kPausedDomain)});
   ASSERT_GT(pid, 0);
-  pid_t mapper = 0;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while ((mapper == 0 || !ProcessCatchesSignal(mapper, SIGTERM)) &&
-         std::chrono::steady_clock::now() < deadline) {
-    mapper = ComponentPid("mapper", out);
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
+  const pid_t mapper = RunningComponentPid("mapper", out);
   ASSERT_GT(mapper, 0) << ReadAll(dir_ + "/run.err");
   // Once the frames flow (the mapper has matched slam and announced READY; 5 s of frames at 30 Hz).
   std::this_thread::sleep_for(std::chrono::seconds(2));
@@ -443,13 +444,7 @@ TEST_F(RunIntegrity, AStallAtCameraRateIsNotTheCamerasPace) {
                            "--frames", "0:300", "--no-map", "--processes", "--rate", "1", "--out",
                            out, "--domain", std::to_string(kStallDomain)});
   ASSERT_GT(pid, 0);
-  pid_t slam = 0;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while ((slam == 0 || !ProcessCatchesSignal(slam, SIGTERM)) &&
-         std::chrono::steady_clock::now() < deadline) {
-    slam = ComponentPid("slam", out);
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
+  const pid_t slam = RunningComponentPid("slam", out);
   ASSERT_GT(slam, 0) << ReadAll(dir_ + "/run.err");
   std::this_thread::sleep_for(std::chrono::seconds(3));  // the frames flow
   kill(slam, SIGSTOP);
@@ -474,12 +469,7 @@ TEST_F(RunIntegrity, ALoopedReplayEndedBeforeItsTimeIsNotComplete) {
                            "--frames", "0:30", "--no-map", "--processes", "--loop-minutes", "0.25",
                            "--out", out, "--domain", std::to_string(kLoopDomain)});
   ASSERT_GT(pid, 0);
-  pid_t player = 0;
-  while ((player == 0 || !ProcessCatchesSignal(player, SIGTERM)) &&
-         std::chrono::steady_clock::now() < start + std::chrono::seconds(60)) {
-    player = ComponentPid("player", out);
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
+  const pid_t player = RunningComponentPid("player", out);
   ASSERT_GT(player, 0) << ReadAll(dir_ + "/run.err");
   std::this_thread::sleep_for(std::chrono::seconds(3));
   kill(player, SIGTERM);

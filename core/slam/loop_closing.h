@@ -1,20 +1,13 @@
-// Loop closing, ORB-SLAM2's RGB-D order, on its own thread (synchronous in deterministic mode):
-//   1. detection: loop candidates from the BoW index (scoring at least as well as the keyframe's
-//      worst covisible neighbour, not covisible, not recent), kept only when consistent over
-//      `consistency` consecutive keyframes (candidate groups overlapping);
-//   2. geometry: BoW matches between the map points of the keyframe and the candidate, an SE3
-//      (metric depth: no scale) by RANSAC on 3-point Horn/Umeyama solutions scored by
-//      reprojection in both keyframes, refined on the inliers, then a guided projection search of
-//      the candidate's neighbourhood with that transform; enough matches accept the loop;
-//      Steps 1-2 hold the map lock only to copy what they need (see TakeSnapshot);
-//   3. correction (under the map lock, dropped if the map was corrected meanwhile): the keyframe
-//   and its covisible neighbours are moved by the loop transform (and
-//      their points with them), duplicated map points are fused, covisibility is updated, the
-//      essential graph (spanning tree, strong covisibility, loop edges) is optimised with Ceres,
-//      and map points follow their reference keyframes; a correction below
-//      `pose_graph_min_correction_*` moves nothing: only the fusion and the links are made;
-//   4. a global bundle adjustment of every keyframe and point, in the background (its own
-//      thread; synchronous in deterministic mode), written back only if no newer loop came.
+// Loop closing, ORB-SLAM2's RGB-D order, on its own thread (synchronous in deterministic mode).
+// One step per file:
+//   1. detection (loop_detection.h): consistent loop candidates from the BoW index;
+//   2. verification (loop_verification.h): an SE3 from matched map points, a guided search and a
+//      pose refinement on a copy of the map state, without the map lock;
+//   3. correction (loop_correction.h): the loop applied under the map lock, dropped if the map was
+//      corrected meanwhile; duplicated points fused, the essential graph optimised;
+//   4. a global bundle adjustment (global_bundle_adjustment.h) of every keyframe and point, in the
+//      background (its own thread; synchronous in deterministic mode), written back only if no
+//      newer loop came.
 // Corrections are reported through the callback (ids of keyframes whose pose changed).
 #pragma once
 
@@ -32,21 +25,14 @@
 #include "core/base/work_queue.h"
 #include "core/place/keyframe_database.h"
 #include "core/slam/loop_closing_options.h"
+#include "core/slam/loop_correction.h"
+#include "core/slam/loop_detection.h"
+#include "core/slam/loop_verification.h"
 #include "core/slam/map.h"
 #include "core/slam/matcher.h"
 #include "core/slam/optimizer.h"
 
 namespace dygslam {
-
-// One geometric verification of a loop candidate (RANSAC reached), for logs and calibration.
-struct LoopVerification {
-  int64_t frame_id = -1, loop_frame_id = -1;
-  int bow_pairs = 0, inliers = 0, projected = 0;  // projected: 0 if not reached
-  double correction_m = 0, correction_deg = 0;    // how far the loop transform moves the camera
-  double path_m = 0;                              // keyframe path since the loop keyframe
-  double allowed_m = 0, allowed_deg = 0;          // the drift budget over that path
-  const char* verdict = "";                       // "accepted" or the failed check
-};
 
 struct LoopClosingStats {
   int keyframes_checked = 0;
@@ -86,11 +72,6 @@ struct LoopClosingStats {
   std::vector<std::pair<int64_t, int64_t>> loop_frames;  // (frame id, loop keyframe's frame id)
 };
 
-// Keyframe path from keyframe `from` to keyframe `to`: the summed distances between the centres
-// of the keyframes made in between, in creation order, culled keyframes included at their
-// resolved pose (0 if `from` was never made). Locks nothing: the caller holds Map::mutex().
-double KeyFramePathLength(const Map& map, int64_t from, int64_t to);
-
 // One line for run summaries: the candidates rejected by each geometric check and the strongest
 // rejected one (most inliers), e.g. "loop rejections: 3 BoW matches, 2 inliers, ...; strongest:
 // frame 587 vs frame 0: 35 / 60 inliers, 0 matches, correction ... (inliers)". Empty when no
@@ -121,43 +102,18 @@ class LoopCloser {
   std::vector<std::pair<int64_t, int64_t>> LoopEdges() const;
 
  private:
-  struct Loop;
-  struct Snapshot;
   void Process(const std::shared_ptr<KeyFrame>& kf);
-  std::vector<std::shared_ptr<KeyFrame>> DetectLoop(const std::shared_ptr<KeyFrame>& kf);
-  // The geometric checks work on a copy of the map state they need (poses and map points of the
-  // keyframe and its candidates), taken under a short map lock; matching, RANSAC, guided search
-  // and refinement then run without the lock, so tracking and local mapping are not held up.
-  bool TakeSnapshot(const std::shared_ptr<KeyFrame>& kf,
-                    const std::vector<std::shared_ptr<KeyFrame>>& candidates, Snapshot* snapshot);
-  void CopyNeighbourhood(size_t candidate, Snapshot* snapshot);  // locks the map briefly
-  bool ComputeTransform(Snapshot* snapshot, Loop* loop);
-  // false: dropped. *fused_only: the correction was below pose_graph_min_correction_* (nothing
-  // moved, only the duplicated points fused and the sides linked).
-  bool CorrectLoop(const std::shared_ptr<KeyFrame>& kf, const Loop& loop, bool* fused_only);
   void StartGlobalBundleAdjustment(int64_t loop_kf_id);
   void RunGlobalBundleAdjustment(int64_t epoch);
   void Report(const std::vector<int64_t>& moved);
 
   std::shared_ptr<Map> map_;
-  std::shared_ptr<KeyFrameDatabase> database_;
   LoopClosingOptions options_;
   OptimizerOptions optimizer_;
-  Matcher matcher_;
   bool threaded_;
-
-  // Detection state (loop thread only).
-  struct ConsistentGroup {
-    std::set<int64_t> keyframes;
-    int consistency = 0;
-  };
-  std::vector<ConsistentGroup> consistent_groups_;
-  int64_t last_loop_kf_id_ = -1;
-  // Loop edges kept for later pose graphs, between active keyframes (ids of culled ones moved to
-  // the keyframe that took their place), each pair once. Map lock held.
-  std::vector<std::pair<int64_t, int64_t>> loop_edges_;
-  void CompactLoopEdges();
-  void AddLoopEdges(const std::vector<std::pair<int64_t, int64_t>>& links);
+  LoopDetector detector_;    // loop thread only
+  LoopVerifier verifier_;    // stateless
+  LoopCorrector corrector_;  // loop thread only (LoopEdges() from any)
 
   mutable std::mutex callback_mutex_;
   CorrectionCallback callback_;

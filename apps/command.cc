@@ -19,7 +19,7 @@
 #include "core/io/dataset.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
-#include "core/slam/map_file.h"
+#include "core/slam/map/map_file.h"
 #include "core/system/system.h"
 #include "run/realtime_report.h"
 

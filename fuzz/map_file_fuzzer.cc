@@ -1,4 +1,4 @@
-// libFuzzer target: SLAM map files through DecodeMapFile (core/slam/map_file.h). Input: a map
+// libFuzzer target: SLAM map files through DecodeMapFile (core/slam/map/map_file.h). Input: a map
 // file. With the first byte even, the input is decoded as it is (header checks: size, magic,
 // version, truncation, checksum); odd, the bytes after the 20-byte header and before the 8-byte
 // checksum are re-wrapped with a matching size and checksum, so mutations reach the payload

@@ -6,9 +6,9 @@
 #include <memory>
 #include <string>
 
-#include "core/slam/map.h"
-#include "core/slam/map_file.h"
-#include "core/slam/orb_extractor.h"
+#include "core/slam/map/map.h"
+#include "core/slam/map/map_file.h"
+#include "core/slam/feature/orb_extractor.h"
 
 namespace dygslam::fuzz {
 

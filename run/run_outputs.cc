@@ -10,10 +10,10 @@
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 #include "core/place/vocabulary.h"
-#include "core/slam/frame.h"
-#include "core/slam/map.h"
-#include "core/slam/map_file.h"
-#include "core/slam/orb_extractor.h"
+#include "core/slam/map/frame.h"
+#include "core/slam/map/map.h"
+#include "core/slam/map/map_file.h"
+#include "core/slam/feature/orb_extractor.h"
 #include "mapping/keyframe_mapper.h"
 
 namespace dygslam {

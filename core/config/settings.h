@@ -8,7 +8,7 @@
 
 #include "core/base/camera.h"
 #include "core/config/config_reader.h"
-#include "core/slam/orb_extractor.h"
+#include "core/slam/feature/orb_extractor.h"
 
 namespace dygslam {
 

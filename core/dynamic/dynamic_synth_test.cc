@@ -7,7 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/dynamic/dynamic_filter.h"
-#include "core/slam/orb_extractor.h"
+#include "core/slam/feature/orb_extractor.h"
 #include "tools/synth/synthetic_scene.h"
 
 namespace dygslam {

@@ -13,7 +13,7 @@
 
 #include "core/base/error.h"
 #include "core/dynamic/dynamic_filter.h"
-#include "core/slam/orb_extractor.h"
+#include "core/slam/feature/orb_extractor.h"
 #include "tools/synth/synthetic_scene.h"
 
 namespace dygslam {

@@ -13,11 +13,11 @@
 #include "core/base/log.h"
 #include "core/base/work_queue.h"
 #include "core/dynamic/detection_worker.h"
-#include "core/slam/frame.h"
-#include "core/slam/frame_preparation.h"
-#include "core/slam/local_mapping.h"
-#include "core/slam/optimizer.h"
-#include "core/slam/tracking.h"
+#include "core/slam/map/frame.h"
+#include "core/slam/feature/frame_preparation.h"
+#include "core/slam/local_mapping/local_mapping.h"
+#include "core/slam/optimize/optimizer.h"
+#include "core/slam/tracking/tracking.h"
 
 namespace dygslam {
 namespace {

@@ -7,7 +7,7 @@
 //   FrameResult r = system.FeedRgbdFrame(rgb, depth, stamp);  // loose images, raw / DepthMapFactor
 //
 // Inside, like stella_vslam's create-frame / feed-frame: the frame is prepared (checks, grey
-// image, depth in metres, ORB features while the detector runs; core/slam/frame_preparation.h),
+// image, depth in metres, ORB features while the detector runs; core/slam/feature/frame_preparation.h),
 // then filtered (dynamic features out, top-up outside the boxes on crowded frames), tracked, and
 // a new keyframe is emitted to the keyframe callback and handed to local mapping.
 #pragma once
@@ -26,12 +26,12 @@
 #include "core/dynamic/dynamic_filter.h"
 #include "core/dynamic/dynamic_mask.h"
 #include "core/dynamic/yolo_detector.h"
-#include "core/slam/dynamic_points.h"
-#include "core/slam/local_mapping.h"
-#include "core/slam/loop_closing.h"
-#include "core/slam/map_file.h"
-#include "core/slam/orb_extractor.h"
-#include "core/slam/tracking.h"
+#include "core/slam/map/dynamic_points.h"
+#include "core/slam/local_mapping/local_mapping.h"
+#include "core/slam/loop_closing/loop_closing.h"
+#include "core/slam/map/map_file.h"
+#include "core/slam/feature/orb_extractor.h"
+#include "core/slam/tracking/tracking.h"
 
 namespace dygslam {
 
@@ -107,7 +107,7 @@ struct SystemOptions {
   // ordinary static features).
   bool demote_in_box_features = true;
   // Map points whose tracked features the filter labels dynamic are flagged and taken out of the
-  // map (core/slam/dynamic_points.h). Off in the `paper` configurations.
+  // map (core/slam/map/dynamic_points.h). Off in the `paper` configurations.
   DynamicPointOptions dynamic_points;
   // Fixed seeds, local mapping run synchronously after each keyframe: identical output run to run.
   bool deterministic = false;

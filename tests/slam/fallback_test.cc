@@ -12,7 +12,7 @@
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
-#include "core/slam/static_depth_odometry.h"
+#include "core/slam/tracking/static_depth_odometry.h"
 #include "core/system/system.h"
 #include "run/system_config.h"
 #include "tests/support/test_support.h"

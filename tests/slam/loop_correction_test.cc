@@ -6,7 +6,7 @@
 #include <functional>
 #include <set>
 
-#include "core/slam/loop_closing.h"
+#include "core/slam/loop_closing/loop_closing.h"
 #include "tests/slam/synthetic_map.h"
 
 namespace dygslam {

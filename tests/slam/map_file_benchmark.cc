@@ -16,7 +16,7 @@
 
 #include "core/config/settings.h"
 #include "run/system_config.h"
-#include "core/slam/map_file.h"
+#include "core/slam/map/map_file.h"
 #include "core/system/system.h"
 #include "tests/slam/synthetic_map.h"
 

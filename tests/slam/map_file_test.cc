@@ -1,7 +1,7 @@
 // SLAM map files on generated frames: save -> load -> save is byte-identical, a loaded
 // map localizes every frame deterministically without growing, a loaded map without localization
 // is extended with continuing ids, and every kind of damaged file gives its clear InputError.
-#include "core/slam/map_file.h"
+#include "core/slam/map/map_file.h"
 
 #include <gtest/gtest.h>
 

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "core/slam/relocalization.h"
+#include "core/slam/tracking/relocalization.h"
 #include "tests/slam/synthetic_map.h"
 
 using namespace dygslam;

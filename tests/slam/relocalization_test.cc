@@ -1,6 +1,6 @@
 // Relocalization through the bag-of-words index on a generated keyframe map: same success and
 // accuracy as brute force, and the index does not touch keyframes that share no words.
-#include "core/slam/relocalization.h"
+#include "core/slam/tracking/relocalization.h"
 
 #include <gtest/gtest.h>
 

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "core/place/keyframe_database.h"
-#include "core/slam/frame.h"
-#include "core/slam/map.h"
+#include "core/slam/map/frame.h"
+#include "core/slam/map/map.h"
 #include "tools/synth/synthetic_scene.h"
 
 namespace dygslam::testing {

@@ -1,4 +1,4 @@
-// The per-map-point dynamic flag (core/slam/dynamic_points.h) on generated sequences.
+// The per-map-point dynamic flag (core/slam/map/dynamic_points.h) on generated sequences.
 // The System runs the full filter (deterministic) on movers that walk, stop, stand and turn, one
 // of them never detected, with and without the flag. Ground truth of a map point: the generator's
 // object label at the pixel of one of its observations (in the frame of that keyframe); a point

@@ -1,4 +1,4 @@
-// The local-mapping schedule (core/slam/local_mapping.h): a keyframe's local BA is solved on the
+// The local-mapping schedule (core/slam/local_mapping/local_mapping.h): a keyframe's local BA is solved on the
 // mapping thread and lands at a fixed point of the frame sequence, so a threaded run gives the
 // trajectory of the unthreaded (deterministic) run, whatever the threads' timing.
 #include <gtest/gtest.h>

@@ -8,7 +8,7 @@
 #include "core/base/error.h"
 #include "core/dynamic/dynamic_filter.h"
 #include "core/dynamic/yolo_detector.h"
-#include "core/slam/orb_extractor.h"
+#include "core/slam/feature/orb_extractor.h"
 
 namespace dygslam {
 namespace {

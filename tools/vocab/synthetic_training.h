@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/place/vocabulary.h"
-#include "core/slam/orb_extractor.h"
+#include "core/slam/feature/orb_extractor.h"
 
 namespace dygslam {
 

@@ -1,0 +1,377 @@
+#include "core/slam/optimize/optimizer.h"
+
+#include <ceres/ceres.h>
+
+#include <cmath>
+#include <functional>
+#include <map>
+#include <set>
+
+#include "core/slam/optimize/bundle_solver.h"
+#include "core/slam/optimize/cost_functions.h"
+#include "core/slam/optimize/pose_solver.h"
+
+namespace dygslam {
+namespace {
+
+// Bundle adjustments with at most this many keyframe poses solve with a dense Schur complement.
+constexpr size_t kDenseSchurMaxPoses = 100;
+// ... and with at most this many variable poses, with the dedicated solver (its reduced camera
+// system is a dense matrix of 6 x this size).
+constexpr size_t kDedicatedSolverMaxPoses = 60;
+
+ProjectionModel ModelOf(const CameraGeometry& g) {
+  return {g.camera.fx, g.camera.fy, g.camera.cx, g.camera.cy, g.bf};
+}
+
+class AbortCallback : public ceres::IterationCallback {
+ public:
+  explicit AbortCallback(const std::atomic<bool>* abort) : abort_(abort) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    return (abort_ && abort_->load()) ? ceres::SOLVER_TERMINATE_SUCCESSFULLY
+                                      : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const std::atomic<bool>* abort_;
+};
+
+}  // namespace
+
+namespace {
+
+// The frame's matched map points as pose residuals (clears frame.outlier for them); `index` gets
+// each observation's keypoint index.
+void CollectPoseObservations(Frame& frame, std::vector<PoseObservation>* observations,
+                             std::vector<size_t>* index) {
+  const CameraGeometry& g = *frame.geometry;
+  observations->clear();
+  index->clear();
+  for (size_t i = 0; i < frame.size(); ++i) {
+    const auto& mp = frame.map_points[i];
+    if (!mp) continue;
+    frame.outlier[i] = 0;
+    const cv::KeyPoint& kp = frame.undistorted[i];
+    const bool stereo = frame.u_right[i] >= 0;
+    observations->push_back({mp->position,
+                             Eigen::Vector3d(kp.pt.x, kp.pt.y, stereo ? frame.u_right[i] : 0.0),
+                             g.inv_sigma2[kp.octave], stereo});
+    index->push_back(i);
+  }
+}
+
+// Marks every observation (including earlier outliers) by its chi2 at cam_from_world (behind the
+// camera: outlier); writes frame.outlier and returns the inliers.
+int ClassifyPoseObservations(const std::vector<PoseObservation>& observations,
+                             const std::vector<size_t>& index, const Rigid3d& cam_from_world,
+                             const ProjectionModel& model, const OptimizerOptions& options,
+                             Frame& frame) {
+  int inliers = 0;
+  for (size_t k = 0; k < observations.size(); ++k) {
+    const PoseObservation& o = observations[k];
+    const Eigen::Vector3d p = cam_from_world * o.point;
+    double chi2 = 0;
+    const bool bad_depth = p.z() <= 0;
+    if (!bad_depth) {
+      const double u = model.fx * p.x() / p.z() + model.cx, v = model.fy * p.y() / p.z() + model.cy;
+      chi2 = (u - o.measurement.x()) * (u - o.measurement.x()) +
+             (v - o.measurement.y()) * (v - o.measurement.y());
+      if (o.stereo) {
+        const double ur = u - model.bf / p.z();
+        chi2 += (ur - o.measurement.z()) * (ur - o.measurement.z());
+      }
+      chi2 *= o.information;
+    }
+    const bool is_outlier =
+        bad_depth || chi2 > (o.stereo ? options.chi2_stereo : options.chi2_mono);
+    frame.outlier[index[k]] = is_outlier ? 1 : 0;
+    if (!is_outlier) ++inliers;
+  }
+  return inliers;
+}
+
+}  // namespace
+
+int OptimizePose(Frame& frame, const OptimizerOptions& options) {
+  // Reused across calls of one thread: no allocation per frame once warm.
+  thread_local std::vector<PoseObservation> observations;
+  thread_local std::vector<size_t> index;
+  thread_local std::vector<uint8_t> active;
+  CollectPoseObservations(frame, &observations, &index);
+  if (observations.size() < 3) return 0;
+  const ProjectionModel model = ModelOf(*frame.geometry);
+  const double delta_mono = std::sqrt(options.chi2_mono),
+               delta_stereo = std::sqrt(options.chi2_stereo);
+  PoseSolverOptions solver_options;
+  solver_options.max_iterations = options.pose_iterations;
+  Rigid3d cam_from_world = frame.cam_from_world;
+  active.assign(observations.size(), 1);
+  int inliers = 0;
+  for (int round = 0; round < options.pose_rounds; ++round) {
+    const bool robust = round < options.pose_rounds - 1;  // last round without the kernel
+    int added = 0;
+    for (size_t k = 0; k < index.size(); ++k) {
+      active[k] = frame.outlier[index[k]] ? 0 : 1;
+      added += active[k];
+    }
+    if (added < 3) break;
+    SolvePose(observations, active.data(), model, robust ? delta_mono : 0.0,
+              robust ? delta_stereo : 0.0, solver_options, &cam_from_world);
+    inliers = ClassifyPoseObservations(observations, index, cam_from_world, model, options, frame);
+    if (inliers < 10) break;
+  }
+  frame.cam_from_world = cam_from_world;
+  return inliers;
+}
+
+namespace {
+
+// The keyframes of the local window around `kf`: it and its covisible keyframes (empty when kf
+// was culled). Called under the map lock.
+std::vector<std::shared_ptr<KeyFrame>> LocalWindow(const Map& map,
+                                                   const std::shared_ptr<KeyFrame>& kf) {
+  std::vector<std::shared_ptr<KeyFrame>> local;
+  if (kf->bad) return local;
+  local.push_back(kf);
+  for (int64_t id : kf->ordered_connections) {
+    auto other = map.GetKeyFrame(id);
+    if (other && !other->bad) local.push_back(other);
+  }
+  return local;
+}
+
+}  // namespace
+
+// Copies the problem of the keyframes `local` (with every point they see; other keyframes
+// observing those points are fixed, and so is the map's first keyframe, else the oldest selected
+// one, when nothing else fixes the gauge). Called under the map lock.
+BundleProblem PrepareBundle(const Map& map, const std::vector<std::shared_ptr<KeyFrame>>& local) {
+  BundleProblem problem;
+  if (local.empty()) return problem;
+  problem.epoch = map.CorrectionEpoch();
+  const CameraGeometry& g = *local.front()->geometry;
+  problem.model = ModelOf(g);
+  for (const auto& k : local) PoseToParameters(k->cam_from_world, problem.poses[k->id].data());
+  std::map<int64_t, std::shared_ptr<MapPoint>> local_points;
+  for (const auto& k : local) {
+    for (const auto& mp : k->map_points) {
+      if (mp && !mp->bad) local_points[mp->id] = mp;
+    }
+  }
+  for (const auto& [pid, mp] : local_points) {
+    problem.points[pid] = mp->position;
+    for (const auto& [obs_kf_id, idx] : mp->observations) {
+      auto obs_kf = map.GetKeyFrame(obs_kf_id);
+      if (!obs_kf || obs_kf->bad) continue;
+      if (!problem.poses.count(obs_kf_id)) {
+        PoseToParameters(obs_kf->cam_from_world, problem.poses[obs_kf_id].data());
+        problem.fixed.insert(obs_kf_id);
+      }
+      const cv::KeyPoint& kp = obs_kf->undistorted[idx];
+      const bool stereo = obs_kf->u_right[idx] >= 0;
+      problem.observations.push_back(
+          {obs_kf_id, pid, Eigen::Vector3d(kp.pt.x, kp.pt.y, stereo ? obs_kf->u_right[idx] : 0.0),
+           std::sqrt(obs_kf->geometry->inv_sigma2[kp.octave]), stereo});
+    }
+  }
+  // Gauge: if no keyframe outside the local window observes the points, fix the oldest one.
+  if (problem.poses.count(map.keyframes().begin()->first))
+    problem.fixed.insert(map.keyframes().begin()->first);
+  if (problem.fixed.empty()) problem.fixed.insert(problem.poses.begin()->first);
+  return problem;
+}
+
+BundleProblem PrepareLocalBundle(const Map& map, const std::shared_ptr<KeyFrame>& kf) {
+  return PrepareBundle(map, LocalWindow(map, kf));
+}
+
+void SolveBundle(BundleProblem& bundle, const OptimizerOptions& options, int iterations_first,
+                 int iterations_second, const std::atomic<bool>* abort) {
+  auto& observations = bundle.observations;
+  auto& poses = bundle.poses;
+  auto& points = bundle.points;
+  const auto& fixed = bundle.fixed;
+  const ProjectionModel& model = bundle.model;
+  auto& outlier = bundle.outlier;
+  outlier.assign(observations.size(), 0);
+  if (observations.empty()) return;
+  const double delta_mono = std::sqrt(options.chi2_mono),
+               delta_stereo = std::sqrt(options.chi2_stereo);
+  AbortCallback abort_callback(abort);
+  // Local windows: the dedicated Schur-complement solver (core/slam/optimize/bundle_solver.h) on the
+  // problem indexed once; larger problems: Ceres with a sparse camera system.
+  const bool dedicated = poses.size() - fixed.size() <= kDedicatedSolverMaxPoses;
+  std::vector<int64_t> pose_ids, point_ids;
+  std::vector<std::array<double, 7>> pose_values;
+  std::vector<uint8_t> pose_fixed;
+  std::vector<Eigen::Vector3d> point_values;
+  std::vector<BundleResidual> residuals;
+  if (dedicated) {
+    std::map<int64_t, int> pose_index, point_index;
+    for (const auto& [id, pose] : poses) {
+      pose_index[id] = static_cast<int>(pose_ids.size());
+      pose_ids.push_back(id);
+      pose_values.push_back(pose);
+      pose_fixed.push_back(fixed.count(id) ? 1 : 0);
+    }
+    for (const auto& [id, point] : points) {
+      point_index[id] = static_cast<int>(point_ids.size());
+      point_ids.push_back(id);
+      point_values.push_back(point);
+    }
+    residuals.reserve(observations.size());
+    for (const BundleObservation& o : observations)
+      residuals.push_back({pose_index.at(o.kf_id), point_index.at(o.point_id), o.measurement,
+                           o.sqrt_info, o.stereo});
+  }
+  // Cost functions and the two Huber kernels are made once and shared by both solves (the
+  // problems do not own them): only the problem's structure is rebuilt for the second solve.
+  std::vector<std::unique_ptr<ceres::CostFunction>> costs;
+  costs.reserve(observations.size());
+  for (const BundleObservation& o : observations) {
+    if (dedicated) break;
+    if (o.stereo) {
+      costs.emplace_back(new StereoBACost(o.measurement, o.sqrt_info, model));
+    } else {
+      costs.emplace_back(new MonoBACost(o.measurement.head<2>(), o.sqrt_info, model));
+    }
+  }
+  ceres::HuberLoss huber_mono(delta_mono), huber_stereo(delta_stereo);
+  auto solve = [&](int iterations, bool robust) {
+    if (dedicated) {
+      std::vector<uint8_t> active(observations.size());
+      for (size_t k = 0; k < observations.size(); ++k) active[k] = outlier[k] ? 0 : 1;
+      BundleSolverOptions solver_options;
+      solver_options.max_iterations = iterations;
+      SolveBundleProblem(residuals, active.data(), model, robust ? delta_mono : 0.0,
+                         robust ? delta_stereo : 0.0, solver_options, pose_fixed, &pose_values,
+                         &point_values, abort);
+      for (size_t k = 0; k < pose_ids.size(); ++k) poses[pose_ids[k]] = pose_values[k];
+      for (size_t k = 0; k < point_ids.size(); ++k) points[point_ids[k]] = point_values[k];
+      return;
+    }
+    ceres::Problem::Options problem_options;
+    problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(problem_options);
+    PoseManifold manifold;
+    for (size_t k = 0; k < observations.size(); ++k) {
+      if (outlier[k]) continue;
+      const BundleObservation& o = observations[k];
+      double* pose = poses[o.kf_id].data();
+      double* point = points[o.point_id].data();
+      ceres::LossFunction* loss = robust ? (o.stereo ? &huber_stereo : &huber_mono) : nullptr;
+      problem.AddResidualBlock(costs[k].get(), loss, pose, point);
+    }
+    for (auto& [id, pose] : poses) {
+      if (!problem.HasParameterBlock(pose.data())) continue;
+      problem.SetManifold(pose.data(), &manifold);
+      if (fixed.count(id)) problem.SetParameterBlockConstant(pose.data());
+    }
+    ceres::Solver::Options solver_options;
+    // The reduced camera system of a local window is small and dense (its keyframes share most
+    // points): a dense Schur complement suits it; sparse for large global problems.
+    solver_options.linear_solver_type =
+        poses.size() <= kDenseSchurMaxPoses ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
+    solver_options.max_num_iterations = iterations;
+    solver_options.num_threads = 1;
+    solver_options.logging_type = ceres::SILENT;
+    if (abort) solver_options.callbacks.push_back(&abort_callback);
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &problem, &summary);
+  };
+  auto classify = [&]() {
+    for (size_t k = 0; k < observations.size(); ++k) {
+      const BundleObservation& o = observations[k];
+      const Rigid3d cw = PoseFromParameters(poses[o.kf_id].data());
+      const Eigen::Vector3d p = cw * points[o.point_id];
+      if (p.z() <= 0) {
+        outlier[k] = 1;
+        continue;
+      }
+      const double u = model.fx * p.x() / p.z() + model.cx, v = model.fy * p.y() / p.z() + model.cy;
+      double chi2 = (u - o.measurement.x()) * (u - o.measurement.x()) +
+                    (v - o.measurement.y()) * (v - o.measurement.y());
+      if (o.stereo) {
+        const double ur = u - model.bf / p.z();
+        chi2 += (ur - o.measurement.z()) * (ur - o.measurement.z());
+      }
+      chi2 *= o.sqrt_info * o.sqrt_info;
+      outlier[k] = chi2 > (o.stereo ? options.chi2_stereo : options.chi2_mono) ? 1 : 0;
+    }
+  };
+  solve(iterations_first, true);
+  if (!(abort && abort->load())) {
+    classify();
+    solve(iterations_second, false);
+  }
+  classify();
+  bundle.solved = true;
+}
+
+bool ApplyBundle(Map& map, const BundleProblem& bundle) {
+  if (!bundle.solved || bundle.observations.empty()) return false;
+  // A loop correction moved the map meanwhile: this solution is relative to the old poses.
+  if (map.CorrectionEpoch() != bundle.epoch) return false;
+  // Drop outlier observations, then write back poses and points.
+  for (size_t k = 0; k < bundle.observations.size(); ++k) {
+    if (!bundle.outlier[k]) continue;
+    const BundleObservation& o = bundle.observations[k];
+    auto it = map.map_points().find(o.point_id);
+    if (it == map.map_points().end()) continue;
+    auto mp = it->second;
+    map.EraseObservation(mp, o.kf_id);
+  }
+  for (const auto& [id, pose] : bundle.poses) {
+    if (bundle.fixed.count(id)) continue;
+    auto k = map.GetKeyFrame(id);
+    if (k && !k->bad) k->cam_from_world = PoseFromParameters(pose.data());
+  }
+  for (const auto& [pid, position] : bundle.points) {
+    auto it = map.map_points().find(pid);
+    if (it == map.map_points().end()) continue;
+    it->second->position = position;
+    map.UpdateNormalAndDepth(*it->second);
+  }
+  return true;
+}
+
+namespace {
+
+// Copy in under the map lock, solve without it, write back under it.
+void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyFrame>>()>& select,
+                  const OptimizerOptions& options, int iterations_first, int iterations_second,
+                  const std::atomic<bool>* abort) {
+  BundleProblem bundle;
+  {
+    std::lock_guard<std::mutex> lock(map.mutex());
+    bundle = PrepareBundle(map, select());
+  }
+  if (bundle.observations.empty()) return;
+  SolveBundle(bundle, options, iterations_first, iterations_second, abort);
+  std::lock_guard<std::mutex> lock(map.mutex());
+  ApplyBundle(map, bundle);
+}
+
+}  // namespace
+
+void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf,
+                           const OptimizerOptions& options, const std::atomic<bool>* abort) {
+  AdjustBundle(
+      map, [&map, &kf]() { return LocalWindow(map, kf); }, options, options.ba_iterations_first,
+      options.ba_iterations_second, abort);
+}
+
+void GlobalBundleAdjustment(Map& map, const OptimizerOptions& options, int iterations_first,
+                            int iterations_second) {
+  auto select = [&map]() {
+    std::vector<std::shared_ptr<KeyFrame>> all;
+    for (const auto& [id, k] : map.keyframes())
+      if (!k->bad) all.push_back(k);
+    return all;
+  };
+  AdjustBundle(map, select, options, iterations_first, iterations_second, nullptr);
+}
+
+}  // namespace dygslam

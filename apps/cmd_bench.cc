@@ -258,7 +258,8 @@ int RunBench(const std::vector<std::string>& args) {
   p.AddOption("out", "DIR", "report folder (report.md, runs.csv, PNGs)", "out/bench");
   p.AddOption("work", "DIR", "run folders (trajectories, frames.csv); default DIR/runs");
   p.AddOption("update-benchmarks", "FILE",
-              "write the report between the bench markers of FILE (BENCHMARKS.md)");
+              "write the report between the bench markers of FILE (a Markdown file outside the "
+              "data, e.g. BENCHMARKS.md)");
   p.AddOption(
       "config", "FILE",
       "settings YAML for every sequence (default: camera.yaml in the sequence or a preset)");
@@ -305,10 +306,19 @@ int RunBench(const std::vector<std::string>& args) {
                                  : PrepareOutputDir("out", (out_dir / "runs").string()))
           .lexically_normal();
 
-  // The file the section goes into: never one of this bench's own outputs (the report would be
-  // written over it first), and its markers checked now, not after the runs.
+  // The file the section goes into: a Markdown file outside any dataset, never one of this
+  // bench's own outputs (the report would be written over it first); its markers checked now,
+  // not after the runs.
   if (p.Has("update-benchmarks")) {
     const std::string target = p.Get("update-benchmarks");
+    const std::string extension = fs::path(target).extension().string();
+    if (extension != ".md" && extension != ".markdown")
+      return p.UsageError("--update-benchmarks " + target +
+                          ": not a Markdown file (.md); the section is written into a report "
+                          "such as BENCHMARKS.md");
+    if (const std::string dataset = DatasetFolderOf(target); !dataset.empty())
+      return p.UsageError("--update-benchmarks " + target + " is a file of the dataset " + dataset +
+                          "; a bench never writes into its data");
     std::vector<NamedPath> outputs;
     for (const char* name : {"report.md", "runs.csv", "bench_context.txt"})
       outputs.push_back({std::string("the output ") + name, (out_dir / name).string()});
@@ -330,6 +340,22 @@ int RunBench(const std::vector<std::string>& args) {
   if (sequences.empty())
     throw InputError(p.Positional("DATA_DIR"), 0,
                      "no sequence found (a folder with rgb.txt, depth.txt and groundtruth.txt)");
+
+  // None of this bench's inputs (a dataset's lists, a settings file) is --update-benchmarks.
+  if (p.Has("update-benchmarks")) {
+    std::vector<NamedPath> inputs;
+    if (p.Has("config")) inputs.push_back({"--config", p.Get("config")});
+    for (const BenchSequence& s : sequences) {
+      inputs.push_back({"the settings of " + s.name, s.settings_path});
+      for (const char* list : {"rgb.txt", "depth.txt", "groundtruth.txt", "associations.txt"})
+        inputs.push_back(
+            {std::string(list) + " of " + s.name, (fs::path(s.directory) / list).string()});
+    }
+    if (const std::string clash =
+            FindOutputClash(inputs, {{"--update-benchmarks", p.Get("update-benchmarks")}});
+        !clash.empty())
+      return p.UsageError(clash);
+  }
 
   // Per sequence: settings, dataset, frame range, ground truth (all checked before any run).
   struct Prepared {

@@ -839,6 +839,9 @@ int RunRun(const std::vector<std::string>& args) {
                       : incomplete                ? kExitIncompleteRun
                       : tracking_failure          ? 1
                                                   : 0;
+  // An output that could not be written is the run's error (eval.json says why it exits 1).
+  for (const auto& [name, reason] : outputs.failures())
+    summary.error += (summary.error.empty() ? "" : "; ") + name + " not written: " + reason;
   outputs.Write("eval.json",
                 [&] { WriteFileAtomically(outputs.PathOf("eval.json"), RunSummaryJson(summary)); });
   // The files this run wrote; a file an earlier run left (not replaced) is named apart.

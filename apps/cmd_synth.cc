@@ -148,8 +148,8 @@ keys). The same seed gives byte-identical files.)");
   if (!p.Flag("replace")) {
     std::string found;
     for (const char* name :
-         {"rgb.txt", "depth.txt", "groundtruth.txt", "mask.txt", "detections.txt", "objects.txt",
-          "camera.yaml", "rgb", "depth", "mask"}) {
+         {"rgb.txt", "depth.txt", "associations.txt", "groundtruth.txt", "mask.txt",
+          "detections.txt", "objects.txt", "camera.yaml", "rgb", "depth", "mask"}) {
       std::error_code ec;
       if (std::filesystem::exists(std::filesystem::path(out_dir) / name, ec))
         found += (found.empty() ? "" : ", ") + std::string(name);
@@ -194,6 +194,16 @@ keys). The same seed gives byte-identical files.)");
                            " (the rendered files are in " + staging.string() + ")");
   }
   fs::remove(staging, ec);
+  // The pairs of the dataset replaced (a reader prefers associations.txt to rgb.txt + depth.txt)
+  // are not this sequence's.
+  if (const fs::path stale = target / "associations.txt";
+      fs::exists(fs::symlink_status(stale, ec))) {
+    fs::remove(stale, ec);
+    std::fprintf(stderr,
+                 "synth: removed %s (the frame pairs of the replaced dataset; this sequence is "
+                 "read from rgb.txt and depth.txt)\n",
+                 EchoValue(stale.string()).c_str());
+  }
   std::printf("wrote %d frames (%dx%d, %d moving objects, seed %llu) to %s in %.2f s\n",
               options.num_frames, options.camera.width, options.camera.height,
               options.num_moving_objects, static_cast<unsigned long long>(options.seed),

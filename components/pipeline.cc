@@ -30,6 +30,7 @@
 #include "core/base/log.h"
 #include "core/base/stop_signal.h"
 #include "core/base/thread_setup.h"
+#include "core/io/file_util.h"
 #include "dygslam_msg/StreamStatusPubSubTypes.h"
 #include "run/realtime_report.h"
 
@@ -200,6 +201,14 @@ ComponentOutcome RunComponentKind(ComponentKind kind, const PipelineOptions& opt
           if (component != ComponentKind::kPlayer) p.wait_for_components.push_back(component);
         }
       }
+      // The real-time report goes into the output folder this run started with, wherever it is
+      // when the player ends (WriteFileAtomically follows a pinned folder; a component process
+      // pins it here, a run in one process pinned it already).
+      if (options.rate > 0) {
+        std::error_code ec;
+        fs::create_directories(options.output_dir, ec);
+        PinOutputFolder(options.output_dir);
+      }
       const PlayerStats stats = RunPlayer(participant, p, stop);
       if (options.rate > 0) {
         RealtimeReport report;
@@ -210,8 +219,6 @@ ComponentOutcome RunComponentKind(ComponentKind kind, const PipelineOptions& opt
         report.latency_median_ms = stats.latency_median_ms;
         report.latency_p99_ms = stats.latency_p99_ms;
         report.longest_gap_s = stats.longest_gap_s;
-        std::error_code ec;  // the player may end before the recorder made the folder
-        fs::create_directories(options.output_dir, ec);
         WriteRealtimeReport((fs::path(options.output_dir) / kRealtimeReportFile).string(), report);
       }
       if (stats.refused) throw FrameSourceRefused();

@@ -27,6 +27,18 @@ namespace {
 // the run's consumers took the other source, and this player's frames are refused.
 constexpr size_t kRefusedAfterForeignPoses = 30;
 
+using Clock = std::chrono::steady_clock;
+
+// How long the pipeline has kept a frame without a result at `now`: since the last result or
+// since the oldest frame still out (`sent`: send times by sequence number) was sent, whichever is
+// later; 0 with no frame out or before the first result (start-up is not a stall).
+std::chrono::duration<double> WaitWithFrameOut(Clock::time_point now,
+                                               const std::optional<Clock::time_point>& last_result,
+                                               const std::map<uint64_t, Clock::time_point>& sent) {
+  if (!last_result || sent.empty()) return std::chrono::duration<double>(0);
+  return now - std::max(*last_result, sent.begin()->second);
+}
+
 }  // namespace
 
 void PlayerOptions::Check() const {
@@ -127,7 +139,12 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   options.Check();
   DatasetPlayer player(options);
   PlayerStats stats;
-  const auto start = Clock::now();
+  const auto begin = Clock::now();
+  auto start = begin;  // of the replay's schedule; moved on when the player was stopped
+  // A stop of the player itself (SIGSTOP, Ctrl-Z) is not the pipeline's: the times measured
+  // across it (latency, the wait for a result) are left out, and the replay resumes at the
+  // camera's rate rather than sending the frames it fell behind in one burst.
+  unsigned continued_at_last_pose = TimesContinued(), continued_at_last_frame = TimesContinued();
 
   std::mutex mutex;
   std::condition_variable cv;
@@ -186,11 +203,17 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
           const auto it = sent.find(seq);
           if (it != sent.end()) {
             const auto now = Clock::now();
-            const double ms = std::chrono::duration<double, std::milli>(now - it->second).count();
-            latency_ms.Add(ms);
-            if (late_after_ms > 0 && ms > late_after_ms) ++late;
-            if (last_pose)
-              longest_gap = std::max(longest_gap, std::chrono::duration<double>(now - *last_pose));
+            const unsigned continued = TimesContinued();
+            if (continued == continued_at_last_pose) {
+              const double ms = std::chrono::duration<double, std::milli>(now - it->second).count();
+              latency_ms.Add(ms);
+              if (late_after_ms > 0 && ms > late_after_ms) ++late;
+              // The wait for a result while a frame was out: from the last result or from when
+              // the oldest frame still out was sent, whichever is later (a player that sent
+              // nothing for a while, throttled, is no stall of the pipeline).
+              longest_gap = std::max(longest_gap, WaitWithFrameOut(now, last_pose, sent));
+            }
+            continued_at_last_pose = continued;
             last_pose = now;
             sent.erase(sent.begin(), std::next(it));
           }
@@ -282,7 +305,7 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
                                       : player.Stamp(player.num_frames() - 1).nanoseconds() -
                                             player.Stamp(0).nanoseconds() + 1000000000LL;
   const auto loop_end =
-      start + std::chrono::milliseconds(static_cast<int64_t>(options.loop_minutes * 60000));
+      begin + std::chrono::milliseconds(static_cast<int64_t>(options.loop_minutes * 60000));
   const size_t frames_per_loop = player.num_frames();
   for (size_t n = 0; frames_per_loop > 0 && !stop->requested(); ++n) {
     const size_t loop = n / frames_per_loop;
@@ -296,10 +319,19 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
     frame.stamp = Timestamp::FromNanoseconds(frame.stamp.nanoseconds() + loop * replay_shift_ns);
     if (n == 0) first_stamp = frame.stamp;
     if (options.rate > 0) {
-      const auto due =
-          start + std::chrono::nanoseconds(static_cast<int64_t>(
-                      (frame.stamp.nanoseconds() - first_stamp.nanoseconds()) / options.rate));
-      if (stop->WaitFor(due - Clock::now())) break;
+      auto due = [&] {
+        return start + std::chrono::nanoseconds(static_cast<int64_t>(
+                           (frame.stamp.nanoseconds() - first_stamp.nanoseconds()) / options.rate));
+      };
+      if (const unsigned continued = TimesContinued(); continued != continued_at_last_frame) {
+        continued_at_last_frame = continued;
+        if (const auto behind = Clock::now() - due(); behind > Clock::duration::zero()) {
+          start += behind;
+          LOG_INFO << "player: stopped and continued; the replay goes on at the camera's rate "
+                   << "from frame " << n;
+        }
+      }
+      if (stop->WaitFor(due() - Clock::now())) break;
     }
     if (options.window > 0 && n >= static_cast<size_t>(options.window)) {
       const int64_t need = static_cast<int64_t>(n) - options.window;
@@ -341,8 +373,8 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   {
     // Frames published after the last pose that came back: a gap too.
     std::lock_guard<std::mutex> lock(mutex);
-    if (last_pose)
-      longest_gap = std::max(longest_gap, std::chrono::duration<double>(Clock::now() - *last_pose));
+    if (TimesContinued() == continued_at_last_pose)
+      longest_gap = std::max(longest_gap, WaitWithFrameOut(Clock::now(), last_pose, sent));
     stats.longest_gap_s = longest_gap.count();
   }
   const uint64_t last_seq = stats.frames_published == 0 ? 0 : stats.frames_published - 1;
@@ -360,7 +392,7 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   if (slam_gone_reported) {
     LOG_WARNING << "player: slam left without announcing that it is done; ending";
   }
-  stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  stats.seconds = std::chrono::duration<double>(Clock::now() - begin).count();
   {
     std::lock_guard<std::mutex> lock(mutex);
     stats.poses_timed = latency_ms.count();

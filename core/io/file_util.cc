@@ -120,10 +120,16 @@ void PinOutputFolder(const std::string& dir) {
   PinnedFolders& pins = Pins();
   std::lock_guard<std::mutex> lock(pins.mutex);
   auto [it, inserted] = pins.fds.emplace(FolderKey(dir), fd);
-  if (!inserted) {
-    ::close(it->second);
-    it->second = fd;
+  if (inserted) return;
+  // Pinned already (a command and a component of it in one process): the first pin stands, the
+  // folder the command started with, while that folder exists (wherever it is now).
+  struct stat pinned {};
+  if (::fstat(it->second, &pinned) == 0 && pinned.st_nlink > 0) {
+    ::close(fd);
+    return;
   }
+  ::close(it->second);
+  it->second = fd;
 }
 
 void WriteFileAtomically(const std::string& path, const std::string& content) {

@@ -16,7 +16,8 @@ void WriteFileAtomically(const std::string& path, const std::string& content);
 // checks that the path still names the folder pinned, so that a folder replaced while the command
 // runs (renamed away and a link to another folder put in its place) is never written into. A
 // pinned folder that was removed may be made again, empty, under its name (the writes then pin
-// the new one). Throws InputError when `dir` cannot be opened.
+// the new one). A folder pinned already stays pinned as it was while it exists. Throws
+// InputError when `dir` cannot be opened.
 void PinOutputFolder(const std::string& dir);
 
 // Where the folder pinned as `dir` is now: `dir` itself while it still names it (or when `dir` is

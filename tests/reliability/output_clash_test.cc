@@ -178,6 +178,18 @@ TEST_F(OutputClashCli, SynthRefusesAnExistingDatasetUnlessAskedToReplaceIt) {
   ExpectError(Run({"synth", settings, "--frames", "2", "--quiet"}), 2,
               {"camera.yaml", "--replace"});
   EXPECT_EQ(ReadAll(settings + "/camera.yaml"), "%YAML:1.0\nCamera.fx: 500\n");
+  // associations.txt, which a reader prefers to rgb.txt + depth.txt: refused, and with --replace
+  // removed (its pairs would read the new sequence through the old dataset's pairs).
+  const std::string paired = dir_ + "/paired";
+  fs::create_directories(paired);
+  std::ofstream(paired + "/associations.txt") << "1.0 rgb/1.png 1.0 depth/1.png\n";
+  ExpectError(Run({"synth", paired, "--frames", "2", "--quiet"}), 2,
+              {"holds a dataset (associations.txt)", "--replace"});
+  const auto replaced_pairs = Run({"synth", paired, "--frames", "2", "--quiet", "--replace"});
+  EXPECT_EQ(replaced_pairs.code, 0) << replaced_pairs.err;
+  EXPECT_TRUE(Contains(replaced_pairs.err, "removed " + paired + "/associations.txt"))
+      << replaced_pairs.err;
+  EXPECT_FALSE(fs::exists(paired + "/associations.txt"));
 }
 
 // A synth --replace stopped midway (SIGTERM) leaves the folder's earlier sequence whole: the new
@@ -288,6 +300,40 @@ TEST_F(OutputClashCli, BenchUpdateFileIsCheckedBeforeAnyRun) {
   ExpectError(r, 1, {unmarked, "marker <!-- bench:begin --> not found"});
   EXPECT_EQ(ReadAll(unmarked), "no markers here\n");
   EXPECT_FALSE(Contains(r.err, "no sequence found")) << r.err;  // before the data is looked at
+}
+
+// `bench --update-benchmarks FILE` writes only into a Markdown file outside the data: a dataset's
+// list or ground truth, or the bench's own --config, that holds the markers (in comment lines)
+// is refused before any run. Before, it was replaced by the report, exit 0, and the dataset or
+// the settings no longer read.
+TEST_F(OutputClashCli, BenchNeverWritesItsReportIntoItsInputs) {
+  const fs::path ds = fs::path(dir_) / "ds";
+  fs::create_directories(ds / "rgb");
+  const std::string marked = "# <!-- bench:begin -->\n# <!-- bench:end -->\n";
+  for (const char* name : {"rgb.txt", "depth.txt", "groundtruth.txt"})
+    std::ofstream(ds / name) << marked << "1.0 x\n";
+  const std::string settings = dir_ + "/cfg.yaml";
+  std::ofstream(settings) << marked << ReadAll(Config());
+  const std::string settings_before = ReadAll(settings);
+  const fs::path out = fs::path(dir_) / "b";
+  for (const char* name : {"rgb.txt", "groundtruth.txt"}) {
+    const std::string target = (ds / name).string();
+    const std::string before = ReadAll(target);
+    const auto r =
+        Run({"bench", ds.string(), "--out", out.string(), "--update-benchmarks", target});
+    ExpectError(r, 2, {"--update-benchmarks " + target});
+    EXPECT_EQ(ReadAll(target), before) << name;
+  }
+  const auto r = Run({"bench", ds.string(), "--out", out.string(), "--config", settings,
+                      "--update-benchmarks", settings});
+  ExpectError(r, 2, {"--update-benchmarks " + settings, "not a Markdown file"});
+  EXPECT_EQ(ReadAll(settings), settings_before);
+  // A Markdown file inside a dataset folder is the dataset's too.
+  const std::string notes = (ds / "NOTES.md").string();
+  std::ofstream(notes) << marked;
+  ExpectError(Run({"bench", ds.string(), "--out", out.string(), "--update-benchmarks", notes}), 2,
+              {"is a file of the dataset"});
+  EXPECT_EQ(ReadAll(notes), marked);
 }
 
 // `eval --save-aligned` replaces an earlier trajectory, never another kind of file (before: a

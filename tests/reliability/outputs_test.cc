@@ -170,6 +170,10 @@ TEST_F(RunOutputsCli, AFailedMapSaveDoesNotStopTheOtherOutputs) {
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_TRUE(Contains(r.err, "dygslam run: error: " + map_file + " not written: ")) << r.err;
   EXPECT_FALSE(Contains(r.err, "internal error")) << r.err;
+  // eval.json says why the run exits 1.
+  const std::string json = ReadAll((out / "eval.json").string());
+  EXPECT_TRUE(Contains(json, "\"error\": \"" + map_file + " not written: ")) << json;
+  EXPECT_TRUE(Contains(json, "\"exit_code\": 1}")) << json;
   // The old map file is whole; every other output is this run's.
   EXPECT_EQ(ReadAll(map_file), "DYGSLMAP: an earlier map file\n");
   EXPECT_GE(ReadTumTrajectory((out / "trajectory.txt").string()).size(), 10u) << r.out;

@@ -26,6 +26,7 @@
 #include "core/base/stop_signal.h"
 #include "core/io/trajectory_io.h"
 #include "dygslam_msg/StreamStatusPubSubTypes.h"
+#include "run/realtime_report.h"
 #include "tests/support/cli_fixture.h"
 #include "tests/support/test_support.h"
 
@@ -45,6 +46,8 @@ constexpr int kLoopDomain = 147;
 constexpr int kPausedDomain = 148;
 constexpr int kSwappedDomain = 149;
 constexpr int kStallDomain = 150;
+constexpr int kSwappedProcessesDomain = 151;
+constexpr int kPlayerPausedDomain = 152;
 
 class RunIntegrity : public testing::CliFixture {
  protected:
@@ -53,6 +56,8 @@ class RunIntegrity : public testing::CliFixture {
   pid_t Spawn(const std::vector<std::string>& args) {
     return testing::SpawnDygslam(args, dir_ + "/run.out", dir_ + "/run.err");
   }
+  void ExpectOutputFolderReplacedMidRunIsNeverWrittenThrough(const std::string& source, int domain,
+                                                             const std::vector<std::string>& extra);
 };
 
 bool Exited(pid_t pid, int* code) {
@@ -419,20 +424,35 @@ TEST_F(RunIntegrity, AMapperPausedWhileSlamFinishesMakesTheRunIncomplete) {
 }
 
 // --out replaced while the run goes (renamed away, a link to a dataset folder put in its place):
-// before, the recorder wrote into the dataset and replaced its groundtruth.txt, exit 0. The
-// folder is pinned when the run starts: the outputs go into it where it now is, the run says so,
+// before, the recorder wrote into the dataset and replaced its groundtruth.txt, exit 0 (and with
+// --processes the player's realtime.txt went through the link). The folder is pinned when the
+// run starts, by every process of it: the outputs go into it where it now is, the run says so,
 // and the dataset is untouched.
-TEST_F(RunIntegrity, AnOutputFolderReplacedMidRunIsNeverWrittenThrough) {
-  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+void RunIntegrity::ExpectOutputFolderReplacedMidRunIsNeverWrittenThrough(
+    const std::string& source, int domain, const std::vector<std::string>& extra) {
+  const std::string& dir = dir_;
   const std::string data = SmallDataset(source, 90, "data", /*with_groundtruth=*/true);
+  std::ofstream(data + "/realtime.txt") << "the user's notes\n";
   const std::string groundtruth = ReadAll(data + "/groundtruth.txt");
-  const std::string out = dir_ + "/out", moved = dir_ + "/out.moved";
-  const pid_t pid =
-      Spawn({"run", data, "--config", Config(), "--filter", "none", "--quiet", "--rate", "1",
-             "--out", out, "--domain", std::to_string(kSwappedDomain)});
+  const std::string out = dir + "/out", moved = dir + "/out.moved";
+  std::vector<std::string> args = {"run",
+                                   data,
+                                   "--config",
+                                   Config(),
+                                   "--filter",
+                                   "none",
+                                   "--quiet",
+                                   "--rate",
+                                   "1",
+                                   "--out",
+                                   out,
+                                   "--domain",
+                                   std::to_string(domain)};
+  args.insert(args.end(), extra.begin(), extra.end());
+  const pid_t pid = testing::SpawnDygslam(args, dir + "/run.out", dir + "/run.err");
   ASSERT_GT(pid, 0);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (!Contains(ReadAll(dir_ + "/run.err"), "DDS partition") &&
+  while (!Contains(ReadAll(dir + "/run.err"), "DDS partition") &&
          std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   std::this_thread::sleep_for(std::chrono::seconds(2));  // 3 s of frames at 30 Hz
@@ -440,18 +460,63 @@ TEST_F(RunIntegrity, AnOutputFolderReplacedMidRunIsNeverWrittenThrough) {
   fs::create_directory_symlink(data, out);
   std::string diagnostics;
   const int code = testing::WaitForExit(pid, 120, &diagnostics);
-  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  const std::string summary = ReadAll(dir + "/run.out"), err = ReadAll(dir + "/run.err");
   EXPECT_EQ(ReadAll(data + "/groundtruth.txt"), groundtruth) << "the dataset was written into";
+  EXPECT_EQ(ReadAll(data + "/realtime.txt"), "the user's notes\n") << "written through the link";
   EXPECT_FALSE(fs::exists(data + "/trajectory.txt"));
   EXPECT_FALSE(fs::exists(data + "/map.bt"));
   EXPECT_TRUE(Contains(err, "the output folder " + out + " was replaced while the command ran"))
       << err;
   EXPECT_GE(ReadTumTrajectory(moved + "/trajectory.txt").size(), 80u) << summary << err;
   EXPECT_TRUE(fs::exists(moved + "/map.bt")) << err;
+  EXPECT_TRUE(Contains(ReadAll(moved + "/realtime.txt"), "rate 1\n")) << err;
   EXPECT_EQ(code, 0) << summary << err << diagnostics;
   EXPECT_TRUE(Contains(summary, "integrity: 90 of 90 requested frames processed (complete)"))
       << summary;
   EXPECT_TRUE(Contains(summary, "outputs: " + moved + "/{trajectory.txt")) << summary;
+  EXPECT_TRUE(Contains(summary, ",realtime.txt,")) << summary;
+}
+
+TEST_F(RunIntegrity, AnOutputFolderReplacedMidRunIsNeverWrittenThrough) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  ExpectOutputFolderReplacedMidRunIsNeverWrittenThrough(source, kSwappedDomain, {});
+}
+
+TEST_F(RunIntegrity, AnOutputFolderReplacedMidRunIsNeverWrittenThroughByAnyProcess) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  ExpectOutputFolderReplacedMidRunIsNeverWrittenThrough(source, kSwappedProcessesDomain,
+                                                        {"--processes"});
+}
+
+// --processes --rate 1 with the player paused (SIGSTOP) for 5 s: no frame was out while no pose
+// came, so the pipeline did not stall: the run is complete (exit 0) and never called stalled.
+// Before, the summary said "stalled: no result for 5 s while frames arrived" beside exit 0.
+TEST_F(RunIntegrity, APausedPlayerIsNoStallOfThePipeline) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string out = dir_ + "/out";
+  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet",
+                           "--frames", "0:150", "--no-map", "--processes", "--rate", "1", "--out",
+                           out, "--domain", std::to_string(kPlayerPausedDomain)});
+  ASSERT_GT(pid, 0);
+  const pid_t player = RunningComponentPid("player", out);
+  ASSERT_GT(player, 0) << ReadAll(dir_ + "/run.err");
+  std::this_thread::sleep_for(std::chrono::seconds(2));  // the frames flow
+  kill(player, SIGSTOP);
+  std::this_thread::sleep_for(std::chrono::seconds(5));
+  kill(player, SIGCONT);
+  std::string diagnostics;
+  const int code = testing::WaitForExit(pid, 120, &diagnostics);
+  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  EXPECT_FALSE(Contains(summary, "stalled")) << summary;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(summary, m, std::regex("150 frames, ([0-9]+) dropped"))) << summary;
+  if (std::stoi(m[1]) == 0) {
+    EXPECT_EQ(code, 0) << summary << err << diagnostics;
+    EXPECT_TRUE(Contains(summary, "integrity: 150 of 150 requested frames processed (complete)"))
+        << summary;
+  }
+  const RealtimeReport report = ReadRealtimeReport(out + "/realtime.txt");
+  EXPECT_LT(report.longest_gap_s, 3.0) << summary;
 }
 
 // --processes --rate 1 with slam paused (SIGSTOP) for 6 s: the frames the player sent meanwhile

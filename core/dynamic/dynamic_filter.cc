@@ -166,237 +166,6 @@ void DynamicFilter::Reset() {
   prev_cam_from_world_translation_ = cv::Vec3d(0, 0, 0);
 }
 
-bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv::Point2f>& geom,
-                                  const std::vector<int>& matches, FilterResult* result,
-                                  std::vector<double>* distances, std::vector<State>* anchors,
-                                  cv::Matx33d* cam_from_world_rotation,
-                                  cv::Vec3d* cam_from_world_translation) const {
-  const DynamicFilterOptions& o = options_;
-  const cv::Matx33d& k = *input.camera_matrix;
-  const double fx = k(0, 0), fy = k(1, 1), cx = k(0, 2), cy = k(1, 2);
-  const std::vector<float>& depths = *input.depths;
-  const int n = static_cast<int>(geom.size());
-  distances->assign(n, -1.0);
-  anchors->assign(n, State{});
-  const auto back_project = [&](const cv::Point2f& p, double z) {
-    return cv::Vec3d((p.x - cx) * z / fx, (p.y - cy) * z / fy, z);
-  };
-  result->used_depth_residual = true;
-
-  // Camera motion cur_from_prev: PnP-RANSAC on matches whose previous feature has depth, from
-  // the static region when it holds enough of them (full mode), else from all (geometry mode).
-  // world_anchors: cam_from_world by PnP on the matched tracks' anchors (fixed in the world).
-  const bool world = o.world_anchors;
-  const cv::Matx33d prev_r = *cam_from_world_rotation;
-  const cv::Vec3d prev_t = *cam_from_world_translation;
-  bool ok = false;
-  cv::Matx33d rotation = cv::Matx33d::eye();
-  cv::Vec3d translation(0, 0, 0);
-  if (!prev_depths_.empty()) {
-    std::vector<cv::Point3f> object;
-    std::vector<cv::Point2f> image;
-    for (int pass = 0; pass < 2 && static_cast<int>(object.size()) < o.pnp_min_inliers; ++pass) {
-      object.clear();
-      image.clear();
-      for (int i = 0; i < n; ++i) {
-        const int j = matches[i];
-        if (j < 0) continue;
-        if (world ? !prev_states_[j].has_anchor : prev_depths_[j] <= 0) continue;
-        if (pass == 0 && result->features[i].in_dynamic_region &&
-            !result->features[i].in_box_background)
-          continue;
-        const cv::Vec3d x =
-            world ? prev_states_[j].anchor : back_project(prev_geom_points_[j], prev_depths_[j]);
-        object.emplace_back(static_cast<float>(x[0]), static_cast<float>(x[1]),
-                            static_cast<float>(x[2]));
-        image.push_back(geom[i]);
-      }
-    }
-    result->num_pnp_matches = static_cast<int>(object.size());
-    if (static_cast<int>(object.size()) >= o.pnp_min_inliers) {
-      cv::Mat rvec, tvec;
-      std::vector<int> inliers;
-      bool found = false;
-      try {
-        found = cv::solvePnPRansac(object, image, cv::Mat(k), cv::noArray(), rvec, tvec, false,
-                                   o.pnp_iterations, static_cast<float>(o.pnp_threshold), 0.99,
-                                   inliers, cv::SOLVEPNP_ITERATIVE);
-      } catch (const cv::Exception&) {
-        found = false;
-      }
-      result->num_pnp_inliers = static_cast<int>(inliers.size());
-      if (found && cv::checkRange(rvec) && cv::checkRange(tvec) &&
-          result->num_pnp_inliers >= o.pnp_min_inliers &&
-          result->num_pnp_inliers >= o.pnp_min_inlier_fraction * object.size()) {
-        cv::Mat r;
-        cv::Rodrigues(rvec, r);
-        r.convertTo(r, CV_64F);
-        tvec.convertTo(tvec, CV_64F);
-        rotation = cv::Matx33d(r);
-        translation = cv::Vec3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
-        ok = true;
-      }
-    }
-  }
-  // Anchors are in `world` (world_anchors) or in the previous camera: `pose` maps them into the
-  // current camera; `rotation` / `translation` become cur_from_prev.
-  cv::Matx33d pose_r = rotation;
-  cv::Vec3d pose_t = translation;
-  if (world) {
-    *cam_from_world_rotation = ok ? rotation : cv::Matx33d::eye();
-    *cam_from_world_translation = ok ? translation : cv::Vec3d(0, 0, 0);
-    if (ok) {
-      rotation = pose_r * prev_r.t();
-      translation = pose_t - rotation * prev_t;
-    }
-  }
-  const cv::Matx33d world_from_cam_r = cam_from_world_rotation->t();
-  const cv::Vec3d cam_from_world_t = *cam_from_world_translation;
-  const auto to_anchor_frame = [&](const cv::Vec3d& x_cam) -> cv::Vec3d {
-    return world ? cv::Vec3d(world_from_cam_r * (x_cam - cam_from_world_t)) : x_cam;
-  };
-  result->prev_rotation = rotation;
-  result->prev_translation = translation;
-
-  // Fundamental matrix of the estimated motion for features without an anchor (no depth).
-  cv::Matx33d fundamental = cv::Matx33d::zeros();
-  if (ok) {
-    const cv::Vec3d& t = translation;
-    const cv::Matx33d tx(0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0);
-    const cv::Matx33d k_inv = k.inv();
-    fundamental = k_inv.t() * tx * rotation * k_inv;
-  }
-  constexpr double kBehindCamera = 1e3;  // px: a residual that reads as certainly moving
-  for (int i = 0; i < n; ++i) {
-    const int j = matches[i];
-    const double z = depths[i];
-    State& a = (*anchors)[i];
-    if (j >= 0 && ok) {
-      const State& prev = prev_states_[j];
-      if (prev.has_anchor) {
-        const cv::Vec3d x = pose_r * prev.anchor + pose_t;
-        double d = kBehindCamera;
-        if (x[2] > 1e-3) {
-          const double du = fx * x[0] / x[2] + cx - geom[i].x;
-          const double dv = fy * x[1] / x[2] + cy - geom[i].y;
-          d = std::hypot(du, dv);
-        }
-        // In units of the keypoint's pyramid scale (ORB keypoints are `31 * scale` px wide):
-        // keypoints of coarse levels are localised less precisely.
-        (*distances)[i] = d / std::max(1.0, input.keypoints[i].size / 31.0);
-        result->features[i].track_age = prev.anchor_age + 1;
-        if (prev.anchor_age + 1 < o.anchor_max_age) {
-          a.has_anchor = true;
-          a.anchor = world ? prev.anchor : x;
-          a.anchor_age = prev.anchor_age + 1;
-          continue;
-        }
-      } else if (cv::norm(translation) > 1e-9) {
-        (*distances)[i] = EpipolarDistance(fundamental, prev_geom_points_[j], geom[i]);
-      }
-    }
-    if (z > 0) {
-      a.has_anchor = true;
-      a.anchor = to_anchor_frame(back_project(geom[i], z));
-      a.anchor_age = 0;
-    }
-  }
-  return ok;
-}
-
-void DynamicFilter::SplitBoxesByDepth(const FilterInput& input, FilterResult* result) const {
-  const DynamicFilterOptions& o = options_;
-  const std::vector<float>& depths = *input.depths;
-  const int n = static_cast<int>(depths.size());
-  const bool use_image = input.depth_image != nullptr && !input.depth_image->empty() &&
-                         input.depth_image->type() == CV_32FC1;
-  std::vector<double> object(input.detections.size(), std::nan(""));
-  for (size_t b = 0; b < input.detections.size(); ++b) {
-    const cv::Rect2f& bf = input.detections[b].box;
-    const cv::Rect box(
-        cv::Point(static_cast<int>(std::floor(bf.x)), static_cast<int>(std::floor(bf.y))),
-        cv::Point(static_cast<int>(std::ceil(bf.x + bf.width)),
-                  static_cast<int>(std::ceil(bf.y + bf.height))));
-    if (use_image) {
-      object[b] = BoxObjectDepth(*input.depth_image, box);
-    } else {
-      // The keypoint depths inside the box, as a one-row depth image.
-      std::vector<float> inside;
-      for (int i = 0; i < n; ++i)
-        if (depths[i] > 0 && box.contains(cv::Point(static_cast<int>(input.keypoints[i].pt.x),
-                                                    static_cast<int>(input.keypoints[i].pt.y))))
-          inside.push_back(depths[i]);
-      if (!inside.empty()) {
-        const cv::Mat row(1, static_cast<int>(inside.size()), CV_32FC1, inside.data());
-        object[b] = BoxObjectDepth(row, cv::Rect(0, 0, row.cols, 1));
-      }
-    }
-  }
-  for (int i = 0; i < n; ++i) {
-    FeatureStatus& fs = result->features[i];
-    if (!fs.in_dynamic_region || depths[i] <= 0) continue;
-    bool judged = false;
-    for (size_t b = 0; b < input.detections.size(); ++b) {
-      if (!std::isfinite(object[b])) continue;
-      const cv::Rect2f r = DynamicRegion(input.detections[b], o);
-      const cv::Point2f& p = input.keypoints[i].pt;
-      if (!(p.x >= r.x && p.x <= r.x + r.width && p.y >= r.y && p.y <= r.y + r.height)) continue;
-      judged = true;
-      if (std::abs(depths[i] - object[b]) <= o.box_depth_band) fs.at_object_depth = true;
-    }
-    fs.in_box_background = judged && !fs.at_object_depth;
-  }
-}
-
-void DynamicFilter::Consensus(const FilterInput& input, FilterResult* result) const {
-  const DynamicFilterOptions& o = options_;
-  const std::vector<cv::KeyPoint>& kps = input.keypoints;
-  const std::vector<float>& depths = *input.depths;
-  const int n = static_cast<int>(kps.size());
-  // Features with depth in a grid of consensus_radius cells.
-  const double cell = o.consensus_radius;
-  std::unordered_map<int64_t, std::vector<int>> grid;
-  // Shifted as unsigned: a negative cx << 32 is undefined in C++17 (UBSan); same bits.
-  const auto key = [](int64_t cx, int64_t cy) {
-    return static_cast<int64_t>((static_cast<uint64_t>(cx) << 32) ^
-                                (static_cast<uint64_t>(cy) & 0xffffffffu));
-  };
-  for (int i = 0; i < n; ++i)
-    if (depths[i] > 0)
-      grid[key(static_cast<int64_t>(std::floor(kps[i].pt.x / cell)),
-               static_cast<int64_t>(std::floor(kps[i].pt.y / cell)))]
-          .push_back(i);
-  const double r2 = o.consensus_radius * o.consensus_radius;
-  std::vector<char> label(n);
-  for (int i = 0; i < n; ++i) label[i] = result->features[i].is_dynamic;
-  for (int i = 0; i < n; ++i) {
-    // Features without depth, and the box's object itself, keep their label.
-    if (depths[i] <= 0 || result->features[i].at_object_depth) continue;
-    const int64_t cx = static_cast<int64_t>(std::floor(kps[i].pt.x / cell));
-    const int64_t cy = static_cast<int64_t>(std::floor(kps[i].pt.y / cell));
-    int near = 0, flagged = 0;
-    for (int64_t gx = cx - 1; gx <= cx + 1; ++gx) {
-      for (int64_t gy = cy - 1; gy <= cy + 1; ++gy) {
-        const auto it = grid.find(key(gx, gy));
-        if (it == grid.end()) continue;
-        for (int j : it->second) {
-          if (j == i) continue;
-          const double dx = kps[j].pt.x - kps[i].pt.x, dy = kps[j].pt.y - kps[i].pt.y;
-          if (dx * dx + dy * dy > r2 || std::abs(depths[j] - depths[i]) > o.consensus_depth_gap)
-            continue;
-          ++near;
-          flagged += label[j];
-        }
-      }
-    }
-    if (near < o.consensus_min_neighbours) continue;
-    const bool dynamic = 2 * (flagged + label[i]) > near + 1;
-    FeatureStatus& fs = result->features[i];
-    result->num_dynamic += static_cast<int>(dynamic) - static_cast<int>(fs.is_dynamic);
-    fs.is_dynamic = dynamic;
-  }
-}
-
 std::vector<int> DynamicFilter::MatchToPrevious(const std::vector<cv::KeyPoint>& keypoints,
                                                 const cv::Mat& descriptors) const {
   const int n_cur = static_cast<int>(keypoints.size());
@@ -490,13 +259,10 @@ std::vector<int> DynamicFilter::MatchToPrevious(const std::vector<cv::KeyPoint>&
   return matches;
 }
 
-FilterResult DynamicFilter::Process(const FilterInput& input) {
-  using Clock = std::chrono::steady_clock;
-  const auto ms_since = [](Clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  };
-  const std::vector<cv::KeyPoint>& kps = input.keypoints;
-  const int n = static_cast<int>(kps.size());
+namespace {
+
+void CheckFilterInput(const FilterInput& input) {
+  const int n = static_cast<int>(input.keypoints.size());
   if (input.descriptors.rows != n)
     throw InputError("DynamicFilter::Process: " + std::to_string(input.descriptors.rows) +
                      " descriptor rows for " + std::to_string(n) + " keypoints");
@@ -505,7 +271,64 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
   if (input.undistorted_points != nullptr &&
       static_cast<int>(input.undistorted_points->size()) != n)
     throw InputError("DynamicFilter::Process: undistorted_points size differs from keypoints");
+}
 
+// F by GC-RANSAC (OpenCV's USAC_ACCURATE) on the matches; false when none could be fitted.
+bool FitFundamental(const std::vector<cv::Point2f>& prev, const std::vector<cv::Point2f>& cur,
+                    const DynamicFilterOptions& o, cv::Matx33d* fundamental, FilterResult* result) {
+  cv::Mat f;
+  try {
+    f = cv::findFundamentalMat(prev, cur, cv::USAC_ACCURATE, o.fundamental_threshold,
+                               o.fundamental_confidence, o.fundamental_max_iters, cv::noArray());
+  } catch (const cv::Exception&) {
+    f.release();
+  }
+  if (f.rows != 3 || f.cols != 3) return false;
+  f.convertTo(f, CV_64F);
+  if (!cv::checkRange(f) || cv::norm(f) <= 0) return false;
+  *fundamental = cv::Matx33d(f);
+  result->fundamental = f;
+  // Inliers under eq. 4 (one-sided distance).
+  int inliers = 0;
+  for (size_t k = 0; k < prev.size(); ++k)
+    inliers += EpipolarDistance(*fundamental, prev[k], cur[k]) <= o.fundamental_threshold;
+  result->num_f_inliers = inliers;
+  return true;
+}
+
+// A homography by USAC_ACCURATE and its inliers within `threshold` (transfer error); -1 when none
+// could be fitted.
+int FitHomography(const std::vector<cv::Point2f>& prev, const std::vector<cv::Point2f>& cur,
+                  const DynamicFilterOptions& o, double threshold, cv::Matx33d* homography) {
+  cv::Mat h;
+  try {
+    h = cv::findHomography(prev, cur, cv::USAC_ACCURATE, threshold, cv::noArray(),
+                           o.fundamental_max_iters, o.fundamental_confidence);
+  } catch (const cv::Exception&) {
+    h.release();
+  }
+  if (h.rows != 3 || h.cols != 3 || !cv::checkRange(h)) return -1;
+  h.convertTo(h, CV_64F);
+  *homography = cv::Matx33d(h);
+  int inliers = 0;
+  for (size_t k = 0; k < prev.size(); ++k) {
+    const cv::Vec3d x = *homography * cv::Vec3d(prev[k].x, prev[k].y, 1.0);
+    if (std::abs(x[2]) < 1e-12) continue;
+    inliers += std::hypot(x[0] / x[2] - cur[k].x, x[1] / x[2] - cur[k].y) <= threshold;
+  }
+  return inliers;
+}
+
+}  // namespace
+
+FilterResult DynamicFilter::Process(const FilterInput& input) {
+  using Clock = std::chrono::steady_clock;
+  const auto ms_since = [](Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  };
+  CheckFilterInput(input);
+  const std::vector<cv::KeyPoint>& kps = input.keypoints;
+  const int n = static_cast<int>(kps.size());
   const DynamicFilterOptions& o = options_;
   FilterResult result;
   result.num_features = n;
@@ -518,11 +341,12 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
         o.mode == FilterMode::kGeometry || InAnyBox(kps[i].pt, input.detections, o);
     result.num_in_dynamic_region += f.in_dynamic_region;
   }
-  const bool depth_mode = o.depth_residual &&
-                          (o.mode == FilterMode::kGeometry || o.mode == FilterMode::kFull) &&
-                          input.depths != nullptr && input.camera_matrix != nullptr &&
-                          static_cast<int>(input.depths->size()) == n;
-  if (depth_mode && o.mode == FilterMode::kFull && o.box_depth_band > 0 &&
+  FrameStep step{input};
+  step.depth_mode = o.depth_residual &&
+                    (o.mode == FilterMode::kGeometry || o.mode == FilterMode::kFull) &&
+                    input.depths != nullptr && input.camera_matrix != nullptr &&
+                    static_cast<int>(input.depths->size()) == n;
+  if (step.depth_mode && o.mode == FilterMode::kFull && o.box_depth_band > 0 &&
       !input.detections.empty())
     SplitBoxesByDepth(input, &result);
   if (o.mode == FilterMode::kBoxes) {
@@ -533,268 +357,220 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
     }
     return result;
   }
-
-  std::vector<cv::Point2f> geom(n);
+  step.geom.resize(n);
   for (int i = 0; i < n; ++i)
-    geom[i] = input.undistorted_points ? (*input.undistorted_points)[i] : kps[i].pt;
+    step.geom[i] = input.undistorted_points ? (*input.undistorted_points)[i] : kps[i].pt;
 
   // b. Matching to the previous frame.
   auto t0 = Clock::now();
-  std::vector<int> matches =
-      has_prev_ ? MatchToPrevious(kps, input.descriptors) : std::vector<int>(n, -1);
+  step.matches = has_prev_ ? MatchToPrevious(kps, input.descriptors) : std::vector<int>(n, -1);
   result.matching_ms = ms_since(t0);
 
   t0 = Clock::now();
-  std::vector<KalmanProbability> posterior(n);
-  std::vector<char> has_posterior(n, 0);
+  step.posterior.resize(n);
+  step.has_posterior.assign(n, 0);
   // Ours: the depth-residual test replaces F (see DynamicFilterOptions::depth_residual), in
   // geometry and full mode (the keyframe masks no longer depend on the in-box labels, so the
   // ghost-voxel figure holds: BENCHMARKS.md, *Geometry that earns its place*).
-  const bool test_outside = depth_mode && o.mode == FilterMode::kFull;
+  step.test_outside = step.depth_mode && o.mode == FilterMode::kFull;
   // Prior of a new track in the dynamic region: p_init inside a box; without boxes (geometry
   // mode) the depth-residual test has no reason to presume a feature moving: outside_p_init.
-  const double region_prior =
-      depth_mode && o.mode == FilterMode::kGeometry ? o.outside_p_init : o.p_init;
-  std::vector<double> depth_distances;
-  std::vector<State> anchors;
-  cv::Matx33d cam_from_world_rotation = prev_cam_from_world_rotation_;
-  cv::Vec3d cam_from_world_translation = prev_cam_from_world_translation_;
-  if (depth_mode && !has_prev_) {
+  step.region_prior =
+      step.depth_mode && o.mode == FilterMode::kGeometry ? o.outside_p_init : o.p_init;
+  step.cam_from_world_rotation = prev_cam_from_world_rotation_;
+  step.cam_from_world_translation = prev_cam_from_world_translation_;
+  if (step.depth_mode && !has_prev_) {
     const std::vector<int> no_matches(n, -1);
-    DepthResidual(input, geom, no_matches, &result, &depth_distances, &anchors,
-                  &cam_from_world_rotation, &cam_from_world_translation);
+    DepthResidual(input, step.geom, no_matches, &result, &step.depth_distances, &step.anchors,
+                  &step.cam_from_world_rotation, &step.cam_from_world_translation);
   }
-  if (has_prev_ && depth_mode) {
-    for (int i = 0; i < n; ++i) {
-      const int j = matches[i];
-      if (j < 0) continue;
-      result.features[i].prev_match = j;
-      ++result.num_matched;
-      result.num_matched_dynamic_region += result.features[i].in_dynamic_region;
-    }
-    result.motion_model_ok =
-        DepthResidual(input, geom, matches, &result, &depth_distances, &anchors,
-                      &cam_from_world_rotation, &cam_from_world_translation);
-    for (int i = 0; i < n; ++i) {
-      FeatureStatus& fs = result.features[i];
-      const int j = matches[i];
-      if (j < 0 || !(fs.in_dynamic_region || test_outside)) continue;
-      const double prior_p =
-          fs.in_dynamic_region && !fs.in_box_background ? region_prior : o.outside_p_init;
-      const KalmanProbability prior_post = prev_states_[j].valid
-                                               ? prev_states_[j].posterior
-                                               : KalmanProbability{prior_p, o.initial_variance};
-      if (result.motion_model_ok && depth_distances[i] >= 0) {
-        fs.has_observation = true;
-        fs.epipolar_distance = depth_distances[i];
-        posterior[i] = KalmanUpdate(
-            prior_post,
-            GeometryProbability(depth_distances[i] / o.depth_residual_scale, o.c1, o.alpha), o.q,
-            o.r);
-      } else {
-        posterior[i] = KalmanPredict(prior_post, o.q);
-      }
-      has_posterior[i] = 1;
-    }
+  if (has_prev_ && step.depth_mode) {
+    ObserveWithDepth(&step, &result);
   } else if (has_prev_) {
-    std::vector<cv::Point2f> prev_static, cur_static, prev_all, cur_all;
-    for (int i = 0; i < n; ++i) {
-      const int j = matches[i];
-      if (j < 0) continue;
-      result.features[i].prev_match = j;
-      ++result.num_matched;
-      prev_all.push_back(prev_geom_points_[j]);
-      cur_all.push_back(geom[i]);
-      if (result.features[i].in_dynamic_region) {
-        ++result.num_matched_dynamic_region;
-      } else {
-        prev_static.push_back(prev_geom_points_[j]);
-        cur_static.push_back(geom[i]);
-      }
-    }
-    // c. Fundamental matrix from the static region (GC-RANSAC).
-    const std::vector<cv::Point2f>* f_prev = &prev_static;
-    const std::vector<cv::Point2f>* f_cur = &cur_static;
-    if (static_cast<int>(prev_static.size()) < o.min_fundamental_matches) {
-      f_prev = &prev_all;
-      f_cur = &cur_all;
-      result.used_all_matches_for_f = true;
-    }
-    result.num_static_matches_used_for_f = static_cast<int>(f_prev->size());
-    cv::Matx33d fundamental;
-    cv::Matx33d homography = cv::Matx33d::eye();
-    bool f_ok = false;
-    int f_inliers = 0;
-    if (static_cast<int>(f_prev->size()) >= o.min_fundamental_matches) {
-      cv::Mat f;
-      try {
-        f = cv::findFundamentalMat(*f_prev, *f_cur, cv::USAC_ACCURATE, o.fundamental_threshold,
-                                   o.fundamental_confidence, o.fundamental_max_iters,
-                                   cv::noArray());
-      } catch (const cv::Exception&) {
-        f.release();
-      }
-      if (f.rows == 3 && f.cols == 3) {
-        f.convertTo(f, CV_64F);
-        if (cv::checkRange(f) && cv::norm(f) > 0) {
-          f_ok = true;
-          fundamental = cv::Matx33d(f);
-          result.fundamental = f;
-          // Inliers under eq. 4 (one-sided distance).
-          for (size_t k = 0; k < f_prev->size(); ++k)
-            f_inliers +=
-                EpipolarDistance(fundamental, (*f_prev)[k], (*f_cur)[k]) <= o.fundamental_threshold;
-          result.num_f_inliers = f_inliers;
-        }
-      }
-      if (o.use_homography_for_degenerate) {
-        // Degenerate motion check: does a homography explain the matches as well as F?
-        // The transfer error is 2-D, the epipolar distance 1-D: for the same Gaussian noise the
-        // same inlier probability (95 %) needs a threshold 2.45 / 1.96 = 1.25 times larger.
-        const double h_thr = o.homography_threshold_scale * o.fundamental_threshold;
-        cv::Mat h;
-        try {
-          h = cv::findHomography(*f_prev, *f_cur, cv::USAC_ACCURATE, h_thr, cv::noArray(),
-                                 o.fundamental_max_iters, o.fundamental_confidence);
-        } catch (const cv::Exception&) {
-          h.release();
-        }
-        if (h.rows == 3 && h.cols == 3 && cv::checkRange(h)) {
-          h.convertTo(h, CV_64F);
-          const cv::Matx33d hm(h);
-          int h_inliers = 0;
-          for (size_t k = 0; k < f_prev->size(); ++k) {
-            const cv::Vec3d x = hm * cv::Vec3d((*f_prev)[k].x, (*f_prev)[k].y, 1.0);
-            if (std::abs(x[2]) < 1e-12) continue;
-            h_inliers +=
-                std::hypot(x[0] / x[2] - (*f_cur)[k].x, x[1] / x[2] - (*f_cur)[k].y) <= h_thr;
-          }
-          result.num_h_inliers = h_inliers;
-          // H replaces F when it explains the matches as well as F, or, when F had to be fitted
-          // on all matches (moving objects included: with the small baseline of consecutive
-          // frames a 7-dof F absorbs a rigidly moving object), when H explains most matches.
-          const bool as_good_as_f = !f_ok || h_inliers >= o.homography_inlier_ratio * f_inliers;
-          const bool dominant_in_contaminated =
-              result.used_all_matches_for_f &&
-              h_inliers >= o.homography_dominant_fraction * static_cast<double>(f_prev->size());
-          if (h_inliers >= o.min_fundamental_matches &&
-              (as_good_as_f || dominant_in_contaminated)) {
-            result.used_homography = true;
-            homography = hm;
-          }
-        }
-      }
-    }
-    result.motion_model_ok = f_ok || result.used_homography;
+    ObserveEpipolar(&step, &result);
+  }
+  std::vector<State> states = ExpandAndDecide(step, &result);
+  if (step.depth_mode && o.consensus_radius > 0 && has_prev_) Consensus(input, &result);
+  result.probability_ms = ms_since(t0);
+  Remember(&step, std::move(states));
+  return result;
+}
 
-    // d + e. Observation and Kalman update for matched dynamic-region features.
-    for (int i = 0; i < n; ++i) {
-      FeatureStatus& fs = result.features[i];
-      const int j = matches[i];
-      if (!fs.in_dynamic_region || j < 0) continue;
-      const KalmanProbability prior_post = prev_states_[j].valid
-                                               ? prev_states_[j].posterior
-                                               : KalmanProbability{o.p_init, o.initial_variance};
-      if (result.motion_model_ok) {
-        double d;
-        if (result.used_homography) {
-          const cv::Vec3d x =
-              homography * cv::Vec3d(prev_geom_points_[j].x, prev_geom_points_[j].y, 1.0);
-          d = std::abs(x[2]) < 1e-12 ? std::numeric_limits<double>::infinity()
-                                     : std::hypot(x[0] / x[2] - geom[i].x, x[1] / x[2] - geom[i].y);
-        } else {
-          d = EpipolarDistance(fundamental, prev_geom_points_[j], geom[i]);
-        }
-        fs.has_observation = true;
-        fs.epipolar_distance = d;
-        // Optional: distances in units of the keypoint's pyramid scale (localisation error grows
-        // with the octave). Off by default (the paper uses pixels).
-        const double d_eff = o.octave_scale_factor > 1.0
-                                 ? d / std::pow(o.octave_scale_factor, std::max(kps[i].octave, 0))
-                                 : d;
-        posterior[i] =
-            KalmanUpdate(prior_post, GeometryProbability(d_eff, o.c1, o.alpha), o.q, o.r);
-      } else {
-        posterior[i] = KalmanPredict(prior_post, o.q);
-      }
-      has_posterior[i] = 1;
+DynamicFilter::MotionModel DynamicFilter::FitMotionModel(const std::vector<cv::Point2f>& prev,
+                                                         const std::vector<cv::Point2f>& cur,
+                                                         FilterResult* result) const {
+  const DynamicFilterOptions& o = options_;
+  MotionModel model;
+  if (static_cast<int>(prev.size()) < o.min_fundamental_matches) return model;
+  model.fundamental_ok = FitFundamental(prev, cur, o, &model.fundamental, result);
+  if (!o.use_homography_for_degenerate) return model;
+  // Degenerate motion check: does a homography explain the matches as well as F?
+  // The transfer error is 2-D, the epipolar distance 1-D: for the same Gaussian noise the
+  // same inlier probability (95 %) needs a threshold 2.45 / 1.96 = 1.25 times larger.
+  cv::Matx33d h;
+  const int h_inliers =
+      FitHomography(prev, cur, o, o.homography_threshold_scale * o.fundamental_threshold, &h);
+  if (h_inliers < 0) return model;
+  result->num_h_inliers = h_inliers;
+  // H replaces F when it explains the matches as well as F, or, when F had to be fitted on all
+  // matches (moving objects included: with the small baseline of consecutive frames a 7-dof F
+  // absorbs a rigidly moving object), when H explains most matches.
+  const bool as_good_as_f =
+      !model.fundamental_ok || h_inliers >= o.homography_inlier_ratio * result->num_f_inliers;
+  const bool dominant_in_contaminated =
+      result->used_all_matches_for_f &&
+      h_inliers >= o.homography_dominant_fraction * static_cast<double>(prev.size());
+  if (h_inliers >= o.min_fundamental_matches && (as_good_as_f || dominant_in_contaminated)) {
+    result->used_homography = true;
+    model.use_homography = true;
+    model.homography = h;
+  }
+  return model;
+}
+
+void DynamicFilter::ObserveEpipolar(FrameStep* step, FilterResult* result) const {
+  const DynamicFilterOptions& o = options_;
+  const int n = static_cast<int>(step->matches.size());
+  std::vector<cv::Point2f> prev_static, cur_static, prev_all, cur_all;
+  for (int i = 0; i < n; ++i) {
+    const int j = step->matches[i];
+    if (j < 0) continue;
+    result->features[i].prev_match = j;
+    ++result->num_matched;
+    prev_all.push_back(prev_geom_points_[j]);
+    cur_all.push_back(step->geom[i]);
+    if (result->features[i].in_dynamic_region) {
+      ++result->num_matched_dynamic_region;
+    } else {
+      prev_static.push_back(prev_geom_points_[j]);
+      cur_static.push_back(step->geom[i]);
     }
   }
+  // c. Fundamental matrix from the static region (GC-RANSAC).
+  result->used_all_matches_for_f = static_cast<int>(prev_static.size()) < o.min_fundamental_matches;
+  const auto& f_prev = result->used_all_matches_for_f ? prev_all : prev_static;
+  const auto& f_cur = result->used_all_matches_for_f ? cur_all : cur_static;
+  result->num_static_matches_used_for_f = static_cast<int>(f_prev.size());
+  const MotionModel model = FitMotionModel(f_prev, f_cur, result);
+  result->motion_model_ok = model.fundamental_ok || model.use_homography;
+  // d + e. Observation and Kalman update for matched dynamic-region features.
+  for (int i = 0; i < n; ++i) {
+    FeatureStatus& fs = result->features[i];
+    const int j = step->matches[i];
+    if (!fs.in_dynamic_region || j < 0) continue;
+    const KalmanProbability prior_post = prev_states_[j].valid
+                                             ? prev_states_[j].posterior
+                                             : KalmanProbability{o.p_init, o.initial_variance};
+    step->has_posterior[i] = 1;
+    if (!result->motion_model_ok) {
+      step->posterior[i] = KalmanPredict(prior_post, o.q);
+      continue;
+    }
+    const cv::Point2f& p = prev_geom_points_[j];
+    const cv::Point2f& c = step->geom[i];
+    double d;
+    if (model.use_homography) {
+      const cv::Vec3d x = model.homography * cv::Vec3d(p.x, p.y, 1.0);
+      d = std::abs(x[2]) < 1e-12 ? std::numeric_limits<double>::infinity()
+                                 : std::hypot(x[0] / x[2] - c.x, x[1] / x[2] - c.y);
+    } else {
+      d = EpipolarDistance(model.fundamental, p, c);
+    }
+    fs.has_observation = true;
+    fs.epipolar_distance = d;
+    // Optional: distances in units of the keypoint's pyramid scale (localisation error grows
+    // with the octave). Off by default (the paper uses pixels).
+    const int octave = std::max(step->input.keypoints[i].octave, 0);
+    const double d_eff =
+        o.octave_scale_factor > 1.0 ? d / std::pow(o.octave_scale_factor, octave) : d;
+    step->posterior[i] =
+        KalmanUpdate(prior_post, GeometryProbability(d_eff, o.c1, o.alpha), o.q, o.r);
+  }
+}
 
+// Eqs. 11-12 from `sources` to feature i (depth-gated in depth mode), starting from `base`.
+double DynamicFilter::Expand(const FrameStep& step, int i, double base,
+                             const std::vector<int>& sources) const {
+  const DynamicFilterOptions& o = options_;
+  const std::vector<cv::KeyPoint>& kps = step.input.keypoints;
+  const double delta2 = o.delta * o.delta;
+  double weight_sum = 0, change = 0;
+  for (int m : sources) {
+    const double dx = kps[m].pt.x - kps[i].pt.x, dy = kps[m].pt.y - kps[i].pt.y;
+    const double d2 = dx * dx + dy * dy;
+    if (d2 > delta2) continue;
+    if (step.depth_mode && o.expansion_depth_gap > 0) {
+      const float zi = (*step.input.depths)[i], zm = (*step.input.depths)[m];
+      if (zi > 0 && zm > 0 && std::abs(zi - zm) > o.expansion_depth_gap) continue;
+    }
+    const double w = ExpansionWeight(std::sqrt(d2), o.c2, o.delta);
+    weight_sum += w;
+    change += w * (step.posterior[m].p - base);
+  }
+  // Eq. 11 sums without normalising (the paper; clamped below). Ours (depth mode): a weighted
+  // mean once the weights exceed 1, so many static neighbours cannot add up to a certainty.
+  return std::clamp(base + (step.depth_mode && weight_sum > 1 ? change / weight_sum : change), 0.0,
+                    1.0);
+}
+
+std::vector<DynamicFilter::State> DynamicFilter::ExpandAndDecide(const FrameStep& step,
+                                                                 FilterResult* result) const {
+  const DynamicFilterOptions& o = options_;
+  const int n = static_cast<int>(result->features.size());
   // f. Expansion to unmatched dynamic-region features (eqs. 11-12).
   std::vector<int> matched_dyn, matched_outside;
   for (int i = 0; i < n; ++i) {
-    if (has_posterior[i] && result.features[i].in_dynamic_region) matched_dyn.push_back(i);
-    if (has_posterior[i] && !result.features[i].in_dynamic_region) matched_outside.push_back(i);
+    if (!step.has_posterior[i]) continue;
+    (result->features[i].in_dynamic_region ? matched_dyn : matched_outside).push_back(i);
   }
-  const double delta2 = o.delta * o.delta;
-  // Eqs. 11-12 from `sources` to feature i (depth-gated in depth mode), starting from `base`.
-  const auto expand = [&](int i, double base, const std::vector<int>& sources) {
-    double weight_sum = 0, change = 0;
-    for (int m : sources) {
-      const double dx = kps[m].pt.x - kps[i].pt.x, dy = kps[m].pt.y - kps[i].pt.y;
-      const double d2 = dx * dx + dy * dy;
-      if (d2 > delta2) continue;
-      if (depth_mode && o.expansion_depth_gap > 0) {
-        const float zi = (*input.depths)[i], zm = (*input.depths)[m];
-        if (zi > 0 && zm > 0 && std::abs(zi - zm) > o.expansion_depth_gap) continue;
-      }
-      const double w = ExpansionWeight(std::sqrt(d2), o.c2, o.delta);
-      weight_sum += w;
-      change += w * (posterior[m].p - base);
-    }
-    // Eq. 11 sums without normalising (the paper; clamped below). Ours (depth mode): a
-    // weighted mean once the weights exceed 1, so many static neighbours cannot add up to a
-    // certainty.
-    return std::clamp(base + (depth_mode && weight_sum > 1 ? change / weight_sum : change), 0.0,
-                      1.0);
-  };
   std::vector<State> states(n);
   for (int i = 0; i < n; ++i) {
-    FeatureStatus& fs = result.features[i];
+    FeatureStatus& fs = result->features[i];
     if (!fs.in_dynamic_region) {
       // Depth-residual test outside the boxes (full mode): matched tracks carry their state.
-      if (has_posterior[i]) {
-        fs.probability = posterior[i].p;
-        states[i] = {true, posterior[i]};
-        fs.is_dynamic = fs.probability > o.threshold;
-        result.num_dynamic += fs.is_dynamic;
-      } else if (test_outside && o.expand_outside && has_prev_) {
+      if (step.has_posterior[i]) {
+        fs.probability = step.posterior[i].p;
+        states[i] = {true, step.posterior[i]};
+      } else if (step.test_outside && o.expand_outside && has_prev_) {
         // expand_outside: an unmatched feature outside the boxes inherits from its matched
         // neighbours outside the boxes, and its track starts from that (as in geometry mode).
-        fs.probability = expand(i, o.outside_p_init, matched_outside);
+        fs.probability = Expand(step, i, o.outside_p_init, matched_outside);
         states[i] = {true, {fs.probability, o.initial_variance}};
-        fs.is_dynamic = fs.probability > o.threshold;
-        result.num_dynamic += fs.is_dynamic;
+      } else {
+        continue;
       }
+      fs.is_dynamic = fs.probability > o.threshold;
+      result->num_dynamic += fs.is_dynamic;
       continue;
     }
-    if (has_posterior[i]) {
-      fs.probability = posterior[i].p;
-      states[i] = {true, posterior[i]};
+    if (step.has_posterior[i]) {
+      fs.probability = step.posterior[i].p;
+      states[i] = {true, step.posterior[i]};
     } else {
-      const double base = fs.in_box_background ? o.outside_p_init : region_prior;
-      fs.probability = expand(i, base, matched_dyn);
+      const double base = fs.in_box_background ? o.outside_p_init : step.region_prior;
+      fs.probability = Expand(step, i, base, matched_dyn);
       states[i] = {true, {fs.probability, o.initial_variance}};
     }
     // g. Decision. Geometry mode has no information on the first frame: keep everything.
     const bool informed = has_prev_ || o.mode == FilterMode::kFull;
     fs.is_dynamic = informed && (fs.probability > o.threshold || fs.at_object_depth);
-    result.num_dynamic += fs.is_dynamic;
+    result->num_dynamic += fs.is_dynamic;
   }
-  if (depth_mode && o.consensus_radius > 0 && has_prev_) Consensus(input, &result);
-  result.probability_ms = ms_since(t0);
+  return states;
+}
 
-  // Remember this frame.
-  if (depth_mode) {
+void DynamicFilter::Remember(FrameStep* step, std::vector<State> states) {
+  const FilterInput& input = step->input;
+  const int n = static_cast<int>(input.keypoints.size());
+  if (step->depth_mode) {
     for (int i = 0; i < n; ++i) {
-      states[i].has_anchor = anchors[i].has_anchor;
-      states[i].anchor = anchors[i].anchor;
-      states[i].anchor_age = anchors[i].anchor_age;
+      states[i].has_anchor = step->anchors[i].has_anchor;
+      states[i].anchor = step->anchors[i].anchor;
+      states[i].anchor_age = step->anchors[i].anchor_age;
     }
     prev_depths_ = *input.depths;
-    prev_cam_from_world_rotation_ = cam_from_world_rotation;
-    prev_cam_from_world_translation_ = cam_from_world_translation;
+    prev_cam_from_world_rotation_ = step->cam_from_world_rotation;
+    prev_cam_from_world_translation_ = step->cam_from_world_translation;
   } else {
     prev_depths_.clear();
   }
@@ -802,13 +578,12 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
   prev_points_.resize(n);
   prev_octaves_.resize(n);
   for (int i = 0; i < n; ++i) {
-    prev_points_[i] = kps[i].pt;
-    prev_octaves_[i] = kps[i].octave;
+    prev_points_[i] = input.keypoints[i].pt;
+    prev_octaves_[i] = input.keypoints[i].octave;
   }
-  prev_geom_points_ = std::move(geom);
+  prev_geom_points_ = std::move(step->geom);
   input.descriptors.copyTo(prev_descriptors_);
   prev_states_ = std::move(states);
-  return result;
 }
 
 }  // namespace dygslam

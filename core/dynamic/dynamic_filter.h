@@ -280,6 +280,43 @@ class DynamicFilter {
     cv::Vec3d anchor = cv::Vec3d(0, 0, 0);
     int anchor_age = 0;
   };
+  // What the steps of Process share about the frame being classified.
+  struct FrameStep {
+    const FilterInput& input;
+    std::vector<cv::Point2f> geom;             // keypoints, undistorted when given (for F)
+    std::vector<int> matches;                  // previous-frame feature per feature (-1: none)
+    bool depth_mode = false;                   // the depth-residual test replaces F (ours)
+    bool test_outside = false;                 // and runs outside the boxes too (full mode)
+    double region_prior = 0;                   // prior of a new track in the dynamic region
+    std::vector<KalmanProbability> posterior;  // per matched, observed feature
+    std::vector<char> has_posterior;
+    std::vector<double> depth_distances;  // depth mode: residual per feature (-1: none)
+    std::vector<State> anchors;           // depth mode: 3-D anchors per feature
+    cv::Matx33d cam_from_world_rotation = cv::Matx33d::eye();
+    cv::Vec3d cam_from_world_translation = cv::Vec3d(0, 0, 0);
+  };
+  // The motion between the previous frame and this one that the epipolar test measures against.
+  struct MotionModel {
+    bool fundamental_ok = false;
+    cv::Matx33d fundamental;
+    bool use_homography = false;  // degenerate motion: H replaces F
+    cv::Matx33d homography = cv::Matx33d::eye();
+  };
+
+  // The paper's steps (dynamic_filter.cc). c-e: F from the static matches (GC-RANSAC), then the
+  // epipolar probability and the Kalman update of each matched dynamic-region feature.
+  void ObserveEpipolar(FrameStep* step, FilterResult* result) const;
+  MotionModel FitMotionModel(const std::vector<cv::Point2f>& prev,
+                             const std::vector<cv::Point2f>& cur, FilterResult* result) const;
+  // f-g: unmatched features inherit from matched neighbours (eqs. 11-12); P > threshold drops.
+  std::vector<State> ExpandAndDecide(const FrameStep& step, FilterResult* result) const;
+  double Expand(const FrameStep& step, int i, double base, const std::vector<int>& sources) const;
+  // Keeps this frame as the previous one of the next.
+  void Remember(FrameStep* step, std::vector<State> states);
+
+  // Our extensions (dynamic_filter_depth.cc). The depth-residual observation of matched features
+  // in place of F (depth mode).
+  void ObserveWithDepth(FrameStep* step, FilterResult* result) const;
   // Depth-residual test (options_.depth_residual): estimates cur_from_prev and fills the
   // observations of matched features; returns false (abstain) when the motion is not reliable.
   // cam_from_world: in: the previous frame's pose in the anchors' frame (world_anchors); out:

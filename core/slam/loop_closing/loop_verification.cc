@@ -12,8 +12,8 @@
 #include <utility>
 
 #include "core/base/log.h"
-#include "core/slam/optimize/cost_functions.h"
 #include "core/slam/loop_closing/loop_detection.h"
+#include "core/slam/optimize/cost_functions.h"
 
 namespace dygslam {
 
@@ -310,6 +310,39 @@ struct LoopVerifier::Snapshot {
   std::map<const MapPoint*, int> index;
   double locked_ms = 0;  // time spent holding the map lock for the copies
 
+  // The BoW matches `matched` (candidate feature per current feature, -1: none) whose features
+  // both have a map point, in each camera's frame.
+  std::vector<Pair> Correspondences(const View& candidate, const std::vector<int>& matched) const {
+    std::vector<Pair> pairs;
+    for (size_t i = 0; i < matched.size(); ++i) {
+      const int i2 = matched[i];
+      if (i2 < 0) continue;
+      const int lp = candidate.points[i2], mp = current.points[i];
+      if (lp < 0 || mp < 0 || candidate.observation[i2] < 0) continue;
+      pairs.push_back({static_cast<int>(i), candidate.observation[i2],
+                       current.cam_from_world * points[mp].position,
+                       candidate.cam_from_world * points[lp].position, lp});
+    }
+    return pairs;
+  }
+  // The loop accepted with `candidate`: the current keyframe at `cam_from_world`, its features
+  // matched to the loop-side points `kept` (index per feature, -1: none).
+  LoopMatch Accepted(const View& candidate, const Rigid3d& cam_from_world,
+                     const std::vector<int>& kept, int inliers, const LoopVerification& v) const {
+    LoopMatch loop;
+    loop.loop_kf = candidate.kf;
+    loop.cam_from_world = cam_from_world;
+    loop.matches.assign(kept.size(), nullptr);
+    for (size_t i = 0; i < kept.size(); ++i)
+      if (kept[i] >= 0) loop.matches[i] = points[kept[i]].point;
+    for (int index : candidate.neighbourhood) loop.loop_points.push_back(points[index].point);
+    loop.inliers = inliers;
+    loop.projected = v.projected;
+    loop.correction_m = v.correction_m;
+    loop.correction_deg = v.correction_deg;
+    loop.epoch = epoch;
+    return loop;
+  }
   // The caller holds Map::mutex().
   int Add(const std::shared_ptr<MapPoint>& mp) {
     auto [it, inserted] = index.emplace(mp.get(), static_cast<int>(points.size()));
@@ -414,23 +447,13 @@ std::optional<LoopMatch> LoopVerifier::VerifyCandidate(size_t ci, Snapshot* snap
     record->verifications.push_back(v);
     return std::nullopt;
   };
-  // (current feature, candidate feature), both with a map point.
   std::vector<int> matched(kf.size(), -1);  // candidate feature per current feature
   const auto bow = matcher_.SearchByBow(kf, current.usable, c, candidate.usable, 0.75);
   v.bow_pairs = static_cast<int>(bow.size());
   if (v.bow_pairs < options_.min_bow_matches)
     return reject("BoW matches", &LoopCheckRecord::rejected_bow);
   for (const auto& [i1, i2] : bow) matched[i1] = i2;
-  std::vector<Pair> pairs;
-  for (size_t i = 0; i < kf.size(); ++i) {
-    const int i2 = matched[i];
-    if (i2 < 0) continue;
-    const int lp = candidate.points[i2], mp = current.points[i];
-    if (lp < 0 || mp < 0 || candidate.observation[i2] < 0) continue;
-    pairs.push_back({static_cast<int>(i), candidate.observation[i2],
-                     current.cam_from_world * points[mp].position,
-                     candidate.cam_from_world * points[lp].position, lp});
-  }
+  const std::vector<Pair> pairs = snapshot->Correspondences(candidate, matched);
   v.bow_pairs = static_cast<int>(pairs.size());
   if (v.bow_pairs < options_.min_bow_matches)
     return reject("BoW matches", &LoopCheckRecord::rejected_bow);
@@ -463,9 +486,8 @@ std::optional<LoopMatch> LoopVerifier::VerifyCandidate(size_t ci, Snapshot* snap
   for (size_t k = 0; k < pairs.size(); ++k)
     if (t.flags[k]) kept[pairs[k].idx1] = pairs[k].loop_point;
   CopyNeighbourhood(ci, snapshot);
-  const std::vector<int>& loop_points = candidate.neighbourhood;
-  SearchByProjection(kf, corrected_pose, points, loop_points, 10.0, matcher_.options().th_low,
-                     &kept);
+  SearchByProjection(kf, corrected_pose, points, candidate.neighbourhood, 10.0,
+                     matcher_.options().th_low, &kept);
   // The transform from a few 3D-3D inliers carries their depth noise: refine the pose on every
   // match by reprojection, keep the inliers, and check the correction again.
   Rigid3d refined_pose = corrected_pose;
@@ -476,19 +498,7 @@ std::optional<LoopMatch> LoopVerifier::VerifyCandidate(size_t ci, Snapshot* snap
     return reject("implausible correction", &LoopCheckRecord::rejected_implausible);
   v.verdict = "accepted";
   record->verifications.push_back(v);
-  LoopMatch loop{candidate.kf,
-                 refined_pose,
-                 std::vector<std::shared_ptr<MapPoint>>(kf.size()),
-                 {},
-                 t.inliers,
-                 v.projected,
-                 v.correction_m,
-                 v.correction_deg,
-                 snapshot->epoch};
-  for (size_t i = 0; i < kept.size(); ++i)
-    if (kept[i] >= 0) loop.matches[i] = points[kept[i]].point;
-  for (int index : loop_points) loop.loop_points.push_back(points[index].point);
-  return loop;
+  return snapshot->Accepted(candidate, refined_pose, kept, t.inliers, v);
 }
 
 }  // namespace dygslam

@@ -206,9 +206,10 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
     LOG_WARNING << "recorder: "
                 << IgnoredSamplesNote(std::to_string(stats.foreign_samples) + " samples");
   }
-  if (!stats.trajectory_path.empty())
+  if (!stats.trajectory_path.empty()) {
     LOG_INFO << "recorder: wrote " << stats.trajectory_path
              << (stats.final_trajectory ? " (final trajectory)" : " (online poses)");
+  }
   return stats;
 }
 

@@ -46,17 +46,19 @@ class StatusReader {
                   } catch (const InputError& e) {
                     // A peer may send any number of these: the first few are said, the total
                     // at the end.
-                    if (malformed->Say())
+                    if (malformed->Say()) {
                       LOG_WARNING << ToString(self) << ": ignored status: " << e.what();
+                    }
                     return;
                   }
                   callback(status, m, writer);
                 }) {}
   ~StatusReader() {
-    if (malformed_->suppressed() > 0)
+    if (malformed_->suppressed() > 0) {
       LOG_WARNING << ToString(self_) << ": ignored " << malformed_->count()
                   << " malformed status samples in all (the first " << kMalformedSaid
                   << " said above)";
+    }
   }
   StatusReader(const StatusReader&) = delete;
   StatusReader& operator=(const StatusReader&) = delete;

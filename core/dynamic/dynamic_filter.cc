@@ -166,6 +166,35 @@ void DynamicFilter::Reset() {
   prev_cam_from_world_translation_ = cv::Vec3d(0, 0, 0);
 }
 
+namespace {
+
+// Mutual best (each previous feature matched by the current feature it prefers); without it, the
+// best current feature per previous feature (by Hamming distance `best_dist`).
+void KeepOneMatchPerPrevious(bool mutual_best, const std::vector<int>& best_prev_cur,
+                             const std::vector<int>& best_dist, std::vector<int>* matches) {
+  const int n_cur = static_cast<int>(matches->size());
+  if (mutual_best) {
+    for (int i = 0; i < n_cur; ++i) {
+      const int j = (*matches)[i];
+      if (j >= 0 && best_prev_cur[j] != i) (*matches)[i] = -1;
+    }
+    return;
+  }
+  std::vector<int> owner(best_prev_cur.size(), -1);
+  for (int i = 0; i < n_cur; ++i) {
+    const int j = (*matches)[i];
+    if (j < 0) continue;
+    if (owner[j] < 0 || best_dist[i] < best_dist[owner[j]]) {
+      if (owner[j] >= 0) (*matches)[owner[j]] = -1;
+      owner[j] = i;
+    } else {
+      (*matches)[i] = -1;
+    }
+  }
+}
+
+}  // namespace
+
 std::vector<int> DynamicFilter::MatchToPrevious(const std::vector<cv::KeyPoint>& keypoints,
                                                 const cv::Mat& descriptors) const {
   const int n_cur = static_cast<int>(keypoints.size());
@@ -235,27 +264,7 @@ std::vector<int> DynamicFilter::MatchToPrevious(const std::vector<cv::KeyPoint>&
     matches[i] = best_j;
     best_dist[i] = best;
   }
-  // Mutual best; without it, keep only the best current feature per previous feature.
-  for (int i = 0; i < n_cur; ++i) {
-    const int j = matches[i];
-    if (j < 0) continue;
-    if (options_.mutual_best) {
-      if (best_prev_cur[j] != i) matches[i] = -1;
-    }
-  }
-  if (!options_.mutual_best) {
-    std::vector<int> owner(n_prev, -1);
-    for (int i = 0; i < n_cur; ++i) {
-      const int j = matches[i];
-      if (j < 0) continue;
-      if (owner[j] < 0 || best_dist[i] < best_dist[owner[j]]) {
-        if (owner[j] >= 0) matches[owner[j]] = -1;
-        owner[j] = i;
-      } else {
-        matches[i] = -1;
-      }
-    }
-  }
+  KeepOneMatchPerPrevious(options_.mutual_best, best_prev_cur, best_dist, &matches);
   return matches;
 }
 
@@ -341,7 +350,7 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
         o.mode == FilterMode::kGeometry || InAnyBox(kps[i].pt, input.detections, o);
     result.num_in_dynamic_region += f.in_dynamic_region;
   }
-  FrameStep step{input};
+  FrameStep step(input);
   step.depth_mode = o.depth_residual &&
                     (o.mode == FilterMode::kGeometry || o.mode == FilterMode::kFull) &&
                     input.depths != nullptr && input.camera_matrix != nullptr &&

@@ -282,6 +282,7 @@ class DynamicFilter {
   };
   // What the steps of Process share about the frame being classified.
   struct FrameStep {
+    explicit FrameStep(const FilterInput& frame) : input(frame) {}
     const FilterInput& input;
     std::vector<cv::Point2f> geom;             // keypoints, undistorted when given (for F)
     std::vector<int> matches;                  // previous-frame feature per feature (-1: none)
@@ -326,6 +327,9 @@ class DynamicFilter {
                      std::vector<double>* distances, std::vector<State>* anchors,
                      cv::Matx33d* cam_from_world_rotation,
                      cv::Vec3d* cam_from_world_translation) const;
+  bool SolveFrameMotion(const FilterInput& input, const std::vector<cv::Point2f>& geom,
+                        const std::vector<int>& matches, FilterResult* result,
+                        cv::Matx33d* rotation, cv::Vec3d* translation) const;
   // consensus_radius: each feature's label becomes the majority of its depth-near neighbours.
   void Consensus(const FilterInput& input, FilterResult* result) const;
   // box_depth_band: marks in-box features at their box's object depth / in the background.

@@ -48,6 +48,90 @@ void DynamicFilter::ObserveWithDepth(FrameStep* step, FilterResult* result) cons
   }
 }
 
+namespace {
+
+cv::Vec3d BackProject(const cv::Matx33d& k, const cv::Point2f& p, double z) {
+  return cv::Vec3d((p.x - k(0, 2)) * z / k(0, 0), (p.y - k(1, 2)) * z / k(1, 1), z);
+}
+
+// The fundamental matrix of a known motion cur_from_prev (rotation, translation) with camera k.
+cv::Matx33d FundamentalOfMotion(const cv::Matx33d& k, const cv::Matx33d& rotation,
+                                const cv::Vec3d& t) {
+  const cv::Matx33d tx(0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0);
+  const cv::Matx33d k_inv = k.inv();
+  return k_inv.t() * tx * rotation * k_inv;
+}
+
+// How far the anchor `x` (current camera) projects from the feature at `p`, in pixels; an anchor
+// behind the camera reads as certainly moving.
+double AnchorResidual(const cv::Matx33d& k, const cv::Vec3d& x, const cv::Point2f& p) {
+  constexpr double kBehindCamera = 1e3;
+  if (x[2] <= 1e-3) return kBehindCamera;
+  const double du = k(0, 0) * x[0] / x[2] + k(0, 2) - p.x;
+  const double dv = k(1, 1) * x[1] / x[2] + k(1, 2) - p.y;
+  return std::hypot(du, dv);
+}
+
+}  // namespace
+
+// Camera motion by PnP-RANSAC on matches whose previous feature has depth (or, world_anchors, an
+// anchor), from the static region when it holds enough of them (full mode), else from all
+// (geometry mode). False when there are too few or the solution is not well supported.
+bool DynamicFilter::SolveFrameMotion(const FilterInput& input, const std::vector<cv::Point2f>& geom,
+                                     const std::vector<int>& matches, FilterResult* result,
+                                     cv::Matx33d* rotation, cv::Vec3d* translation) const {
+  const DynamicFilterOptions& o = options_;
+  const cv::Matx33d& k = *input.camera_matrix;
+  const bool world = o.world_anchors;
+  const int n = static_cast<int>(geom.size());
+  if (prev_depths_.empty()) return false;
+  std::vector<cv::Point3f> object;
+  std::vector<cv::Point2f> image;
+  for (int pass = 0; pass < 2 && static_cast<int>(object.size()) < o.pnp_min_inliers; ++pass) {
+    object.clear();
+    image.clear();
+    for (int i = 0; i < n; ++i) {
+      const int j = matches[i];
+      if (j < 0) continue;
+      if (world ? !prev_states_[j].has_anchor : prev_depths_[j] <= 0) continue;
+      if (pass == 0 && result->features[i].in_dynamic_region &&
+          !result->features[i].in_box_background)
+        continue;
+      const cv::Vec3d x =
+          world ? prev_states_[j].anchor : BackProject(k, prev_geom_points_[j], prev_depths_[j]);
+      object.emplace_back(static_cast<float>(x[0]), static_cast<float>(x[1]),
+                          static_cast<float>(x[2]));
+      image.push_back(geom[i]);
+    }
+  }
+  result->num_pnp_matches = static_cast<int>(object.size());
+  if (static_cast<int>(object.size()) >= o.pnp_min_inliers) {
+    cv::Mat rvec, tvec;
+    std::vector<int> inliers;
+    bool found = false;
+    try {
+      found = cv::solvePnPRansac(object, image, cv::Mat(k), cv::noArray(), rvec, tvec, false,
+                                 o.pnp_iterations, static_cast<float>(o.pnp_threshold), 0.99,
+                                 inliers, cv::SOLVEPNP_ITERATIVE);
+    } catch (const cv::Exception&) {
+      found = false;
+    }
+    result->num_pnp_inliers = static_cast<int>(inliers.size());
+    if (found && cv::checkRange(rvec) && cv::checkRange(tvec) &&
+        result->num_pnp_inliers >= o.pnp_min_inliers &&
+        result->num_pnp_inliers >= o.pnp_min_inlier_fraction * object.size()) {
+      cv::Mat r;
+      cv::Rodrigues(rvec, r);
+      r.convertTo(r, CV_64F);
+      tvec.convertTo(tvec, CV_64F);
+      *rotation = cv::Matx33d(r);
+      *translation = cv::Vec3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
+      return true;
+    }
+  }
+  return false;
+}
+
 bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv::Point2f>& geom,
                                   const std::vector<int>& matches, FilterResult* result,
                                   std::vector<double>* distances, std::vector<State>* anchors,
@@ -55,14 +139,11 @@ bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv
                                   cv::Vec3d* cam_from_world_translation) const {
   const DynamicFilterOptions& o = options_;
   const cv::Matx33d& k = *input.camera_matrix;
-  const double fx = k(0, 0), fy = k(1, 1), cx = k(0, 2), cy = k(1, 2);
   const std::vector<float>& depths = *input.depths;
   const int n = static_cast<int>(geom.size());
   distances->assign(n, -1.0);
   anchors->assign(n, State{});
-  const auto back_project = [&](const cv::Point2f& p, double z) {
-    return cv::Vec3d((p.x - cx) * z / fx, (p.y - cy) * z / fy, z);
-  };
+  const auto back_project = [&](const cv::Point2f& p, double z) { return BackProject(k, p, z); };
   result->used_depth_residual = true;
 
   // Camera motion cur_from_prev: PnP-RANSAC on matches whose previous feature has depth, from
@@ -71,55 +152,9 @@ bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv
   const bool world = o.world_anchors;
   const cv::Matx33d prev_r = *cam_from_world_rotation;
   const cv::Vec3d prev_t = *cam_from_world_translation;
-  bool ok = false;
   cv::Matx33d rotation = cv::Matx33d::eye();
   cv::Vec3d translation(0, 0, 0);
-  if (!prev_depths_.empty()) {
-    std::vector<cv::Point3f> object;
-    std::vector<cv::Point2f> image;
-    for (int pass = 0; pass < 2 && static_cast<int>(object.size()) < o.pnp_min_inliers; ++pass) {
-      object.clear();
-      image.clear();
-      for (int i = 0; i < n; ++i) {
-        const int j = matches[i];
-        if (j < 0) continue;
-        if (world ? !prev_states_[j].has_anchor : prev_depths_[j] <= 0) continue;
-        if (pass == 0 && result->features[i].in_dynamic_region &&
-            !result->features[i].in_box_background)
-          continue;
-        const cv::Vec3d x =
-            world ? prev_states_[j].anchor : back_project(prev_geom_points_[j], prev_depths_[j]);
-        object.emplace_back(static_cast<float>(x[0]), static_cast<float>(x[1]),
-                            static_cast<float>(x[2]));
-        image.push_back(geom[i]);
-      }
-    }
-    result->num_pnp_matches = static_cast<int>(object.size());
-    if (static_cast<int>(object.size()) >= o.pnp_min_inliers) {
-      cv::Mat rvec, tvec;
-      std::vector<int> inliers;
-      bool found = false;
-      try {
-        found = cv::solvePnPRansac(object, image, cv::Mat(k), cv::noArray(), rvec, tvec, false,
-                                   o.pnp_iterations, static_cast<float>(o.pnp_threshold), 0.99,
-                                   inliers, cv::SOLVEPNP_ITERATIVE);
-      } catch (const cv::Exception&) {
-        found = false;
-      }
-      result->num_pnp_inliers = static_cast<int>(inliers.size());
-      if (found && cv::checkRange(rvec) && cv::checkRange(tvec) &&
-          result->num_pnp_inliers >= o.pnp_min_inliers &&
-          result->num_pnp_inliers >= o.pnp_min_inlier_fraction * object.size()) {
-        cv::Mat r;
-        cv::Rodrigues(rvec, r);
-        r.convertTo(r, CV_64F);
-        tvec.convertTo(tvec, CV_64F);
-        rotation = cv::Matx33d(r);
-        translation = cv::Vec3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
-        ok = true;
-      }
-    }
-  }
+  const bool ok = SolveFrameMotion(input, geom, matches, result, &rotation, &translation);
   // Anchors are in `world` (world_anchors) or in the previous camera: `pose` maps them into the
   // current camera; `rotation` / `translation` become cur_from_prev.
   cv::Matx33d pose_r = rotation;
@@ -141,14 +176,8 @@ bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv
   result->prev_translation = translation;
 
   // Fundamental matrix of the estimated motion for features without an anchor (no depth).
-  cv::Matx33d fundamental = cv::Matx33d::zeros();
-  if (ok) {
-    const cv::Vec3d& t = translation;
-    const cv::Matx33d tx(0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0);
-    const cv::Matx33d k_inv = k.inv();
-    fundamental = k_inv.t() * tx * rotation * k_inv;
-  }
-  constexpr double kBehindCamera = 1e3;  // px: a residual that reads as certainly moving
+  const cv::Matx33d fundamental =
+      ok ? FundamentalOfMotion(k, rotation, translation) : cv::Matx33d::zeros();
   for (int i = 0; i < n; ++i) {
     const int j = matches[i];
     const double z = depths[i];
@@ -157,12 +186,7 @@ bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv
       const State& prev = prev_states_[j];
       if (prev.has_anchor) {
         const cv::Vec3d x = pose_r * prev.anchor + pose_t;
-        double d = kBehindCamera;
-        if (x[2] > 1e-3) {
-          const double du = fx * x[0] / x[2] + cx - geom[i].x;
-          const double dv = fy * x[1] / x[2] + cy - geom[i].y;
-          d = std::hypot(du, dv);
-        }
+        const double d = AnchorResidual(k, x, geom[i]);
         // In units of the keypoint's pyramid scale (ORB keypoints are `31 * scale` px wide):
         // keypoints of coarse levels are localised less precisely.
         (*distances)[i] = d / std::max(1.0, input.keypoints[i].size / 31.0);

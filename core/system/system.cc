@@ -13,9 +13,9 @@
 #include "core/base/log.h"
 #include "core/base/work_queue.h"
 #include "core/dynamic/detection_worker.h"
-#include "core/slam/map/frame.h"
 #include "core/slam/feature/frame_preparation.h"
 #include "core/slam/local_mapping/local_mapping.h"
+#include "core/slam/map/frame.h"
 #include "core/slam/optimize/optimizer.h"
 #include "core/slam/tracking/tracking.h"
 
@@ -120,8 +120,8 @@ class SystemImpl {
         local_mapper_(map_, options.local_mapping, !options.deterministic),
         tracker_(options.tracking, map_, local_mapper_),
         filter_(options.filter),
-        dynamic_points_(options.dynamic_points),
-        boxes_(options.box_propagation) {
+        boxes_(options.box_propagation),
+        dynamic_points_(options.dynamic_points) {
     if (vocabulary_) {
       database_ = std::make_shared<KeyFrameDatabase>();
       for (const auto& [id, kf] : map_->keyframes()) database_->Add(id, kf->bow_vector);

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cerrno>
 #include <chrono>
@@ -301,6 +302,9 @@ int RunBench(const std::vector<std::string>& args) {
 
   // Checked before any run (named by the option; not a filesystem error after the first run).
   const fs::path out_dir = fs::absolute(PrepareOutputDir("out", p.Get("out"))).lexically_normal();
+  // Where --out is now (renamed away mid-run: the folder the bench started with), for the
+  // pictures the plotting script writes by path.
+  const auto PinnedOutDir = [&] { return fs::path(PinnedFolderNow(out_dir.string())); };
   const fs::path work_dir =
       fs::absolute(p.Has("work") ? PrepareOutputDir("work", p.Get("work"))
                                  : PrepareOutputDir("out", (out_dir / "runs").string()))
@@ -330,6 +334,31 @@ int RunBench(const std::vector<std::string>& args) {
     std::stringstream text;
     text << in.rdbuf();
     ReplaceBetweenMarkers(text.str(), "", target);  // throws naming the file and the marker
+    PinFolderOfOutput(target);
+  }
+
+  // An earlier bench's report, runs and pictures in --out are replaced, never a user's files
+  // of the same names.
+  {
+    const std::vector<std::array<std::string, 3>> kinds = {
+        {"report.md", "# dygslam bench report", "a bench report"},
+        {"runs.csv", "sequence,config,run,", "a bench's runs.csv"},
+        {"bench_context.txt", "command: ", "a bench's context file"}};
+    for (const auto& [name, signature, kind] : kinds) {
+      if (const std::string foreign = FindForeignFileAtOutput(
+              {"the output " + name, (out_dir / name).string()}, signature, kind);
+          !foreign.empty())
+        return p.UsageError(foreign);
+    }
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(out_dir, ec)) {
+      if (entry.path().extension() != ".png") continue;
+      if (const std::string foreign = FindForeignFileAtOutput(
+              {"the picture " + entry.path().filename().string(), entry.path().string()},
+              "\x89PNG\r\n\x1a\n", "a PNG picture");
+          !foreign.empty())
+        return p.UsageError(foreign);
+    }
   }
 
   const std::string config_dir = (fs::path(ScriptsDir()).parent_path() / "config").string();
@@ -601,13 +630,14 @@ int RunBench(const std::vector<std::string>& args) {
         series << (first_series ? "" : ", ") << "{\"config\": " << JsonString(cell.config)
                << ", \"label\": " << JsonString(ConfigLabel(cell.config))
                << ", \"pairs\": " << JsonString(pairs)
-               << ", \"png\": " << JsonString((out_dir / png).string()) << "}";
+               << ", \"png\": " << JsonString((PinnedOutDir() / png).string()) << "}";
         first_series = false;
       }
       if (!first_series) pics.comparison_png = base + "_compare.png";
       manifest << (first_seq ? "" : ", ") << "{\"sequence\": " << JsonString(pr.sequence.name)
-               << ", \"compare_png\": " << JsonString((out_dir / pics.comparison_png).string())
-               << ", \"series\": [" << series.str() << "]}";
+               << ", \"compare_png\": "
+               << JsonString((PinnedOutDir() / pics.comparison_png).string()) << ", \"series\": ["
+               << series.str() << "]}";
       first_seq = false;
 
       // Features picture (needs the detector model).

@@ -102,8 +102,12 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   if (o.output_dir.empty()) return p.UsageError("--out: empty folder name");
   // The folder the recorder and the mapper write into, checked as run's --out before any DDS
   // work: never a dataset folder, writable.
-  if (name == "recorder" || name == "mapper" || name == "pipeline")
+  if (name == "recorder" || name == "mapper" || name == "pipeline") {
     PrepareOutputDir("out", o.output_dir);
+    // An earlier run's outputs are replaced, never a user's files of the same names.
+    if (const std::string foreign = FindForeignFileInRunOutputs(o.output_dir); !foreign.empty())
+      return p.UsageError(foreign);
+  }
   if (o.dataset_dir.empty()) o.dataset_dir = "-";  // only the player reads it
   if (p.Get("partition").find_first_of("*?[]") != std::string::npos)
     return p.UsageError("--partition '" + EchoValue(p.Get("partition")) +
@@ -144,6 +148,8 @@ int RunComponentCommand(const std::vector<std::string>& args) {
     return p.UsageError(clash);
   if (const std::string foreign = FindForeignFileAtSaveMap(p); !foreign.empty())
     return p.UsageError(foreign);
+  // The folder the map goes into is the one there now, even if it is replaced while the run goes.
+  if (p.Has("save-map")) PinFolderOfOutput(p.Get("save-map"));
   o.load_octomap = p.Get("load-octomap");
   if (p.Has("detector-cfg")) {
     o.system.detector.cfg_path = p.Get("detector-cfg");

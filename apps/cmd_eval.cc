@@ -9,7 +9,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -75,12 +77,24 @@ bool Plot(const std::string& png, const std::string& title, const AteResult& ate
   const fs::path data =
       fs::temp_directory_path() / ("dygslam_plot_" + std::to_string(::getpid()) + ".txt");
   WriteFileAtomically(data.string(), AtePairsText(ate));
+  // Drawn into a private file, then written like every output (a temporary name renamed over
+  // FILE, into the folder pinned when eval started).
+  const fs::path drawn =
+      fs::temp_directory_path() / ("dygslam_plot_" + std::to_string(::getpid()) + ".png");
   const std::string cmd = "python3 " + ShellQuote(script) + " --data " + ShellQuote(data.string()) +
-                          " --out " + ShellQuote(png) + " --title " + ShellQuote(title);
+                          " --out " + ShellQuote(drawn.string()) + " --title " + ShellQuote(title);
   const int status = std::system(cmd.c_str());
   fs::remove(data, ec);
   const int code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-  if (code == 0) return true;
+  if (code == 0) {
+    std::ifstream in(drawn, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    fs::remove(drawn, ec);
+    if (bytes.empty()) throw InputError(png, 0, "plot failed: " + script + " wrote nothing");
+    WriteFileAtomically(png, bytes);
+    return true;
+  }
+  fs::remove(drawn, ec);
   if (code == 3) {
     std::cerr << "dygslam eval: plot skipped: python3-matplotlib is not installed "
                  "(apt-get install python3-matplotlib)\n";
@@ -172,9 +186,10 @@ int RunEval(const std::vector<std::string>& args) {
     for (const char* option : {"save-aligned", "plot"}) {
       if (!p.Has(option)) continue;
       if (const std::string dataset = DatasetFolderOf(p.Get(option)); !dataset.empty())
-        return p.UsageError(std::string("--") + option + " '" + EchoValue(p.Get(option)) +
-                            "' is a file of the dataset " + EchoValue(dataset) +
-                            " (it holds rgb.txt and depth.txt): choose another path");
+        return p.UsageError(
+            std::string("--") + option + " '" + EchoValue(p.Get(option)) +
+            "' is a file of the dataset " + EchoValue(dataset) +
+            " (it holds rgb.txt and depth.txt, or associations.txt): choose another path");
     }
     if (p.Has("save-aligned")) {
       const std::string foreign =
@@ -187,6 +202,9 @@ int RunEval(const std::vector<std::string>& args) {
           FindForeignFileAtOutput({"--plot", p.Get("plot")}, "\x89PNG\r\n\x1a\n", "a PNG picture");
       if (!foreign.empty()) return p.UsageError(foreign);
     }
+    // The folders the files go into are the ones there now, even if replaced while eval runs.
+    for (const char* option : {"save-aligned", "plot"})
+      if (p.Has(option)) PinFolderOfOutput(p.Get(option));
   }
   if (p.Has("plot")) {
     std::error_code ec;

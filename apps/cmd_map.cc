@@ -145,6 +145,9 @@ int RunMap(const std::vector<std::string>& args) {
     }
     if (const std::string clash = FindOutputClash(inputs, outputs); !clash.empty())
       return p.UsageError(clash);
+    // An earlier map's files are replaced, never a user's files of the same names.
+    if (const std::string foreign = FindForeignFileInRunOutputs(out); !foreign.empty())
+      return p.UsageError(foreign);
   }
 
   RunConfiguration configuration =

@@ -558,6 +558,8 @@ int RunRun(const std::vector<std::string>& args) {
   }
   if (const std::string foreign = FindForeignFileAtSaveMap(p); !foreign.empty())
     return p.UsageError(foreign);
+  // The folder the map goes into is the one there now, even if it is replaced while the run goes.
+  if (p.Has("save-map")) PinFolderOfOutput(p.Get("save-map"));
   if (const std::string foreign = FindForeignFileInRunOutputs(out_dir); !foreign.empty())
     return p.UsageError(foreign);
   s.first = 0;

@@ -51,6 +51,7 @@ with the defaults.)");
                                   "a dygslam vocabulary file");
       !foreign.empty())
     return p.UsageError(foreign);
+  PinFolderOfOutput(p.Positional("OUT_FILE"));  // replaced while training: not written through
   const bool quiet = p.Flag("quiet");
 
   const auto start = std::chrono::steady_clock::now();

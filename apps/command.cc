@@ -81,9 +81,10 @@ std::filesystem::path PrepareOutputDir(const std::string& option, const std::str
     throw InputError(name + ": exists and is not a folder");
   // A dataset folder (TUM / Bonn layout) is never an output folder: the run writes
   // groundtruth.txt and would replace the dataset's own.
-  if (fs::exists(dir / "rgb.txt", ec) && fs::exists(dir / "depth.txt", ec))
+  if (IsDatasetFolder(dir))
     throw InputError(name +
-                     ": is a dataset folder (it holds rgb.txt and depth.txt); the outputs "
+                     ": is a dataset folder (it holds rgb.txt and depth.txt, or "
+                     "associations.txt); the outputs "
                      "(groundtruth.txt, trajectory.txt, ...) would overwrite its files: choose "
                      "another folder");
   // The folders this call creates (deepest first), removed again by RemoveUnusedOutputDirs when
@@ -394,15 +395,20 @@ std::string ShellQuote(const std::string& s) {
   return out + "'";
 }
 
+bool IsDatasetFolder(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  return (fs::is_regular_file(dir / "rgb.txt", ec) && fs::is_regular_file(dir / "depth.txt", ec)) ||
+         fs::is_regular_file(dir / "associations.txt", ec);
+}
+
 std::string DatasetFolderOf(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::exists(path, ec)) return "";
   const fs::path folder = fs::absolute(path, ec).parent_path();
-  for (const fs::path& dir : {folder, folder.parent_path()}) {
-    if (fs::is_regular_file(dir / "rgb.txt", ec) && fs::is_regular_file(dir / "depth.txt", ec))
-      return dir.string();
-  }
+  for (const fs::path& dir : {folder, folder.parent_path()})
+    if (IsDatasetFolder(dir)) return dir.string();
   return "";
 }
 
@@ -472,7 +478,12 @@ std::string FindForeignFileInRunOutputs(const std::filesystem::path& out_dir) {
       {"map.bt", "# Octomap OcTree binary file"},
       {"map.ot", "# Octomap OcTree file"},
       {kRealtimeReportFile, "rate "},
-      {"eval.json", "{"}};
+      {"eval.json", "{"},
+      // `dygslam map`'s pictures and reference map in the same folder.
+      {"map_top.png", "\x89PNG\r\n\x1a\n"},
+      {"map_slice.png", "\x89PNG\r\n\x1a\n"},
+      {"ghosts_top.png", "\x89PNG\r\n\x1a\n"},
+      {"reference.bt", "# Octomap OcTree binary file"}};
   for (const auto& [name, signature] : kinds) {
     const NamedPath output{"the output " + name, (out_dir / name).string()};
     const std::string why =

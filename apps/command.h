@@ -172,9 +172,10 @@ std::vector<NamedPath> DatasetRunOutputs(const ArgParser& p, const std::filesyst
 // when there is none.
 std::string FindDatasetRunOutputClash(const std::vector<NamedPath>& inputs, const ArgParser& p,
                                       const std::filesystem::path& out_dir);
-// The first file in `out_dir` with the name of one of the run's outputs (RunOutputNames) that is
-// of another kind than that output (a settings file named map.bt, a picture named frames.csv):
-// why it is not replaced, "" when there is none. A run replaces its own earlier outputs only.
+// The first file in `out_dir` with the name of one of the outputs of `run`, `map` or a component
+// (RunOutputNames, map's pictures) that is of another kind than that output (a settings file
+// named map.bt, a text named map_top.png): why it is not replaced, "" when there is none. A
+// command replaces its own earlier outputs only.
 std::string FindForeignFileInRunOutputs(const std::filesystem::path& out_dir);
 // Why `path` (given as `role`) may not be written as a TUM trajectory: it exists and is not one
 // (nor empty). "" when it may.
@@ -193,7 +194,10 @@ void WarnAboutDataset(const std::string& command, const RgbdDataset& dataset, si
                       size_t last, double depth_map_factor, int width, int height,
                       const std::vector<StampedPose>* groundtruth);
 
-// The dataset folder (one that holds rgb.txt and depth.txt) that an existing file `path` belongs
+// Whether `dir` is a dataset folder (TUM / Bonn layout): it holds rgb.txt and depth.txt, or an
+// associations.txt that pairs the images.
+bool IsDatasetFolder(const std::filesystem::path& dir);
+// The dataset folder (IsDatasetFolder) that an existing file `path` belongs
 // to: the folder itself or its parent (rgb/, depth/); "" when it belongs to none or does not exist.
 // An output onto such a file would destroy a user's data.
 std::string DatasetFolderOf(const std::string& path);

@@ -84,13 +84,15 @@ struct Collector {
 void RunWriter(std::shared_ptr<dds::Participant> participant, const TransportBenchOptions& o,
                const std::function<int64_t()>& acked) {
   dds::Writer<msg::RgbdFramePubSubType> writer(participant, dds::topics::kRgbdFrame,
-                                              dds::TopicKind::kRgbdFrame);
+                                               dds::TopicKind::kRgbdFrame);
   writer.WaitForReaders(1, std::chrono::seconds(20));
   std::this_thread::sleep_for(std::chrono::milliseconds(300));  // let discovery settle
   msg::RgbdFrame frame = MakeFrame(o);
   const auto start = Clock::now();
   for (int i = 0; i < o.frames; ++i) {
-    if (o.hz > 0) std::this_thread::sleep_until(start + std::chrono::nanoseconds(static_cast<int64_t>(i * 1e9 / o.hz)));
+    if (o.hz > 0)
+      std::this_thread::sleep_until(start +
+                                    std::chrono::nanoseconds(static_cast<int64_t>(i * 1e9 / o.hz)));
     if (o.window > 0 && acked) {
       const auto deadline = Clock::now() + std::chrono::seconds(5);
       while (acked() < i - o.window && Clock::now() < deadline) {
@@ -130,8 +132,7 @@ TransportBenchResult Collect(Collector& c, int sent, const TransportBenchOptions
 std::unique_ptr<dds::Reader<msg::RgbdFramePubSubType>> MakeReader(
     std::shared_ptr<dds::Participant> participant, Collector& c) {
   return std::make_unique<dds::Reader<msg::RgbdFramePubSubType>>(
-      participant, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame,
-      [&c](msg::RgbdFrame&& f) {
+      participant, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame, [&c](msg::RgbdFrame&& f) {
         const int64_t now = NowNs();
         const int64_t sent = static_cast<int64_t>(f.header().stamp().sec()) * 1000000000 +
                              f.header().stamp().nanosec();

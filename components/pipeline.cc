@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <malloc.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -257,7 +258,8 @@ ComponentOutcome RunComponentKind(ComponentKind kind, const PipelineOptions& opt
       const SlamStats stats = RunSlam(participant, s, stop);
       // The final trajectories are out (the recorder writes them): now the map file's failure.
       if (!stats.save_map_error.empty()) throw InputError(stats.save_map_error);
-      return {stats.foreign_frames + stats.foreign_detections + stats.foreign_statuses, false};
+      return {stats.foreign_frames + stats.foreign_detections + stats.foreign_statuses,
+              stats.input_cut_short};
     }
     case ComponentKind::kMapper: {
       MapperOptions m;
@@ -466,6 +468,7 @@ int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop, StopRe
     std::vector<char*> cenv;
     for (std::string& s : env) cenv.push_back(s.data());
     cenv.push_back(nullptr);
+    const pid_t parent = getpid();
     const pid_t pid = fork();
     if (pid < 0) {
       close(report_pipe[0]);
@@ -473,7 +476,11 @@ int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop, StopRe
       throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
     }
     if (pid == 0) {
-      fcntl(report_pipe[1], F_SETFD, 0);  // the write end survives exec
+      // A run killed outright (SIGKILL) takes its components with it: left running, they would
+      // finish later and write over the outputs of the next run into the same folder.
+      prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (getppid() != parent) std::_Exit(127);  // the run died before the line above
+      fcntl(report_pipe[1], F_SETFD, 0);         // the write end survives exec
       execve(exe.c_str(), cargv.data(), cenv.data());
       std::_Exit(127);
     }
@@ -620,6 +627,15 @@ int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
   }
   if (report != nullptr) {
     report->signaled = stop->signal() != 0;
+    return code;
+  }
+  // Without a caller to judge the run (`component pipeline`): a component cut short makes it
+  // incomplete, like `run --processes`.
+  if (code == 0 && !out->components_cut_short.empty()) {
+    std::string names;
+    for (const std::string& c : out->components_cut_short) names += (names.empty() ? "" : ", ") + c;
+    LOG_ERROR << "the run is incomplete: " << names << " ended before the run did";
+    return kExitComponentCutShort;
   }
   return code;
 }

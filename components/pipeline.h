@@ -95,7 +95,8 @@ struct StopReport {
 // of the run (the mapper or recorder missed slam's last samples): the run is incomplete.
 inline constexpr int kExitComponentCutShort = 3;
 // Runs the whole pipeline until the end of the data or a signal. Returns 0 on success (also when
-// stopped by a signal), 1 if a component failed.
+// stopped by a signal), 1 if a component failed; without `report`, kExitComponentCutShort when a
+// component ended before the run did (with a report, the caller judges the run).
 int RunPipeline(const PipelineOptions& options, StopReport* report = nullptr);
 
 }  // namespace dygslam

@@ -249,6 +249,7 @@ SlamStats RunSlam(std::shared_ptr<dds::Participant> participant,
             pairer.pending_frames() == 0 && Clock::now() - last_frame_time > kSourceGone) {
           LOG_WARNING << "slam: the frame source left without announcing the end of its stream; "
                       << "finishing with the " << frames_received << " frames received";
+          stats.input_cut_short = true;
           break;
         }
         const auto deadline = pairer.NextDeadline();

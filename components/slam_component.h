@@ -31,6 +31,9 @@ class Participant;
 
 struct SlamStats {
   PairingStats pairing;
+  // The frame source left without announcing the end of its stream (killed): the frames that
+  // came are processed and the outputs written, but the stream was cut short.
+  bool input_cut_short = false;
   size_t frames_processed = 0;
   size_t frames_tracked = 0;
   size_t keyframes_published = 0;  // Keyframe messages: new + pose updates + removals

@@ -26,8 +26,11 @@ namespace fs = std::filesystem;
 namespace {
 
 // A folder's spelling for the pin registry: "out/run/", "out/run" and "out//run" alike.
+// Relative spellings count from the working directory (which a command does not change).
 std::string FolderKey(const fs::path& dir) {
-  std::string key = dir.lexically_normal().string();
+  std::error_code ec;
+  const fs::path absolute = fs::absolute(dir, ec);
+  std::string key = (ec ? dir : absolute).lexically_normal().string();
   while (key.size() > 1 && key.back() == '/') key.pop_back();
   return key;
 }
@@ -130,6 +133,13 @@ void PinOutputFolder(const std::string& dir) {
   }
   ::close(it->second);
   it->second = fd;
+}
+
+void PinFolderOfOutput(const std::string& file) {
+  const fs::path parent = fs::path(file).parent_path();
+  const fs::path dir = parent.empty() ? fs::path(".") : parent;
+  std::error_code ec;
+  if (fs::is_directory(dir, ec)) PinOutputFolder(dir.string());
 }
 
 void WriteFileAtomically(const std::string& path, const std::string& content) {

@@ -19,6 +19,9 @@ void WriteFileAtomically(const std::string& path, const std::string& content);
 // the new one). A folder pinned already stays pinned as it was while it exists. Throws
 // InputError when `dir` cannot be opened.
 void PinOutputFolder(const std::string& dir);
+// Pins the folder an output file goes into (PinOutputFolder), when it exists: a command calls it
+// for each output file it names (--save-map, a plot) before it starts its work.
+void PinFolderOfOutput(const std::string& file);
 
 // Where the folder pinned as `dir` is now: `dir` itself while it still names it (or when `dir` is
 // not pinned, or the folder was removed), else the folder's new path (renamed away while the

@@ -10,10 +10,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/io/file_util.h"
@@ -372,4 +374,79 @@ TEST_F(OutputClashCli, RunNeverReplacesAFileOfAnotherKindInItsOutputFolder) {
 }
 
 }  // namespace
+// `bench`, `map` and the recorder / mapper components replace their own earlier outputs only,
+// like `run`: a user's files under their output names are refused before any work. Before, a
+// report.md, a runs.csv or a text named like a picture were replaced, exit 0.
+TEST_F(OutputClashCli, EveryCommandReplacesItsOwnOutputsOnly) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const fs::path out = fs::path(dir_) / "out";
+  fs::create_directories(out);
+  const auto keeps = [&](const std::string& name, const std::vector<std::string>& args,
+                         const std::string& why) {
+    const fs::path user = out / name;
+    std::ofstream(user) << "the user's notes\n";
+    ExpectError(Run(args), 2, {name, why});
+    EXPECT_EQ(ReadAll(user.string()), "the user's notes\n") << name;
+    fs::remove(user);
+  };
+  const std::vector<std::string> bench = {"bench", source, "--out", out.string(), "--runs", "1"};
+  keeps("runs.csv", bench, "is not a bench's runs.csv");
+  keeps("report.md", bench, "is not a bench report");
+  keeps("bonn_crowd_part_features.png", bench, "is not a PNG picture");
+  const std::vector<std::string> map = {"map", source, "--config", Config(), "--out", out.string()};
+  keeps("map_top.png", map, "map_top.png");
+  keeps("map.ot", map, "map.ot");
+  keeps("keyframes.txt", map, "keyframes.txt");
+  const std::vector<std::string> recorder = {"component", "recorder",   "--config", Config(),
+                                             "--out",     out.string(), "--domain", "154"};
+  keeps("trajectory.txt", recorder, "trajectory.txt");
+  keeps("frames.csv", recorder, "frames.csv");
+}
+
+// A dataset given by associations.txt alone (rgb/, depth/, groundtruth.txt beside it) is a
+// dataset too: never an output folder, its ground truth never an output. Before, `run --out` and
+// `eval --save-aligned` wrote into it.
+TEST_F(OutputClashCli, ADatasetOfAssociationsIsADatasetToo) {
+  const fs::path ds = fs::path(dir_) / "assoc";
+  fs::create_directories(ds);
+  std::ofstream(ds / "associations.txt") << "1.0 rgb/1.png 1.0 depth/1.png\n";
+  const std::string gt = dir_ + "/gt.txt", est = dir_ + "/est.txt";
+  WriteTrajectories(gt, est);
+  fs::copy_file(gt, ds / "groundtruth.txt");
+  const std::string before = ReadAll((ds / "groundtruth.txt").string());
+  ExpectError(Run({"eval", gt, est, "--save-aligned", (ds / "groundtruth.txt").string()}), 2,
+              {"is a file of the dataset"});
+  ExpectError(Run({"run", ds.string(), "--config", Config(), "--direct", "--out", ds.string()}), 1,
+              {"is a dataset folder"});
+  EXPECT_EQ(ReadAll((ds / "groundtruth.txt").string()), before);
+}
+
+// --save-map's folder replaced while the run goes (renamed away, a link to a dataset put in its
+// place): the map goes into the folder the run started with, where it now is. Before, it was
+// written through the link over the dataset's groundtruth.txt, exit 0.
+TEST_F(OutputClashCli, ASaveMapFolderReplacedMidRunIsNeverWrittenThrough) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string data = SmallDataset(source, 90, "data", /*with_groundtruth=*/true);
+  const std::string groundtruth = ReadAll(data + "/groundtruth.txt");
+  const fs::path maps = fs::path(dir_) / "maps", moved = fs::path(dir_) / "maps.moved";
+  fs::create_directories(maps);
+  const std::string out = dir_ + "/out", err = dir_ + "/save.err";
+  const pid_t pid = testing::SpawnDygslam(
+      {"run", data, "--config", Config(), "--direct", "--filter", "none", "--quiet", "--no-map",
+       "--rate", "1", "--out", out, "--save-map", (maps / "groundtruth.txt").string()},
+      dir_ + "/save.out", err);
+  ASSERT_GT(pid, 0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!fs::exists(fs::path(dir_) / "save.out") && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  fs::rename(maps, moved);
+  fs::create_directory_symlink(data, maps);
+  std::string diagnostics;
+  const int code = testing::WaitForExit(pid, 120, &diagnostics);
+  EXPECT_EQ(code, 0) << ReadAll(err) << diagnostics;
+  EXPECT_EQ(ReadAll(data + "/groundtruth.txt"), groundtruth) << "the dataset was written into";
+  EXPECT_EQ(ReadAll((moved / "groundtruth.txt").string()).substr(0, 8), "DYGSLMAP") << ReadAll(err);
+}
+
 }  // namespace dygslam

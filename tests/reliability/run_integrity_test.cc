@@ -48,6 +48,7 @@ constexpr int kSwappedDomain = 149;
 constexpr int kStallDomain = 150;
 constexpr int kSwappedProcessesDomain = 151;
 constexpr int kPlayerPausedDomain = 152;
+constexpr int kKilledRunDomain = 153;
 
 class RunIntegrity : public testing::CliFixture {
  protected:
@@ -572,4 +573,38 @@ TEST_F(RunIntegrity, ALoopedReplayEndedBeforeItsTimeIsNotComplete) {
 }
 
 }  // namespace
+// `run --processes` killed outright (SIGKILL, no chance to stop its components): the components
+// end with it. Before, they ran on, finished and wrote over the outputs of the next run into the
+// same folder seconds later.
+TEST_F(RunIntegrity, TheComponentsOfARunKilledOutrightEndWithIt) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string out = dir_ + "/out";
+  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet",
+                           "--frames", "0:300", "--no-map", "--processes", "--rate", "1", "--out",
+                           out, "--domain", std::to_string(kKilledRunDomain)});
+  ASSERT_GT(pid, 0);
+  const pid_t slam = RunningComponentPid("slam", out);
+  const pid_t recorder = RunningComponentPid("recorder", out);
+  ASSERT_GT(slam, 0) << ReadAll(dir_ + "/run.err");
+  ASSERT_GT(recorder, 0) << ReadAll(dir_ + "/run.err");
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  kill(pid, SIGKILL);
+  int code = -1;
+  for (int i = 0; i < 100 && !Exited(pid, &code); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  // Gone (or a zombie of init's) within 3 s.
+  const auto alive = [](pid_t p) {
+    const std::string stat = ReadAll("/proc/" + std::to_string(p) + "/stat");
+    const size_t close = stat.rfind(')');
+    return !stat.empty() && close != std::string::npos && close + 2 < stat.size() &&
+           stat[close + 2] != 'Z';
+  };
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  while ((alive(slam) || alive(recorder)) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_FALSE(alive(slam)) << "slam outlived its run";
+  EXPECT_FALSE(alive(recorder)) << "the recorder outlived its run";
+  EXPECT_FALSE(fs::exists(out + "/trajectory.txt")) << "written after the run was killed";
+}
+
 }  // namespace dygslam

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <optional>
 #include <string>
@@ -170,20 +171,31 @@ keys). The same seed gives byte-identical files.)");
   namespace fs = std::filesystem;
   const fs::path target = fs::path(out_dir);
   const fs::path staging = target / ".synth-partial";
+  // The staging folder holds this marker from its start: one without it is not synth's.
+  const fs::path marker = staging / ".dygslam-synth-render";
   std::error_code ec;
-  if (fs::exists(fs::symlink_status(staging, ec)))  // left by a synth that was stopped: said
+  if (fs::exists(fs::symlink_status(staging, ec))) {
+    if (!fs::is_directory(fs::symlink_status(staging, ec)) ||
+        !fs::is_regular_file(fs::symlink_status(marker, ec)))
+      return p.UsageError("OUT_DIR '" + EchoValue(out_dir) +
+                          "' holds .synth-partial, which is not an unfinished synth render: "
+                          "remove it or choose another folder");
+    // Left by a synth that was stopped: said, and made again.
     std::fprintf(stderr,
                  "synth: warning: removing %s (the unfinished render of a synth that was "
                  "stopped)\n",
                  EchoValue(staging.string()).c_str());
+  }
   fs::remove_all(staging, ec);
-  fs::create_directories(target, ec);
+  fs::create_directories(staging, ec);
+  std::ofstream(marker) << "an unfinished render of dygslam synth\n";
   WriteSyntheticSequence(staging.string(), options, [&](int done, int total) {
     if (quiet) return;
     std::fprintf(stderr, "\rsynth: frame %d/%d (%.1f frames/s)", done, total, done / elapsed());
     std::fflush(stderr);
   });
   if (!quiet) std::fprintf(stderr, "\n");
+  fs::remove(marker, ec);
   for (const auto& entry : fs::directory_iterator(staging)) {
     const fs::path destination = target / entry.path().filename();
     fs::remove_all(destination, ec);

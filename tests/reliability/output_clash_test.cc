@@ -227,6 +227,19 @@ TEST_F(OutputClashCli, StoppedSynthLeavesTheEarlierSequenceWhole) {
     EXPECT_EQ(ReadAll(entry.path().string()), images[k++]) << entry.path();
   }
   EXPECT_EQ(k, images.size());
+  // The next synth removes the stopped one's render (it says so) and completes.
+  const auto again = Run({"synth", target, "--frames", "3", "--seed", "4", "--quiet", "--replace"});
+  EXPECT_EQ(again.code, 0) << again.err;
+  EXPECT_TRUE(Contains(again.err, "the unfinished render of a synth that was stopped"))
+      << again.err;
+  EXPECT_FALSE(fs::exists(target + "/.synth-partial"));
+  EXPECT_FALSE(fs::exists(target + "/.dygslam-synth-render"));
+  // A folder of the user's under that name is not synth's to remove.
+  fs::create_directories(target + "/.synth-partial");
+  std::ofstream(target + "/.synth-partial/thesis.tex") << "the user's text\n";
+  ExpectError(Run({"synth", target, "--frames", "3", "--quiet", "--replace"}), 2,
+              {"is not an unfinished synth render"});
+  EXPECT_EQ(ReadAll(target + "/.synth-partial/thesis.tex"), "the user's text\n");
 }
 
 // The component command checks its files as `run` does: a slam's --save-map onto its own

@@ -841,6 +841,9 @@ int RunRun(const std::vector<std::string>& args) {
                       : incomplete                ? kExitIncompleteRun
                       : tracking_failure          ? 1
                                                   : 0;
+  // A failed component's message is on stderr (its own line); eval.json says that one failed.
+  if (summary.exit_code == 1 && summary.error.empty() && summary.component_failed)
+    summary.error = "a component of the run failed (its error is on stderr)";
   // An output that could not be written is the run's error (eval.json says why it exits 1).
   for (const auto& [name, reason] : outputs.failures())
     summary.error += (summary.error.empty() ? "" : "; ") + name + " not written: " + reason;

@@ -135,7 +135,6 @@ double LatencyReservoir::Quantile(double q) const {
 
 PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const PlayerOptions& options,
                       const StopFlagPtr& stop) {
-  using Clock = std::chrono::steady_clock;
   options.Check();
   DatasetPlayer player(options);
   PlayerStats stats;

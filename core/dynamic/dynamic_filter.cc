@@ -270,6 +270,16 @@ std::vector<int> DynamicFilter::MatchToPrevious(const std::vector<cv::KeyPoint>&
 
 namespace {
 
+// Each feature's match in the previous frame, and the counts of matches (in the dynamic region).
+void RecordMatches(const std::vector<int>& matches, FilterResult* result) {
+  for (size_t i = 0; i < matches.size(); ++i) {
+    if (matches[i] < 0) continue;
+    result->features[i].prev_match = matches[i];
+    ++result->num_matched;
+    result->num_matched_dynamic_region += result->features[i].in_dynamic_region;
+  }
+}
+
 void CheckFilterInput(const FilterInput& input) {
   const int n = static_cast<int>(input.keypoints.size());
   if (input.descriptors.rows != n)
@@ -393,10 +403,13 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
     DepthResidual(input, step.geom, no_matches, &result, &step.depth_distances, &step.anchors,
                   &step.cam_from_world_rotation, &step.cam_from_world_translation);
   }
-  if (has_prev_ && step.depth_mode) {
-    ObserveWithDepth(&step, &result);
-  } else if (has_prev_) {
-    ObserveEpipolar(&step, &result);
+  if (has_prev_) {
+    RecordMatches(step.matches, &result);
+    if (step.depth_mode) {
+      ObserveWithDepth(&step, &result);
+    } else {
+      ObserveEpipolar(&step, &result);
+    }
   }
   std::vector<State> states = ExpandAndDecide(step, &result);
   if (step.depth_mode && o.consensus_radius > 0 && has_prev_) Consensus(input, &result);
@@ -444,13 +457,9 @@ void DynamicFilter::ObserveEpipolar(FrameStep* step, FilterResult* result) const
   for (int i = 0; i < n; ++i) {
     const int j = step->matches[i];
     if (j < 0) continue;
-    result->features[i].prev_match = j;
-    ++result->num_matched;
     prev_all.push_back(prev_geom_points_[j]);
     cur_all.push_back(step->geom[i]);
-    if (result->features[i].in_dynamic_region) {
-      ++result->num_matched_dynamic_region;
-    } else {
+    if (!result->features[i].in_dynamic_region) {
       prev_static.push_back(prev_geom_points_[j]);
       cur_static.push_back(step->geom[i]);
     }

@@ -15,13 +15,6 @@ namespace dygslam {
 void DynamicFilter::ObserveWithDepth(FrameStep* step, FilterResult* result) const {
   const DynamicFilterOptions& o = options_;
   const int n = static_cast<int>(step->matches.size());
-  for (int i = 0; i < n; ++i) {
-    const int j = step->matches[i];
-    if (j < 0) continue;
-    result->features[i].prev_match = j;
-    ++result->num_matched;
-    result->num_matched_dynamic_region += result->features[i].in_dynamic_region;
-  }
   result->motion_model_ok = DepthResidual(
       step->input, step->geom, step->matches, result, &step->depth_distances, &step->anchors,
       &step->cam_from_world_rotation, &step->cam_from_world_translation);

@@ -59,6 +59,12 @@ class RunIntegrity : public testing::CliFixture {
   }
   void ExpectOutputFolderReplacedMidRunIsNeverWrittenThrough(const std::string& source, int domain,
                                                              const std::vector<std::string>& extra);
+  // `run --processes --rate 1` on `frames` into dir_/out whose `component` is stopped (SIGSTOP)
+  // `after` the frames began to flow and continued `paused` later; the run's exit code (-1 and
+  // a failure when the run or the component could not be found).
+  int RunWithComponentPaused(const std::string& source, const std::string& component,
+                             const std::string& frames, int domain, std::chrono::seconds after,
+                             std::chrono::seconds paused, std::string* diagnostics);
 };
 
 bool Exited(pid_t pid, int* code) {
@@ -489,24 +495,43 @@ TEST_F(RunIntegrity, AnOutputFolderReplacedMidRunIsNeverWrittenThroughByAnyProce
                                                         {"--processes"});
 }
 
+int RunIntegrity::RunWithComponentPaused(const std::string& source, const std::string& component,
+                                         const std::string& frames, int domain,
+                                         std::chrono::seconds after, std::chrono::seconds paused,
+                                         std::string* diagnostics) {
+  const std::string out = dir_ + "/out";
+  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet",
+                           "--frames", frames, "--no-map", "--processes", "--rate", "1", "--out",
+                           out, "--domain", std::to_string(domain)});
+  if (pid <= 0) {
+    ADD_FAILURE() << "run did not start";
+    return -1;
+  }
+  const pid_t target = RunningComponentPid(component, out);
+  if (target <= 0) {
+    ADD_FAILURE() << component << " not found: " << ReadAll(dir_ + "/run.err");
+    kill(pid, SIGKILL);
+    testing::WaitForExit(pid, 30, diagnostics);
+    return -1;
+  }
+  std::this_thread::sleep_for(after);  // the frames flow
+  kill(target, SIGSTOP);
+  std::this_thread::sleep_for(paused);
+  kill(target, SIGCONT);
+  return testing::WaitForExit(pid, 120, diagnostics);
+}
+
 // --processes --rate 1 with the player paused (SIGSTOP) for 5 s: no frame was out while no pose
 // came, so the pipeline did not stall: the run is complete (exit 0) and never called stalled.
 // Before, the summary said "stalled: no result for 5 s while frames arrived" beside exit 0.
 TEST_F(RunIntegrity, APausedPlayerIsNoStallOfThePipeline) {
   DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
   const std::string out = dir_ + "/out";
-  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet",
-                           "--frames", "0:150", "--no-map", "--processes", "--rate", "1", "--out",
-                           out, "--domain", std::to_string(kPlayerPausedDomain)});
-  ASSERT_GT(pid, 0);
-  const pid_t player = RunningComponentPid("player", out);
-  ASSERT_GT(player, 0) << ReadAll(dir_ + "/run.err");
-  std::this_thread::sleep_for(std::chrono::seconds(2));  // the frames flow
-  kill(player, SIGSTOP);
-  std::this_thread::sleep_for(std::chrono::seconds(5));
-  kill(player, SIGCONT);
   std::string diagnostics;
-  const int code = testing::WaitForExit(pid, 120, &diagnostics);
+  const int code =
+      RunWithComponentPaused(source, "player", "0:150", kPlayerPausedDomain,
+                             std::chrono::seconds(2), std::chrono::seconds(5), &diagnostics);
+  ASSERT_NE(code, -1);
   const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
   EXPECT_FALSE(Contains(summary, "stalled")) << summary;
   std::smatch m;
@@ -526,18 +551,11 @@ TEST_F(RunIntegrity, APausedPlayerIsNoStallOfThePipeline) {
 TEST_F(RunIntegrity, AStallAtCameraRateIsNotTheCamerasPace) {
   DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
   const std::string out = dir_ + "/out";
-  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet",
-                           "--frames", "0:300", "--no-map", "--processes", "--rate", "1", "--out",
-                           out, "--domain", std::to_string(kStallDomain)});
-  ASSERT_GT(pid, 0);
-  const pid_t slam = RunningComponentPid("slam", out);
-  ASSERT_GT(slam, 0) << ReadAll(dir_ + "/run.err");
-  std::this_thread::sleep_for(std::chrono::seconds(3));  // the frames flow
-  kill(slam, SIGSTOP);
-  std::this_thread::sleep_for(std::chrono::seconds(6));
-  kill(slam, SIGCONT);
   std::string diagnostics;
-  const int code = testing::WaitForExit(pid, 120, &diagnostics);
+  const int code =
+      RunWithComponentPaused(source, "slam", "0:300", kStallDomain, std::chrono::seconds(3),
+                             std::chrono::seconds(6), &diagnostics);
+  ASSERT_NE(code, -1);
   const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
   EXPECT_EQ(code, 3) << summary << err << diagnostics;
   EXPECT_TRUE(Contains(summary, "stalled: no result for")) << summary;

@@ -156,6 +156,10 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
   std::map<uint64_t, Timestamp> sent_stamps;
   size_t own_poses = 0, foreign_poses = 0;
   bool refused = false;  // the run's slam takes another frame source's frames, not ours
+  // The pose writers of the slam components that announced themselves on the partition: only
+  // their poses for other frames tell that the consumers took another frame source; any other
+  // participant publishing poses into the partition proves nothing about them.
+  std::set<WriterGuid> slam_pose_writers;
   LatencyReservoir latency_ms;
   // Paced runs: the frame period at the played rate, from the stamps; later poses are late.
   double late_after_ms = 0;
@@ -177,7 +181,7 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
                                                   dds::TopicKind::kStreamStatus);
   dds::Reader<msg::CameraPosePubSubType> poses(
       participant, dds::topics::kCameraPose, dds::TopicKind::kCameraPose,
-      [&](msg::CameraPose&& pose) {
+      [&](msg::CameraPose&& pose, const WriterGuid& writer) {
         {
           std::lock_guard<std::mutex> lock(mutex);
           const uint64_t seq = pose.header().seq();
@@ -189,8 +193,10 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
             return;  // a malformed sample (the reader's own checks report those)
           }
           if (stamp_it == sent_stamps.end() || stamp_it->second != stamp) {
-            // Not ours: a pose for another frame source's frame. Many of them while none of
-            // ours came back: the consumers took the other source (it started first).
+            // Not ours: a pose for another frame source's frame. Many of them from a slam
+            // component while none of ours came back: the consumers took the other source (it
+            // started first).
+            if (slam_pose_writers.count(writer) == 0) return;
             ++foreign_poses;
             if (own_poses == 0 && foreign_poses >= kRefusedAfterForeignPoses) refused = true;
             cv.notify_all();
@@ -240,6 +246,10 @@ PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const Playe
             slam_done = true;
           }
           if (s.event == StreamEvent::kReady) ready.insert(s.source);
+          if (s.event == StreamEvent::kStarted && s.source == ComponentKind::kSlam) {
+            if (const auto it = s.writers.find(DataTopic::kCameraPose); it != s.writers.end())
+              slam_pose_writers.insert(it->second);
+          }
         }
         cv.notify_all();
       });

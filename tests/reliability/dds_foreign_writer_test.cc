@@ -128,12 +128,18 @@ void RunWithIntruder(const std::string& dataset, bool processes, int domain) {
     if (trajectory_writer.matched() > 0) {
       trajectory_writer.Write(forged_frames);
       trajectory_writer.Write(forged_keyframes);
-      msg::CameraPose pose;
-      pose.header().stamp(TimeToMsg(Timestamp::FromSeconds(kForgedStamp + published % 5)));
-      pose.tracking_state(1);
-      pose.has_pose(true);
-      pose.world_from_cam(PoseToMsg(forged[published % 5].world_from_cam));
-      pose_writer.Write(pose);
+      // Poses in bursts, more of them in the run's first second than a rival slam would give
+      // (the player must not take them for the consumers' poses of another frame source: they
+      // come from no announced slam).
+      for (int i = 0; i < 5; ++i) {
+        msg::CameraPose pose;
+        pose.header().seq(published);
+        pose.header().stamp(TimeToMsg(Timestamp::FromSeconds(kForgedStamp + i)));
+        pose.tracking_state(1);
+        pose.has_pose(true);
+        pose.world_from_cam(PoseToMsg(forged[i].world_from_cam));
+        pose_writer.Write(pose);
+      }
       msg::Keyframe keyframe;
       keyframe.id(1000000 + static_cast<int64_t>(published));
       keyframe_writer.Write(keyframe);

@@ -192,7 +192,19 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
         idle_counting = true;
         idle_since = Clock::now();
       }
-      if (idle_counting && Clock::now() - idle_since > std::chrono::milliseconds(300)) break;
+      if (idle_counting && Clock::now() - idle_since > std::chrono::milliseconds(300)) {
+        // slam done, but the frame source never ended its stream (killed, or failed): the map
+        // lacks the rest. Its end is sent before slam's DONE, from another writer: by now it is
+        // here unless it never came (2 s more allowed).
+        if (writers.StreamUnfinished() && !stop->requested()) {
+          if (Clock::now() - idle_since < std::chrono::milliseconds(2300)) continue;
+          stats.input_cut_short = true;
+          LOG_WARNING << "mapper: slam is done but the frame source never announced the end of "
+                         "its stream (it was stopped or failed): the map lacks the frames it did "
+                         "not play";
+        }
+        break;
+      }
       if (flush_deadline &&
           (std::chrono::steady_clock::now() >= *flush_deadline || keyframes.matched() == 0)) {
         break;

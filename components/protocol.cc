@@ -306,6 +306,8 @@ bool RunWriters::Announce(const ComponentStatus& status,
       }
       frame_source_ = from;
     }
+    if (status.event == StreamEvent::kStarted) stream_started_ = true;
+    if (status.event == StreamEvent::kEndOfStream) stream_ended_ = true;
     if ((status.event == StreamEvent::kEndOfStream || status.event == StreamEvent::kFailed) &&
         from && frame_source_ == from) {
       frame_source_.reset();  // the next frame source may play (e.g. a player started again)

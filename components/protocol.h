@@ -147,6 +147,10 @@ class RunWriters {
   const std::string& LastRival() const { return last_rival_; }
   // END_OF_STREAM / DONE statuses from participants that announced no component (see above).
   size_t NumForeignStatuses() const { return foreign_statuses_; }
+  // The run's frame source announced itself (STARTED) and has not announced the end of its stream:
+  // a slam that is done meanwhile finished with a stream cut short (its frame source killed or
+  // failed), and the outputs lack its end.
+  bool StreamUnfinished() const { return stream_started_ && !stream_ended_; }
 
  private:
   using Prefix = std::array<uint8_t, 12>;
@@ -157,6 +161,7 @@ class RunWriters {
   std::set<Prefix> announced_;  // participants that announced a component of the run
   size_t foreign_statuses_ = 0;
   std::string last_rival_;
+  bool stream_started_ = false, stream_ended_ = false;
 };
 
 // Admits the samples of one data topic: those of announced writers pass (in arrival order per

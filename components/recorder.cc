@@ -130,8 +130,8 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
         if (s.source == ComponentKind::kSlam &&
             (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed)) {
           slam_done = true;
-          cv.notify_all();
         }
+        cv.notify_all();
       });
   StartedAnnouncer started(status, ComponentStatus::Started(ComponentKind::kRecorder, {}));
 
@@ -190,6 +190,19 @@ RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,
       }
       cv.wait_for(lock, std::chrono::milliseconds(50));
       release_held();  // expire held samples
+    }
+    // slam finished (its final trajectories came, or its DONE), but the frame source never ended
+    // its stream (killed, or failed): slam finished with the frames that came, and the
+    // trajectory lacks the rest. The end of the stream is sent before slam's last samples, from
+    // another writer: allow it a moment to arrive.
+    if (!stats.input_cut_short && !stop->requested()) {
+      cv.wait_for(lock, std::chrono::seconds(2), [&] { return !writers.StreamUnfinished(); });
+      if (writers.StreamUnfinished()) {
+        stats.input_cut_short = true;
+        LOG_WARNING << "recorder: slam is done but the frame source never announced the end of "
+                       "its stream (it was stopped or failed): the trajectory lacks the frames "
+                       "it did not play";
+      }
     }
     // Samples whose writer never announced itself: not from this run either.
     pose_gate.Close();

@@ -184,12 +184,13 @@ TEST_F(Faults, RecorderAndPlayerEndWhenSlamDiesWithoutAnnouncingTheEnd) {
 // The player dies (SIGKILL: no END_OF_STREAM): slam and the detector do not wait for the rest of
 // the stream for ever; once the frame writer is gone and nothing came for 5 s slam finishes with
 // the frames it got (final trajectory to the recorder, COMPONENT_DONE) and the detector ends. The
-// stream was cut short: slam exits 3 (its outputs are written, the run is incomplete), the
-// detector 0.
+// stream was cut short: slam exits 3 (its outputs are written, the run is incomplete), and so do
+// the recorder and the mapper (they write what came); the detector exits 0.
 TEST_F(Faults, SlamEndsWhenThePlayerDiesWithoutAnnouncingTheEnd) {
   const std::string tmp = testing::MakeTempDir("fault_player_gone");
   const int domain = 133;
   const pid_t recorder = Run("recorder", tmp, domain, "0:300");
+  const pid_t mapper = Run("mapper", tmp, domain, "0:300");
   const pid_t slam = Run("slam", tmp, domain, "0:300", {"--filter", "none"});
   const pid_t detector = Run("detector", tmp, domain, "0:300");
   const pid_t player = Run("player", tmp, domain, "0:300", {"--rate", "1"});
@@ -201,7 +202,15 @@ TEST_F(Faults, SlamEndsWhenThePlayerDiesWithoutAnnouncingTheEnd) {
   EXPECT_NE(ReadAll(tmp + "/detector.log").find("frame source left without announcing"),
             std::string::npos)
       << ReadAll(tmp + "/detector.log");
-  EXPECT_EQ(Wait(recorder), 0) << ReadAll(tmp + "/recorder.log");
+  // The recorder and the mapper write what came, and say that the stream was cut short (3).
+  EXPECT_EQ(Wait(recorder), 3) << ReadAll(tmp + "/recorder.log");
+  EXPECT_EQ(Wait(mapper), 3) << ReadAll(tmp + "/mapper.log");
+  for (const char* name : {"recorder", "mapper"}) {
+    const std::string component_log = ReadAll(tmp + "/" + name + ".log");
+    EXPECT_NE(component_log.find("never announced the end of its stream"), std::string::npos)
+        << component_log;
+  }
+  EXPECT_TRUE(fs::exists(tmp + "/out/map.bt"));
   const std::string log = ReadAll(tmp + "/slam.log");
   EXPECT_NE(log.find("frame source left without announcing"), std::string::npos) << log;
   const long frames = Extract(log, R"(slam: (\d+) frames)");

@@ -170,7 +170,15 @@ MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const Mappe
     const bool writer_gone = slam_gone.Update(keyframes.matched() > 0);
     std::optional<Prepared> sample = prepared.Pop(std::chrono::milliseconds(50));
     if (!sample) {
-      if (writer_gone) {
+      // slam gone without DONE, or this process paused while it left (keyframes it sent then
+      // are lost). A slam that said DONE and left while the map stage still worked through its
+      // backlog (the map stage runs at background priority) took nothing with it.
+      bool done_said = false;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        done_said = slam_done;
+      }
+      if (writer_gone && (!done_said || pause.WasPaused())) {
         stats.input_cut_short = true;
         if (pause.WasPaused()) {
           LOG_WARNING << "mapper: this process was stopped (SIGSTOP) and continued, for about "

@@ -108,24 +108,6 @@ std::filesystem::path PrepareOutputDir(const std::string& option, const std::str
   return dir;
 }
 
-void RecreateOutputDirIfRemoved(const std::string& command, const std::string& option,
-                                const std::filesystem::path& dir) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(dir, ec)) return;
-  if (std::filesystem::exists(std::filesystem::symlink_status(dir, ec))) {
-    std::fprintf(stderr,
-                 "dygslam %s: warning: --%s '%s' was replaced by something that is not a folder "
-                 "while the command ran; the outputs cannot be written there\n",
-                 command.c_str(), option.c_str(), EchoValue(dir.string()).c_str());
-    return;
-  }
-  std::fprintf(stderr,
-               "dygslam %s: warning: --%s '%s' was removed while the command ran; made it again "
-               "for the outputs\n",
-               command.c_str(), option.c_str(), EchoValue(dir.string()).c_str());
-  std::filesystem::create_directories(dir, ec);  // failing: the first write names the file
-}
-
 SettingsReadOptions CliSettingsReadOptions(bool strict_flag) {
   SettingsReadOptions options;
   const char* env = std::getenv("DYGSLAM_STRICT_SETTINGS");
@@ -157,29 +139,6 @@ bool CheckFilterOption(ArgParser* p) {
                   list + ")");
     return false;
   }
-}
-
-bool IsTrackingFailure(size_t processed, size_t tracked) {
-  return processed == 0 || tracked * 10 < processed;
-}
-
-void PrintTrackingFailure(const std::string& command, size_t processed, size_t tracked,
-                          size_t lost) {
-  if (processed == 0) {
-    std::fprintf(stderr,
-                 "dygslam %s: error: no frame was processed (no rgb entry of the range has a "
-                 "depth partner)\n",
-                 command.c_str());
-    return;
-  }
-  const size_t untracked = processed - std::min(processed, tracked);
-  std::fprintf(stderr,
-               "dygslam %s: error: tracking failed: %zu of %zu frames tracked (%.1f %%, at least "
-               "10 %% needed); %zu lost after initialisation, %zu never tracked. Likely causes: "
-               "depth images without valid depth (DepthMapFactor), camera settings that do not "
-               "match the images (Camera.*), or images without texture.\n",
-               command.c_str(), tracked, processed, 100.0 * tracked / processed,
-               std::min(lost, untracked), untracked - std::min(lost, untracked));
 }
 
 ArgParser::ArgParser(std::string command, std::string usage, std::string description)
@@ -431,13 +390,6 @@ std::vector<NamedPath> DatasetRunInputs(const ArgParser& p, const std::string& d
   inputs.push_back({"the detector's weights", system.detector.weights_path});
   inputs.push_back({"the detector's names", system.detector.names_path});
   return inputs;
-}
-
-const std::vector<std::string>& RunOutputNames() {
-  static const std::vector<std::string> names = {
-      "trajectory.txt", "trajectory_online.txt", "keyframes.txt",     "frames.csv", "map.bt",
-      "map.ot",         "groundtruth.txt",       kRealtimeReportFile, "eval.json"};
-  return names;
 }
 
 std::vector<NamedPath> DatasetRunOutputs(const ArgParser& p, const std::filesystem::path& out_dir) {

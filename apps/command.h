@@ -32,6 +32,8 @@
 
 #include "core/config/settings.h"
 #include "core/io/file_util.h"
+#include "run/run_outputs.h"
+#include "run/run_summary.h"
 
 namespace dygslam {
 class RgbdDataset;
@@ -40,10 +42,6 @@ struct SystemOptions;
 }  // namespace dygslam
 
 namespace dygslam::cli {
-
-// `run`: the stream ended before every requested frame was processed, and no stop signal asked
-// for that (a component stopped or stalled, an end of stream from outside the run).
-inline constexpr int kExitIncompleteRun = 3;
 
 struct Command {
   std::string name;
@@ -124,11 +122,6 @@ std::string ConfigDir();
 // folder cannot be created or written (a probe file is created and removed, so a read-only folder
 // is found up front, not after the whole run). Creates the folder (and missing parents).
 std::filesystem::path PrepareOutputDir(const std::string& option, const std::string& value);
-// Before a command writes its outputs into `dir` (given as --<option>): a folder removed while the
-// command ran (a cleanup script, `rm -rf` by hand) is made again with a warning on stderr naming
-// the option, so the outputs of the work done are not lost.
-void RecreateOutputDirIfRemoved(const std::string& command, const std::string& option,
-                                const std::filesystem::path& dir);
 // Removes the folders PrepareOutputDir created when they are still empty (a command that failed
 // before writing anything leaves no empty output folder behind). The dispatcher calls it when a
 // command exits non-zero.
@@ -147,13 +140,6 @@ void AddDatasetRunFlags(ArgParser* p);
 // command then exits 2).
 bool CheckFilterOption(ArgParser* p);
 
-// A SLAM run that processed no frame or tracked fewer than 10 % of them failed (exit 1), even when
-// every part of it ran: its trajectory says nothing.
-bool IsTrackingFailure(size_t processed, size_t tracked);
-// "dygslam <command>: error: tracking failed: 0 of 30 frames tracked ..." with the likely causes.
-void PrintTrackingFailure(const std::string& command, size_t processed, size_t tracked,
-                          size_t lost);
-
 // The files of a SLAM run on a dataset folder, named as the user knows them, for FindOutputClash:
 // the dataset's lists, the settings file (`settings_role`: "--config" or "the settings file"), the
 // files given to the options `file_options` (--load-map, ...) and the model files the settings
@@ -163,9 +149,6 @@ std::vector<NamedPath> DatasetRunInputs(const ArgParser& p, const std::string& d
                                         const std::string& settings_path,
                                         const SystemOptions& system,
                                         const std::vector<std::string>& file_options);
-// The files a run writes into its --out folder (trajectories, frames.csv, maps, reports,
-// eval.json), and those the summary lists.
-const std::vector<std::string>& RunOutputNames();
 // --save-map (when given) and every file of RunOutputNames() in `out_dir`.
 std::vector<NamedPath> DatasetRunOutputs(const ArgParser& p, const std::filesystem::path& out_dir);
 // The first output of a dataset run that is an input or another output (FindOutputClash), ""

@@ -7,14 +7,16 @@
 #include <map>
 #include <memory>
 
+#include "core/base/echo.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 #include "core/place/vocabulary.h"
+#include "core/slam/feature/orb_extractor.h"
 #include "core/slam/map/frame.h"
 #include "core/slam/map/map.h"
 #include "core/slam/map/map_file.h"
-#include "core/slam/feature/orb_extractor.h"
 #include "mapping/keyframe_mapper.h"
+#include "run/realtime_report.h"
 
 namespace dygslam {
 namespace fs = std::filesystem;
@@ -176,6 +178,31 @@ size_t WriteMapFileOctoMap(const std::string& directory, const std::string& map_
   WriteOctoMapBinary(tree, (fs::path(directory) / "map.bt").string());
   if (with_full_map) WriteOctoMapFull(tree, (fs::path(directory) / "map.ot").string());
   return inserted;
+}
+
+const std::vector<std::string>& RunOutputNames() {
+  static const std::vector<std::string> names = {
+      "trajectory.txt", "trajectory_online.txt", "keyframes.txt",     "frames.csv", "map.bt",
+      "map.ot",         "groundtruth.txt",       kRealtimeReportFile, "eval.json"};
+  return names;
+}
+
+void RecreateOutputDirIfRemoved(const std::string& command, const std::string& option,
+                                const std::filesystem::path& dir) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(dir, ec)) return;
+  if (std::filesystem::exists(std::filesystem::symlink_status(dir, ec))) {
+    std::fprintf(stderr,
+                 "dygslam %s: warning: --%s '%s' was replaced by something that is not a folder "
+                 "while the command ran; the outputs cannot be written there\n",
+                 command.c_str(), option.c_str(), EchoValue(dir.string()).c_str());
+    return;
+  }
+  std::fprintf(stderr,
+               "dygslam %s: warning: --%s '%s' was removed while the command ran; made it again "
+               "for the outputs\n",
+               command.c_str(), option.c_str(), EchoValue(dir.string()).c_str());
+  std::filesystem::create_directories(dir, ec);  // failing: the first write names the file
 }
 
 }  // namespace dygslam

@@ -72,6 +72,15 @@ class RunOutputs {
   std::vector<std::pair<std::string, std::string>> failures_;  // name, reason
 };
 
+// The files a run writes into its --out folder (trajectories, frames.csv, maps, reports,
+// eval.json), and those the summary lists.
+const std::vector<std::string>& RunOutputNames();
+// Before a command writes its outputs into `dir` (given as --<option>): a folder removed while the
+// command ran (a cleanup script, `rm -rf` by hand) is made again with a warning on stderr naming
+// the option, so the outputs of the work done are not lost.
+void RecreateOutputDirIfRemoved(const std::string& command, const std::string& option,
+                                const std::filesystem::path& dir);
+
 FrameRow FrameRowFromResult(const FrameResult& result);
 std::string FramesCsvHeader();
 std::string FramesCsvRow(const FrameRow& row);

@@ -1,5 +1,7 @@
 #include "run/run_summary.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <sstream>
 
 #include "core/base/json.h"
@@ -101,6 +103,29 @@ std::string RunSummaryJson(const RunSummary& s) {
     j << (i == 0 ? "" : ", ") << JsonString(s.components_cut_short[i]);
   j << "], \"error\": " << JsonString(s.error) << ", \"exit_code\": " << s.exit_code << "}\n";
   return j.str();
+}
+
+bool IsTrackingFailure(size_t processed, size_t tracked) {
+  return processed == 0 || tracked * 10 < processed;
+}
+
+void PrintTrackingFailure(const std::string& command, size_t processed, size_t tracked,
+                          size_t lost) {
+  if (processed == 0) {
+    std::fprintf(stderr,
+                 "dygslam %s: error: no frame was processed (no rgb entry of the range has a "
+                 "depth partner)\n",
+                 command.c_str());
+    return;
+  }
+  const size_t untracked = processed - std::min(processed, tracked);
+  std::fprintf(stderr,
+               "dygslam %s: error: tracking failed: %zu of %zu frames tracked (%.1f %%, at least "
+               "10 %% needed); %zu lost after initialisation, %zu never tracked. Likely causes: "
+               "depth images without valid depth (DepthMapFactor), camera settings that do not "
+               "match the images (Camera.*), or images without texture.\n",
+               command.c_str(), tracked, processed, 100.0 * tracked / processed,
+               std::min(lost, untracked), untracked - std::min(lost, untracked));
 }
 
 }  // namespace dygslam

@@ -16,6 +16,17 @@
 
 namespace dygslam {
 
+// A run: the stream ended before every requested frame was processed, and no stop signal asked
+// for that (a component stopped or stalled, an end of stream from outside the run).
+inline constexpr int kExitIncompleteRun = 3;
+
+// A SLAM run that processed no frame or tracked fewer than 10 % of them failed (exit 1), even when
+// every part of it ran: its trajectory says nothing.
+bool IsTrackingFailure(size_t processed, size_t tracked);
+// "dygslam <command>: error: tracking failed: 0 of 30 frames tracked ..." with the likely causes.
+void PrintTrackingFailure(const std::string& command, size_t processed, size_t tracked,
+                          size_t lost);
+
 // ATE figures of one trajectory against the ground truth (metres).
 struct AteFigures {
   double rmse = 0, mean = 0, median = 0, max = 0;

@@ -182,85 +182,98 @@ struct ComponentOutcome {
   bool input_cut_short = false;
 };
 
+// The player of the pipeline: the dataset's frames, paced or windowed; with --rate the real-time
+// report into the run's output folder.
+ComponentOutcome RunPipelinePlayer(const PipelineOptions& options,
+                                   std::shared_ptr<dds::Participant> participant,
+                                   const StopFlagPtr& stop) {
+  PlayerOptions p;
+  p.dataset_dir = options.dataset_dir;
+  p.camera = options.system.camera;
+  p.depth_scale = options.system.sensor.depth_map_factor;
+  p.rate = options.rate;
+  p.first_entry = options.first_entry;
+  p.last_entry = options.last_entry;
+  p.window = options.window;
+  p.loop_minutes = options.loop_minutes;
+  p.expected_readers = options.NeedsDetectorComponent() ? 2 : 1;
+  if (options.wait_for_components) {
+    for (const ComponentKind component : PipelineComponents(options)) {
+      if (component != ComponentKind::kPlayer) p.wait_for_components.push_back(component);
+    }
+  }
+  // The real-time report goes into the output folder this run started with, wherever it is
+  // when the player ends (WriteFileAtomically follows a pinned folder; a component process
+  // pins it here, a run in one process pinned it already).
+  if (options.rate > 0) {
+    std::error_code ec;
+    fs::create_directories(options.output_dir, ec);
+    PinOutputFolder(options.output_dir);
+  }
+  const PlayerStats stats = RunPlayer(participant, p, stop);
+  if (options.rate > 0) {
+    RealtimeReport report;
+    report.rate = options.rate;
+    report.frames = stats.frames_published;
+    report.results = stats.poses_timed;
+    report.late = stats.late;
+    report.latency_median_ms = stats.latency_median_ms;
+    report.latency_p99_ms = stats.latency_p99_ms;
+    report.longest_gap_s = stats.longest_gap_s;
+    WriteRealtimeReport((fs::path(options.output_dir) / kRealtimeReportFile).string(), report);
+  }
+  if (stats.refused) throw FrameSourceRefused();
+  return {0, stats.slam_left_early};
+}
+
+// slam of the pipeline, with the detector's settings for the keyframes the detector skips.
+ComponentOutcome RunPipelineSlam(const PipelineOptions& options,
+                                 std::shared_ptr<dds::Participant> participant,
+                                 const StopFlagPtr& stop) {
+  SlamComponentOptions s;
+  s.system = options.system;
+  s.external_detections = options.run_detector;
+  if (s.external_detections) {
+    // Keyframes made on frames the detector component skipped (Detector.every_n_frames > 1)
+    // get their map mask from slam's own detector, the detector component's model and
+    // thread count (created on first use; SystemOptions::detect_skipped_keyframes). Without
+    // a mapper nobody uses the masks: no detection. A slam host without the models (the
+    // detector on another host) keeps the carried boxes for those masks, with a warning.
+    const bool detect = options.system.detect_skipped_keyframes && options.run_mapper &&
+                        options.system.detection_every_n_frames > 1;
+    s.system.detect_skipped_keyframes = false;
+    if (detect) {
+      try {
+        s.system.detector = DetectorOptionsFor(options);
+        s.system.detect_skipped_keyframes = true;
+      } catch (const InputError& e) {
+        LOG_WARNING << "slam: keyframes on frames the detector skips keep the carried boxes "
+                       "for their map mask (no detector model here: "
+                    << e.what() << ")";
+      }
+    }
+  }
+  s.detection_wait = options.detection_wait;
+  s.save_map = options.save_map;
+  const SlamStats stats = RunSlam(participant, s, stop);
+  // The final trajectories are out (the recorder writes them): now the map file's failure.
+  if (!stats.save_map_error.empty()) throw InputError(stats.save_map_error);
+  return {stats.foreign_frames + stats.foreign_detections + stats.foreign_statuses,
+          stats.input_cut_short};
+}
+
 ComponentOutcome RunComponentKind(ComponentKind kind, const PipelineOptions& options,
                                   std::shared_ptr<dds::Participant> participant,
                                   const StopFlagPtr& stop) {
   switch (kind) {
-    case ComponentKind::kPlayer: {
-      PlayerOptions p;
-      p.dataset_dir = options.dataset_dir;
-      p.camera = options.system.camera;
-      p.depth_scale = options.system.sensor.depth_map_factor;
-      p.rate = options.rate;
-      p.first_entry = options.first_entry;
-      p.last_entry = options.last_entry;
-      p.window = options.window;
-      p.loop_minutes = options.loop_minutes;
-      p.expected_readers = options.NeedsDetectorComponent() ? 2 : 1;
-      if (options.wait_for_components) {
-        for (const ComponentKind component : PipelineComponents(options)) {
-          if (component != ComponentKind::kPlayer) p.wait_for_components.push_back(component);
-        }
-      }
-      // The real-time report goes into the output folder this run started with, wherever it is
-      // when the player ends (WriteFileAtomically follows a pinned folder; a component process
-      // pins it here, a run in one process pinned it already).
-      if (options.rate > 0) {
-        std::error_code ec;
-        fs::create_directories(options.output_dir, ec);
-        PinOutputFolder(options.output_dir);
-      }
-      const PlayerStats stats = RunPlayer(participant, p, stop);
-      if (options.rate > 0) {
-        RealtimeReport report;
-        report.rate = options.rate;
-        report.frames = stats.frames_published;
-        report.results = stats.poses_timed;
-        report.late = stats.late;
-        report.latency_median_ms = stats.latency_median_ms;
-        report.latency_p99_ms = stats.latency_p99_ms;
-        report.longest_gap_s = stats.longest_gap_s;
-        WriteRealtimeReport((fs::path(options.output_dir) / kRealtimeReportFile).string(), report);
-      }
-      if (stats.refused) throw FrameSourceRefused();
-      return {};
-    }
+    case ComponentKind::kPlayer:
+      return RunPipelinePlayer(options, participant, stop);
     case ComponentKind::kDetector:
       RunDetector(participant, DetectorOptionsFor(options), stop,
                   options.system.detection_every_n_frames);
       return {};
-    case ComponentKind::kSlam: {
-      SlamComponentOptions s;
-      s.system = options.system;
-      s.external_detections = options.run_detector;
-      if (s.external_detections) {
-        // Keyframes made on frames the detector component skipped (Detector.every_n_frames > 1)
-        // get their map mask from slam's own detector, the detector component's model and
-        // thread count (created on first use; SystemOptions::detect_skipped_keyframes). Without
-        // a mapper nobody uses the masks: no detection. A slam host without the models (the
-        // detector on another host) keeps the carried boxes for those masks, with a warning.
-        const bool detect = options.system.detect_skipped_keyframes && options.run_mapper &&
-                            options.system.detection_every_n_frames > 1;
-        s.system.detect_skipped_keyframes = false;
-        if (detect) {
-          try {
-            s.system.detector = DetectorOptionsFor(options);
-            s.system.detect_skipped_keyframes = true;
-          } catch (const InputError& e) {
-            LOG_WARNING << "slam: keyframes on frames the detector skips keep the carried boxes "
-                           "for their map mask (no detector model here: "
-                        << e.what() << ")";
-          }
-        }
-      }
-      s.detection_wait = options.detection_wait;
-      s.save_map = options.save_map;
-      const SlamStats stats = RunSlam(participant, s, stop);
-      // The final trajectories are out (the recorder writes them): now the map file's failure.
-      if (!stats.save_map_error.empty()) throw InputError(stats.save_map_error);
-      return {stats.foreign_frames + stats.foreign_detections + stats.foreign_statuses,
-              stats.input_cut_short};
-    }
+    case ComponentKind::kSlam:
+      return RunPipelineSlam(options, participant, stop);
     case ComponentKind::kMapper: {
       MapperOptions m;
       m.map_path = (fs::path(options.output_dir) / "map.bt").string();
@@ -441,151 +454,201 @@ ChildReport ReadChildReport(int fd) {
 // own (slam's final bundle adjustment included).
 constexpr std::chrono::seconds kSourceCutShortGrace(60);
 
-int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop, StopReport* report) {
-  const std::string exe =
-      options.executable.empty() ? fs::read_symlink("/proc/self/exe").string() : options.executable;
-  const std::vector<std::string> args = ComponentArgs(options);
-  std::map<pid_t, ComponentKind> children;
-  std::map<pid_t, int> reports;  // read end of each child's report pipe
-  for (const ComponentKind kind : PipelineComponents(options)) {
-    std::vector<std::string> argv = {exe, "component", ToString(kind)};
-    argv.insert(argv.end(), args.begin(), args.end());
-    std::vector<char*> cargv;
-    for (std::string& s : argv) cargv.push_back(s.data());
-    cargv.push_back(nullptr);
-    int report_pipe[2] = {-1, -1};
-    if (pipe2(report_pipe, O_CLOEXEC) != 0) {
-      throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
-    }
-    // The environment with the report descriptor, made before fork (the child only execs).
-    std::vector<std::string> env;
-    for (char** e = environ; *e != nullptr; ++e) {
-      if (std::strncmp(*e, kReportFdVariable, std::strlen(kReportFdVariable)) != 0) {
-        env.emplace_back(*e);
-      }
-    }
-    env.push_back(std::string(kReportFdVariable) + "=" + std::to_string(report_pipe[1]));
-    std::vector<char*> cenv;
-    for (std::string& s : env) cenv.push_back(s.data());
-    cenv.push_back(nullptr);
-    const pid_t parent = getpid();
-    const pid_t pid = fork();
-    if (pid < 0) {
-      close(report_pipe[0]);
-      close(report_pipe[1]);
-      throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
-    }
-    if (pid == 0) {
-      // A run killed outright (SIGKILL) takes its components with it: left running, they would
-      // finish later and write over the outputs of the next run into the same folder.
-      prctl(PR_SET_PDEATHSIG, SIGKILL);
-      if (getppid() != parent) std::_Exit(127);  // the run died before the line above
-      fcntl(report_pipe[1], F_SETFD, 0);         // the write end survives exec
-      execve(exe.c_str(), cargv.data(), cenv.data());
-      std::_Exit(127);
-    }
-    close(report_pipe[1]);
-    reports[pid] = report_pipe[0];
-    children[pid] = kind;
-    LOG_INFO << "started component " << ToString(kind) << " (pid " << pid << ")";
+// Starts `exe component KIND ARGS` as a child of this run (it dies with the run) with the write
+// end of a report pipe whose read end goes to *report_fd. Returns its pid.
+pid_t StartComponentProcess(const std::string& exe, ComponentKind kind,
+                            const std::vector<std::string>& args, int* report_fd) {
+  std::vector<std::string> argv = {exe, "component", ToString(kind)};
+  argv.insert(argv.end(), args.begin(), args.end());
+  std::vector<char*> cargv;
+  for (std::string& s : argv) cargv.push_back(s.data());
+  cargv.push_back(nullptr);
+  int report_pipe[2] = {-1, -1};
+  if (pipe2(report_pipe, O_CLOEXEC) != 0) {
+    throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
   }
-  int result = 0;
-  bool forwarded = false;
-  std::set<pid_t> signalled;
-  auto stop_time = std::chrono::steady_clock::time_point::max();
-  bool run_failed = false;
+  // The environment with the report descriptor, made before fork (the child only execs).
+  std::vector<std::string> env;
+  for (char** e = environ; *e != nullptr; ++e) {
+    if (std::strncmp(*e, kReportFdVariable, std::strlen(kReportFdVariable)) != 0) {
+      env.emplace_back(*e);
+    }
+  }
+  env.push_back(std::string(kReportFdVariable) + "=" + std::to_string(report_pipe[1]));
+  std::vector<char*> cenv;
+  for (std::string& s : env) cenv.push_back(s.data());
+  cenv.push_back(nullptr);
+  const pid_t parent = getpid();
+  const pid_t pid = fork();
+  if (pid < 0) {
+    close(report_pipe[0]);
+    close(report_pipe[1]);
+    throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
+  }
+  if (pid == 0) {
+    // A run killed outright (SIGKILL) takes its components with it: left running, they would
+    // finish later and write over the outputs of the next run into the same folder.
+    prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (getppid() != parent) std::_Exit(127);  // the run died before the line above
+    fcntl(report_pipe[1], F_SETFD, 0);         // the write end survives exec
+    execve(exe.c_str(), cargv.data(), cenv.data());
+    std::_Exit(127);
+  }
+  close(report_pipe[1]);
+  *report_fd = report_pipe[0];
+  LOG_INFO << "started component " << ToString(kind) << " (pid " << pid << ")";
+  return pid;
+}
+
+// The component processes of a `run --processes`: started, watched, stopped together.
+class ComponentProcesses {
+ public:
+  ComponentProcesses(const PipelineOptions& options, StopFlagPtr stop, StopReport* report)
+      : stop_(std::move(stop)), report_(report) {
+    const std::string exe = options.executable.empty() ? fs::read_symlink("/proc/self/exe").string()
+                                                       : options.executable;
+    const std::vector<std::string> args = ComponentArgs(options);
+    for (const ComponentKind kind : PipelineComponents(options)) {
+      int report_fd = -1;
+      const pid_t pid = StartComponentProcess(exe, kind, args, &report_fd);
+      reports_[pid] = report_fd;
+      children_[pid] = kind;
+    }
+  }
+
+  // Until every component ended: 0, or 1 when one whose failure fails the run failed.
+  int Supervise() {
+    while (!children_.empty()) {
+      StopAfterSourceCutShort();
+      int status = 0;
+      const pid_t pid = waitpid(-1, &status, WNOHANG);
+      if (pid > 0) {
+        if (children_.count(pid) > 0) Reap(pid, status);  // else not one of ours
+        continue;
+      }
+      if (stop_->requested()) ForwardStop();
+      if (forwarded_ && Clock::now() - stop_time_ > std::chrono::seconds(30)) KillStragglers();
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return run_failed_ ? 1 : 0;
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+
   // A frame source stopped on its own before its peers had matched it: they never see its end of
   // stream and would wait for ever. The run is incomplete anyway; after a grace period for the
   // frames it sent, the others are stopped (they write what they have).
-  std::optional<std::chrono::steady_clock::time_point> source_cut_short_at;
-  while (!children.empty()) {
-    if (source_cut_short_at && !forwarded &&
-        std::chrono::steady_clock::now() - *source_cut_short_at > kSourceCutShortGrace) {
-      LOG_WARNING << "the frame source was stopped on its own " << kSourceCutShortGrace.count()
-                  << " s ago and the run has not ended: stopping the other components";
-      stop->Request();
-      source_cut_short_at.reset();
-    }
-    int status = 0;
-    const pid_t pid = waitpid(-1, &status, WNOHANG);
-    if (pid > 0) {
-      if (children.count(pid) == 0) continue;  // not one of ours
-      const ComponentKind kind = children[pid];
-      const char* name = ToString(kind);
-      children.erase(pid);
-      const ChildReport child = ReadChildReport(reports[pid]);
-      reports.erase(pid);
-      report->ignored_samples += child.ignored_samples;
-      // A stop signal sent to this component alone (not the run's: the runner had not forwarded
-      // one and received none itself) ended it before the stream did: its part of the run (the
-      // map, the detections) covers the frames until then.
-      if (child.stop_signal != 0 && !forwarded && !stop->requested()) {
-        LOG_WARNING << "component " << name << " (pid " << pid << ") was stopped by signal "
-                    << child.stop_signal << " sent to it alone, before the end of the run";
-        report->components_cut_short.push_back(std::string(name) + " (signal " +
-                                               std::to_string(child.stop_signal) + ")");
-        if (IsFrameSource(kind)) source_cut_short_at = std::chrono::steady_clock::now();
-      }
-      const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-      // After the outputs are written the runner stops the others with SIGTERM; a component that
-      // was already tearing down (its handler restored) then dies of that signal: not a failure.
-      const bool stopped_by_runner =
-          forwarded && WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM;
-      // Its outputs are written, but its input ended without the end of the run.
-      const bool cut_short = WIFEXITED(status) && WEXITSTATUS(status) == kExitComponentCutShort;
-      if (cut_short) {
-        LOG_WARNING << "component " << name << " (pid " << pid << ") wrote its outputs, but its "
-                    << "input ended without the end of the run (see its warning above)";
-        report->components_cut_short.push_back(std::string(name) + " (its input ended early)");
-      } else if (stopped_by_runner) {
-        LOG_INFO << "component " << name << " (pid " << pid << ") stopped at the end of the run";
-      } else if (!ok) {
-        LOG_WARNING << "component " << name << " (pid " << pid << ") "
-                    << (WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
-                                            : "exited with " + std::to_string(WEXITSTATUS(status)));
-        if (FailureFailsRun(kind)) run_failed = true;
-        // Without the frame source or slam nothing can go on: stop the others now (they flush
-        // what they have) instead of waiting for an end of stream that never comes. A failed
-        // detector is not a reason to stop: slam carries boxes forward / goes geometry-only.
-        if (FailureStopsPipeline(kind) && !forwarded) {
-          LOG_ERROR << "a pipeline component failed (" << name << "); stopping the others";
-          stop->Request();
-        }
-      }
-      // The run is over when the recorder (and mapper) have written their outputs.
-      bool outputs_done = true;
-      for (const auto& [p, k] : children) {
-        if (WritesOutputs(k)) outputs_done = false;
-      }
-      if (outputs_done && !forwarded) {
-        stop->Request();
-      }
-      continue;
-    }
-    if (stop->requested()) {
-      if (!forwarded) stop_time = std::chrono::steady_clock::now();
-      forwarded = true;
-      // A child signalled before its main() has installed the handler would die without writing
-      // its outputs (or, between fork and exec, lose the signal): wait until it catches SIGTERM.
-      const bool late = std::chrono::steady_clock::now() - stop_time > std::chrono::seconds(10);
-      for (const auto& [p, n] : children) {
-        if (signalled.count(p) == 0 && (late || ComponentCatchesSignal(p, n, SIGTERM))) {
-          kill(p, SIGTERM);
-          signalled.insert(p);
-        }
-      }
-    }
-    if (forwarded && std::chrono::steady_clock::now() - stop_time > std::chrono::seconds(30)) {
-      for (const auto& [p, n] : children) {
-        LOG_WARNING << "component " << ToString(n) << " did not stop; killing it";
-        kill(p, SIGKILL);
-      }
-      stop_time = std::chrono::steady_clock::time_point::max();
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  void StopAfterSourceCutShort() {
+    if (!source_cut_short_at_ || forwarded_ ||
+        Clock::now() - *source_cut_short_at_ <= kSourceCutShortGrace)
+      return;
+    LOG_WARNING << "the frame source was stopped on its own " << kSourceCutShortGrace.count()
+                << " s ago and the run has not ended: stopping the other components";
+    stop_->Request();
+    source_cut_short_at_.reset();
   }
-  if (run_failed) result = 1;
-  return result;
+
+  // A child ended: what it reported, why it ended, whether the others go on.
+  void Reap(pid_t pid, int status) {
+    const ComponentKind kind = children_[pid];
+    const char* name = ToString(kind);
+    children_.erase(pid);
+    const ChildReport child = ReadChildReport(reports_[pid]);
+    reports_.erase(pid);
+    report_->ignored_samples += child.ignored_samples;
+    // A stop signal sent to this component alone (not the run's: the runner had not forwarded
+    // one and received none itself) ended it before the stream did: its part of the run (the
+    // map, the detections) covers the frames until then.
+    if (child.stop_signal != 0 && !forwarded_ && !stop_->requested()) {
+      LOG_WARNING << "component " << name << " (pid " << pid << ") was stopped by signal "
+                  << child.stop_signal << " sent to it alone, before the end of the run";
+      report_->components_cut_short.push_back(std::string(name) + " (signal " +
+                                              std::to_string(child.stop_signal) + ")");
+      if (IsFrameSource(kind)) source_cut_short_at_ = Clock::now();
+    }
+    // A component that did not stop when the run ended (paused, or hung) had stopped doing its
+    // part before: what it gave (the detector's boxes, the map) may end early.
+    if (killed_by_runner_.count(pid) > 0) {
+      report_->components_cut_short.push_back(std::string(name) +
+                                              " (did not stop at the end of the run: killed)");
+    }
+    JudgeExit(pid, kind, status);
+    // The run is over when the recorder (and mapper) have written their outputs.
+    bool outputs_done = true;
+    for (const auto& [p, k] : children_) {
+      if (WritesOutputs(k)) outputs_done = false;
+    }
+    if (outputs_done && !forwarded_) stop_->Request();
+  }
+
+  void JudgeExit(pid_t pid, ComponentKind kind, int status) {
+    const char* name = ToString(kind);
+    const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    // After the outputs are written the runner stops the others with SIGTERM; a component that
+    // was already tearing down (its handler restored) then dies of that signal: not a failure.
+    const bool stopped_by_runner = forwarded_ && WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM;
+    // Its outputs are written, but its input ended without the end of the run.
+    const bool cut_short = WIFEXITED(status) && WEXITSTATUS(status) == kExitComponentCutShort;
+    if (cut_short) {
+      LOG_WARNING << "component " << name << " (pid " << pid << ") wrote its outputs, but its "
+                  << "input ended without the end of the run (see its warning above)";
+      report_->components_cut_short.push_back(std::string(name) + " (its input ended early)");
+    } else if (stopped_by_runner) {
+      LOG_INFO << "component " << name << " (pid " << pid << ") stopped at the end of the run";
+    } else if (!ok) {
+      LOG_WARNING << "component " << name << " (pid " << pid << ") "
+                  << (WIFSIGNALED(status) ? "killed by signal " + std::to_string(WTERMSIG(status))
+                                          : "exited with " + std::to_string(WEXITSTATUS(status)));
+      if (FailureFailsRun(kind)) run_failed_ = true;
+      // Without the frame source or slam nothing can go on: stop the others now (they flush
+      // what they have) instead of waiting for an end of stream that never comes. A failed
+      // detector is not a reason to stop: slam carries boxes forward / goes geometry-only.
+      if (FailureStopsPipeline(kind) && !forwarded_) {
+        LOG_ERROR << "a pipeline component failed (" << name << "); stopping the others";
+        stop_->Request();
+      }
+    }
+  }
+
+  void ForwardStop() {
+    if (!forwarded_) stop_time_ = Clock::now();
+    forwarded_ = true;
+    // A child signalled before its main() has installed the handler would die without writing
+    // its outputs (or, between fork and exec, lose the signal): wait until it catches SIGTERM.
+    const bool late = Clock::now() - stop_time_ > std::chrono::seconds(10);
+    for (const auto& [p, n] : children_) {
+      if (signalled_.count(p) == 0 && (late || ComponentCatchesSignal(p, n, SIGTERM))) {
+        kill(p, SIGTERM);
+        signalled_.insert(p);
+      }
+    }
+  }
+
+  void KillStragglers() {
+    for (const auto& [p, n] : children_) {
+      LOG_WARNING << "component " << ToString(n) << " did not stop; killing it";
+      kill(p, SIGKILL);
+      killed_by_runner_.insert(p);
+    }
+    stop_time_ = Clock::time_point::max();
+  }
+
+  StopFlagPtr stop_;
+  StopReport* report_;
+  std::map<pid_t, ComponentKind> children_;
+  std::map<pid_t, int> reports_;  // read end of each child's report pipe
+  bool forwarded_ = false;
+  std::set<pid_t> signalled_;
+  Clock::time_point stop_time_ = Clock::time_point::max();
+  bool run_failed_ = false;
+  std::optional<Clock::time_point> source_cut_short_at_;
+  std::set<pid_t> killed_by_runner_;  // did not stop within 30 s of the run's end
+};
+
+int RunProcesses(const PipelineOptions& options, const StopFlagPtr& stop, StopReport* report) {
+  ComponentProcesses processes(options, stop, report);
+  return processes.Supervise();
 }
 
 }  // namespace

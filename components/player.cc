@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <thread>
@@ -133,293 +135,360 @@ double LatencyReservoir::Quantile(double q) const {
   return sorted[index];
 }
 
-PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const PlayerOptions& options,
-                      const StopFlagPtr& stop) {
-  options.Check();
-  DatasetPlayer player(options);
-  PlayerStats stats;
-  const auto begin = Clock::now();
-  auto start = begin;  // of the replay's schedule; moved on when the player was stopped
+namespace {
+
+// The player's shell: publishes the dataset's frames (paced at the camera's rate, or as fast as
+// the window of unacknowledged frames allows), reads the poses back for the window and for the
+// latency, and ends after slam's DONE.
+class PlayerShell {
+ public:
+  PlayerShell(std::shared_ptr<dds::Participant> participant, const PlayerOptions& options)
+      : options_(options),
+        player_(options),
+        begin_(Clock::now()),
+        start_(begin_),
+        continued_at_last_pose_(TimesContinued()),
+        continued_at_last_frame_(TimesContinued()),
+        late_after_ms_(LateAfterMs()),
+        frames_(participant, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame),
+        gt_writer_(participant, dds::topics::kGroundTruth, dds::TopicKind::kGroundTruth),
+        status_(participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus),
+        poses_(participant, dds::topics::kCameraPose, dds::TopicKind::kCameraPose,
+               [this](msg::CameraPose&& pose, const WriterGuid& writer) { OnPose(pose, writer); }),
+        status_reader_(participant, ComponentKind::kPlayer,
+                       [this](const ComponentStatus& s, const msg::StreamStatus& /*m*/,
+                              const WriterGuid& from) { OnStatus(s, from); }),
+        // Who we are and which writers are ours (the consumers accept frames and ground truth
+        // only from announced writers; components/protocol.h).
+        started_(status_, ComponentStatus::Started(ComponentKind::kPlayer,
+                                                   {{DataTopic::kFrames, frames_.guid()},
+                                                    {DataTopic::kGroundTruth, gt_writer_.guid()}},
+                                                   player_.num_frames())) {}
+
+  PlayerStats Run(const StopFlagPtr& stop);
+
+ private:
+  // Paced runs: the frame period at the played rate, from the stamps; later poses are late.
+  double LateAfterMs() const;
+  void OnPose(const msg::CameraPose& pose, const WriterGuid& writer);
+  void OnStatus(const ComponentStatus& s, const WriterGuid& from);
+  // A slam that was there and left without COMPONENT_DONE (killed, or its DONE lost): its pose
+  // writer unmatched for 5 s. Then no acknowledgement and no DONE will come: stop waiting.
+  bool SlamGone() {
+    slam_gone_reported_ = slam_gone_reported_ || slam_watch_.Update(poses_.matched() > 0);
+    return slam_gone_reported_;
+  }
+  void WaitForPeers(const StopFlagPtr& stop);
+  void PlayFrames(const StopFlagPtr& stop);
+  // Paced runs: waits until frame `n` is due; false when stopped meanwhile.
+  bool WaitUntilDue(size_t n, const RgbdFrameData& frame, const StopFlagPtr& stop);
+  // With a window: waits for the acknowledgement of frame n - window (bounded).
+  void WaitForWindow(size_t n, const StopFlagPtr& stop);
+  void EndStream(const StopFlagPtr& stop);
+  void Summarize();
+
+  const PlayerOptions options_;
+  DatasetPlayer player_;
+  PlayerStats stats_;
+  const Clock::time_point begin_;
+  Clock::time_point start_;  // of the replay's schedule; moved on when the player was stopped
   // A stop of the player itself (SIGSTOP, Ctrl-Z) is not the pipeline's: the times measured
   // across it (latency, the wait for a result) are left out, and the replay resumes at the
   // camera's rate rather than sending the frames it fell behind in one burst.
-  unsigned continued_at_last_pose = TimesContinued(), continued_at_last_frame = TimesContinued();
+  unsigned continued_at_last_pose_, continued_at_last_frame_;
+  Timestamp first_stamp_;
 
-  std::mutex mutex;
-  std::condition_variable cv;
-  int64_t acked = -1;  // highest seq whose pose was received
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  int64_t acked_ = -1;  // highest seq whose pose was received
   // End-to-end latency: when each frame was published, and from it to its pose's arrival here.
-  std::map<uint64_t, Clock::time_point> sent;
+  std::map<uint64_t, Clock::time_point> sent_;
   // The stamp of each frame published and not yet acknowledged: a pose is for one of this
   // player's frames only when its seq and stamp are one of them (another frame source on the
   // partition numbers its frames from 0 too).
-  std::map<uint64_t, Timestamp> sent_stamps;
-  size_t own_poses = 0, foreign_poses = 0;
-  bool refused = false;  // the run's slam takes another frame source's frames, not ours
+  std::map<uint64_t, Timestamp> sent_stamps_;
+  size_t own_poses_ = 0, foreign_poses_ = 0;
+  bool refused_ = false;  // the run's slam takes another frame source's frames, not ours
   // The pose writers of the slam components that announced themselves on the partition: only
   // their poses for other frames tell that the consumers took another frame source; any other
   // participant publishing poses into the partition proves nothing about them.
-  std::set<WriterGuid> slam_pose_writers;
-  LatencyReservoir latency_ms;
-  // Paced runs: the frame period at the played rate, from the stamps; later poses are late.
-  double late_after_ms = 0;
-  size_t late = 0;
-  if (options.rate > 0 && player.num_frames() > 1) {
-    const double span_s = SecondsBetween(player.Stamp(0), player.Stamp(player.num_frames() - 1));
-    late_after_ms = kLateFramePeriods * 1000.0 * span_s /
-                    static_cast<double>(player.num_frames() - 1) / options.rate;
-  }
-  std::optional<Clock::time_point> first_sent, last_pose;
-  std::chrono::duration<double> longest_gap{0};
-  bool slam_done = false;
-  std::set<ComponentKind> ready;  // components that announced READY
-  dds::Writer<msg::RgbdFramePubSubType> frames(participant, dds::topics::kRgbdFrame,
-                                               dds::TopicKind::kRgbdFrame);
-  dds::Writer<msg::GroundTruthPosePubSubType> gt_writer(participant, dds::topics::kGroundTruth,
-                                                        dds::TopicKind::kGroundTruth);
-  dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
-                                                  dds::TopicKind::kStreamStatus);
-  dds::Reader<msg::CameraPosePubSubType> poses(
-      participant, dds::topics::kCameraPose, dds::TopicKind::kCameraPose,
-      [&](msg::CameraPose&& pose, const WriterGuid& writer) {
-        {
-          std::lock_guard<std::mutex> lock(mutex);
-          const uint64_t seq = pose.header().seq();
-          const auto stamp_it = sent_stamps.find(seq);
-          Timestamp stamp;
-          try {
-            stamp = TimeFromMsg(pose.header().stamp(), "CameraPose.header.stamp");
-          } catch (const InputError&) {
-            return;  // a malformed sample (the reader's own checks report those)
-          }
-          if (stamp_it == sent_stamps.end() || stamp_it->second != stamp) {
-            // Not ours: a pose for another frame source's frame. Many of them from a slam
-            // component while none of ours came back: the consumers took the other source (it
-            // started first).
-            if (slam_pose_writers.count(writer) == 0) return;
-            ++foreign_poses;
-            if (own_poses == 0 && foreign_poses >= kRefusedAfterForeignPoses) refused = true;
-            cv.notify_all();
-            return;
-          }
-          ++own_poses;
-          sent_stamps.erase(sent_stamps.begin(), std::next(stamp_it));
-          acked = std::max<int64_t>(acked, static_cast<int64_t>(seq));
-          const auto it = sent.find(seq);
-          if (it != sent.end()) {
-            const auto now = Clock::now();
-            const unsigned continued = TimesContinued();
-            if (continued == continued_at_last_pose) {
-              const double ms = std::chrono::duration<double, std::milli>(now - it->second).count();
-              latency_ms.Add(ms);
-              if (late_after_ms > 0 && ms > late_after_ms) ++late;
-              // The wait for a result while a frame was out: from the last result or from when
-              // the oldest frame still out was sent, whichever is later (a player that sent
-              // nothing for a while, throttled, is no stall of the pipeline).
-              longest_gap = std::max(longest_gap, WaitWithFrameOut(now, last_pose, sent));
-            }
-            continued_at_last_pose = continued;
-            last_pose = now;
-            sent.erase(sent.begin(), std::next(it));
-          }
-        }
-        cv.notify_all();
-      });
-  RepeatedWarning rival_warning;  // a rival announces itself again as peers join
-  StatusReader status_reader(
-      participant, ComponentKind::kPlayer,
-      [&](const ComponentStatus& s, const msg::StreamStatus& /*m*/, const WriterGuid& from) {
-        {
-          std::lock_guard<std::mutex> lock(mutex);
-          // Another frame source on the partition: the consumers take the frames of the one
-          // that announced itself first and ignore the other's (components/protocol.h).
-          if (s.event == StreamEvent::kStarted && IsFrameSource(s.source) &&
-              !std::equal(from.begin(), from.begin() + 12, frames.guid().begin()) &&
-              rival_warning.Say()) {
-            LOG_WARNING << "player: another frame source (" << ToString(s.source)
-                        << ") plays on this partition; the run's consumers take the frames of "
-                        << "the one that started first and ignore the other's (give each run its "
-                        << "own --partition)";
-          }
-          if (s.source == ComponentKind::kSlam &&
-              (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed)) {
-            slam_done = true;
-          }
-          if (s.event == StreamEvent::kReady) ready.insert(s.source);
-          if (s.event == StreamEvent::kStarted && s.source == ComponentKind::kSlam) {
-            if (const auto it = s.writers.find(DataTopic::kCameraPose); it != s.writers.end())
-              slam_pose_writers.insert(it->second);
-          }
-        }
-        cv.notify_all();
-      });
-  // Who we are and which writers are ours (the consumers accept frames and ground truth only
-  // from announced writers; components/protocol.h).
-  StartedAnnouncer started(status,
-                           ComponentStatus::Started(ComponentKind::kPlayer,
-                                                    {{DataTopic::kFrames, frames.guid()},
-                                                     {DataTopic::kGroundTruth, gt_writer.guid()}},
-                                                    player.num_frames()));
+  std::set<WriterGuid> slam_pose_writers_;
+  LatencyReservoir latency_ms_;
+  const double late_after_ms_;
+  size_t late_ = 0;
+  std::optional<Clock::time_point> first_sent_, last_pose_;
+  std::chrono::duration<double> longest_gap_{0};
+  bool slam_done_ = false;
+  std::set<ComponentKind> ready_;  // components that announced READY
+  RepeatedWarning rival_warning_;  // a rival announces itself again as peers join
+  WriterGoneWatch slam_watch_{std::chrono::seconds(5)};
+  bool slam_gone_reported_ = false;
+  // The endpoints last: their listeners use the state above.
+  dds::Writer<msg::RgbdFramePubSubType> frames_;
+  dds::Writer<msg::GroundTruthPosePubSubType> gt_writer_;
+  dds::Writer<msg::StreamStatusPubSubType> status_;
+  dds::Reader<msg::CameraPosePubSubType> poses_;
+  StatusReader status_reader_;
+  StartedAnnouncer started_;
+};
 
-  // A slam that was there and left without COMPONENT_DONE (killed, or its DONE lost): its pose
-  // writer unmatched for 5 s. Then no acknowledgement and no DONE will come: stop waiting for them.
-  WriterGoneWatch slam_watch(std::chrono::seconds(5));
-  bool slam_gone_reported = false;
-  auto slam_gone = [&] {
-    slam_gone_reported = slam_gone_reported || slam_watch.Update(poses.matched() > 0);
-    return slam_gone_reported;
-  };
+double PlayerShell::LateAfterMs() const {
+  if (options_.rate <= 0 || player_.num_frames() <= 1) return 0;
+  const double span_s = SecondsBetween(player_.Stamp(0), player_.Stamp(player_.num_frames() - 1));
+  return kLateFramePeriods * 1000.0 * span_s / static_cast<double>(player_.num_frames() - 1) /
+         options_.rate;
+}
+
+void PlayerShell::OnPose(const msg::CameraPose& pose, const WriterGuid& writer) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const uint64_t seq = pose.header().seq();
+    const auto stamp_it = sent_stamps_.find(seq);
+    Timestamp stamp;
+    try {
+      stamp = TimeFromMsg(pose.header().stamp(), "CameraPose.header.stamp");
+    } catch (const InputError&) {
+      return;  // a malformed sample (the reader's own checks report those)
+    }
+    if (stamp_it == sent_stamps_.end() || stamp_it->second != stamp) {
+      // Not ours: a pose for another frame source's frame. Many of them from a slam component
+      // while none of ours came back: the consumers took the other source (it started first).
+      if (slam_pose_writers_.count(writer) == 0) return;
+      ++foreign_poses_;
+      if (own_poses_ == 0 && foreign_poses_ >= kRefusedAfterForeignPoses) refused_ = true;
+      cv_.notify_all();
+      return;
+    }
+    ++own_poses_;
+    sent_stamps_.erase(sent_stamps_.begin(), std::next(stamp_it));
+    acked_ = std::max<int64_t>(acked_, static_cast<int64_t>(seq));
+    const auto it = sent_.find(seq);
+    if (it != sent_.end()) {
+      const auto now = Clock::now();
+      const unsigned continued = TimesContinued();
+      if (continued == continued_at_last_pose_) {
+        const double ms = std::chrono::duration<double, std::milli>(now - it->second).count();
+        latency_ms_.Add(ms);
+        if (late_after_ms_ > 0 && ms > late_after_ms_) ++late_;
+        // The wait for a result while a frame was out: from the last result or from when the
+        // oldest frame still out was sent, whichever is later (a player that sent nothing for
+        // a while, throttled, is no stall of the pipeline).
+        longest_gap_ = std::max(longest_gap_, WaitWithFrameOut(now, last_pose_, sent_));
+      }
+      continued_at_last_pose_ = continued;
+      last_pose_ = now;
+      sent_.erase(sent_.begin(), std::next(it));
+    }
+  }
+  cv_.notify_all();
+}
+
+void PlayerShell::OnStatus(const ComponentStatus& s, const WriterGuid& from) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    // Another frame source on the partition: the consumers take the frames of the one that
+    // announced itself first and ignore the other's (components/protocol.h).
+    if (s.event == StreamEvent::kStarted && IsFrameSource(s.source) &&
+        !std::equal(from.begin(), from.begin() + 12, frames_.guid().begin()) &&
+        rival_warning_.Say()) {
+      LOG_WARNING << "player: another frame source (" << ToString(s.source)
+                  << ") plays on this partition; the run's consumers take the frames of "
+                  << "the one that started first and ignore the other's (give each run its "
+                  << "own --partition)";
+    }
+    if (s.source == ComponentKind::kSlam &&
+        (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed)) {
+      slam_done_ = true;
+    }
+    if (s.event == StreamEvent::kReady) ready_.insert(s.source);
+    if (s.event == StreamEvent::kStarted && s.source == ComponentKind::kSlam) {
+      if (const auto it = s.writers.find(DataTopic::kCameraPose); it != s.writers.end())
+        slam_pose_writers_.insert(it->second);
+    }
+  }
+  cv_.notify_all();
+}
+
+void PlayerShell::WaitForPeers(const StopFlagPtr& stop) {
   const auto readers_deadline =
       Clock::now() +
-      std::chrono::milliseconds(static_cast<int64_t>(options.wait_for_readers_s * 1000));
-  while (frames.matched() < options.expected_readers && Clock::now() < readers_deadline &&
+      std::chrono::milliseconds(static_cast<int64_t>(options_.wait_for_readers_s * 1000));
+  while (frames_.matched() < options_.expected_readers && Clock::now() < readers_deadline &&
          !stop->WaitFor(std::chrono::milliseconds(10))) {
   }
-  if (frames.matched() < options.expected_readers && !stop->requested()) {
-    LOG_WARNING << "player: only " << frames.matched() << " of " << options.expected_readers
-                << " frame readers after " << options.wait_for_readers_s << " s; playing anyway";
+  if (frames_.matched() < options_.expected_readers && !stop->requested()) {
+    LOG_WARNING << "player: only " << frames_.matched() << " of " << options_.expected_readers
+                << " frame readers after " << options_.wait_for_readers_s << " s; playing anyway";
   }
-  {
-    const auto deadline =
-        Clock::now() +
-        std::chrono::milliseconds(static_cast<int64_t>(options.wait_for_components_s * 1000));
-    std::unique_lock<std::mutex> lock(mutex);
-    auto missing = [&] {
-      std::string names;
-      for (const ComponentKind kind : options.wait_for_components) {
-        if (!ready.count(kind)) names += std::string(names.empty() ? "" : ", ") + ToString(kind);
-      }
-      return names;
-    };
-    while (!missing().empty() && !stop->requested() && Clock::now() < deadline) {
-      cv.wait_for(lock, std::chrono::milliseconds(20));
+  const auto deadline =
+      Clock::now() +
+      std::chrono::milliseconds(static_cast<int64_t>(options_.wait_for_components_s * 1000));
+  std::unique_lock<std::mutex> lock(mutex_);
+  auto missing = [&] {
+    std::string names;
+    for (const ComponentKind kind : options_.wait_for_components) {
+      if (!ready_.count(kind)) names += std::string(names.empty() ? "" : ", ") + ToString(kind);
     }
-    if (!missing().empty() && !stop->requested()) {
-      LOG_WARNING << "player: no READY announcement from " << missing() << " after "
-                  << options.wait_for_components_s << " s; playing anyway";
-    }
+    return names;
+  };
+  while (!missing().empty() && !stop->requested() && Clock::now() < deadline) {
+    cv_.wait_for(lock, std::chrono::milliseconds(20));
   }
+  if (!missing().empty() && !stop->requested()) {
+    LOG_WARNING << "player: no READY announcement from " << missing() << " after "
+                << options_.wait_for_components_s << " s; playing anyway";
+  }
+}
 
-  if (options.publish_ground_truth) {
-    uint64_t seq = 0;
-    for (const StampedPose& p : player.GroundTruth()) {
-      gt_writer.Write(GroundTruthToMsg(p, seq++));
-      ++stats.ground_truth_published;
+bool PlayerShell::WaitUntilDue(size_t n, const RgbdFrameData& frame, const StopFlagPtr& stop) {
+  auto due = [&] {
+    return start_ + std::chrono::nanoseconds(static_cast<int64_t>(
+                        (frame.stamp.nanoseconds() - first_stamp_.nanoseconds()) / options_.rate));
+  };
+  if (const unsigned continued = TimesContinued(); continued != continued_at_last_frame_) {
+    continued_at_last_frame_ = continued;
+    if (const auto behind = Clock::now() - due(); behind > Clock::duration::zero()) {
+      start_ += behind;
+      LOG_INFO << "player: stopped and continued; the replay goes on at the camera's rate "
+               << "from frame " << n;
     }
   }
+  return !stop->WaitFor(due() - Clock::now());
+}
 
-  Timestamp first_stamp;
-  const int64_t replay_shift_ns = player.num_frames() == 0
+void PlayerShell::WaitForWindow(size_t n, const StopFlagPtr& stop) {
+  const int64_t need = static_cast<int64_t>(n) - options_.window;
+  const auto deadline =
+      Clock::now() + std::chrono::milliseconds(static_cast<int64_t>(options_.ack_timeout_s * 1000));
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (acked_ < need && !stop->requested() && Clock::now() < deadline && !SlamGone() &&
+         !refused_) {
+    cv_.wait_for(lock, std::chrono::milliseconds(20));
+  }
+  if (acked_ < need && !stop->requested() && !SlamGone() && !refused_) {
+    ++stats_.ack_timeouts;
+    LOG_WARNING << "player: no acknowledgement of frame " << need << " after "
+                << options_.ack_timeout_s << " s; sending frame " << n;
+  }
+}
+
+void PlayerShell::PlayFrames(const StopFlagPtr& stop) {
+  const int64_t replay_shift_ns = player_.num_frames() == 0
                                       ? 0
-                                      : player.Stamp(player.num_frames() - 1).nanoseconds() -
-                                            player.Stamp(0).nanoseconds() + 1000000000LL;
+                                      : player_.Stamp(player_.num_frames() - 1).nanoseconds() -
+                                            player_.Stamp(0).nanoseconds() + 1000000000LL;
   const auto loop_end =
-      begin + std::chrono::milliseconds(static_cast<int64_t>(options.loop_minutes * 60000));
-  const size_t frames_per_loop = player.num_frames();
+      begin_ + std::chrono::milliseconds(static_cast<int64_t>(options_.loop_minutes * 60000));
+  const size_t frames_per_loop = player_.num_frames();
   for (size_t n = 0; frames_per_loop > 0 && !stop->requested(); ++n) {
     const size_t loop = n / frames_per_loop;
     if (n % frames_per_loop == 0 && loop > 0 &&
-        (options.loop_minutes <= 0 || Clock::now() >= loop_end)) {
+        (options_.loop_minutes <= 0 || Clock::now() >= loop_end)) {
       break;
     }
-    started.Poll(status);  // until the end of stream
-    RgbdFrameData frame = player.Frame(n % frames_per_loop);
+    started_.Poll(status_);  // until the end of stream
+    RgbdFrameData frame = player_.Frame(n % frames_per_loop);
     frame.seq = n;
     frame.stamp = Timestamp::FromNanoseconds(frame.stamp.nanoseconds() + loop * replay_shift_ns);
-    if (n == 0) first_stamp = frame.stamp;
-    if (options.rate > 0) {
-      auto due = [&] {
-        return start + std::chrono::nanoseconds(static_cast<int64_t>(
-                           (frame.stamp.nanoseconds() - first_stamp.nanoseconds()) / options.rate));
-      };
-      if (const unsigned continued = TimesContinued(); continued != continued_at_last_frame) {
-        continued_at_last_frame = continued;
-        if (const auto behind = Clock::now() - due(); behind > Clock::duration::zero()) {
-          start += behind;
-          LOG_INFO << "player: stopped and continued; the replay goes on at the camera's rate "
-                   << "from frame " << n;
-        }
-      }
-      if (stop->WaitFor(due() - Clock::now())) break;
-    }
-    if (options.window > 0 && n >= static_cast<size_t>(options.window)) {
-      const int64_t need = static_cast<int64_t>(n) - options.window;
-      const auto deadline = Clock::now() + std::chrono::milliseconds(
-                                               static_cast<int64_t>(options.ack_timeout_s * 1000));
-      std::unique_lock<std::mutex> lock(mutex);
-      while (acked < need && !stop->requested() && Clock::now() < deadline && !slam_gone() &&
-             !refused) {
-        cv.wait_for(lock, std::chrono::milliseconds(20));
-      }
-      if (acked < need && !stop->requested() && !slam_gone() && !refused) {
-        ++stats.ack_timeouts;
-        LOG_WARNING << "player: no acknowledgement of frame " << need << " after "
-                    << options.ack_timeout_s << " s; sending frame " << n;
-      }
-    }
+    if (n == 0) first_stamp_ = frame.stamp;
+    if (options_.rate > 0 && !WaitUntilDue(n, frame, stop)) break;
+    if (options_.window > 0 && n >= static_cast<size_t>(options_.window)) WaitForWindow(n, stop);
     if (stop->requested()) break;
     {
-      std::lock_guard<std::mutex> lock(mutex);
-      if (refused) {
-        stats.refused = true;
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (refused_) {
+        stats_.refused = true;
         LOG_ERROR << "player: the consumers on this partition take the frames of another frame "
-                  << "source (" << foreign_poses << " poses for its frames, none for this "
+                  << "source (" << foreign_poses_ << " poses for its frames, none for this "
                   << "player's " << n << "): this player's frames are refused; stopping (give "
                   << "each run its own --partition)";
         break;
       }
       const auto now = Clock::now();
-      sent[n] = now;
-      sent_stamps[n] = frame.stamp;
-      if (!first_sent) first_sent = now;
+      sent_[n] = now;
+      sent_stamps_[n] = frame.stamp;
+      if (!first_sent_) first_sent_ = now;
     }
-    if (!frames.Write(RgbdFrameToMsg(frame))) {
+    if (!frames_.Write(RgbdFrameToMsg(frame))) {
       LOG_WARNING << "player: frame " << n << " was not accepted by the writer";
       continue;
     }
-    ++stats.frames_published;
+    ++stats_.frames_published;
   }
+}
+
+void PlayerShell::EndStream(const StopFlagPtr& stop) {
   {
     // Frames published after the last pose that came back: a gap too.
-    std::lock_guard<std::mutex> lock(mutex);
-    if (TimesContinued() == continued_at_last_pose)
-      longest_gap = std::max(longest_gap, WaitWithFrameOut(Clock::now(), last_pose, sent));
-    stats.longest_gap_s = longest_gap.count();
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (TimesContinued() == continued_at_last_pose_)
+      longest_gap_ = std::max(longest_gap_, WaitWithFrameOut(Clock::now(), last_pose_, sent_));
+    stats_.longest_gap_s = longest_gap_.count();
   }
-  const uint64_t last_seq = stats.frames_published == 0 ? 0 : stats.frames_published - 1;
-  status.Write(ToMsg(
-      ComponentStatus::EndOfStream(ComponentKind::kPlayer, stats.frames_published, last_seq)));
-  LOG_INFO << "player: published " << stats.frames_published << " frames, end of stream";
+  const uint64_t last_seq = stats_.frames_published == 0 ? 0 : stats_.frames_published - 1;
+  status_.Write(ToMsg(
+      ComponentStatus::EndOfStream(ComponentKind::kPlayer, stats_.frames_published, last_seq)));
+  LOG_INFO << "player: published " << stats_.frames_published << " frames, end of stream";
   // Stay alive (frames and ground truth remain available to late readers) until slam is done, or
   // gone without saying so.
+  bool slam_said_done = false;
   {
-    std::unique_lock<std::mutex> lock(mutex);
-    while (!slam_done && !stop->requested() && !slam_gone()) {
-      cv.wait_for(lock, std::chrono::milliseconds(50));
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (!slam_done_ && !stop->requested() && !SlamGone()) {
+      cv_.wait_for(lock, std::chrono::milliseconds(50));
+    }
+    slam_said_done = slam_done_;
+  }
+  if (slam_gone_reported_ && !slam_said_done) {
+    LOG_WARNING << "player: slam left without announcing that it is done; ending (the frames it "
+                   "did not process have no pose)";
+    stats_.slam_left_early = true;
+  }
+}
+
+void PlayerShell::Summarize() {
+  stats_.seconds = std::chrono::duration<double>(Clock::now() - begin_).count();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stats_.poses_timed = latency_ms_.count();
+    stats_.latency_median_ms = latency_ms_.Quantile(0.5);
+    stats_.latency_p95_ms = latency_ms_.Quantile(0.95);
+    stats_.latency_p99_ms = latency_ms_.Quantile(0.99);
+    stats_.late = late_;
+    if (first_sent_ && last_pose_ && latency_ms_.count() > 1) {
+      stats_.poses_per_second = (latency_ms_.count() - 1) /
+                                std::chrono::duration<double>(*last_pose_ - *first_sent_).count();
     }
   }
-  if (slam_gone_reported) {
-    LOG_WARNING << "player: slam left without announcing that it is done; ending";
+  if (stats_.poses_timed > 0) {
+    LOG_INFO << "player: frame-to-pose latency median " << stats_.latency_median_ms << " ms, 95th "
+             << stats_.latency_p95_ms << " ms over " << stats_.poses_timed << " frames; "
+             << stats_.poses_per_second << " poses/s";
   }
-  stats.seconds = std::chrono::duration<double>(Clock::now() - begin).count();
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    stats.poses_timed = latency_ms.count();
-    stats.latency_median_ms = latency_ms.Quantile(0.5);
-    stats.latency_p95_ms = latency_ms.Quantile(0.95);
-    stats.latency_p99_ms = latency_ms.Quantile(0.99);
-    stats.late = late;
-    if (first_sent && last_pose && latency_ms.count() > 1) {
-      stats.poses_per_second = (latency_ms.count() - 1) /
-                               std::chrono::duration<double>(*last_pose - *first_sent).count();
+}
+
+PlayerStats PlayerShell::Run(const StopFlagPtr& stop) {
+  WaitForPeers(stop);
+  if (options_.publish_ground_truth) {
+    uint64_t seq = 0;
+    for (const StampedPose& p : player_.GroundTruth()) {
+      gt_writer_.Write(GroundTruthToMsg(p, seq++));
+      ++stats_.ground_truth_published;
     }
   }
-  if (stats.poses_timed > 0) {
-    LOG_INFO << "player: frame-to-pose latency median " << stats.latency_median_ms << " ms, 95th "
-             << stats.latency_p95_ms << " ms over " << stats.poses_timed << " frames; "
-             << stats.poses_per_second << " poses/s";
-  }
-  return stats;
+  PlayFrames(stop);
+  EndStream(stop);
+  Summarize();
+  return stats_;
+}
+
+}  // namespace
+
+PlayerStats RunPlayer(std::shared_ptr<dds::Participant> participant, const PlayerOptions& options,
+                      const StopFlagPtr& stop) {
+  options.Check();
+  PlayerShell shell(std::move(participant), options);
+  return shell.Run(stop);
 }
 
 }  // namespace dygslam

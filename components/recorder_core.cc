@@ -18,6 +18,19 @@
 
 namespace dygslam {
 
+namespace {
+
+// The first line of OUTPUT/groundtruth.txt as the recorder writes it.
+constexpr char kGroundTruthCopyLine[] =
+    "# ground truth of the played frames, a copy written by the dygslam recorder\n";
+
+std::string ReadWhole(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+}  // namespace
+
 void RecorderOptions::Check() const {
   DYGSLAM_CHECK_OPTION(!output_dir.empty(), "recorder.output_dir");
   DYGSLAM_CHECK_OPTION(flush_timeout_s >= 0, "recorder.flush_timeout_s");
@@ -26,8 +39,13 @@ void RecorderOptions::Check() const {
 RecorderCore::RecorderCore(const RecorderOptions& options) : options_(options) {
   options_.Check();
   std::error_code ec;
-  ground_truth_file_existed_ = std::filesystem::exists(std::filesystem::symlink_status(
-      std::filesystem::path(options_.output_dir) / "groundtruth.txt", ec));
+  // A copy an earlier recorder wrote (its first line says so) is replaced like the other outputs;
+  // any other file of that name (a user's ground truth) is kept.
+  const std::filesystem::path copy = std::filesystem::path(options_.output_dir) / "groundtruth.txt";
+  const auto status = std::filesystem::symlink_status(copy, ec);
+  ground_truth_file_existed_ =
+      std::filesystem::exists(status) && !(std::filesystem::is_regular_file(status) &&
+                                           ReadWhole(copy).rfind(kGroundTruthCopyLine, 0) == 0);
 }
 
 FrameRow FrameRowFromPose(const msg::CameraPose& m) {
@@ -93,24 +111,19 @@ std::vector<StampedPose> SortedUnique(std::vector<StampedPose> poses) {
 }  // namespace
 
 void RecorderCore::WriteGroundTruthCopy(const std::filesystem::path& path) const {
+  const std::string plain = FormatTumTrajectory(path.string(), SortedUnique(ground_truth_));
   if (!ground_truth_file_existed_) {
-    WriteTumTrajectory(path.string(), SortedUnique(ground_truth_));
+    WriteFileAtomically(path.string(), kGroundTruthCopyLine + plain);
     return;
   }
-  // Not this run's file: kept unless it already holds exactly this ground truth.
-  const std::filesystem::path fresh = path.string() + ".recorder." + std::to_string(::getpid());
-  WriteTumTrajectory(fresh.string(), SortedUnique(ground_truth_));
-  const auto slurp = [](const std::filesystem::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  };
+  // A file this recorder did not write (a user's): kept; said unless it already holds exactly
+  // this ground truth.
   std::error_code ec;
-  const bool same = std::filesystem::is_regular_file(path, ec) && slurp(path) == slurp(fresh);
-  std::filesystem::remove(fresh, ec);
+  const bool same = std::filesystem::is_regular_file(path, ec) && ReadWhole(path) == plain;
   if (!same) {
     LOG_WARNING << "recorder: " << EchoValue(path.string())
-                << " was there before this run (not written by it): left as it was, the ground "
-                   "truth of the player is not copied";
+                << " was there before this run and is no ground truth copy a recorder wrote: left "
+                   "as it was, the ground truth of the player is not copied";
   }
 }
 

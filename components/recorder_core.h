@@ -58,8 +58,8 @@ class RecorderCore {
   size_t num_lost_ = 0;
   std::vector<StampedPose> ground_truth_;
   std::optional<std::vector<StampedPose>> final_frames_, final_keyframes_;
-  // OUTPUT/groundtruth.txt was there before this recorder (a user's file, another run's): it is
-  // replaced only by identical content, else left as it was with a warning.
+  // OUTPUT/groundtruth.txt was there before this recorder and is no copy an earlier recorder wrote
+  // (a user's file): it is left as it was, with a warning unless it holds this ground truth.
   bool ground_truth_file_existed_ = false;
 };
 

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -71,6 +72,34 @@ TEST(RecorderCore, NoFrameLeavesAnEarlierRunsFilesAsTheyWere) {
   EXPECT_EQ(empty_final.Write(), "");
   EXPECT_EQ(ReadTumTrajectory(options.output_dir + "/trajectory.txt").size(), 3u);
   EXPECT_EQ(ReadTumTrajectory(options.output_dir + "/trajectory_online.txt").size(), 3u);
+}
+
+// OUTPUT/groundtruth.txt: the recorder's own copy from an earlier run is replaced like the other
+// outputs (a second run with more frames into the same folder); a user's file of that name is
+// kept.
+TEST(RecorderCore, ReplacesItsOwnGroundTruthCopyAndKeepsAUsersFile) {
+  RecorderOptions options;
+  options.output_dir = testing::MakeTempDir("recorder_core_truth") + "/out";
+  const std::string copy = options.output_dir + "/groundtruth.txt";
+  auto run_with_truth = [&](int frames) {
+    RecorderCore core(options);
+    for (int k = 0; k < frames; ++k) {
+      core.AddPose(CameraPoseToMsg(Result(k, TrackingState::kOk, k == 0), k, false));
+      core.AddGroundTruth(
+          GroundTruthToMsg({Result(k, TrackingState::kOk, false).stamp,
+                            Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(k, 0, 0))},
+                           k));
+    }
+    core.Write();
+  };
+  run_with_truth(2);
+  ASSERT_EQ(ReadTumTrajectory(copy).size(), 2u);
+  run_with_truth(4);
+  EXPECT_EQ(ReadTumTrajectory(copy).size(), 4u) << "the earlier copy was kept";
+  const std::string mine = "# my own ground truth\n1 0 0 0 0 0 0 1\n";
+  std::ofstream(copy) << mine;
+  run_with_truth(4);
+  EXPECT_EQ(testing::ReadAll(copy), mine);
 }
 
 TEST(RecorderCore, WritesTheRunFilesFromOnlinePoses) {

@@ -95,7 +95,9 @@ fs::path PinnedFolderFor(const fs::path& dir, const std::string& path) {
                    "not written: the output folder " + EchoValue(dir.string()) +
                        " was removed while the command ran and something else put in its place "
                        "(" +
-                       (is_link ? std::string("a link") : std::string("a folder with files")) +
+                       (is_link                ? std::string("a link")
+                        : S_ISDIR(now.st_mode) ? std::string("a folder with files")
+                                               : std::string("a file")) +
                        "); nothing is written into it");
 }
 

@@ -84,6 +84,10 @@ std::vector<StampedPose> ReadTumTrajectory(const std::string& path) {
 }
 
 void WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses) {
+  WriteFileAtomically(path, FormatTumTrajectory(path, poses));
+}
+
+std::string FormatTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses) {
   std::string out = "# timestamp tx ty tz qx qy qz qw (world_from_cam)\n";
   char buffer[512];
   for (size_t i = 0; i < poses.size(); ++i) {
@@ -102,7 +106,7 @@ void WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>&
                   p.stamp.ToString().c_str(), t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
     out += buffer;
   }
-  WriteFileAtomically(path, out);
+  return out;
 }
 
 std::optional<Rigid3d> InterpolatePose(const std::vector<StampedPose>& trajectory, Timestamp stamp,

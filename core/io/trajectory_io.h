@@ -19,6 +19,8 @@ inline constexpr double kMaxTrajectoryCoordinate = 1e7;
 std::vector<StampedPose> ReadTumTrajectory(const std::string& path);
 // Writes atomically (temporary file + rename). Quaternions normalised, qw >= 0 not enforced.
 void WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses);
+// The text WriteTumTrajectory writes (`path` names the file in its errors).
+std::string FormatTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses);
 // Pose at `stamp` by linear / slerp interpolation between the neighbouring samples of a
 // trajectory sorted by stamp; nullopt outside it or where the neighbours are more than max_gap
 // seconds apart.

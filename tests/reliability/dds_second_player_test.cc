@@ -116,5 +116,36 @@ TEST(DdsSecondPlayer, RunRejectsASecondFrameSourceOnItsPartition) {
   fs::remove_all(dir);
 }
 
+// A second detector on a run's partition (started by hand before the run, with the run's
+// --partition): both answer the run's frames. Before, slam used whichever boxes came first and
+// nothing said so (the other detector may run another model). Now slam says it, once.
+TEST(DdsSecondDetector, ARunSaysWhenASecondDetectorAnswers) {
+  DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
+  DYGSLAM_REQUIRE_MODELS(models);
+  DYGSLAM_REQUIRE_FILE(testing::DygslamBinary(), "dygslam binary");
+  const std::string dir = testing::MakeTempDir("dds_second_detector");
+  const std::string partition = "dygslam_second_detector_" + std::to_string(getpid());
+  const std::string config = std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml";
+  const std::string domain = std::to_string(kDomain + 1);
+  const pid_t second = testing::SpawnDygslam(
+      {"component", "detector", "--config", config, "--domain", domain, "--partition", partition},
+      dir + "/detector.out", dir + "/detector.err");
+  std::this_thread::sleep_for(std::chrono::seconds(2));  // its model loaded, its writer up
+  const pid_t run = testing::SpawnDygslam(
+      {"run", dataset, "--config", config, "--filter", "full", "--frames", "0:90", "--rate", "1",
+       "--no-map", "--out", dir + "/out", "--domain", domain, "--partition", partition},
+      dir + "/run.out", dir + "/run.err");
+  std::string diagnostics;
+  const int run_code = testing::WaitForExit(run, 240, &diagnostics);
+  kill(second, SIGINT);
+  std::string second_diagnostics;
+  testing::WaitForExit(second, 30, &second_diagnostics);
+  const std::string log = testing::ReadAll(dir + "/run.out") + testing::ReadAll(dir + "/run.err");
+  EXPECT_EQ(run_code, 0) << diagnostics << log;
+  EXPECT_TRUE(Contains(log, "slam: boxes for one frame came from two detectors")) << log;
+  EXPECT_GE(ReadTumTrajectory(dir + "/out/trajectory.txt").size(), 80u) << log;
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace dygslam

@@ -49,6 +49,7 @@ constexpr int kStallDomain = 150;
 constexpr int kSwappedProcessesDomain = 151;
 constexpr int kPlayerPausedDomain = 152;
 constexpr int kKilledRunDomain = 153;
+constexpr int kDetectorPausedDomain = 154;
 
 class RunIntegrity : public testing::CliFixture {
  protected:
@@ -428,6 +429,34 @@ TEST_F(RunIntegrity, AMapperPausedWhileSlamFinishesMakesTheRunIncomplete) {
   const std::string json = ReadAll(out + "/eval.json");
   EXPECT_TRUE(Contains(json, "\"components_cut_short\": [\"mapper (its input ended early)\"]"))
       << json;
+}
+
+// --processes: the detector paused (SIGSTOP) from early in the run to its end. slam carries its
+// last boxes forward, then goes geometry-only; at the end the detector does not stop and the
+// runner kills it. Before, the run said "complete", exit 0 (also with --deterministic, whose
+// output then differs from --direct). The boxes ended early: the run is incomplete (exit 3) and
+// names the detector.
+TEST_F(RunIntegrity, ADetectorPausedUntilTheEndMakesTheRunIncomplete) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  DYGSLAM_REQUIRE_MODELS(models);
+  const std::string out = dir_ + "/out";
+  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "full", "--quiet",
+                           "--frames", "0:60", "--no-map", "--processes", "--rate", "1", "--out",
+                           out, "--domain", std::to_string(kDetectorPausedDomain)});
+  ASSERT_GT(pid, 0);
+  const pid_t detector = RunningComponentPid("detector", out);
+  ASSERT_GT(detector, 0) << ReadAll(dir_ + "/run.err");
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  kill(detector, SIGSTOP);
+  std::string diagnostics;
+  const int code = testing::WaitForExit(pid, 150, &diagnostics);
+  kill(detector, SIGCONT);  // if it is still there
+  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  EXPECT_EQ(code, 3) << summary << err << diagnostics;
+  EXPECT_TRUE(Contains(err, "detector (did not stop at the end of the run: killed)")) << err;
+  EXPECT_FALSE(Contains(summary, "(complete)")) << summary;
+  EXPECT_TRUE(Contains(ReadAll(out + "/eval.json"), "\"complete\": false"))
+      << ReadAll(out + "/eval.json");
 }
 
 // --out replaced while the run goes (renamed away, a link to a dataset folder put in its place):

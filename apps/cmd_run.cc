@@ -40,6 +40,7 @@
 #include "run/run_settings.h"
 #ifdef DYGSLAM_HAVE_COMPONENTS
 #include "components/pipeline.h"
+#include "components/protocol.h"
 #endif
 
 namespace dygslam::cli {
@@ -152,6 +153,9 @@ PipelineRunResult RunThroughPipeline(const RunControllerOptions& s) {
   result.exit_code = RunPipeline(o, &report);
   result.interrupted = report.signaled;
   result.ignored_samples = report.ignored_samples;
+  if (report.ignored_samples > 0)
+    result.ignored_samples_note =
+        IgnoredSamplesNote(std::to_string(report.ignored_samples) + " samples");
   result.components_cut_short = report.components_cut_short;
   return result;
 }

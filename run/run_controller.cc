@@ -188,6 +188,7 @@ struct RunController::Outcome {
   bool interrupted = false;
   int exit_code = 0;
   size_t ignored_samples = 0;  // DDS: samples of writers outside this run (components/protocol.h)
+  std::string ignored_samples_note;               // what the pipeline says of them ("" when none)
   std::vector<std::string> components_cut_short;  // --processes: ended before the run did
   std::vector<Timestamp> stamps;  // DDS: the stamps of the frames processed (frames.csv)
 };
@@ -356,6 +357,7 @@ RunController::Outcome RunController::RunPipeline() {
   outcome.exit_code = result.exit_code;
   outcome.interrupted = result.interrupted;
   outcome.ignored_samples = result.ignored_samples;
+  outcome.ignored_samples_note = result.ignored_samples_note;
   outcome.components_cut_short = result.components_cut_short;
   if (outputs_.Fresh("frames.csv")) {
     for (const TextLine& line : ReadDataLines(outputs_.PathOf("frames.csv"))) {
@@ -515,13 +517,8 @@ int RunController::Finish(const Outcome& outcome, double elapsed) {
   std::printf("filter: %s%s\n", s.filter.c_str(), s.system.deterministic ? " (deterministic)" : "");
   if (summary.realtime) std::printf("real time: %s\n", summary.realtime->Summary().c_str());
   Evaluate(trajectory);
-  if (outcome.ignored_samples > 0) {
-    std::printf(
-        "dds: ignored %zu samples from writers outside this run (another process on the "
-        "DDS domain published into it; without --security any local process can: see "
-        "docs/dds_components.md)\n",
-        outcome.ignored_samples);
-  }
+  if (!outcome.ignored_samples_note.empty())
+    std::printf("dds: %s\n", outcome.ignored_samples_note.c_str());
   // The exit code, then eval.json (which holds it), then the list of what was written.
   const bool incomplete =
       !outcome.interrupted &&

@@ -69,6 +69,8 @@ struct PipelineRunResult {
   int exit_code = 0;         // 0, or 1 when a component failed
   bool interrupted = false;  // stopped by SIGINT / SIGTERM
   size_t ignored_samples = 0;
+  // What the pipeline says of them, for the summary's `dds:` line ("" when none).
+  std::string ignored_samples_note;
   std::vector<std::string> components_cut_short;
 };
 // Runs the DDS pipeline for `options` (its outputs in options.out); supplied by the caller.

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -87,6 +88,10 @@ std::filesystem::path PrepareOutputDir(const std::string& option, const std::str
                      "associations.txt); the outputs "
                      "(groundtruth.txt, trajectory.txt, ...) would overwrite its files: choose "
                      "another folder");
+  if (const std::string images = DatasetImageFolderOf(dir); !images.empty())
+    throw InputError(name + ": lies in the image folder '" + EchoValue(images) +
+                     "' of a dataset; the outputs would be mixed with its images: choose another "
+                     "folder");
   // The folders this call creates (deepest first), removed again by RemoveUnusedOutputDirs when
   // the command fails before writing anything into them.
   std::vector<fs::path> created;
@@ -352,23 +357,6 @@ std::string ShellQuote(const std::string& s) {
     }
   }
   return out + "'";
-}
-
-bool IsDatasetFolder(const std::filesystem::path& dir) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  return (fs::is_regular_file(dir / "rgb.txt", ec) && fs::is_regular_file(dir / "depth.txt", ec)) ||
-         fs::is_regular_file(dir / "associations.txt", ec);
-}
-
-std::string DatasetFolderOf(const std::string& path) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::exists(path, ec)) return "";
-  const fs::path folder = fs::absolute(path, ec).parent_path();
-  for (const fs::path& dir : {folder, folder.parent_path()})
-    if (IsDatasetFolder(dir)) return dir.string();
-  return "";
 }
 
 std::vector<NamedPath> DatasetRunInputs(const ArgParser& p, const std::string& dataset_dir,

@@ -177,14 +177,6 @@ void WarnAboutDataset(const std::string& command, const RgbdDataset& dataset, si
                       size_t last, double depth_map_factor, int width, int height,
                       const std::vector<StampedPose>* groundtruth);
 
-// Whether `dir` is a dataset folder (TUM / Bonn layout): it holds rgb.txt and depth.txt, or an
-// associations.txt that pairs the images.
-bool IsDatasetFolder(const std::filesystem::path& dir);
-// The dataset folder (IsDatasetFolder) that an existing file `path` belongs
-// to: the folder itself or its parent (rgb/, depth/); "" when it belongs to none or does not exist.
-// An output onto such a file would destroy a user's data.
-std::string DatasetFolderOf(const std::string& path);
-
 // `s` as one POSIX shell word: unchanged when it has only safe characters, else single-quoted.
 std::string ShellQuote(const std::string& s);
 

@@ -171,7 +171,8 @@ int main(int argc, char** argv) {
   std::optional<dygslam::ScopedStopSignals> stop_signals;
   if (argc > 1) {
     const std::string name = argv[1];
-    if (name == "run" || name == "map" || name == "component" || name == "bridge")
+    if (name == "run" || name == "map" || name == "component" || name == "bridge" ||
+        name == "synth")
       stop_signals.emplace();
   }
   const int code = dygslam::cli::Dispatch(std::vector<std::string>(argv + 1, argv + argc));

@@ -3,7 +3,6 @@
 #include <fcntl.h>
 #include <malloc.h>
 #include <signal.h>
-#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -27,6 +26,7 @@
 #include "components/player.h"
 #include "components/recorder.h"
 #include "components/slam_component.h"
+#include "core/base/child_process.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "core/base/stop_signal.h"
@@ -458,41 +458,25 @@ constexpr std::chrono::seconds kSourceCutShortGrace(60);
 // end of a report pipe whose read end goes to *report_fd. Returns its pid.
 pid_t StartComponentProcess(const std::string& exe, ComponentKind kind,
                             const std::vector<std::string>& args, int* report_fd) {
-  std::vector<std::string> argv = {exe, "component", ToString(kind)};
-  argv.insert(argv.end(), args.begin(), args.end());
-  std::vector<char*> cargv;
-  for (std::string& s : argv) cargv.push_back(s.data());
-  cargv.push_back(nullptr);
+  ChildProcessOptions child;
+  child.argv = {exe, "component", ToString(kind)};
+  child.argv.insert(child.argv.end(), args.begin(), args.end());
   int report_pipe[2] = {-1, -1};
   if (pipe2(report_pipe, O_CLOEXEC) != 0) {
     throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
   }
-  // The environment with the report descriptor, made before fork (the child only execs).
-  std::vector<std::string> env;
-  for (char** e = environ; *e != nullptr; ++e) {
-    if (std::strncmp(*e, kReportFdVariable, std::strlen(kReportFdVariable)) != 0) {
-      env.emplace_back(*e);
-    }
-  }
-  env.push_back(std::string(kReportFdVariable) + "=" + std::to_string(report_pipe[1]));
-  std::vector<char*> cenv;
-  for (std::string& s : env) cenv.push_back(s.data());
-  cenv.push_back(nullptr);
-  const pid_t parent = getpid();
-  const pid_t pid = fork();
-  if (pid < 0) {
+  child.set_env = {{kReportFdVariable, std::to_string(report_pipe[1])}};
+  child.keep_fds = {report_pipe[1]};  // the write end survives the exec
+  // A run killed outright (SIGKILL) takes its components with it: left running, they would
+  // finish later and write over the outputs of the next run into the same folder.
+  child.dies_with_parent = true;
+  pid_t pid = -1;
+  try {
+    pid = StartChildProcess(child);
+  } catch (...) {
     close(report_pipe[0]);
     close(report_pipe[1]);
-    throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
-  }
-  if (pid == 0) {
-    // A run killed outright (SIGKILL) takes its components with it: left running, they would
-    // finish later and write over the outputs of the next run into the same folder.
-    prctl(PR_SET_PDEATHSIG, SIGKILL);
-    if (getppid() != parent) std::_Exit(127);  // the run died before the line above
-    fcntl(report_pipe[1], F_SETFD, 0);         // the write end survives exec
-    execve(exe.c_str(), cargv.data(), cenv.data());
-    std::_Exit(127);
+    throw;
   }
   close(report_pipe[1]);
   *report_fd = report_pipe[0];

@@ -219,6 +219,10 @@ class PlayerShell {
   std::optional<Clock::time_point> first_sent_, last_pose_;
   std::chrono::duration<double> longest_gap_{0};
   bool slam_done_ = false;
+  // slam ended before the end of the stream: it said why (stopped by a signal, failed), or it
+  // was done before this player announced the end of its stream.
+  std::string slam_cut_short_;
+  bool end_of_stream_sent_ = false;
   std::set<ComponentKind> ready_;  // components that announced READY
   RepeatedWarning rival_warning_;  // a rival announces itself again as peers join
   WriterGoneWatch slam_watch_{std::chrono::seconds(5)};
@@ -299,6 +303,12 @@ void PlayerShell::OnStatus(const ComponentStatus& s, const WriterGuid& from) {
     if (s.source == ComponentKind::kSlam &&
         (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed)) {
       slam_done_ = true;
+      if (s.event == StreamEvent::kFailed)
+        slam_cut_short_ = "failed: " + s.reason;
+      else if (!s.reason.empty())
+        slam_cut_short_ = s.reason;
+      else if (!end_of_stream_sent_)
+        slam_cut_short_ = "was done before the end of the stream";
     }
     if (s.event == StreamEvent::kReady) ready_.insert(s.source);
     if (s.event == StreamEvent::kStarted && s.source == ComponentKind::kSlam) {
@@ -426,18 +436,29 @@ void PlayerShell::EndStream(const StopFlagPtr& stop) {
     stats_.longest_gap_s = longest_gap_.count();
   }
   const uint64_t last_seq = stats_.frames_published == 0 ? 0 : stats_.frames_published - 1;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    end_of_stream_sent_ = true;
+  }
   status_.Write(ToMsg(
       ComponentStatus::EndOfStream(ComponentKind::kPlayer, stats_.frames_published, last_seq)));
   LOG_INFO << "player: published " << stats_.frames_published << " frames, end of stream";
   // Stay alive (frames and ground truth remain available to late readers) until slam is done, or
   // gone without saying so.
   bool slam_said_done = false;
+  std::string slam_cut_short;
   {
     std::unique_lock<std::mutex> lock(mutex_);
     while (!slam_done_ && !stop->requested() && !SlamGone()) {
       cv_.wait_for(lock, std::chrono::milliseconds(50));
     }
     slam_said_done = slam_done_;
+    slam_cut_short = slam_cut_short_;
+  }
+  if (slam_said_done && !slam_cut_short.empty() && !stop->requested()) {
+    LOG_WARNING << "player: slam " << slam_cut_short
+                << "; ending (the frames it did not process have no pose)";
+    stats_.slam_left_early = true;
   }
   if (slam_gone_reported_ && !slam_said_done) {
     LOG_WARNING << "player: slam left without announcing that it is done; ending (the frames it "

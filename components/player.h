@@ -110,8 +110,9 @@ struct PlayerStats {
   // The consumers took another frame source's frames (it started first on the partition) and
   // none of this player's: it stopped publishing (the component then fails).
   bool refused = false;
-  // slam left without announcing that it is done (killed): the frames it did not process have
-  // no pose, the run is incomplete.
+  // slam left without announcing that it is done (killed), failed, or ended before the end of
+  // the stream (stopped by a signal): the frames it did not process have no pose, the run is
+  // incomplete.
   bool slam_left_early = false;
 };
 

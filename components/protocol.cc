@@ -147,11 +147,13 @@ ComponentStatus ComponentStatus::EndOfStream(ComponentKind source, uint64_t num_
   return s;
 }
 
-ComponentStatus ComponentStatus::Done(ComponentKind source, uint64_t num_frames) {
+ComponentStatus ComponentStatus::Done(ComponentKind source, uint64_t num_frames,
+                                      std::string cut_short) {
   ComponentStatus s;
   s.event = StreamEvent::kComponentDone;
   s.source = source;
   s.num_frames = num_frames;
+  s.reason = std::move(cut_short);
   return s;
 }
 
@@ -191,6 +193,7 @@ msg::StreamStatus ToMsg(const ComponentStatus& status) {
       }
       break;
     case StreamEvent::kFailed:
+    case StreamEvent::kComponentDone:
       detail = status.reason;
       break;
     case StreamEvent::kMapLoaded: {
@@ -248,6 +251,7 @@ ComponentStatus StatusFromMsg(const msg::StreamStatus& m) {
       break;
     }
     case StreamEvent::kFailed:
+    case StreamEvent::kComponentDone:
       s.reason = detail;
       break;
     case StreamEvent::kMapLoaded: {

@@ -96,15 +96,17 @@ struct ComponentStatus {
   uint64_t num_frames = 0;
   uint64_t seq = 0;                         // END_OF_STREAM: seq of the last frame
   std::map<DataTopic, WriterGuid> writers;  // STARTED
-  std::string reason;                       // FAILED
-  uint64_t map_checksum = 0;                // MAP_LOADED
-  std::string map_path;                     // MAP_LOADED
+  // FAILED: why; COMPONENT_DONE: why it ended before the end of its input ("" when it did not).
+  std::string reason;
+  uint64_t map_checksum = 0;  // MAP_LOADED
+  std::string map_path;       // MAP_LOADED
 
   static ComponentStatus Started(ComponentKind source, std::map<DataTopic, WriterGuid> writers,
                                  uint64_t num_frames = 0);
   static ComponentStatus Ready(ComponentKind source);
   static ComponentStatus EndOfStream(ComponentKind source, uint64_t num_frames, uint64_t last_seq);
-  static ComponentStatus Done(ComponentKind source, uint64_t num_frames = 0);
+  static ComponentStatus Done(ComponentKind source, uint64_t num_frames = 0,
+                              std::string cut_short = "");
   static ComponentStatus Failed(ComponentKind source, std::string reason);
   static ComponentStatus MapLoaded(ComponentKind source, uint64_t keyframes, uint64_t checksum,
                                    std::string path);
@@ -337,24 +339,36 @@ class PauseWatch {
   Clock::duration longest_{0};
 };
 
+// When this process was stopped and continued (the whole run suspended with Ctrl-Z, a laptop
+// asleep), its peers' leases may have run out meanwhile: their writers look gone until discovery
+// finds them again (a participant announces itself every few seconds). A peer unmatched then is
+// given kResumeGrace from the resumption before it counts as gone.
 class WriterGoneWatch {
  public:
   using Clock = std::chrono::steady_clock;
-  explicit WriterGoneWatch(Clock::duration after) : after_(after) {}
+  static constexpr std::chrono::seconds kResumeGrace{12};
+  explicit WriterGoneWatch(Clock::duration after)
+      : after_(after), continued_seen_(TimesContinued()) {}
   bool Update(bool matched, Clock::time_point now = Clock::now()) {
+    if (const unsigned continued = TimesContinued(); continued != continued_seen_) {
+      continued_seen_ = continued;
+      grace_until_ = now + kResumeGrace;
+      unmatched_since_.reset();
+    }
     seen_ = seen_ || matched;
     if (matched || !seen_) {
       unmatched_since_.reset();
       return false;
     }
     if (!unmatched_since_) unmatched_since_ = now;
-    return now - *unmatched_since_ > after_;
+    return now - *unmatched_since_ > after_ && (!grace_until_ || now > *grace_until_);
   }
 
  private:
   Clock::duration after_;
+  unsigned continued_seen_;
   bool seen_ = false;
-  std::optional<Clock::time_point> unmatched_since_;
+  std::optional<Clock::time_point> unmatched_since_, grace_until_;
 };
 
 }  // namespace dygslam

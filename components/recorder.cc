@@ -84,7 +84,8 @@ class RecorderShell {
   std::mutex mutex_;
   std::condition_variable cv_;
   bool slam_done_ = false;
-  uint64_t total_frames_ = 0;  // announced by the player (STARTED)
+  std::string slam_cut_short_;  // slam said it ended before the end of the stream, and why
+  uint64_t total_frames_ = 0;   // announced by the player (STARTED)
   const Clock::time_point start_;
   std::optional<Clock::time_point> first_pose_;
   // Only the writers announced by this run's components (components/protocol.h): poses and
@@ -168,6 +169,7 @@ void RecorderShell::OnStatus(const ComponentStatus& s, const WriterGuid& from) {
   if (s.source == ComponentKind::kSlam &&
       (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed)) {
     slam_done_ = true;
+    if (s.event == StreamEvent::kComponentDone) slam_cut_short_ = s.reason;
   }
   cv_.notify_all();
 }
@@ -234,8 +236,15 @@ void RecorderShell::CheckStreamEnded(std::unique_lock<std::mutex>& lock, const S
   // trajectory lacks the rest. The end of the stream is sent before slam's last samples, from
   // another writer: allow it a moment to arrive.
   if (!stats_.input_cut_short && !stop->requested()) {
-    cv_.wait_for(lock, std::chrono::seconds(2), [&] { return !writers_.StreamUnfinished(); });
-    if (writers_.StreamUnfinished()) {
+    // slam's DONE (which says whether slam itself was stopped early) follows its trajectories.
+    cv_.wait_for(lock, std::chrono::seconds(2), [&] {
+      return !slam_cut_short_.empty() || (slam_done_ && !writers_.StreamUnfinished());
+    });
+    if (!slam_cut_short_.empty()) {
+      stats_.input_cut_short = true;
+      LOG_WARNING << "recorder: slam " << slam_cut_short_
+                  << ": the trajectory lacks the frames slam did not process";
+    } else if (writers_.StreamUnfinished()) {
       stats_.input_cut_short = true;
       LOG_WARNING << "recorder: slam is done but the frame source never announced the end of "
                      "its stream (slam stopped before the end, or the frame source stopped or "
@@ -265,7 +274,7 @@ RecorderStats RecorderShell::Run(const StopFlagPtr& stop) {
     LOG_WARNING << "recorder: "
                 << IgnoredSamplesNote(std::to_string(stats_.foreign_samples) + " samples");
   }
-  if (!stats_.trajectory_path.empty()) {
+  if (!stats_.trajectory_path.empty() && core_.num_frames() > 0) {
     LOG_INFO << "recorder: wrote " << stats_.trajectory_path
              << (stats_.final_trajectory ? " (final trajectory)" : " (online poses)");
   }

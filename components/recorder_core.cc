@@ -128,13 +128,18 @@ void RecorderCore::WriteGroundTruthCopy(const std::filesystem::path& path) const
 }
 
 std::string RecorderCore::Write() const {
-  std::filesystem::create_directories(options_.output_dir);
+  {
+    // Made again when removed while the run went; when something else took its place, the first
+    // write names the file and what is in the folder's place.
+    std::error_code ignored;
+    std::filesystem::create_directories(options_.output_dir, ignored);
+  }
   const std::filesystem::path dir(options_.output_dir);
   const std::string trajectory = (dir / "trajectory.txt").string();
   if (frame_rows_.empty() && online_.empty() && (!final_frames_ || final_frames_->empty())) {
-    // No frame came (a run stopped or failed before its first): an earlier run's trajectories
-    // stay as they were instead of being replaced by empty files; where there is none, the empty
-    // (loadable) files are written.
+    // No frame came (a run stopped or failed before its first, a bridge whose camera never
+    // sent): an earlier run's trajectories stay as they were instead of being replaced by empty
+    // files; where there is none, the empty (loadable) files are written.
     std::error_code ec;
     if (std::filesystem::exists(trajectory, ec)) {
       LOG_INFO << "recorder: no frame received; the earlier trajectory.txt, keyframes.txt and "
@@ -142,6 +147,8 @@ std::string RecorderCore::Write() const {
       if (!ground_truth_.empty()) WriteGroundTruthCopy(dir / "groundtruth.txt");
       return "";
     }
+    LOG_INFO << "recorder: no frame received; empty trajectory.txt, keyframes.txt and frames.csv "
+                "written";
   }
   WriteTumTrajectory(trajectory, final_frames_ ? *final_frames_ : SortedUnique(online_));
   WriteTumTrajectory((dir / "trajectory_online.txt").string(), SortedUnique(online_));

@@ -113,7 +113,8 @@ class SlamShell {
   bool StreamOver();
   void Process(const PairedFrame& paired);
   void LogBoxes(const PairedFrame& paired);
-  void Finish();
+  // `cut_short`: why the loop ended before the end of the stream ("" when it did not).
+  void Finish(const std::string& cut_short);
 
   const SlamComponentOptions options_;
   SlamCore core_;
@@ -125,7 +126,7 @@ class SlamShell {
   int64_t end_frames_ = -1;
   size_t frames_received_ = 0;
   Clock::time_point last_frame_time_ = Clock::now();
-  bool frame_source_seen_ = false;  // a frame writer was matched
+  WriterGoneWatch source_watch_{kSourceGone};  // the frame source's writer, matched then gone
   int detector_writers_seen_ = 0;
   std::map<int64_t, double> inference_ms_;  // detector component's time per frame stamp (ns)
   bool detector_done_ = false;    // the detector announced COMPONENT_DONE (finished, not lost)
@@ -281,10 +282,10 @@ bool SlamShell::StreamOver() {
   // A frame source that left without its END_OF_STREAM (killed, or the announcement lost) would
   // leave slam waiting for ever: once its writer is gone and nothing arrived for kSourceGone,
   // finish with the frames that came.
-  const int frame_writers = frames_.matched();
-  frame_source_seen_ = frame_source_seen_ || frame_writers > 0;
-  if (end_frames_ < 0 && frame_source_seen_ && frame_writers == 0 &&
-      pairer_.pending_frames() == 0 && Clock::now() - last_frame_time_ > kSourceGone) {
+  // (A peer unmatched after this process was suspended gets time to be discovered again.)
+  const bool source_gone = source_watch_.Update(frames_.matched() > 0);
+  if (end_frames_ < 0 && source_gone && pairer_.pending_frames() == 0 &&
+      Clock::now() - last_frame_time_ > kSourceGone) {
     LOG_WARNING << "slam: the frame source left without announcing the end of its stream; "
                 << "finishing with the " << frames_received_ << " frames received";
     stats_.input_cut_short = true;
@@ -372,7 +373,7 @@ void SlamShell::Process(const PairedFrame& paired) {
   stats_.busy_s += std::chrono::duration<double>(Clock::now() - busy_begin).count();
 }
 
-void SlamShell::Finish() {
+void SlamShell::Finish(const std::string& cut_short) {
   PublishKeyframes(core_.Finish());
   stats_.save_map_error = core_.save_map_error();
   trajectory_writer_.Write(TrajectoryToMsg(core_.Trajectory(), false));
@@ -387,7 +388,8 @@ void SlamShell::Finish() {
     stats_.foreign_detections = detection_gate_.ignored();
     stats_.foreign_statuses = run_writers_.NumForeignStatuses();
   }
-  status_.Write(ToMsg(ComponentStatus::Done(ComponentKind::kSlam, stats_.frames_processed)));
+  status_.Write(
+      ToMsg(ComponentStatus::Done(ComponentKind::kSlam, stats_.frames_processed, cut_short)));
   // Let reliable readers (mapper, recorder) get everything before the writers go away.
   keyframe_writer_.WaitForAcknowledgments(std::chrono::milliseconds(10000));
   trajectory_writer_.WaitForAcknowledgments(std::chrono::milliseconds(5000));
@@ -422,17 +424,24 @@ void SlamShell::Finish() {
 SlamStats SlamShell::Run(const StopFlagPtr& stop) {
   ReadyAnnouncer announcer(ComponentKind::kSlam);
   map_announced_ = !core_.LoadedMapInfo();
+  bool end = false;
   while (!stop->requested()) {
     started_.Poll(status_);
     announcer.Poll(status_, frames_.matched() > 0 &&
                                 (!pairing_options_.needs_detections || detections_.matched() > 0));
     if (announcer.done() && !map_announced_) AnnounceLoadedMap();
-    bool end = false;
     const std::optional<PairedFrame> paired = NextPaired(&end);
     if (end) break;
     if (paired) Process(*paired);
   }
-  Finish();
+  // Stopped before the end of the stream (a signal, a failed peer): the consumers are told, so
+  // that the frames it did not process count as missing, not as a complete run.
+  std::string cut_short;
+  if (!end)
+    cut_short = stop->signal() != 0 ? "stopped by signal " + std::to_string(stop->signal()) +
+                                          " before the end of the stream"
+                                    : "stopped before the end of the stream";
+  Finish(cut_short);
   return stats_;
 }
 

@@ -507,20 +507,72 @@ DepthRangeSample SampleDepthRange(const RgbdDataset& dataset, size_t first, size
 std::string ImplausibleDepth(const DepthRangeSample& s, double depth_map_factor) {
   if (s.valid == 0) return "";
   const bool beyond = s.beyond * 2 > s.valid, below = s.below * 2 > s.valid;
-  if (!beyond && !below) return "";
-  char text[640];
+  const char* causes =
+      "Likely causes: DepthMapFactor off by an order of magnitude or more (raw / DepthMapFactor = "
+      "metres: 5000 for TUM and Bonn, 1000 for millimetres)";
+  char text[700];
+  if (!beyond && !below) {
+    if (s.median_m >= kMinPlausibleMedianDepthMetres) return "";
+    std::snprintf(text, sizeof(text),
+                  "the median depth of %zu sampled depth images (e.g. %s) is %.4g m with "
+                  "DepthMapFactor %g: closer than %g m, a surface a hand's width in front of the "
+                  "camera in every image. %s",
+                  s.images, EchoValue(s.example, 300).c_str(), s.median_m, depth_map_factor,
+                  kMinPlausibleMedianDepthMetres, causes);
+    return text;
+  }
   std::snprintf(
       text, sizeof(text),
       "%.0f %% of the depth pixels of %zu sampled depth images (e.g. %s) lie %s m "
       "(median %.4g m with DepthMapFactor %g): outside the range of an RGB-D sensor "
-      "(%g to %g m). Likely causes: DepthMapFactor off by orders of magnitude (raw / "
-      "DepthMapFactor = metres: 5000 for TUM and Bonn, 1000 for millimetres)%s",
+      "(%g to %g m). %s%s",
       100.0 * (beyond ? s.beyond : s.below) / s.valid, s.images, EchoValue(s.example, 300).c_str(),
       beyond ? ("beyond " + std::to_string(static_cast<int>(kMaxSensorDepthMetres))).c_str()
              : "closer than 0.05",
-      s.median_m, depth_map_factor, kMinSensorDepthMetres, kMaxSensorDepthMetres,
+      s.median_m, depth_map_factor, kMinSensorDepthMetres, kMaxSensorDepthMetres, causes,
       beyond ? ", or depth images saturated at their largest value (invalid depth)" : "");
   return text;
+}
+
+bool IsDatasetFolder(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  return (fs::is_regular_file(dir / "rgb.txt", ec) && fs::is_regular_file(dir / "depth.txt", ec)) ||
+         fs::is_regular_file(dir / "associations.txt", ec);
+}
+
+std::string DatasetImageFolderOf(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const auto holds_image = [&](const fs::path& folder) {
+    int looked = 0;
+    for (fs::directory_iterator it(folder, ec), end; !ec && it != end && looked < 200;
+         it.increment(ec), ++looked) {
+      std::string ext = it->path().extension().string();
+      for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") return true;
+    }
+    return false;
+  };
+  const fs::path absolute = fs::absolute(dir, ec).lexically_normal();
+  for (fs::path a = absolute; a.has_relative_path(); a = a.parent_path()) {
+    const std::string name = a.filename().string();
+    if (name.empty() || !IsDatasetFolder(a.parent_path())) continue;
+    if (name == "rgb" || name == "depth" || name == "mask" ||
+        (fs::is_directory(a, ec) && holds_image(a)))
+      return a.string();
+  }
+  return "";
+}
+
+std::string DatasetFolderOf(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return "";
+  const fs::path folder = fs::absolute(path, ec).parent_path();
+  for (const fs::path& dir : {folder, folder.parent_path()})
+    if (IsDatasetFolder(dir)) return dir.string();
+  return "";
 }
 
 }  // namespace dygslam

@@ -5,6 +5,7 @@
 //   timestamp within max_time_difference (default 0.02 s).
 #pragma once
 
+#include <filesystem>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -115,6 +116,10 @@ std::string ImplausibleGroundTruthNote(const std::string& path,
 // scale (65535 / 5000 = 13.1 m) is beyond it. Below 5 cm no sensor gives depth.
 inline constexpr double kMaxSensorDepthMetres = 12.0;
 inline constexpr double kMinSensorDepthMetres = 0.05;
+// A scene whose median depth is this close fills the view with one surface a hand's width away:
+// no room, street or table scene a SLAM camera looks at. A DepthMapFactor 20 times too large puts
+// an indoor scene (median 2-3 m) there while most pixels still lie beyond kMinSensorDepthMetres.
+inline constexpr double kMinPlausibleMedianDepthMetres = 0.2;
 
 // The depth of a few frames of a run in metres (raw / DepthMapFactor), against the sensor range.
 struct DepthRangeSample {
@@ -130,8 +135,22 @@ struct DepthRangeSample {
 DepthRangeSample SampleDepthRange(const RgbdDataset& dataset, size_t first, size_t last,
                                   double depth_map_factor, int width, int height,
                                   size_t max_images = 5);
-// "" when most valid pixels lie within the sensor range; else what is wrong and the likely cause
-// (DepthMapFactor off by orders of magnitude, saturated or invalid depth images).
+// "" when most valid pixels lie within the sensor range and the median is not closer than
+// kMinPlausibleMedianDepthMetres; else what is wrong and the likely cause (DepthMapFactor off by
+// an order of magnitude or more, saturated or invalid depth images).
 std::string ImplausibleDepth(const DepthRangeSample& sample, double depth_map_factor);
+
+// Whether `dir` is a dataset folder (TUM / Bonn layout): it holds rgb.txt and depth.txt, or an
+// associations.txt that pairs the images.
+bool IsDatasetFolder(const std::filesystem::path& dir);
+// The dataset folder (IsDatasetFolder) that an existing file `path` belongs
+// to: the folder itself or its parent (rgb/, depth/); "" when it belongs to none or does not exist.
+// An output onto such a file would destroy a user's data.
+std::string DatasetFolderOf(const std::string& path);
+
+// The image folder of a dataset (a folder whose parent is a dataset folder and that is named rgb,
+// depth or mask or holds a .png / .jpg image) that `dir` is or lies inside, "" when none: outputs
+// written there would be listed with the sequence's images by later reads of the folder.
+std::string DatasetImageFolderOf(const std::filesystem::path& dir);
 
 }  // namespace dygslam

@@ -49,6 +49,19 @@ bool IsEmptyFolder(const fs::path& dir) {
   return fs::is_empty(dir, ec) && !ec;
 }
 
+// Says once per folder that the output folder `dir` now names something else (`is_link`: a
+// link) and that the outputs go to the folder the command started with, now at `moved`. Called
+// with the pins' mutex held.
+void WarnFolderMovedOnce(const fs::path& dir, bool is_link, const fs::path& moved) {
+  static std::set<std::string> said;
+  if (!said.insert(FolderKey(dir)).second) return;
+  std::fprintf(stderr,
+               "warning: the output folder %s was replaced while the command ran (it now %s): the "
+               "outputs are written into the folder the command started with, now %s\n",
+               EchoValue(dir.string()).c_str(), is_link ? "is a link" : "names another folder",
+               EchoValue(moved.string()).c_str());
+}
+
 // The folder to write `path`'s file into: `dir`, unless `dir` is pinned and no longer names the
 // folder pinned (see PinOutputFolder). Then the pinned folder where it now is (renamed away: the
 // outputs go there, said once), or, when the pinned folder was removed, an empty folder made
@@ -69,15 +82,7 @@ fs::path PinnedFolderFor(const fs::path& dir, const std::string& path) {
     std::error_code ec;
     const fs::path moved = fs::read_symlink("/proc/self/fd/" + std::to_string(it->second), ec);
     if (!ec && fs::is_directory(moved, ec)) {
-      static std::set<std::string> said;
-      if (said.insert(FolderKey(dir)).second)
-        std::fprintf(stderr,
-                     "warning: the output folder %s was replaced while the command ran (it now "
-                     "%s): the outputs are written into the folder the command started with, now "
-                     "%s\n",
-                     EchoValue(dir.string()).c_str(),
-                     is_link ? "is a link" : "names another folder",
-                     EchoValue(moved.string()).c_str());
+      WarnFolderMovedOnce(dir, is_link, moved);
       return moved;
     }
   }
@@ -109,13 +114,16 @@ std::string PinnedFolderNow(const std::string& dir) {
   const auto it = pins.fds.find(FolderKey(dir));
   if (it == pins.fds.end()) return dir;
   struct stat pinned {
-  }, now{};
+  }, now{}, link{};
   if (::fstat(it->second, &pinned) != 0 || pinned.st_nlink == 0) return dir;
   if (::stat(dir.c_str(), &now) == 0 && pinned.st_dev == now.st_dev && pinned.st_ino == now.st_ino)
     return dir;
   std::error_code ec;
   const fs::path moved = fs::read_symlink("/proc/self/fd/" + std::to_string(it->second), ec);
-  return ec ? dir : moved.string();
+  if (ec) return dir;
+  const bool is_link = ::lstat(dir.c_str(), &link) == 0 && S_ISLNK(link.st_mode);
+  WarnFolderMovedOnce(dir, is_link, moved);
+  return moved.string();
 }
 
 void PinOutputFolder(const std::string& dir) {

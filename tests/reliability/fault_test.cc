@@ -19,12 +19,14 @@
 #include "core/base/error.h"
 #include "core/base/stop_signal.h"
 #include "core/io/trajectory_io.h"
+#include "tests/support/cli_fixture.h"
 #include "tests/support/test_support.h"
 
 namespace dygslam {
 namespace {
 namespace fs = std::filesystem;
 
+using testing::Contains;
 using testing::ReadAll;
 
 std::string Config() { return std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml"; }
@@ -180,6 +182,32 @@ TEST_F(Faults, RecorderAndPlayerEndWhenSlamDiesWithoutAnnouncingTheEnd) {
   const size_t poses = ReadTumTrajectory(tmp + "/out/trajectory.txt").size();
   EXPECT_GT(poses, 10u) << log;
   EXPECT_LT(poses, 300u) << log;
+}
+
+// slam stopped by SIGTERM alone mid-stream: it finishes cleanly (final trajectory, COMPONENT_DONE)
+// and says that it stopped before the end of the stream; the player and the recorder exit 3 and
+// name slam's stop. Before, the player exited 0 (it had published its frames) and the recorder
+// blamed the frame source.
+TEST_F(Faults, RecorderAndPlayerSayWhenSlamIsStoppedBeforeTheEnd) {
+  const std::string tmp = testing::MakeTempDir("fault_slam_stopped");
+  const int domain = 137;
+  const pid_t recorder = Run("recorder", tmp, domain, "0:300");
+  const pid_t slam = Run("slam", tmp, domain, "0:300", {"--filter", "none"});
+  const pid_t player = Run("player", tmp, domain, "0:300", {"--rate", "1", "--no-detector"});
+  std::this_thread::sleep_for(std::chrono::seconds(5));  // ~150 frames at 30 Hz
+  kill(slam, SIGTERM);
+  EXPECT_EQ(Wait(slam), 0) << ReadAll(tmp + "/slam.log");
+  EXPECT_EQ(Wait(player), 3) << ReadAll(tmp + "/player.log");      // kExitComponentCutShort
+  EXPECT_EQ(Wait(recorder), 3) << ReadAll(tmp + "/recorder.log");  // kExitComponentCutShort
+  EXPECT_TRUE(Contains(ReadAll(tmp + "/player.log"),
+                       "slam stopped by signal 15 before the end of the stream"))
+      << ReadAll(tmp + "/player.log");
+  EXPECT_TRUE(Contains(ReadAll(tmp + "/recorder.log"),
+                       "slam stopped by signal 15 before the end of the stream"))
+      << ReadAll(tmp + "/recorder.log");
+  const size_t poses = ReadTumTrajectory(tmp + "/out/trajectory.txt").size();
+  EXPECT_GT(poses, 10u);
+  EXPECT_LT(poses, 300u);
 }
 
 // The player dies (SIGKILL: no END_OF_STREAM): slam and the detector do not wait for the rest of

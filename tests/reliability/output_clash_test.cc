@@ -194,20 +194,12 @@ TEST_F(OutputClashCli, SynthRefusesAnExistingDatasetUnlessAskedToReplaceIt) {
   EXPECT_FALSE(fs::exists(paired + "/associations.txt"));
 }
 
-// A synth --replace stopped midway (SIGTERM) leaves the folder's earlier sequence whole: the new
-// one is rendered beside it and moved in only when complete. Before: half the images were the new
-// seed's while the lists still described the old one.
-TEST_F(OutputClashCli, StoppedSynthLeavesTheEarlierSequenceWhole) {
-  const std::string target = dir_ + "/sequence";
-  ASSERT_EQ(Run({"synth", target, "--frames", "3", "--seed", "2", "--quiet"}).code, 0);
-  const std::string list = ReadAll(target + "/rgb.txt");
-  std::vector<std::string> images;
-  for (const auto& entry : fs::directory_iterator(target + "/rgb"))
-    images.push_back(ReadAll(entry.path().string()));
+// Starts `synth --replace` of 400 frames into `target` and sends `sig` once it has rendered a few
+// frames; returns the exit status.
+int StopSynthMidway(const std::string& dir, const std::string& target, int sig) {
   const pid_t pid = testing::SpawnDygslam(
       {"synth", target, "--frames", "400", "--seed", "3", "--quiet", "--replace"},
-      dir_ + "/synth.out", dir_ + "/synth.err");
-  // Stopped once it has rendered a few frames.
+      dir + "/synth.out", dir + "/synth.err");
   const fs::path staging = target + "/.synth-partial/rgb";
   for (int i = 0; i < 600; ++i) {
     std::error_code ec;
@@ -216,21 +208,48 @@ TEST_F(OutputClashCli, StoppedSynthLeavesTheEarlierSequenceWhole) {
       break;
     usleep(50 * 1000);
   }
-  kill(pid, SIGTERM);
+  kill(pid, sig);
   int status = 0;
-  ASSERT_EQ(waitpid(pid, &status, 0), pid);
-  EXPECT_NE(status, 0);
-  EXPECT_EQ(ReadAll(target + "/rgb.txt"), list);
-  size_t k = 0;
-  for (const auto& entry : fs::directory_iterator(target + "/rgb")) {
-    ASSERT_LT(k, images.size());
-    EXPECT_EQ(ReadAll(entry.path().string()), images[k++]) << entry.path();
-  }
-  EXPECT_EQ(k, images.size());
-  // The next synth removes the stopped one's render (it says so) and completes.
+  EXPECT_EQ(waitpid(pid, &status, 0), pid);
+  return status;
+}
+
+// A synth --replace stopped midway leaves the folder's earlier sequence whole: the new one is
+// rendered beside it and moved in only when complete. Stopped by SIGTERM / SIGINT it removes its
+// unfinished render (exit 128 + signal); killed, the next synth removes it. Before: half the
+// images were the new seed's while the lists still described the old one, and a SIGTERM left
+// tens of MB of render behind.
+TEST_F(OutputClashCli, StoppedSynthLeavesTheEarlierSequenceWhole) {
+  const std::string target = dir_ + "/sequence";
+  ASSERT_EQ(Run({"synth", target, "--frames", "3", "--seed", "2", "--quiet"}).code, 0);
+  const std::string list = ReadAll(target + "/rgb.txt");
+  std::vector<std::string> images;
+  for (const auto& entry : fs::directory_iterator(target + "/rgb"))
+    images.push_back(ReadAll(entry.path().string()));
+  const auto expect_earlier_sequence = [&] {
+    EXPECT_EQ(ReadAll(target + "/rgb.txt"), list);
+    size_t k = 0;
+    for (const auto& entry : fs::directory_iterator(target + "/rgb")) {
+      ASSERT_LT(k, images.size());
+      EXPECT_EQ(ReadAll(entry.path().string()), images[k++]) << entry.path();
+    }
+    EXPECT_EQ(k, images.size());
+  };
+  const int stopped = StopSynthMidway(dir_, target, SIGTERM);
+  ASSERT_TRUE(WIFEXITED(stopped));
+  EXPECT_EQ(WEXITSTATUS(stopped), 128 + SIGTERM);
+  EXPECT_TRUE(Contains(ReadAll(dir_ + "/synth.err"), "stopped by signal 15 after"))
+      << ReadAll(dir_ + "/synth.err");
+  EXPECT_FALSE(fs::exists(target + "/.synth-partial"));
+  expect_earlier_sequence();
+  // Killed: its render stays until the next synth removes it (it says so) and completes.
+  const int killed = StopSynthMidway(dir_, target, SIGKILL);
+  EXPECT_TRUE(WIFSIGNALED(killed));
+  EXPECT_TRUE(fs::exists(target + "/.synth-partial"));
+  expect_earlier_sequence();
   const auto again = Run({"synth", target, "--frames", "3", "--seed", "4", "--quiet", "--replace"});
   EXPECT_EQ(again.code, 0) << again.err;
-  EXPECT_TRUE(Contains(again.err, "the unfinished render of a synth that was stopped"))
+  EXPECT_TRUE(Contains(again.err, "the unfinished render of a synth that was killed"))
       << again.err;
   EXPECT_FALSE(fs::exists(target + "/.synth-partial"));
   EXPECT_FALSE(fs::exists(target + "/.dygslam-synth-render"));
@@ -240,6 +259,55 @@ TEST_F(OutputClashCli, StoppedSynthLeavesTheEarlierSequenceWhole) {
   ExpectError(Run({"synth", target, "--frames", "3", "--quiet", "--replace"}), 2,
               {"is not an unfinished synth render"});
   EXPECT_EQ(ReadAll(target + "/.synth-partial/thesis.tex"), "the user's text\n");
+}
+
+// --replace replaces a sequence's files and its image folders, nothing else: an image folder
+// holding anything but images (the user's notes, a dataset made inside rgb/ earlier) is refused
+// before any work, and nothing is removed. Before, rgb/ went as a whole with what was in it.
+TEST_F(OutputClashCli, SynthReplaceKeepsWhatIsNotASequenceFile) {
+  const std::string target = dir_ + "/sequence";
+  ASSERT_EQ(Run({"synth", target, "--frames", "2", "--quiet"}).code, 0);
+  std::ofstream(target + "/rgb/notes.txt") << "the user's notes\n";
+  ExpectError(Run({"synth", target, "--frames", "2", "--quiet", "--replace"}), 2,
+              {"rgb/notes.txt' is not an image of a sequence"});
+  EXPECT_EQ(ReadAll(target + "/rgb/notes.txt"), "the user's notes\n");
+  fs::remove(target + "/rgb/notes.txt");
+  fs::create_directories(target + "/depth/nested");
+  ExpectError(Run({"synth", target, "--frames", "2", "--quiet", "--replace"}), 2,
+              {"depth/nested' is not an image of a sequence"});
+  EXPECT_TRUE(fs::is_directory(target + "/depth/nested"));
+  fs::remove(target + "/depth/nested");
+  // Files beside the sequence are kept; the sequence is replaced.
+  std::ofstream(target + "/README.md") << "the user's readme\n";
+  const auto replaced = Run({"synth", target, "--frames", "3", "--quiet", "--replace"});
+  EXPECT_EQ(replaced.code, 0) << replaced.err;
+  EXPECT_EQ(ReadAll(target + "/README.md"), "the user's readme\n");
+  EXPECT_EQ(std::distance(fs::directory_iterator(target + "/rgb"), fs::directory_iterator()), 3);
+}
+
+// An output folder inside a dataset's image folder (rgb/, depth/, or a folder of its images) is
+// refused before any work: later reads of the dataset would find the outputs among its images.
+TEST_F(OutputClashCli, OutputsNeverGoIntoADatasetsImageFolder) {
+  const std::string dataset = dir_ + "/sequence";
+  ASSERT_EQ(Run({"synth", dataset, "--frames", "10", "--quiet"}).code, 0);
+  const size_t images =
+      std::distance(fs::directory_iterator(dataset + "/rgb"), fs::directory_iterator());
+  ExpectError(Run({"run", dataset, "--direct", "--filter", "none", "--no-map", "--quiet", "--out",
+                   dataset + "/rgb"}),
+              1, {"lies in the image folder", "of a dataset"});
+  ExpectError(Run({"run", dataset, "--direct", "--filter", "none", "--no-map", "--quiet", "--out",
+                   dataset + "/depth/results"}),
+              1, {"lies in the image folder"});
+  EXPECT_FALSE(fs::exists(dataset + "/depth/results"));
+  ExpectError(Run({"synth", dataset + "/rgb/more", "--frames", "2", "--quiet"}), 2,
+              {"lies in the image folder"});
+  EXPECT_FALSE(fs::exists(dataset + "/rgb/more"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dataset + "/rgb"), fs::directory_iterator()),
+            static_cast<std::ptrdiff_t>(images));
+  // A results folder beside the images is fine.
+  const auto beside = Run({"run", dataset, "--direct", "--filter", "none", "--no-map", "--quiet",
+                           "--out", dataset + "/results"});
+  EXPECT_EQ(beside.code, 0) << beside.err;
 }
 
 // The component command checks its files as `run` does: a slam's --save-map onto its own

@@ -50,6 +50,7 @@ constexpr int kSwappedProcessesDomain = 151;
 constexpr int kPlayerPausedDomain = 152;
 constexpr int kKilledRunDomain = 153;
 constexpr int kDetectorPausedDomain = 154;
+constexpr int kSuspendedDomain = 155;
 
 class RunIntegrity : public testing::CliFixture {
  protected:
@@ -652,6 +653,41 @@ TEST_F(RunIntegrity, TheComponentsOfARunKilledOutrightEndWithIt) {
   EXPECT_FALSE(alive(slam)) << "slam outlived its run";
   EXPECT_FALSE(alive(recorder)) << "the recorder outlived its run";
   EXPECT_FALSE(fs::exists(out + "/trajectory.txt")) << "written after the run was killed";
+}
+
+
+// `run --processes` suspended as a whole (Ctrl-Z of its process group, a laptop asleep) for longer
+// than the DDS participant lease (20 s), then continued: each component was paused as long as its
+// peers, so none of them is gone; they find each other again and the run completes. Before, every
+// component took its peers' expired leases for their end and the run ended with a third of its
+// frames, blaming the components (exit 3).
+TEST_F(RunIntegrity, ARunSuspendedAsAWholeCompletes) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string out = dir_ + "/out";
+  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet",
+                           "--frames", "0:150", "--no-map", "--processes", "--rate", "0.5", "--out",
+                           out, "--domain", std::to_string(kSuspendedDomain)});
+  ASSERT_GT(pid, 0);
+  std::vector<pid_t> group = {pid};
+  for (const char* name : {"recorder", "slam", "player"}) {
+    group.push_back(RunningComponentPid(name, out));
+    ASSERT_GT(group.back(), 0) << name << " did not start\n" << ReadAll(dir_ + "/run.err");
+  }
+  std::this_thread::sleep_for(std::chrono::seconds(2));  // ~30 frames in
+  for (const pid_t p : group) kill(p, SIGSTOP);
+  std::this_thread::sleep_for(std::chrono::seconds(24));
+  for (const pid_t p : group) kill(p, SIGCONT);
+  std::string diagnostics;
+  const int code = testing::WaitForExit(pid, 120, &diagnostics);
+  const std::string err = ReadAll(dir_ + "/run.err");
+  const std::string summary = ReadAll(dir_ + "/run.out");
+  EXPECT_EQ(code, 0) << diagnostics << summary << err;
+  EXPECT_FALSE(Contains(err, "ended before the run did")) << err;
+  // Every frame, but for a few the paced player may drop on a loaded machine (counted as such).
+  EXPECT_GE(ReadTumTrajectory(out + "/trajectory.txt").size(), 140u) << summary << err;
+  EXPECT_TRUE(Contains(summary, "integrity: 150 of 150 requested frames") ||
+              Contains(summary, "dropped: the pipeline could not take them"))
+      << summary;
 }
 
 }  // namespace dygslam

@@ -224,129 +224,142 @@ void OrbExtractor::DistributeQuadtree(std::vector<cv::KeyPoint>& candidates, con
   for (int w : winners) kept->push_back(candidates[w]);
 }
 
+void OrbExtractor::BuildPyramid(const cv::Mat& gray, OrbExtractionCache* cache) const {
+  OrbExtractionCache& c = *cache;
+  c = OrbExtractionCache();
+  c.data_ = gray.data;
+  c.size_ = gray.size();
+  c.source_ = gray;
+  cv::Mat level_img = gray;
+  for (int level = 0; level < options_.num_levels; ++level) {
+    if (level > 0) {
+      const cv::Size size(static_cast<int>(std::lround(gray.cols / scales_[level])),
+                          static_cast<int>(std::lround(gray.rows / scales_[level])));
+      if (size.width < 2 * kBorder + 8 || size.height < 2 * kBorder + 8) break;
+      cv::Mat next;
+      cv::resize(level_img, next, size, 0, 0, cv::INTER_LINEAR);
+      level_img = next;
+    }
+    const cv::Rect area(kBorder, kBorder, level_img.cols - 2 * kBorder,
+                        level_img.rows - 2 * kBorder);
+    if (area.width <= 0 || area.height <= 0) break;
+    std::vector<cv::KeyPoint> corners;
+    cv::FAST(level_img(area), corners, options_.min_th_fast, true);
+    for (cv::KeyPoint& kp : corners) {
+      kp.pt.x += area.x;
+      kp.pt.y += area.y;
+    }
+    c.levels_.push_back(level_img);
+    c.corners_.push_back(std::move(corners));
+    c.blurred_.emplace_back();
+  }
+}
+
+std::vector<cv::KeyPoint> OrbExtractor::SelectCorners(const OrbExtractionCache& c, int level,
+                                                      const cv::Mat& mask, int wanted) const {
+  const cv::Mat& level_img = c.levels_[level];
+  const cv::Rect area(kBorder, kBorder, level_img.cols - 2 * kBorder, level_img.rows - 2 * kBorder);
+  const std::vector<cv::KeyPoint>& corners = c.corners_[level];
+  cv::Mat level_mask;
+  if (!mask.empty()) cv::resize(mask, level_mask, level_img.size(), 0, 0, cv::INTER_NEAREST);
+  const int cells_x = (area.width + kCellSize - 1) / kCellSize;
+  const int cells_y = (area.height + kCellSize - 1) / kCellSize;
+  std::vector<uint8_t> cell_has_strong(cells_x * cells_y, 0);
+  for (const cv::KeyPoint& kp : corners) {
+    if (kp.response >= options_.ini_th_fast) {
+      const int cx = static_cast<int>(kp.pt.x - area.x) / kCellSize;
+      const int cy = static_cast<int>(kp.pt.y - area.y) / kCellSize;
+      cell_has_strong[cy * cells_x + cx] = 1;
+    }
+  }
+  std::vector<cv::KeyPoint> candidates;
+  candidates.reserve(corners.size());
+  for (const cv::KeyPoint& kp : corners) {
+    const int cx = static_cast<int>(kp.pt.x - area.x) / kCellSize;
+    const int cy = static_cast<int>(kp.pt.y - area.y) / kCellSize;
+    if (cell_has_strong[cy * cells_x + cx] && kp.response < options_.ini_th_fast) continue;
+    if (!level_mask.empty() &&
+        level_mask.at<uint8_t>(static_cast<int>(kp.pt.y), static_cast<int>(kp.pt.x)) != 0)
+      continue;
+    candidates.push_back(kp);
+  }
+  std::vector<cv::KeyPoint> kept;
+  DistributeQuadtree(candidates, area, wanted, &kept);
+  return kept;
+}
+
+void OrbExtractor::Orient(const cv::Mat& level_img, std::vector<cv::KeyPoint>* keypoints) const {
+  for (cv::KeyPoint& kp : *keypoints) {
+    const int cx = cvRound(kp.pt.x);
+    const int cy = cvRound(kp.pt.y);
+    const uint8_t* center = level_img.ptr<uint8_t>(cy) + cx;
+    const int step = static_cast<int>(level_img.step1());
+    int m01 = 0, m10 = 0;
+    for (int u = -kPatchRadius; u <= kPatchRadius; ++u) m10 += u * center[u];
+    for (int v = 1; v <= kPatchRadius; ++v) {
+      int v_sum = 0;
+      const int d = umax_[v];
+      for (int u = -d; u <= d; ++u) {
+        const int plus = center[u + v * step], minus = center[u - v * step];
+        v_sum += plus - minus;
+        m10 += u * (plus + minus);
+      }
+      m01 += v * v_sum;
+    }
+    float angle = static_cast<float>(std::atan2(double(m01), double(m10)) * 180.0 / M_PI);
+    if (angle < 0) angle += 360.f;
+    kp.angle = angle;
+  }
+}
+
+void OrbExtractor::Describe(OrbExtractionCache* c, int level, std::vector<cv::KeyPoint> keypoints,
+                            OrbFeatures* out) const {
+  if (c->blurred_[level].empty())
+    cv::GaussianBlur(c->levels_[level], c->blurred_[level], cv::Size(7, 7), 2, 2,
+                     cv::BORDER_REFLECT_101);
+  const cv::Mat& blurred = c->blurred_[level];
+  const float scale = static_cast<float>(scales_[level]);
+  const PatternPoints& points = PatternAsArrays();
+  for (cv::KeyPoint& kp : keypoints) {
+    const float a = kp.angle * static_cast<float>(M_PI / 180.0);
+    const float ca = std::cos(a), sa = std::sin(a);
+    const int cx = cvRound(kp.pt.x);
+    const int cy = cvRound(kp.pt.y);
+    Descriptor desc{0, 0, 0, 0};
+    // Rotated test offsets as row/column offsets into the blurred image: all 512 test points
+    // rotated and rounded first (4 at a time), then the comparisons.
+    const int step = static_cast<int>(blurred.step1());
+    const uint8_t* center = blurred.ptr<uint8_t>(cy) + cx;
+    alignas(16) int offsets[2 * 256];
+    RotatedOffsets(points, ca, sa, step, offsets);
+    for (int bit = 0; bit < 256; ++bit) {
+      if (center[offsets[2 * bit]] < center[offsets[2 * bit + 1]])
+        desc[bit >> 6] |= (1ULL << (bit & 63));
+    }
+    kp.octave = level;
+    kp.size = 31.0f * scale;
+    kp.pt.x *= scale;
+    kp.pt.y *= scale;
+    out->keypoints.push_back(kp);
+    out->descriptors.push_back(desc);
+  }
+}
+
 OrbFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& mask, int num_features,
                                   OrbExtractionCache* cache) const {
   CV_Assert(gray.type() == CV_8UC1);
   OrbExtractionCache local;
   OrbExtractionCache& c = cache != nullptr ? *cache : local;
-  if (!c.IsFor(gray)) {
-    // Pyramid and FAST corners (once at the low threshold) of every level.
-    c = OrbExtractionCache();
-    c.data_ = gray.data;
-    c.size_ = gray.size();
-    c.source_ = gray;
-    cv::Mat level_img = gray;
-    for (int level = 0; level < options_.num_levels; ++level) {
-      if (level > 0) {
-        const cv::Size size(static_cast<int>(std::lround(gray.cols / scales_[level])),
-                            static_cast<int>(std::lround(gray.rows / scales_[level])));
-        if (size.width < 2 * kBorder + 8 || size.height < 2 * kBorder + 8) break;
-        cv::Mat next;
-        cv::resize(level_img, next, size, 0, 0, cv::INTER_LINEAR);
-        level_img = next;
-      }
-      const cv::Rect area(kBorder, kBorder, level_img.cols - 2 * kBorder,
-                          level_img.rows - 2 * kBorder);
-      if (area.width <= 0 || area.height <= 0) break;
-      std::vector<cv::KeyPoint> corners;
-      cv::FAST(level_img(area), corners, options_.min_th_fast, true);
-      for (cv::KeyPoint& kp : corners) {
-        kp.pt.x += area.x;
-        kp.pt.y += area.y;
-      }
-      c.levels_.push_back(level_img);
-      c.corners_.push_back(std::move(corners));
-      c.blurred_.emplace_back();
-    }
-  }
+  if (!c.IsFor(gray)) BuildPyramid(gray, &c);
   const int levels = static_cast<int>(c.levels_.size());
   const std::vector<int> features_per_level =
       FeaturesPerLevel(num_features > 0 ? num_features : options_.num_features);
   OrbFeatures out;
   for (int level = 0; level < levels; ++level) {
-    const cv::Mat& level_img = c.levels_[level];
-    const cv::Rect area(kBorder, kBorder, level_img.cols - 2 * kBorder,
-                        level_img.rows - 2 * kBorder);
-    // Per cell, prefer the corners that pass the initial threshold.
-    const std::vector<cv::KeyPoint>& corners = c.corners_[level];
-    cv::Mat level_mask;
-    if (!mask.empty()) cv::resize(mask, level_mask, level_img.size(), 0, 0, cv::INTER_NEAREST);
-    const int cells_x = (area.width + kCellSize - 1) / kCellSize;
-    const int cells_y = (area.height + kCellSize - 1) / kCellSize;
-    std::vector<uint8_t> cell_has_strong(cells_x * cells_y, 0);
-    for (const cv::KeyPoint& kp : corners) {
-      if (kp.response >= options_.ini_th_fast) {
-        const int cx = static_cast<int>(kp.pt.x - area.x) / kCellSize;
-        const int cy = static_cast<int>(kp.pt.y - area.y) / kCellSize;
-        cell_has_strong[cy * cells_x + cx] = 1;
-      }
-    }
-    std::vector<cv::KeyPoint> candidates;
-    candidates.reserve(corners.size());
-    for (const cv::KeyPoint& kp : corners) {
-      const int cx = static_cast<int>(kp.pt.x - area.x) / kCellSize;
-      const int cy = static_cast<int>(kp.pt.y - area.y) / kCellSize;
-      if (cell_has_strong[cy * cells_x + cx] && kp.response < options_.ini_th_fast) continue;
-      if (!level_mask.empty() &&
-          level_mask.at<uint8_t>(static_cast<int>(kp.pt.y), static_cast<int>(kp.pt.x)) != 0)
-        continue;
-      candidates.push_back(kp);
-    }
-    std::vector<cv::KeyPoint> kept;
-    DistributeQuadtree(candidates, area, features_per_level[level], &kept);
+    std::vector<cv::KeyPoint> kept = SelectCorners(c, level, mask, features_per_level[level]);
     if (kept.empty()) continue;
-
-    // Orientation by intensity centroid on the unblurred level image.
-    for (cv::KeyPoint& kp : kept) {
-      const int cx = cvRound(kp.pt.x);
-      const int cy = cvRound(kp.pt.y);
-      const uint8_t* center = level_img.ptr<uint8_t>(cy) + cx;
-      const int step = static_cast<int>(level_img.step1());
-      int m01 = 0, m10 = 0;
-      for (int u = -kPatchRadius; u <= kPatchRadius; ++u) m10 += u * center[u];
-      for (int v = 1; v <= kPatchRadius; ++v) {
-        int v_sum = 0;
-        const int d = umax_[v];
-        for (int u = -d; u <= d; ++u) {
-          const int plus = center[u + v * step], minus = center[u - v * step];
-          v_sum += plus - minus;
-          m10 += u * (plus + minus);
-        }
-        m01 += v * v_sum;
-      }
-      float angle = static_cast<float>(std::atan2(double(m01), double(m10)) * 180.0 / M_PI);
-      if (angle < 0) angle += 360.f;
-      kp.angle = angle;
-    }
-    // Steered binary tests on the smoothed level image.
-    if (c.blurred_[level].empty())
-      cv::GaussianBlur(level_img, c.blurred_[level], cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
-    const cv::Mat& blurred = c.blurred_[level];
-    const float scale = static_cast<float>(scales_[level]);
-    const PatternPoints& points = PatternAsArrays();
-    for (cv::KeyPoint& kp : kept) {
-      const float a = kp.angle * static_cast<float>(M_PI / 180.0);
-      const float ca = std::cos(a), sa = std::sin(a);
-      const int cx = cvRound(kp.pt.x);
-      const int cy = cvRound(kp.pt.y);
-      Descriptor desc{0, 0, 0, 0};
-      // Rotated test offsets as row/column offsets into the blurred image: all 512 test points
-      // rotated and rounded first (4 at a time), then the comparisons.
-      const int step = static_cast<int>(blurred.step1());
-      const uint8_t* center = blurred.ptr<uint8_t>(cy) + cx;
-      alignas(16) int offsets[2 * 256];
-      RotatedOffsets(points, ca, sa, step, offsets);
-      for (int bit = 0; bit < 256; ++bit) {
-        if (center[offsets[2 * bit]] < center[offsets[2 * bit + 1]])
-          desc[bit >> 6] |= (1ULL << (bit & 63));
-      }
-      kp.octave = level;
-      kp.size = 31.0f * scale;
-      kp.pt.x *= scale;
-      kp.pt.y *= scale;
-      out.keypoints.push_back(kp);
-      out.descriptors.push_back(desc);
-    }
+    Orient(c.levels_[level], &kept);
+    Describe(&c, level, std::move(kept), &out);
   }
   return out;
 }

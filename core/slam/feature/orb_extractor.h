@@ -89,6 +89,18 @@ class OrbExtractor {
   std::vector<double> scales_;
   std::vector<double> sigma2_;
   std::vector<int> FeaturesPerLevel(int num_features) const;
+  // The pyramid of `gray` and the FAST corners (at the low threshold) of every level, into `cache`.
+  void BuildPyramid(const cv::Mat& gray, OrbExtractionCache* cache) const;
+  // Level `level`'s corners outside `mask`, spread over the level by the quadtree: per cell, the
+  // corners passing the initial threshold where there are any.
+  std::vector<cv::KeyPoint> SelectCorners(const OrbExtractionCache& cache, int level,
+                                          const cv::Mat& mask, int wanted) const;
+  // Orientation by intensity centroid on the unblurred level image.
+  void Orient(const cv::Mat& level_img, std::vector<cv::KeyPoint>* keypoints) const;
+  // Steered binary tests on the smoothed level image; the keypoints scaled to level 0, appended
+  // to `out` with their descriptors.
+  void Describe(OrbExtractionCache* cache, int level, std::vector<cv::KeyPoint> keypoints,
+                OrbFeatures* out) const;
   std::vector<int> umax_;  // half-width of the circular patch per row
 };
 

@@ -2,9 +2,11 @@
 
 #include <ceres/ceres.h>
 
+#include <array>
 #include <cmath>
 #include <functional>
 #include <map>
+#include <memory>
 #include <set>
 
 #include "core/slam/optimize/bundle_solver.h"
@@ -185,128 +187,157 @@ BundleProblem PrepareLocalBundle(const Map& map, const std::shared_ptr<KeyFrame>
   return PrepareBundle(map, LocalWindow(map, kf));
 }
 
-void SolveBundle(BundleProblem& bundle, const OptimizerOptions& options, int iterations_first,
-                 int iterations_second, const std::atomic<bool>* abort) {
-  auto& observations = bundle.observations;
-  auto& poses = bundle.poses;
-  auto& points = bundle.points;
-  const auto& fixed = bundle.fixed;
-  const ProjectionModel& model = bundle.model;
-  auto& outlier = bundle.outlier;
-  outlier.assign(observations.size(), 0);
-  if (observations.empty()) return;
-  const double delta_mono = std::sqrt(options.chi2_mono),
-               delta_stereo = std::sqrt(options.chi2_stereo);
-  AbortCallback abort_callback(abort);
-  // Local windows: the dedicated Schur-complement solver (core/slam/optimize/bundle_solver.h) on the
-  // problem indexed once; larger problems: Ceres with a sparse camera system.
-  const bool dedicated = poses.size() - fixed.size() <= kDedicatedSolverMaxPoses;
-  std::vector<int64_t> pose_ids, point_ids;
-  std::vector<std::array<double, 7>> pose_values;
-  std::vector<uint8_t> pose_fixed;
-  std::vector<Eigen::Vector3d> point_values;
-  std::vector<BundleResidual> residuals;
-  if (dedicated) {
+namespace {
+
+// A local window's solve: the dedicated Schur-complement solver (core/slam/optimize/
+// bundle_solver.h) on the problem indexed once.
+class DedicatedBundleSolve {
+ public:
+  explicit DedicatedBundleSolve(BundleProblem* bundle) : bundle_(*bundle) {
     std::map<int64_t, int> pose_index, point_index;
-    for (const auto& [id, pose] : poses) {
-      pose_index[id] = static_cast<int>(pose_ids.size());
-      pose_ids.push_back(id);
-      pose_values.push_back(pose);
-      pose_fixed.push_back(fixed.count(id) ? 1 : 0);
+    for (const auto& [id, pose] : bundle_.poses) {
+      pose_index[id] = static_cast<int>(pose_ids_.size());
+      pose_ids_.push_back(id);
+      pose_values_.push_back(pose);
+      pose_fixed_.push_back(bundle_.fixed.count(id) ? 1 : 0);
     }
-    for (const auto& [id, point] : points) {
-      point_index[id] = static_cast<int>(point_ids.size());
-      point_ids.push_back(id);
-      point_values.push_back(point);
+    for (const auto& [id, point] : bundle_.points) {
+      point_index[id] = static_cast<int>(point_ids_.size());
+      point_ids_.push_back(id);
+      point_values_.push_back(point);
     }
-    residuals.reserve(observations.size());
-    for (const BundleObservation& o : observations)
-      residuals.push_back({pose_index.at(o.kf_id), point_index.at(o.point_id), o.measurement,
-                           o.sqrt_info, o.stereo});
+    residuals_.reserve(bundle_.observations.size());
+    for (const BundleObservation& o : bundle_.observations)
+      residuals_.push_back({pose_index.at(o.kf_id), point_index.at(o.point_id), o.measurement,
+                            o.sqrt_info, o.stereo});
   }
-  // Cost functions and the two Huber kernels are made once and shared by both solves (the
-  // problems do not own them): only the problem's structure is rebuilt for the second solve.
-  std::vector<std::unique_ptr<ceres::CostFunction>> costs;
-  costs.reserve(observations.size());
-  for (const BundleObservation& o : observations) {
-    if (dedicated) break;
-    if (o.stereo) {
-      costs.emplace_back(new StereoBACost(o.measurement, o.sqrt_info, model));
-    } else {
-      costs.emplace_back(new MonoBACost(o.measurement.head<2>(), o.sqrt_info, model));
+  // The inliers (bundle->outlier 0), `iterations` at most; Huber kernels of `delta_*` (0: none).
+  void Solve(int iterations, double delta_mono, double delta_stereo,
+             const std::atomic<bool>* abort) {
+    std::vector<uint8_t> active(bundle_.observations.size());
+    for (size_t k = 0; k < active.size(); ++k) active[k] = bundle_.outlier[k] ? 0 : 1;
+    BundleSolverOptions solver_options;
+    solver_options.max_iterations = iterations;
+    SolveBundleProblem(residuals_, active.data(), bundle_.model, delta_mono, delta_stereo,
+                       solver_options, pose_fixed_, &pose_values_, &point_values_, abort);
+    for (size_t k = 0; k < pose_ids_.size(); ++k) bundle_.poses[pose_ids_[k]] = pose_values_[k];
+    for (size_t k = 0; k < point_ids_.size(); ++k) bundle_.points[point_ids_[k]] = point_values_[k];
+  }
+
+ private:
+  BundleProblem& bundle_;
+  std::vector<int64_t> pose_ids_, point_ids_;
+  std::vector<std::array<double, 7>> pose_values_;
+  std::vector<uint8_t> pose_fixed_;
+  std::vector<Eigen::Vector3d> point_values_;
+  std::vector<BundleResidual> residuals_;
+};
+
+// A large problem's solve: Ceres with a sparse camera system. Cost functions and the two Huber
+// kernels are made once and shared by both solves (the problems do not own them): only the
+// problem's structure is rebuilt for the second solve.
+class CeresBundleSolve {
+ public:
+  CeresBundleSolve(BundleProblem* bundle, double delta_mono, double delta_stereo)
+      : bundle_(*bundle), huber_mono_(delta_mono), huber_stereo_(delta_stereo) {
+    costs_.reserve(bundle_.observations.size());
+    for (const BundleObservation& o : bundle_.observations) {
+      if (o.stereo) {
+        costs_.emplace_back(new StereoBACost(o.measurement, o.sqrt_info, bundle_.model));
+      } else {
+        costs_.emplace_back(new MonoBACost(o.measurement.head<2>(), o.sqrt_info, bundle_.model));
+      }
     }
   }
-  ceres::HuberLoss huber_mono(delta_mono), huber_stereo(delta_stereo);
-  auto solve = [&](int iterations, bool robust) {
-    if (dedicated) {
-      std::vector<uint8_t> active(observations.size());
-      for (size_t k = 0; k < observations.size(); ++k) active[k] = outlier[k] ? 0 : 1;
-      BundleSolverOptions solver_options;
-      solver_options.max_iterations = iterations;
-      SolveBundleProblem(residuals, active.data(), model, robust ? delta_mono : 0.0,
-                         robust ? delta_stereo : 0.0, solver_options, pose_fixed, &pose_values,
-                         &point_values, abort);
-      for (size_t k = 0; k < pose_ids.size(); ++k) poses[pose_ids[k]] = pose_values[k];
-      for (size_t k = 0; k < point_ids.size(); ++k) points[point_ids[k]] = point_values[k];
-      return;
-    }
+  void Solve(int iterations, bool robust, const std::atomic<bool>* abort) {
     ceres::Problem::Options problem_options;
     problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(problem_options);
     PoseManifold manifold;
-    for (size_t k = 0; k < observations.size(); ++k) {
-      if (outlier[k]) continue;
-      const BundleObservation& o = observations[k];
-      double* pose = poses[o.kf_id].data();
-      double* point = points[o.point_id].data();
-      ceres::LossFunction* loss = robust ? (o.stereo ? &huber_stereo : &huber_mono) : nullptr;
-      problem.AddResidualBlock(costs[k].get(), loss, pose, point);
+    for (size_t k = 0; k < bundle_.observations.size(); ++k) {
+      if (bundle_.outlier[k]) continue;
+      const BundleObservation& o = bundle_.observations[k];
+      ceres::LossFunction* loss = robust ? (o.stereo ? &huber_stereo_ : &huber_mono_) : nullptr;
+      problem.AddResidualBlock(costs_[k].get(), loss, bundle_.poses[o.kf_id].data(),
+                               bundle_.points[o.point_id].data());
     }
-    for (auto& [id, pose] : poses) {
+    for (auto& [id, pose] : bundle_.poses) {
       if (!problem.HasParameterBlock(pose.data())) continue;
       problem.SetManifold(pose.data(), &manifold);
-      if (fixed.count(id)) problem.SetParameterBlockConstant(pose.data());
+      if (bundle_.fixed.count(id)) problem.SetParameterBlockConstant(pose.data());
     }
     ceres::Solver::Options solver_options;
     // The reduced camera system of a local window is small and dense (its keyframes share most
     // points): a dense Schur complement suits it; sparse for large global problems.
     solver_options.linear_solver_type =
-        poses.size() <= kDenseSchurMaxPoses ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
+        bundle_.poses.size() <= kDenseSchurMaxPoses ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
     solver_options.max_num_iterations = iterations;
     solver_options.num_threads = 1;
     solver_options.logging_type = ceres::SILENT;
+    AbortCallback abort_callback(abort);
     if (abort) solver_options.callbacks.push_back(&abort_callback);
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &problem, &summary);
-  };
-  auto classify = [&]() {
-    for (size_t k = 0; k < observations.size(); ++k) {
-      const BundleObservation& o = observations[k];
-      const Rigid3d cw = PoseFromParameters(poses[o.kf_id].data());
-      const Eigen::Vector3d p = cw * points[o.point_id];
-      if (p.z() <= 0) {
-        outlier[k] = 1;
-        continue;
-      }
-      const double u = model.fx * p.x() / p.z() + model.cx, v = model.fy * p.y() / p.z() + model.cy;
-      double chi2 = (u - o.measurement.x()) * (u - o.measurement.x()) +
-                    (v - o.measurement.y()) * (v - o.measurement.y());
-      if (o.stereo) {
-        const double ur = u - model.bf / p.z();
-        chi2 += (ur - o.measurement.z()) * (ur - o.measurement.z());
-      }
-      chi2 *= o.sqrt_info * o.sqrt_info;
-      outlier[k] = chi2 > (o.stereo ? options.chi2_stereo : options.chi2_mono) ? 1 : 0;
+  }
+
+ private:
+  BundleProblem& bundle_;
+  std::vector<std::unique_ptr<ceres::CostFunction>> costs_;
+  ceres::HuberLoss huber_mono_, huber_stereo_;
+};
+
+// Marks each observation whose reprojection error (chi2 with its information) exceeds the
+// threshold of its kind, or whose point lies behind the camera, as an outlier.
+void ClassifyBundleOutliers(BundleProblem* bundle, const OptimizerOptions& options) {
+  const ProjectionModel& model = bundle->model;
+  for (size_t k = 0; k < bundle->observations.size(); ++k) {
+    const BundleObservation& o = bundle->observations[k];
+    const Rigid3d cw = PoseFromParameters(bundle->poses[o.kf_id].data());
+    const Eigen::Vector3d p = cw * bundle->points[o.point_id];
+    if (p.z() <= 0) {
+      bundle->outlier[k] = 1;
+      continue;
     }
-  };
+    const double u = model.fx * p.x() / p.z() + model.cx, v = model.fy * p.y() / p.z() + model.cy;
+    double chi2 = (u - o.measurement.x()) * (u - o.measurement.x()) +
+                  (v - o.measurement.y()) * (v - o.measurement.y());
+    if (o.stereo) {
+      const double ur = u - model.bf / p.z();
+      chi2 += (ur - o.measurement.z()) * (ur - o.measurement.z());
+    }
+    chi2 *= o.sqrt_info * o.sqrt_info;
+    bundle->outlier[k] = chi2 > (o.stereo ? options.chi2_stereo : options.chi2_mono) ? 1 : 0;
+  }
+}
+
+}  // namespace
+
+void SolveBundle(BundleProblem& bundle, const OptimizerOptions& options, int iterations_first,
+                 int iterations_second, const std::atomic<bool>* abort) {
+  bundle.outlier.assign(bundle.observations.size(), 0);
+  if (bundle.observations.empty()) return;
+  const double delta_mono = std::sqrt(options.chi2_mono),
+               delta_stereo = std::sqrt(options.chi2_stereo);
+  // Local windows: the dedicated solver; larger problems: Ceres.
+  std::function<void(int, bool)> solve;
+  if (bundle.poses.size() - bundle.fixed.size() <= kDedicatedSolverMaxPoses) {
+    auto dedicated = std::make_shared<DedicatedBundleSolve>(&bundle);
+    solve = [=](int iterations, bool robust) {
+      dedicated->Solve(iterations, robust ? delta_mono : 0.0, robust ? delta_stereo : 0.0, abort);
+    };
+  } else {
+    auto general = std::make_shared<CeresBundleSolve>(&bundle, delta_mono, delta_stereo);
+    solve = [=](int iterations, bool robust) { general->Solve(iterations, robust, abort); };
+  }
+  // Robust first, then without the kernel on the inliers.
   solve(iterations_first, true);
   if (!(abort && abort->load())) {
-    classify();
+    ClassifyBundleOutliers(&bundle, options);
     solve(iterations_second, false);
   }
-  classify();
+  ClassifyBundleOutliers(&bundle, options);
   bundle.solved = true;
 }
 

@@ -233,6 +233,89 @@ std::string MapFileSettings::Difference(const MapFileSettings& run) const {
   return {};
 }
 
+namespace {
+
+using StoredKeyFrames = std::map<int64_t, std::shared_ptr<KeyFrame>>;
+
+void PutKeypoints(Writer& w, const Map& map, const KeyFrame& kf) {
+  const size_t n = kf.size();
+  w.Put<uint64_t>(n);
+  for (size_t i = 0; i < n; ++i) {
+    const cv::KeyPoint& k = kf.keypoints[i];
+    w.Put<float>(k.pt.x);
+    w.Put<float>(k.pt.y);
+    w.Put<float>(k.size);
+    w.Put<float>(k.angle);
+    w.Put<float>(k.response);
+    w.Put<int32_t>(k.octave);
+    w.Put<float>(kf.undistorted[i].pt.x);
+    w.Put<float>(kf.undistorted[i].pt.y);
+    w.PutDescriptor(kf.descriptors[i]);
+    w.Put<float>(i < kf.depth.size() ? kf.depth[i] : -1.f);
+    w.Put<float>(i < kf.u_right.size() ? kf.u_right[i] : -1.f);
+    w.Put<uint8_t>(i < kf.in_dynamic_region.size() ? kf.in_dynamic_region[i] : 0);
+    w.Put<int64_t>(i < kf.map_points.size() ? StoredPointId(map, kf.map_points[i]) : -1);
+  }
+}
+
+void PutKeyFrame(Writer& w, const Map& map, const KeyFrame& kf, const StoredKeyFrames& keyframes) {
+  w.Put<int64_t>(kf.id);
+  w.Put<int64_t>(kf.frame_id);
+  w.Put<int64_t>(kf.stamp.nanoseconds());
+  w.PutPose(kf.cam_from_world);
+  w.Put<int64_t>(kf.parent_id);
+  w.Put<uint8_t>(kf.not_erase ? 1 : 0);
+  PutKeypoints(w, map, kf);
+  w.Put<uint64_t>(kf.bow_vector.size());
+  for (const auto& [word, weight] : kf.bow_vector) {
+    w.Put<uint32_t>(word);
+    w.Put<double>(weight);
+  }
+  w.Put<uint64_t>(kf.bow_features.size());
+  for (const auto& [node, indices] : kf.bow_features) {
+    w.Put<uint32_t>(node);
+    w.Put<uint64_t>(indices.size());
+    for (int i : indices) w.Put<int32_t>(i);
+  }
+  // Covisibility among the stored keyframes only.
+  std::vector<std::pair<int64_t, int>> connections;
+  for (const auto& [other, weight] : kf.connection_weights)
+    if (keyframes.count(other)) connections.push_back({other, weight});
+  w.Put<uint64_t>(connections.size());
+  for (const auto& [other, weight] : connections) {
+    w.Put<int64_t>(other);
+    w.Put<int32_t>(weight);
+  }
+  std::vector<int64_t> ordered;
+  for (int64_t other : kf.ordered_connections)
+    if (keyframes.count(other)) ordered.push_back(other);
+  w.Put<uint64_t>(ordered.size());
+  for (int64_t other : ordered) w.Put<int64_t>(other);
+}
+
+void PutMapPoint(Writer& w, const MapPoint& mp, const StoredKeyFrames& keyframes) {
+  w.Put<int64_t>(mp.id);
+  w.Put<int64_t>(mp.first_kf_id);
+  w.Put<int64_t>(mp.ref_kf_id);
+  w.PutVector(mp.position);
+  w.PutDescriptor(mp.descriptor);
+  w.PutVector(mp.normal);
+  w.Put<double>(mp.min_distance);
+  w.Put<double>(mp.max_distance);
+  w.Put<int32_t>(mp.visible_count);
+  w.Put<int32_t>(mp.found_count);
+  std::vector<std::pair<int64_t, int>> observations;
+  for (const auto& [kf_id, idx] : mp.observations)
+    if (keyframes.count(kf_id)) observations.push_back({kf_id, idx});
+  w.Put<uint64_t>(observations.size());
+  for (const auto& [kf_id, idx] : observations) {
+    w.Put<int64_t>(kf_id);
+    w.Put<int32_t>(idx);
+  }
+}
+
+}  // namespace
+
 std::string EncodeMapFile(const Map& map, const MapFileSettings& settings) {
   std::lock_guard<std::mutex> lock(map.mutex());
   Writer w;
@@ -241,79 +324,10 @@ std::string EncodeMapFile(const Map& map, const MapFileSettings& settings) {
   w.Put<int64_t>(map.PeekNextMapPointId());
   const auto& keyframes = map.keyframes();
   w.Put<uint64_t>(keyframes.size());
-  for (const auto& [id, kf] : keyframes) {
-    const size_t n = kf->size();
-    w.Put<int64_t>(kf->id);
-    w.Put<int64_t>(kf->frame_id);
-    w.Put<int64_t>(kf->stamp.nanoseconds());
-    w.PutPose(kf->cam_from_world);
-    w.Put<int64_t>(kf->parent_id);
-    w.Put<uint8_t>(kf->not_erase ? 1 : 0);
-    w.Put<uint64_t>(n);
-    for (size_t i = 0; i < n; ++i) {
-      const cv::KeyPoint& k = kf->keypoints[i];
-      w.Put<float>(k.pt.x);
-      w.Put<float>(k.pt.y);
-      w.Put<float>(k.size);
-      w.Put<float>(k.angle);
-      w.Put<float>(k.response);
-      w.Put<int32_t>(k.octave);
-      w.Put<float>(kf->undistorted[i].pt.x);
-      w.Put<float>(kf->undistorted[i].pt.y);
-      w.PutDescriptor(kf->descriptors[i]);
-      w.Put<float>(i < kf->depth.size() ? kf->depth[i] : -1.f);
-      w.Put<float>(i < kf->u_right.size() ? kf->u_right[i] : -1.f);
-      w.Put<uint8_t>(i < kf->in_dynamic_region.size() ? kf->in_dynamic_region[i] : 0);
-      w.Put<int64_t>(i < kf->map_points.size() ? StoredPointId(map, kf->map_points[i]) : -1);
-    }
-    w.Put<uint64_t>(kf->bow_vector.size());
-    for (const auto& [word, weight] : kf->bow_vector) {
-      w.Put<uint32_t>(word);
-      w.Put<double>(weight);
-    }
-    w.Put<uint64_t>(kf->bow_features.size());
-    for (const auto& [node, indices] : kf->bow_features) {
-      w.Put<uint32_t>(node);
-      w.Put<uint64_t>(indices.size());
-      for (int i : indices) w.Put<int32_t>(i);
-    }
-    // Covisibility among the stored keyframes only.
-    std::vector<std::pair<int64_t, int>> connections;
-    for (const auto& [other, weight] : kf->connection_weights)
-      if (keyframes.count(other)) connections.push_back({other, weight});
-    w.Put<uint64_t>(connections.size());
-    for (const auto& [other, weight] : connections) {
-      w.Put<int64_t>(other);
-      w.Put<int32_t>(weight);
-    }
-    std::vector<int64_t> ordered;
-    for (int64_t other : kf->ordered_connections)
-      if (keyframes.count(other)) ordered.push_back(other);
-    w.Put<uint64_t>(ordered.size());
-    for (int64_t other : ordered) w.Put<int64_t>(other);
-  }
+  for (const auto& [id, kf] : keyframes) PutKeyFrame(w, map, *kf, keyframes);
   const auto& points = map.map_points();
   w.Put<uint64_t>(points.size());
-  for (const auto& [id, mp] : points) {
-    w.Put<int64_t>(mp->id);
-    w.Put<int64_t>(mp->first_kf_id);
-    w.Put<int64_t>(mp->ref_kf_id);
-    w.PutVector(mp->position);
-    w.PutDescriptor(mp->descriptor);
-    w.PutVector(mp->normal);
-    w.Put<double>(mp->min_distance);
-    w.Put<double>(mp->max_distance);
-    w.Put<int32_t>(mp->visible_count);
-    w.Put<int32_t>(mp->found_count);
-    std::vector<std::pair<int64_t, int>> observations;
-    for (const auto& [kf_id, idx] : mp->observations)
-      if (keyframes.count(kf_id)) observations.push_back({kf_id, idx});
-    w.Put<uint64_t>(observations.size());
-    for (const auto& [kf_id, idx] : observations) {
-      w.Put<int64_t>(kf_id);
-      w.Put<int32_t>(idx);
-    }
-  }
+  for (const auto& [id, mp] : points) PutMapPoint(w, *mp, keyframes);
   std::string payload = std::move(w.bytes());
   Writer file;
   for (char c : kMagic) file.Put(c);
@@ -358,9 +372,16 @@ uint64_t MapFileChecksum(const char* data, size_t size, uint32_t version) {
   return Fnv1a(data, size, version == 1 ? kFnvOffsetBasisVersion1 : kFnvOffsetBasis);
 }
 
-LoadedMap DecodeMapFile(const std::string& bytes, const std::string& source,
-                        const MapFileSettings& run_settings,
-                        const std::shared_ptr<const CameraGeometry>& geometry) {
+namespace {
+
+// The header (magic, version, payload size) and the trailing checksum of a map file.
+struct MapFileFrame {
+  uint32_t version = 0;
+  uint64_t payload_size = 0;
+  uint64_t checksum = 0;
+};
+
+MapFileFrame CheckMapFileFrame(const std::string& bytes, const std::string& source) {
   auto fail = [&](const std::string& what) -> InputError { return InputError(source, 0, what); };
   if (bytes.size() < kHeaderBytes + kTrailerBytes) {
     if (bytes.size() < sizeof(kMagic) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0)
@@ -371,138 +392,208 @@ LoadedMap DecodeMapFile(const std::string& bytes, const std::string& source,
   }
   if (std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0)
     throw fail("not a dygslam map file (no \"DYGSLMAP\" header)");
-  uint32_t version = 0;
-  uint64_t payload_size = 0;
-  std::memcpy(&version, bytes.data() + 8, 4);
-  std::memcpy(&payload_size, bytes.data() + 12, 8);
-  if (version < kOldestReadableMapFileVersion || version > kMapFileVersion)
-    throw fail("map file format version " + std::to_string(version) +
+  MapFileFrame frame;
+  std::memcpy(&frame.version, bytes.data() + 8, 4);
+  std::memcpy(&frame.payload_size, bytes.data() + 12, 8);
+  if (frame.version < kOldestReadableMapFileVersion || frame.version > kMapFileVersion)
+    throw fail("map file format version " + std::to_string(frame.version) +
                ", this build reads versions " + std::to_string(kOldestReadableMapFileVersion) +
                " to " + std::to_string(kMapFileVersion));
   const uint64_t body = bytes.size() - kHeaderBytes - kTrailerBytes;
-  if (payload_size > body)
+  if (frame.payload_size > body)
     throw fail("truncated map file: " + std::to_string(bytes.size()) + " bytes, the header says " +
-               std::to_string(payload_size + kHeaderBytes + kTrailerBytes) +
+               std::to_string(frame.payload_size + kHeaderBytes + kTrailerBytes) +
                " (written by an interrupted copy?)");
-  if (payload_size < body)
-    throw fail("corrupt map file: " + std::to_string(body - payload_size) +
+  if (frame.payload_size < body)
+    throw fail("corrupt map file: " + std::to_string(body - frame.payload_size) +
                " bytes after the end of the map");
-  uint64_t stored = 0;
-  std::memcpy(&stored, bytes.data() + bytes.size() - 8, 8);
-  if (stored != MapFileChecksum(bytes.data(), bytes.size() - 8, version))
+  std::memcpy(&frame.checksum, bytes.data() + bytes.size() - 8, 8);
+  if (frame.checksum != MapFileChecksum(bytes.data(), bytes.size() - 8, frame.version))
     throw fail("corrupt map file: checksum mismatch (the file was changed or damaged)");
+  return frame;
+}
 
-  Reader r(bytes, kHeaderBytes, kHeaderBytes + payload_size, source);
+// What the ids and octaves of a map file must lie in.
+struct MapFileLimits {
+  int64_t next_kf_id = 0, next_point_id = 0;
+  int num_levels = 0;
+};
+
+// The keypoints of a keyframe into `frame`; returns the map point id of each (-1: none).
+std::vector<int64_t> ReadKeypoints(Reader& r, const MapFileLimits& limits, Frame* frame) {
+  constexpr size_t kKeypointBytes = 4 * 5 + 4 + 4 * 2 + 32 + 4 * 2 + 1 + 8;
+  const size_t n = r.GetCount("keypoint count", kKeypointBytes);
+  frame->keypoints.resize(n);
+  frame->undistorted.resize(n);
+  frame->descriptors.resize(n);
+  frame->depth.resize(n);
+  frame->u_right.resize(n);
+  frame->in_dynamic_region.resize(n);
+  std::vector<int64_t> point_ids(n);
+  for (size_t i = 0; i < n; ++i) {
+    cv::KeyPoint& kp = frame->keypoints[i];
+    kp.pt.x = r.GetFiniteFloat("keypoint");
+    kp.pt.y = r.GetFiniteFloat("keypoint");
+    kp.size = r.GetFiniteFloat("keypoint");
+    kp.angle = r.GetFiniteFloat("keypoint");
+    kp.response = r.GetFiniteFloat("keypoint");
+    kp.octave = r.Get<int32_t>("keypoint");
+    if (kp.octave < 0 || kp.octave >= limits.num_levels)
+      r.Fail("keypoint octave " + std::to_string(kp.octave) + " outside the " +
+             std::to_string(limits.num_levels) + " pyramid levels");
+    frame->undistorted[i] = kp;
+    frame->undistorted[i].pt.x = r.GetFiniteFloat("keypoint");
+    frame->undistorted[i].pt.y = r.GetFiniteFloat("keypoint");
+    for (const cv::Point2f& p : {kp.pt, frame->undistorted[i].pt})
+      if (std::abs(p.x) > kMaxPixelCoordinate || std::abs(p.y) > kMaxPixelCoordinate)
+        r.Fail("keypoint coordinate outside any image");
+    frame->descriptors[i] = r.GetDescriptor("descriptor");
+    frame->depth[i] = r.GetFiniteFloat("keypoint depth");
+    frame->u_right[i] = r.GetFiniteFloat("keypoint right coordinate");
+    frame->in_dynamic_region[i] = r.Get<uint8_t>("keypoint flags");
+    if (frame->in_dynamic_region[i] > 1) r.Fail("keypoint flags");
+    point_ids[i] = r.Get<int64_t>("keypoint map point");
+    if (point_ids[i] < -1 || point_ids[i] >= limits.next_point_id)
+      r.Fail("keypoint map point id " + std::to_string(point_ids[i]) + " out of range");
+  }
+  return point_ids;
+}
+
+// The bag of words and its direct index.
+void ReadBow(Reader& r, Frame* frame) {
+  const size_t num_words = r.GetCount("BoW vector size", 12);
+  for (size_t i = 0; i < num_words; ++i) {
+    const WordId word = r.Get<uint32_t>("BoW vector");
+    const double weight = r.GetFinite("BoW vector");
+    if (!frame->bow_vector.emplace(word, weight).second) r.Fail("BoW word given twice");
+  }
+  const size_t num_nodes = r.GetCount("BoW direct index size", 12);
+  for (size_t i = 0; i < num_nodes; ++i) {
+    const NodeId node = r.Get<uint32_t>("BoW direct index");
+    const size_t m = r.GetCount("BoW direct index entry", 4);
+    std::vector<int> indices(m);
+    for (int& idx : indices) {
+      idx = r.Get<int32_t>("BoW direct index entry");
+      if (idx < 0 || static_cast<size_t>(idx) >= frame->keypoints.size())
+        r.Fail("BoW feature index out of range");
+    }
+    if (!frame->bow_features.emplace(node, std::move(indices)).second)
+      r.Fail("BoW node given twice");
+  }
+}
+
+void ReadCovisibility(Reader& r, KeyFrame* kf) {
+  const size_t num_connections = r.GetCount("covisibility count", 12);
+  for (size_t i = 0; i < num_connections; ++i) {
+    const int64_t other = r.Get<int64_t>("covisibility");
+    const int weight = r.Get<int32_t>("covisibility");
+    if (!kf->connection_weights.emplace(other, weight).second)
+      r.Fail("covisible keyframe given twice");
+  }
+  const size_t num_ordered = r.GetCount("covisibility order count", 8);
+  for (size_t i = 0; i < num_ordered; ++i) {
+    const int64_t other = r.Get<int64_t>("covisibility order");
+    if (!kf->connection_weights.count(other)) r.Fail("covisibility order names an unknown link");
+    kf->ordered_connections.push_back(other);
+  }
+}
+
+// One keyframe (its point slots empty) and the map point id of each keypoint. `previous_id`:
+// the id of the keyframe before it (-1 for the first).
+std::pair<std::shared_ptr<KeyFrame>, std::vector<int64_t>> ReadKeyFrame(
+    Reader& r, const MapFileLimits& limits, const std::shared_ptr<const CameraGeometry>& geometry,
+    int64_t previous_id) {
+  Frame frame;
+  const int64_t kf_id = r.Get<int64_t>("keyframe");
+  frame.id = r.Get<int64_t>("keyframe frame id");
+  frame.stamp = Timestamp::FromNanoseconds(r.Get<int64_t>("keyframe stamp"));
+  frame.geometry = geometry;
+  frame.cam_from_world = r.GetPose("keyframe pose");
+  frame.has_pose = true;
+  const int64_t parent_id = r.Get<int64_t>("keyframe parent");
+  const uint8_t not_erase = r.Get<uint8_t>("keyframe flags");
+  if (kf_id < 0 || kf_id >= limits.next_kf_id)
+    r.Fail("keyframe id " + std::to_string(kf_id) + " outside [0, " +
+           std::to_string(limits.next_kf_id) + ")");
+  if (previous_id >= 0 && kf_id <= previous_id) r.Fail("keyframe ids not ascending");
+  if (not_erase > 1) r.Fail("keyframe flags");
+  std::vector<int64_t> point_ids = ReadKeypoints(r, limits, &frame);
+  ReadBow(r, &frame);
+  frame.grid.Build(frame.undistorted, *geometry);
+  frame.map_points.assign(frame.keypoints.size(), nullptr);
+  frame.outlier.assign(frame.keypoints.size(), 0);
+  auto kf = std::make_shared<KeyFrame>(kf_id, frame);
+  kf->parent_id = parent_id;
+  kf->not_erase = not_erase != 0;
+  ReadCovisibility(r, kf.get());
+  return {kf, std::move(point_ids)};
+}
+
+// One map point, its observations checked against the keyframes of `map`.
+std::shared_ptr<MapPoint> ReadMapPoint(Reader& r, const Map& map, int64_t next_point_id,
+                                       int64_t* last_point_id) {
+  const int64_t id = r.Get<int64_t>("map point");
+  const int64_t first_kf_id = r.Get<int64_t>("map point");
+  if (id <= *last_point_id || id >= next_point_id)
+    r.Fail("map point ids not ascending or out of range");
+  *last_point_id = id;
+  auto mp = std::make_shared<MapPoint>(id, Eigen::Vector3d::Zero(), first_kf_id);
+  mp->ref_kf_id = r.Get<int64_t>("map point");
+  mp->position = r.GetVector("map point position");
+  mp->descriptor = r.GetDescriptor("map point descriptor");
+  mp->normal = r.GetVector("map point normal");
+  mp->min_distance = r.GetFinite("map point distance");
+  mp->max_distance = r.GetFinite("map point distance");
+  if (!(mp->max_distance > 0) || mp->min_distance < 0)
+    r.Fail("map point " + std::to_string(id) + " has no valid scale distance");
+  mp->visible_count = r.Get<int32_t>("map point counters");
+  mp->found_count = r.Get<int32_t>("map point counters");
+  if (mp->visible_count < 1 || mp->found_count < 0)
+    r.Fail("map point " + std::to_string(id) + " has invalid counters");
+  const size_t num_obs = r.GetCount("observation count", 12);
+  for (size_t i = 0; i < num_obs; ++i) {
+    const int64_t kf_id = r.Get<int64_t>("observation");
+    const int idx = r.Get<int32_t>("observation");
+    auto kf = map.GetKeyFrame(kf_id);
+    if (!kf) r.Fail("map point " + std::to_string(id) + " observed by an unknown keyframe");
+    if (idx < 0 || static_cast<size_t>(idx) >= kf->size())
+      r.Fail("map point " + std::to_string(id) + " observation index out of range");
+    if (!mp->observations.emplace(kf_id, idx).second) r.Fail("observation given twice");
+  }
+  return mp;
+}
+
+}  // namespace
+
+LoadedMap DecodeMapFile(const std::string& bytes, const std::string& source,
+                        const MapFileSettings& run_settings,
+                        const std::shared_ptr<const CameraGeometry>& geometry) {
+  const MapFileFrame file = CheckMapFileFrame(bytes, source);
+  Reader r(bytes, kHeaderBytes, kHeaderBytes + file.payload_size, source);
   LoadedMap loaded;
-  loaded.info.version = version;
-  loaded.info.checksum = stored;
+  loaded.info.version = file.version;
+  loaded.info.checksum = file.checksum;
   loaded.info.bytes = bytes.size();
-  loaded.info.settings = GetSettings(r, version);
+  loaded.info.settings = GetSettings(r, file.version);
   const std::string difference = loaded.info.settings.Difference(run_settings);
-  if (!difference.empty()) throw fail("the map was made with a " + difference);
+  if (!difference.empty()) throw InputError(source, 0, "the map was made with a " + difference);
   auto map = std::make_shared<Map>();
-  const int64_t next_kf_id = r.Get<int64_t>("id counters");
-  const int64_t next_point_id = r.Get<int64_t>("id counters");
-  if (next_kf_id < 0 || next_point_id < 0) r.Fail("negative id counter");
-  map->SetIdCounters(next_kf_id, next_point_id);
-  const int num_levels = geometry->num_levels;
+  MapFileLimits limits;
+  limits.next_kf_id = r.Get<int64_t>("id counters");
+  limits.next_point_id = r.Get<int64_t>("id counters");
+  if (limits.next_kf_id < 0 || limits.next_point_id < 0) r.Fail("negative id counter");
+  map->SetIdCounters(limits.next_kf_id, limits.next_point_id);
+  limits.num_levels = geometry->num_levels;
 
   // Keyframes (their point slots are resolved once the points are read).
   constexpr size_t kMinKeyFrameBytes = 8 * 3 + 7 * 8 + 8 + 1 + 8 * 4;
-  constexpr size_t kKeypointBytes = 4 * 5 + 4 + 4 * 2 + 32 + 4 * 2 + 1 + 8;
   const size_t num_keyframes = r.GetCount("keyframe count", kMinKeyFrameBytes);
   std::vector<std::pair<std::shared_ptr<KeyFrame>, std::vector<int64_t>>> keyframes;
   keyframes.reserve(num_keyframes);
   for (size_t k = 0; k < num_keyframes; ++k) {
-    Frame frame;
-    frame.id = r.Get<int64_t>("keyframe");
-    const int64_t kf_id = frame.id;
-    frame.id = r.Get<int64_t>("keyframe frame id");
-    frame.stamp = Timestamp::FromNanoseconds(r.Get<int64_t>("keyframe stamp"));
-    frame.geometry = geometry;
-    frame.cam_from_world = r.GetPose("keyframe pose");
-    frame.has_pose = true;
-    const int64_t parent_id = r.Get<int64_t>("keyframe parent");
-    const uint8_t not_erase = r.Get<uint8_t>("keyframe flags");
-    if (kf_id < 0 || kf_id >= next_kf_id)
-      r.Fail("keyframe id " + std::to_string(kf_id) + " outside [0, " + std::to_string(next_kf_id) +
-             ")");
-    if (!keyframes.empty() && kf_id <= keyframes.back().first->id)
-      r.Fail("keyframe ids not ascending");
-    if (not_erase > 1) r.Fail("keyframe flags");
-    const size_t n = r.GetCount("keypoint count", kKeypointBytes);
-    frame.keypoints.resize(n);
-    frame.undistorted.resize(n);
-    frame.descriptors.resize(n);
-    frame.depth.resize(n);
-    frame.u_right.resize(n);
-    frame.in_dynamic_region.resize(n);
-    std::vector<int64_t> point_ids(n);
-    for (size_t i = 0; i < n; ++i) {
-      cv::KeyPoint& kp = frame.keypoints[i];
-      kp.pt.x = r.GetFiniteFloat("keypoint");
-      kp.pt.y = r.GetFiniteFloat("keypoint");
-      kp.size = r.GetFiniteFloat("keypoint");
-      kp.angle = r.GetFiniteFloat("keypoint");
-      kp.response = r.GetFiniteFloat("keypoint");
-      kp.octave = r.Get<int32_t>("keypoint");
-      if (kp.octave < 0 || kp.octave >= num_levels)
-        r.Fail("keypoint octave " + std::to_string(kp.octave) + " outside the " +
-               std::to_string(num_levels) + " pyramid levels");
-      frame.undistorted[i] = kp;
-      frame.undistorted[i].pt.x = r.GetFiniteFloat("keypoint");
-      frame.undistorted[i].pt.y = r.GetFiniteFloat("keypoint");
-      for (const cv::Point2f& p : {kp.pt, frame.undistorted[i].pt})
-        if (std::abs(p.x) > kMaxPixelCoordinate || std::abs(p.y) > kMaxPixelCoordinate)
-          r.Fail("keypoint coordinate outside any image");
-      frame.descriptors[i] = r.GetDescriptor("descriptor");
-      frame.depth[i] = r.GetFiniteFloat("keypoint depth");
-      frame.u_right[i] = r.GetFiniteFloat("keypoint right coordinate");
-      frame.in_dynamic_region[i] = r.Get<uint8_t>("keypoint flags");
-      if (frame.in_dynamic_region[i] > 1) r.Fail("keypoint flags");
-      point_ids[i] = r.Get<int64_t>("keypoint map point");
-      if (point_ids[i] < -1 || point_ids[i] >= next_point_id)
-        r.Fail("keypoint map point id " + std::to_string(point_ids[i]) + " out of range");
-    }
-    const size_t num_words = r.GetCount("BoW vector size", 12);
-    for (size_t i = 0; i < num_words; ++i) {
-      const WordId word = r.Get<uint32_t>("BoW vector");
-      const double weight = r.GetFinite("BoW vector");
-      if (!frame.bow_vector.emplace(word, weight).second) r.Fail("BoW word given twice");
-    }
-    const size_t num_nodes = r.GetCount("BoW direct index size", 12);
-    for (size_t i = 0; i < num_nodes; ++i) {
-      const NodeId node = r.Get<uint32_t>("BoW direct index");
-      const size_t m = r.GetCount("BoW direct index entry", 4);
-      std::vector<int> indices(m);
-      for (int& idx : indices) {
-        idx = r.Get<int32_t>("BoW direct index entry");
-        if (idx < 0 || static_cast<size_t>(idx) >= n) r.Fail("BoW feature index out of range");
-      }
-      if (!frame.bow_features.emplace(node, std::move(indices)).second)
-        r.Fail("BoW node given twice");
-    }
-    frame.grid.Build(frame.undistorted, *geometry);
-    frame.map_points.assign(n, nullptr);
-    frame.outlier.assign(n, 0);
-    auto kf = std::make_shared<KeyFrame>(kf_id, frame);
-    kf->parent_id = parent_id;
-    kf->not_erase = not_erase != 0;
-    const size_t num_connections = r.GetCount("covisibility count", 12);
-    for (size_t i = 0; i < num_connections; ++i) {
-      const int64_t other = r.Get<int64_t>("covisibility");
-      const int weight = r.Get<int32_t>("covisibility");
-      if (!kf->connection_weights.emplace(other, weight).second)
-        r.Fail("covisible keyframe given twice");
-    }
-    const size_t num_ordered = r.GetCount("covisibility order count", 8);
-    for (size_t i = 0; i < num_ordered; ++i) {
-      const int64_t other = r.Get<int64_t>("covisibility order");
-      if (!kf->connection_weights.count(other)) r.Fail("covisibility order names an unknown link");
-      kf->ordered_connections.push_back(other);
-    }
-    map->AddKeyFrame(kf);
-    keyframes.push_back({kf, std::move(point_ids)});
+    keyframes.push_back(
+        ReadKeyFrame(r, limits, geometry, keyframes.empty() ? -1 : keyframes.back().first->id));
+    map->AddKeyFrame(keyframes.back().first);
   }
   // Links between keyframes must name stored keyframes.
   for (const auto& [kf, ids] : keyframes) {
@@ -512,41 +603,11 @@ LoadedMap DecodeMapFile(const std::string& bytes, const std::string& source,
       if (!map->GetKeyFrame(other) || other == kf->id)
         r.Fail("keyframe " + std::to_string(kf->id) + " is covisible with an unknown keyframe");
   }
-
   constexpr size_t kMinPointBytes = 8 * 3 + 24 + 32 + 24 + 16 + 8 + 8;
   const size_t num_points = r.GetCount("map point count", kMinPointBytes);
   int64_t last_point_id = -1;
-  for (size_t p = 0; p < num_points; ++p) {
-    const int64_t id = r.Get<int64_t>("map point");
-    const int64_t first_kf_id = r.Get<int64_t>("map point");
-    if (id <= last_point_id || id >= next_point_id)
-      r.Fail("map point ids not ascending or out of range");
-    last_point_id = id;
-    auto mp = std::make_shared<MapPoint>(id, Eigen::Vector3d::Zero(), first_kf_id);
-    mp->ref_kf_id = r.Get<int64_t>("map point");
-    mp->position = r.GetVector("map point position");
-    mp->descriptor = r.GetDescriptor("map point descriptor");
-    mp->normal = r.GetVector("map point normal");
-    mp->min_distance = r.GetFinite("map point distance");
-    mp->max_distance = r.GetFinite("map point distance");
-    if (!(mp->max_distance > 0) || mp->min_distance < 0)
-      r.Fail("map point " + std::to_string(id) + " has no valid scale distance");
-    mp->visible_count = r.Get<int32_t>("map point counters");
-    mp->found_count = r.Get<int32_t>("map point counters");
-    if (mp->visible_count < 1 || mp->found_count < 0)
-      r.Fail("map point " + std::to_string(id) + " has invalid counters");
-    const size_t num_obs = r.GetCount("observation count", 12);
-    for (size_t i = 0; i < num_obs; ++i) {
-      const int64_t kf_id = r.Get<int64_t>("observation");
-      const int idx = r.Get<int32_t>("observation");
-      auto kf = map->GetKeyFrame(kf_id);
-      if (!kf) r.Fail("map point " + std::to_string(id) + " observed by an unknown keyframe");
-      if (idx < 0 || static_cast<size_t>(idx) >= kf->size())
-        r.Fail("map point " + std::to_string(id) + " observation index out of range");
-      if (!mp->observations.emplace(kf_id, idx).second) r.Fail("observation given twice");
-    }
-    map->AddMapPoint(mp);
-  }
+  for (size_t p = 0; p < num_points; ++p)
+    map->AddMapPoint(ReadMapPoint(r, *map, limits.next_point_id, &last_point_id));
   if (!r.AtEnd()) r.Fail("data after the last map point");
   for (auto& [kf, ids] : keyframes) {
     for (size_t i = 0; i < ids.size(); ++i) {

@@ -437,8 +437,10 @@ int RunRun(const std::vector<std::string>& args) {
   s.partition = p.Get("partition");
   s.security_dir = p.Get("security");
   const PipelineRunner pipeline = SelectMode(p, &s);
-  // The detector's model files before any output: missing models fail here, nothing written.
-  if (s.mode == RunMode::kDirect && !s.use_detection_file) ResolveDetectorModel(&s.system);
+  // The detector's model files before any output or component: missing models fail here, nothing
+  // written (a detector component failing on them before it announced itself would leave a
+  // deterministic slam waiting for boxes).
+  if (!s.use_detection_file) ResolveDetectorModel(&s.system);
 
   // This run's outputs: written atomically, nothing deleted up front (see RunOutputs).
   RunController controller(s, dataset, std::move(groundtruth), pipeline);

@@ -16,99 +16,139 @@
 
 namespace dygslam {
 
+namespace {
+
+// The detector component: frames in, person boxes out (every n-th frame), until the run's frame
+// source ended its stream (every announced frame seen, or 2 s idle past its end) or left without
+// announcing it. State first, the DDS endpoints last: their listeners never outlive the state.
+class DetectorShell {
+ public:
+  DetectorShell(const std::shared_ptr<dds::Participant>& participant,
+                const DetectorOptions& options, int every_n_frames)
+      : core_(options),
+        every_n_frames_(every_n_frames),
+        writer_(participant, dds::topics::kDetections, dds::TopicKind::kDetections),
+        status_(participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus),
+        frames_(participant, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame,
+                [this](msg::RgbdFrame&& frame) { queue_.Push(std::move(frame)); }),
+        status_reader_(participant, ComponentKind::kDetector,
+                       [this](const ComponentStatus& s, const msg::StreamStatus& m,
+                              const WriterGuid& from) { OnStatus(s, m, from); }),
+        started_(status_, ComponentStatus::Started(ComponentKind::kDetector,
+                                                   {{DataTopic::kDetections, writer_.guid()}})) {}
+
+  DetectorStats Run(const StopFlagPtr& stop) {
+    ReadyAnnouncer announcer(ComponentKind::kDetector);
+    while (!stop->requested()) {
+      started_.Poll(status_);
+      announcer.Poll(status_, frames_.matched() > 0 && writer_.matched() > 0);
+      std::optional<msg::RgbdFrame> sample = queue_.Pop(std::chrono::milliseconds(20));
+      if (sample) {
+        Process(*sample);
+      } else if (StreamOver()) {
+        break;
+      }
+    }
+    Finish();
+    return stats_;
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+
+  void OnStatus(const ComponentStatus& s, const msg::StreamStatus& m, const WriterGuid& from) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    // A second frame source's end of stream is not this run's (components/protocol.h).
+    if (!run_writers_.Announce(s, from)) return;
+    if (s.event == StreamEvent::kEndOfStream && IsFrameSource(s.source)) {
+      end_frames_ = StreamFrameCountFromMsg(m);
+      if (end_frames_ == std::numeric_limits<int64_t>::max()) {
+        LOG_WARNING << "detector: END_OF_STREAM announces " << m.num_frames()
+                    << " frames; finishing when the stream goes idle";
+      }
+    }
+  }
+
+  // Done when every announced frame was seen, or (frames lost) after 2 s idle past the end; or
+  // when a frame source left without END_OF_STREAM (killed, or the announcement lost): its
+  // writer gone (time allowed to find it again after this process was suspended) and nothing
+  // for 5 s.
+  bool StreamOver() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (end_frames_ >= 0 && (static_cast<int64_t>(received_) >= end_frames_ ||
+                             Clock::now() - idle_since_ > std::chrono::seconds(2)))
+      return true;
+    const bool source_gone = source_watch_.Update(frames_.matched() > 0);
+    if (end_frames_ < 0 && source_gone && Clock::now() - idle_since_ > std::chrono::seconds(5)) {
+      LOG_WARNING << "detector: the frame source left without announcing the end of its "
+                     "stream; ending";
+      return true;
+    }
+    return false;
+  }
+
+  void Process(const msg::RgbdFrame& sample) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++received_;
+      idle_since_ = Clock::now();
+    }
+    if (sample.header().seq() % static_cast<uint64_t>(every_n_frames_) != 0) {
+      ++stats_.frames_skipped;  // slam carries the boxes of the last detected frame to it
+      return;
+    }
+    try {
+      const RgbdFrameData frame = RgbdFrameFromMsg(sample);
+      msg::Detections out = core_.Process(frame);
+      total_ms_ += out.inference_ms();
+      writer_.Write(out);
+      ++stats_.frames_processed;
+    } catch (const InputError& e) {
+      ++stats_.bad_samples;
+      LOG_WARNING << "detector: dropped frame seq " << sample.header().seq() << ": " << e.what();
+    }
+  }
+
+  void Finish() {
+    if (stats_.frames_processed > 0) stats_.mean_inference_ms = total_ms_ / stats_.frames_processed;
+    status_.Write(ToMsg(ComponentStatus::Done(ComponentKind::kDetector, stats_.frames_processed)));
+    writer_.WaitForAcknowledgments(std::chrono::milliseconds(2000));
+    LOG_INFO << "detector: " << stats_.frames_processed << " frames, mean inference "
+             << stats_.mean_inference_ms << " ms";
+    if (every_n_frames_ > 1) {
+      LOG_INFO << "detector: " << stats_.frames_skipped << " frames skipped (every "
+               << every_n_frames_ << " frames detected)";
+    }
+  }
+
+  DetectorCore core_;
+  const int every_n_frames_;
+  DetectorStats stats_;
+  double total_ms_ = 0;
+  BlockingQueue<msg::RgbdFrame> queue_;
+  std::mutex mutex_;
+  int64_t end_frames_ = -1;  // frames announced by END_OF_STREAM (guarded by mutex_)
+  size_t received_ = 0;      // guarded by mutex_
+  Clock::time_point idle_since_ = Clock::now();            // guarded by mutex_
+  WriterGoneWatch source_watch_{std::chrono::seconds(0)};  // the frame writer, matched then gone
+  RunWriters run_writers_;  // which frame source is the run's (guarded by mutex_)
+  // DDS endpoints last (see above).
+  dds::Writer<msg::DetectionsPubSubType> writer_;
+  dds::Writer<msg::StreamStatusPubSubType> status_;
+  dds::Reader<msg::RgbdFramePubSubType> frames_;
+  StatusReader status_reader_;
+  StartedAnnouncer started_;
+};
+
+}  // namespace
+
 DetectorStats RunDetector(std::shared_ptr<dds::Participant> participant,
                           const DetectorOptions& options, const StopFlagPtr& stop,
                           int every_n_frames) {
   DYGSLAM_CHECK_OPTION(every_n_frames >= 1 && every_n_frames <= 1000,
                        "Detector.every_n_frames (1..1000)");
-  DetectorCore core(options);
-  DetectorStats stats;
-  BlockingQueue<msg::RgbdFrame> queue;
-  std::mutex mutex;
-  int64_t end_frames = -1;  // frames announced by END_OF_STREAM
-  RunWriters run_writers;   // which frame source is the run's (guarded by mutex)
-
-  dds::Writer<msg::DetectionsPubSubType> writer(participant, dds::topics::kDetections,
-                                                dds::TopicKind::kDetections);
-  dds::Writer<msg::StreamStatusPubSubType> status(participant, dds::topics::kStreamStatus,
-                                                  dds::TopicKind::kStreamStatus);
-  dds::Reader<msg::RgbdFramePubSubType> frames(
-      participant, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame,
-      [&](msg::RgbdFrame&& frame) { queue.Push(std::move(frame)); });
-  StatusReader status_reader(
-      participant, ComponentKind::kDetector,
-      [&](const ComponentStatus& s, const msg::StreamStatus& m, const WriterGuid& from) {
-        std::lock_guard<std::mutex> lock(mutex);
-        // A second frame source's end of stream is not this run's (components/protocol.h).
-        if (!run_writers.Announce(s, from)) return;
-        if (s.event == StreamEvent::kEndOfStream && IsFrameSource(s.source)) {
-          end_frames = StreamFrameCountFromMsg(m);
-          if (end_frames == std::numeric_limits<int64_t>::max()) {
-            LOG_WARNING << "detector: END_OF_STREAM announces " << m.num_frames()
-                        << " frames; finishing when the stream goes idle";
-          }
-        }
-      });
-  StartedAnnouncer started(status,
-                           ComponentStatus::Started(ComponentKind::kDetector,
-                                                    {{DataTopic::kDetections, writer.guid()}}));
-
-  double total_ms = 0;
-  size_t received = 0;
-  auto idle_since = std::chrono::steady_clock::now();
-  bool frame_source_seen = false;  // a frame writer was matched
-  ReadyAnnouncer announcer(ComponentKind::kDetector);
-  while (!stop->requested()) {
-    started.Poll(status);
-    announcer.Poll(status, frames.matched() > 0 && writer.matched() > 0);
-    std::optional<msg::RgbdFrame> sample = queue.Pop(std::chrono::milliseconds(20));
-    if (!sample) {
-      std::lock_guard<std::mutex> lock(mutex);
-      // Done when every announced frame was seen, or (frames lost) after 2 s idle past the end.
-      if (end_frames >= 0 &&
-          (static_cast<int64_t>(received) >= end_frames ||
-           std::chrono::steady_clock::now() - idle_since > std::chrono::seconds(2))) {
-        break;
-      }
-      // A frame source that left without END_OF_STREAM (killed, or the announcement lost): its
-      // writer gone and nothing for 5 s.
-      const int frame_writers = frames.matched();
-      frame_source_seen = frame_source_seen || frame_writers > 0;
-      if (end_frames < 0 && frame_source_seen && frame_writers == 0 &&
-          std::chrono::steady_clock::now() - idle_since > std::chrono::seconds(5)) {
-        LOG_WARNING << "detector: the frame source left without announcing the end of its "
-                       "stream; ending";
-        break;
-      }
-      continue;
-    }
-    ++received;
-    idle_since = std::chrono::steady_clock::now();
-    if (sample->header().seq() % static_cast<uint64_t>(every_n_frames) != 0) {
-      ++stats.frames_skipped;  // slam carries the boxes of the last detected frame to it
-      continue;
-    }
-    try {
-      const RgbdFrameData frame = RgbdFrameFromMsg(*sample);
-      msg::Detections out = core.Process(frame);
-      total_ms += out.inference_ms();
-      writer.Write(out);
-      ++stats.frames_processed;
-    } catch (const InputError& e) {
-      ++stats.bad_samples;
-      LOG_WARNING << "detector: dropped frame seq " << sample->header().seq() << ": " << e.what();
-    }
-  }
-  if (stats.frames_processed > 0) stats.mean_inference_ms = total_ms / stats.frames_processed;
-  status.Write(ToMsg(ComponentStatus::Done(ComponentKind::kDetector, stats.frames_processed)));
-  writer.WaitForAcknowledgments(std::chrono::milliseconds(2000));
-  LOG_INFO << "detector: " << stats.frames_processed << " frames, mean inference "
-           << stats.mean_inference_ms << " ms";
-  if (every_n_frames > 1) {
-    LOG_INFO << "detector: " << stats.frames_skipped << " frames skipped (every " << every_n_frames
-             << " frames detected)";
-  }
-  return stats;
+  DetectorShell shell(participant, options, every_n_frames);
+  return shell.Run(stop);
 }
 
 }  // namespace dygslam

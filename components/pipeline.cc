@@ -223,7 +223,7 @@ ComponentOutcome RunPipelinePlayer(const PipelineOptions& options,
     WriteRealtimeReport((fs::path(options.output_dir) / kRealtimeReportFile).string(), report);
   }
   if (stats.refused) throw FrameSourceRefused();
-  return {0, stats.slam_left_early};
+  return {0, stats.slam_left_early || stats.recorder_left_early};
 }
 
 // slam of the pipeline, with the detector's settings for the keyframes the detector skips.

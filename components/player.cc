@@ -178,6 +178,12 @@ class PlayerShell {
     slam_gone_reported_ = slam_gone_reported_ || slam_watch_.Update(poses_.matched() > 0);
     return slam_gone_reported_;
   }
+  // The run's recorder (waited for, and READY) that left without COMPONENT_DONE: its ground-truth
+  // reader unmatched for 5 s.
+  bool RecorderGone() { return recorder_watch_.Update(gt_writer_.matched() > 0); }
+  // After slam's end: waits for the recorder's DONE when the run has one; false when it left
+  // without (killed: the run's trajectory is not written).
+  bool RecorderFinished(const StopFlagPtr& stop);
   void WaitForPeers(const StopFlagPtr& stop);
   void PlayFrames(const StopFlagPtr& stop);
   // Paced runs: waits until frame `n` is due; false when stopped meanwhile.
@@ -219,6 +225,8 @@ class PlayerShell {
   std::optional<Clock::time_point> first_sent_, last_pose_;
   std::chrono::duration<double> longest_gap_{0};
   bool slam_done_ = false;
+  bool recorder_done_ = false;
+  WriterGoneWatch recorder_watch_{std::chrono::seconds(5)};
   // slam ended before the end of the stream: it said why (stopped by a signal, failed), or it
   // was done before this player announced the end of its stream.
   std::string slam_cut_short_;
@@ -311,6 +319,9 @@ void PlayerShell::OnStatus(const ComponentStatus& s, const WriterGuid& from) {
         slam_cut_short_ = "was done before the end of the stream";
     }
     if (s.event == StreamEvent::kReady) ready_.insert(s.source);
+    if (s.source == ComponentKind::kRecorder &&
+        (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed))
+      recorder_done_ = true;
     if (s.event == StreamEvent::kStarted && s.source == ComponentKind::kSlam) {
       if (const auto it = s.writers.find(DataTopic::kCameraPose); it != s.writers.end())
         slam_pose_writers_.insert(it->second);
@@ -465,6 +476,23 @@ void PlayerShell::EndStream(const StopFlagPtr& stop) {
                    "did not process have no pose)";
     stats_.slam_left_early = true;
   }
+  if (slam_said_done && !RecorderFinished(stop)) {
+    LOG_WARNING << "player: the recorder left without announcing that it is done; the run's "
+                   "trajectory and frames.csv were not written";
+    stats_.recorder_left_early = true;
+  }
+}
+
+bool PlayerShell::RecorderFinished(const StopFlagPtr& stop) {
+  const auto& wanted = options_.wait_for_components;
+  std::unique_lock<std::mutex> lock(mutex_);
+  if (std::find(wanted.begin(), wanted.end(), ComponentKind::kRecorder) == wanted.end() ||
+      !ready_.count(ComponentKind::kRecorder))
+    return true;
+  bool gone = false;
+  while (!recorder_done_ && !stop->requested() && !(gone = RecorderGone()))
+    cv_.wait_for(lock, std::chrono::milliseconds(50));
+  return !gone || recorder_done_;
 }
 
 void PlayerShell::Summarize() {

@@ -114,6 +114,9 @@ struct PlayerStats {
   // the stream (stopped by a signal): the frames it did not process have no pose, the run is
   // incomplete.
   bool slam_left_early = false;
+  // The run's recorder left without announcing that it is done (killed): the run's outputs are
+  // not written, the run is incomplete.
+  bool recorder_left_early = false;
 };
 
 // Publishes the dataset; returns when slam reported done, or stop was requested.

@@ -90,6 +90,69 @@ std::string Describe(const ParticipantOptions& options) {
   return text;
 }
 
+// The participant QoS from the XML profile file FASTRTPS_DEFAULT_PROFILES_FILE names (its
+// profile options.xml_profile_name, else its default).
+DomainParticipantQos QosFromXmlProfile(const ParticipantOptions& options, const char* profiles) {
+  DomainParticipantFactory* factory = DomainParticipantFactory::get_instance();
+  DomainParticipantQos qos;
+  if (factory->load_profiles() != ReturnCode_t::RETCODE_OK) {
+    throw InputError(std::string(profiles), 0,
+                     "FASTRTPS_DEFAULT_PROFILES_FILE: cannot load the XML profiles");
+  }
+  factory->get_default_participant_qos(qos);
+  if (!options.xml_profile_name.empty() &&
+      factory->get_participant_qos_from_profile(options.xml_profile_name, qos) !=
+          ReturnCode_t::RETCODE_OK) {
+    factory->get_default_participant_qos(qos);
+    LOG_INFO << "participant '" << options.name << "': no profile '" << options.xml_profile_name
+             << "' in " << profiles << ", using its default profile";
+  }
+  return qos;
+}
+
+// Shared memory, and UDP on loopback, the given interfaces or all of them.
+void AddTransports(const ParticipantOptions& options, DomainParticipantQos* qos) {
+  qos->transport().use_builtin_transports = false;
+  if (options.use_shm && options.network.shared_memory) {
+    auto shm = std::make_shared<SharedMemTransportDescriptor>();
+    shm->segment_size(options.shm_segment_size);
+    qos->transport().user_transports.push_back(shm);
+  }
+  if (options.use_udp_loopback || !options.network.interfaces.empty() ||
+      options.network.all_interfaces) {
+    auto udp = std::make_shared<UDPv4TransportDescriptor>();
+    if (options.network.all_interfaces) {
+      // No whitelist: every interface, and remote locators on this host's own addresses
+      // (a same-host peer announcing its LAN address) are kept.
+    } else if (options.network.interfaces.empty()) {
+      udp->interfaceWhiteList.push_back("127.0.0.1");
+    } else {
+      for (const std::string& address : options.network.interfaces) {
+        udp->interfaceWhiteList.push_back(address);
+      }
+    }
+    udp->sendBufferSize = options.socket_buffer_size;
+    udp->receiveBufferSize = options.socket_buffer_size;
+    qos->transport().user_transports.push_back(udp);
+  }
+  qos->transport().send_socket_buffer_size = options.socket_buffer_size;
+  qos->transport().listen_socket_buffer_size = options.socket_buffer_size;
+}
+
+// Discovery through the server at options.network.discovery_server (this participant a client).
+void UseDiscoveryServer(const ParticipantOptions& options, DomainParticipantQos* qos) {
+  const Endpoint server = ParseEndpoint(options.network.discovery_server, "discovery server");
+  eprosima::fastdds::rtps::RemoteServerAttributes remote;
+  remote.ReadguidPrefix(DiscoveryServerGuidPrefix(0).c_str());
+  eprosima::fastrtps::rtps::Locator_t locator;
+  eprosima::fastrtps::rtps::IPLocator::setIPv4(locator, server.address);
+  locator.port = server.port;
+  remote.metatrafficUnicastLocatorList.push_back(locator);
+  auto& discovery = qos->wire_protocol().builtin.discovery_config;
+  discovery.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;
+  discovery.m_DiscoveryServers.push_back(remote);
+}
+
 }  // namespace
 
 std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& options) {
@@ -97,68 +160,20 @@ std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& optio
   DisableIntraprocessDelivery();
   DomainParticipantFactory* factory = DomainParticipantFactory::get_instance();
   DomainParticipantQos qos;
-  bool xml = false;
   const char* profiles = std::getenv("FASTRTPS_DEFAULT_PROFILES_FILE");
-  if (options.use_xml_profile && profiles != nullptr && *profiles != '\0') {
-    if (factory->load_profiles() != ReturnCode_t::RETCODE_OK) {
-      throw InputError(std::string(profiles), 0,
-                       "FASTRTPS_DEFAULT_PROFILES_FILE: cannot load the XML profiles");
-    }
-    factory->get_default_participant_qos(qos);
-    if (!options.xml_profile_name.empty() &&
-        factory->get_participant_qos_from_profile(options.xml_profile_name, qos) !=
-            ReturnCode_t::RETCODE_OK) {
-      factory->get_default_participant_qos(qos);
-      LOG_INFO << "participant '" << options.name << "': no profile '" << options.xml_profile_name
-               << "' in " << profiles << ", using its default profile";
-    }
-    xml = true;
+  const bool xml = options.use_xml_profile && profiles != nullptr && *profiles != '\0';
+  if (xml) {
+    qos = QosFromXmlProfile(options, profiles);
   } else {
     qos = PARTICIPANT_QOS_DEFAULT;
-    qos.transport().use_builtin_transports = false;
-    if (options.use_shm && options.network.shared_memory) {
-      auto shm = std::make_shared<SharedMemTransportDescriptor>();
-      shm->segment_size(options.shm_segment_size);
-      qos.transport().user_transports.push_back(shm);
-    }
-    if (options.use_udp_loopback || !options.network.interfaces.empty() ||
-        options.network.all_interfaces) {
-      auto udp = std::make_shared<UDPv4TransportDescriptor>();
-      if (options.network.all_interfaces) {
-        // No whitelist: every interface, and remote locators on this host's own addresses
-        // (a same-host peer announcing its LAN address) are kept.
-      } else if (options.network.interfaces.empty()) {
-        udp->interfaceWhiteList.push_back("127.0.0.1");
-      } else {
-        for (const std::string& address : options.network.interfaces) {
-          udp->interfaceWhiteList.push_back(address);
-        }
-      }
-      udp->sendBufferSize = options.socket_buffer_size;
-      udp->receiveBufferSize = options.socket_buffer_size;
-      qos.transport().user_transports.push_back(udp);
-    }
-    qos.transport().send_socket_buffer_size = options.socket_buffer_size;
-    qos.transport().listen_socket_buffer_size = options.socket_buffer_size;
-    if (!options.network.discovery_server.empty()) {
-      const Endpoint server = ParseEndpoint(options.network.discovery_server, "discovery server");
-      eprosima::fastdds::rtps::RemoteServerAttributes remote;
-      remote.ReadguidPrefix(DiscoveryServerGuidPrefix(0).c_str());
-      eprosima::fastrtps::rtps::Locator_t locator;
-      eprosima::fastrtps::rtps::IPLocator::setIPv4(locator, server.address);
-      locator.port = server.port;
-      remote.metatrafficUnicastLocatorList.push_back(locator);
-      auto& discovery = qos.wire_protocol().builtin.discovery_config;
-      discovery.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;
-      discovery.m_DiscoveryServers.push_back(remote);
-    }
+    AddTransports(options, &qos);
+    if (!options.network.discovery_server.empty()) UseDiscoveryServer(options, &qos);
   }
   qos.name(options.name);
   if (!options.user_data.empty()) {
     qos.user_data().data_vec(std::vector<eprosima::fastrtps::rtps::octet>(options.user_data.begin(),
                                                                           options.user_data.end()));
   }
-
   std::shared_ptr<Participant> result(new Participant());
   result->domain_id_ = options.domain_id;
   result->uses_xml_profile_ = xml;
@@ -176,22 +191,26 @@ std::shared_ptr<Participant> Participant::Create(const ParticipantOptions& optio
     throw std::runtime_error("Fast DDS: cannot create participant '" + options.name +
                              "' on domain " + std::to_string(options.domain_id));
   }
-  PublisherQos publisher_qos = PUBLISHER_QOS_DEFAULT;
-  SubscriberQos subscriber_qos = SUBSCRIBER_QOS_DEFAULT;
-  if (!options.partition.empty()) {
-    publisher_qos.partition().push_back(options.partition.c_str());
-    subscriber_qos.partition().push_back(options.partition.c_str());
-  }
-  result->publisher_ = result->participant_->create_publisher(publisher_qos);
-  result->subscriber_ = result->participant_->create_subscriber(subscriber_qos);
-  if (result->publisher_ == nullptr || result->subscriber_ == nullptr) {
-    throw std::runtime_error("Fast DDS: cannot create publisher/subscriber");
-  }
+  result->CreatePublisherAndSubscriber(options.partition);
   LOG_DEBUG << "participant '" << options.name << "' domain " << options.domain_id
             << (options.partition.empty() ? "" : " partition '" + options.partition + "'")
             << (xml ? " (XML profile)" : " (" + Describe(options) + ")")
             << (options.security.enabled ? " DDS Security on" : "");
   return result;
+}
+
+void Participant::CreatePublisherAndSubscriber(const std::string& partition) {
+  PublisherQos publisher_qos = PUBLISHER_QOS_DEFAULT;
+  SubscriberQos subscriber_qos = SUBSCRIBER_QOS_DEFAULT;
+  if (!partition.empty()) {
+    publisher_qos.partition().push_back(partition.c_str());
+    subscriber_qos.partition().push_back(partition.c_str());
+  }
+  publisher_ = participant_->create_publisher(publisher_qos);
+  subscriber_ = participant_->create_subscriber(subscriber_qos);
+  if (publisher_ == nullptr || subscriber_ == nullptr) {
+    throw std::runtime_error("Fast DDS: cannot create publisher/subscriber");
+  }
 }
 
 Topic* Participant::CreateTopicLocked(const std::string& name, TypeSupport type) {

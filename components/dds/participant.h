@@ -97,6 +97,8 @@ class Participant {
   eprosima::fastdds::dds::Subscriber* subscriber() const { return subscriber_; }
 
  private:
+  // The publisher and subscriber of the participant, in `partition` ("" = the default one).
+  void CreatePublisherAndSubscriber(const std::string& partition);
   Participant() = default;
   eprosima::fastdds::dds::Topic* CreateTopicLocked(const std::string& name,
                                                    eprosima::fastdds::dds::TypeSupport type);

@@ -515,8 +515,8 @@ std::string ImplausibleDepth(const DepthRangeSample& s, double depth_map_factor)
     if (s.median_m >= kMinPlausibleMedianDepthMetres) return "";
     std::snprintf(text, sizeof(text),
                   "the median depth of %zu sampled depth images (e.g. %s) is %.4g m with "
-                  "DepthMapFactor %g: closer than %g m, a surface a hand's width in front of the "
-                  "camera in every image. %s",
+                  "DepthMapFactor %g: closer than %g m, surfaces within arm's reach in every "
+                  "image. %s",
                   s.images, EchoValue(s.example, 300).c_str(), s.median_m, depth_map_factor,
                   kMinPlausibleMedianDepthMetres, causes);
     return text;

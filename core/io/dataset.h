@@ -116,10 +116,10 @@ std::string ImplausibleGroundTruthNote(const std::string& path,
 // scale (65535 / 5000 = 13.1 m) is beyond it. Below 5 cm no sensor gives depth.
 inline constexpr double kMaxSensorDepthMetres = 12.0;
 inline constexpr double kMinSensorDepthMetres = 0.05;
-// A scene whose median depth is this close fills the view with one surface a hand's width away:
-// no room, street or table scene a SLAM camera looks at. A DepthMapFactor 20 times too large puts
-// an indoor scene (median 2-3 m) there while most pixels still lie beyond kMinSensorDepthMetres.
-inline constexpr double kMinPlausibleMedianDepthMetres = 0.2;
+// A scene whose median depth is this close fills the view with surfaces within arm's reach: no
+// room, corridor or street a SLAM camera maps. A DepthMapFactor 10 or 20 times too large puts an
+// indoor scene (median 2-3 m) there while most pixels still lie beyond kMinSensorDepthMetres.
+inline constexpr double kMinPlausibleMedianDepthMetres = 0.5;
 
 // The depth of a few frames of a run in metres (raw / DepthMapFactor), against the sensor range.
 struct DepthRangeSample {

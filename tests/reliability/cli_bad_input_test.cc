@@ -2,6 +2,7 @@
 // full disk or an interrupted copy): either a clear error naming the file (exit 1), or a counted
 // skip with the trajectory of the other frames written -- never a crash (signal) or a silent
 // success that hides the frame.
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -12,8 +13,6 @@
 #include <string>
 #include <vector>
 
-#include <gtest/gtest.h>
-
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
 #include "tests/support/test_support.h"
@@ -23,7 +22,8 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string Binary() {
-  if (const char* dir = std::getenv("DYGSLAM_BINARY_DIR")) return std::string(dir) + "/apps/dygslam";
+  if (const char* dir = std::getenv("DYGSLAM_BINARY_DIR"))
+    return std::string(dir) + "/apps/dygslam";
   const fs::path self = fs::read_symlink("/proc/self/exe");
   return (self.parent_path().parent_path().parent_path() / "apps" / "dygslam").string();
 }
@@ -36,14 +36,16 @@ std::string ReadAll(const std::string& path) {
 }
 
 // Runs argv with stdout/stderr to files; returns the exit code (128 + signal if killed).
-int RunCommand(const std::vector<std::string>& args, const std::string& out, const std::string& err) {
+int RunCommand(const std::vector<std::string>& args, const std::string& out,
+               const std::string& err) {
   const pid_t pid = fork();
   if (pid == 0) {
     std::vector<std::string> copy = args;
     std::vector<char*> argv;
     for (auto& a : copy) argv.push_back(a.data());
     argv.push_back(nullptr);
-    if (!std::freopen(out.c_str(), "w", stdout) || !std::freopen(err.c_str(), "w", stderr)) std::_Exit(126);
+    if (!std::freopen(out.c_str(), "w", stdout) || !std::freopen(err.c_str(), "w", stderr))
+      std::_Exit(126);
     execv(argv[0], argv.data());
     std::_Exit(127);
   }
@@ -82,9 +84,18 @@ TEST_P(CliBadInput, TruncatedFrameMidRunIsAClearErrorOrACountedSkip) {
   rgb_list.close();
   depth_list.close();
   const fs::path out = dir / "out";
-  std::vector<std::string> args = {Binary(), "run", dir.string(), "--config",
-                                   std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml", "--filter", "none",
-                                   "--out", out.string(), "--quiet", "--domain", "131"};
+  std::vector<std::string> args = {Binary(),
+                                   "run",
+                                   dir.string(),
+                                   "--config",
+                                   std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml",
+                                   "--filter",
+                                   "none",
+                                   "--out",
+                                   out.string(),
+                                   "--quiet",
+                                   "--domain",
+                                   "131"};
   if (!GetParam().empty()) args.push_back(GetParam());
   const int code = RunCommand(args, (dir / "stdout.txt").string(), (dir / "stderr.txt").string());
   const std::string stdout_text = ReadAll((dir / "stdout.txt").string());
@@ -97,11 +108,13 @@ TEST_P(CliBadInput, TruncatedFrameMidRunIsAClearErrorOrACountedSkip) {
     EXPECT_NE(stderr_text.find("error"), std::string::npos) << stderr_text;
     // What was built before the broken frame is kept, when written at all, loadable.
     if (fs::exists(out / "trajectory.txt")) {
-      RecordProperty("frames_kept", static_cast<int>(ReadTumTrajectory((out / "trajectory.txt").string()).size()));
+      RecordProperty("frames_kept",
+                     static_cast<int>(ReadTumTrajectory((out / "trajectory.txt").string()).size()));
     }
   } else {
     // A counted skip: the broken frame is reported and the others are in the trajectory.
-    EXPECT_NE((stdout_text + stderr_text).find(broken), std::string::npos) << stdout_text << stderr_text;
+    EXPECT_NE((stdout_text + stderr_text).find(broken), std::string::npos)
+        << stdout_text << stderr_text;
     const auto trajectory = ReadTumTrajectory((out / "trajectory.txt").string());
     EXPECT_GE(trajectory.size(), 25u);
     EXPECT_LE(trajectory.size(), 29u);

@@ -7,19 +7,14 @@
 // type). The components therefore register every type through dds::GuardedType
 // (components/dds/guarded_type.h, used by Participant::GetTopic): its deserialize() catches every
 // exception and rejects oversized payloads, returns false, and Fast DDS drops the sample.
+#include <fastcdr/exceptions/Exception.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <gtest/gtest.h>
+
 #include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
-#include <functional>
-#include <memory>
-#include <string>
-#include <thread>
-#include <vector>
-
-#include <gtest/gtest.h>
-
-#include <fastcdr/exceptions/Exception.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -30,7 +25,11 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/TopicDataType.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
-#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <functional>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include "components/convert.h"
 #include "components/dds/guarded_type.h"
@@ -66,7 +65,8 @@ class RawType : public TopicDataType {
   }
   bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t*, void*) override { return false; }
   std::function<uint32_t()> getSerializedSizeProvider(void* data) override {
-    return [data] { return static_cast<uint32_t>(static_cast<std::vector<uint8_t>*>(data)->size()); };
+    return
+        [data] { return static_cast<uint32_t>(static_cast<std::vector<uint8_t>*>(data)->size()); };
   }
   void* createData() override { return new std::vector<uint8_t>(); }
   void deleteData(void* data) override { delete static_cast<std::vector<uint8_t>*>(data); }
@@ -102,7 +102,9 @@ class CountingListener : public DataReaderListener {
     }
     ++stuck;
   }
-  void on_subscription_matched(DataReader*, const SubscriptionMatchedStatus& s) override { matched = s.current_count; }
+  void on_subscription_matched(DataReader*, const SubscriptionMatchedStatus& s) override {
+    matched = s.current_count;
+  }
   std::atomic<int> good{0}, exceptions{0}, stuck{0}, matched{0};
 };
 
@@ -111,8 +113,8 @@ struct Result {
 };
 
 // Publishes bad, good, bad, good, ... (5 each) from a raw writer to a reader of `reader_type`.
-Result Exchange(TopicDataType* reader_type, const std::vector<uint8_t>& bad, const std::vector<uint8_t>& good,
-                int domain_offset) {
+Result Exchange(TopicDataType* reader_type, const std::vector<uint8_t>& bad,
+                const std::vector<uint8_t>& good, int domain_offset) {
   DomainParticipant* reader_p = MakeParticipant("reader", domain_offset);
   DomainParticipant* writer_p = MakeParticipant("intruder", domain_offset);
   EXPECT_NE(reader_p, nullptr);
@@ -126,7 +128,8 @@ Result Exchange(TopicDataType* reader_type, const std::vector<uint8_t>& bad, con
   CountingListener listener;
   DataReaderQos rq = DATAREADER_QOS_DEFAULT;
   rq.reliability().kind = RELIABLE_RELIABILITY_QOS;
-  DataReader* reader = reader_p->create_subscriber(SUBSCRIBER_QOS_DEFAULT)->create_datareader(rt, rq, &listener);
+  DataReader* reader =
+      reader_p->create_subscriber(SUBSCRIBER_QOS_DEFAULT)->create_datareader(rt, rq, &listener);
   DataWriterQos wq = DATAWRITER_QOS_DEFAULT;
   wq.reliability().kind = RELIABLE_RELIABILITY_QOS;
   wq.history().depth = 50;
@@ -139,7 +142,8 @@ Result Exchange(TopicDataType* reader_type, const std::vector<uint8_t>& bad, con
     writer->get_publication_matched_status(st);
     return st.current_count;
   };
-  while ((listener.matched.load() < 1 || writer_matched() < 1) && std::chrono::steady_clock::now() < deadline) {
+  while ((listener.matched.load() < 1 || writer_matched() < 1) &&
+         std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   EXPECT_EQ(listener.matched.load(), 1);
@@ -159,8 +163,8 @@ Result Exchange(TopicDataType* reader_type, const std::vector<uint8_t>& bad, con
   writer_p->delete_contained_entities();
   DomainParticipantFactory::get_instance()->delete_participant(reader_p);
   DomainParticipantFactory::get_instance()->delete_participant(writer_p);
-  std::printf("good %d exceptions %d stuck %d matched %d\n", listener.good.load(), listener.exceptions.load(),
-              listener.stuck.load(), listener.matched.load());
+  std::printf("good %d exceptions %d stuck %d matched %d\n", listener.good.load(),
+              listener.exceptions.load(), listener.stuck.load(), listener.matched.load());
   return {listener.good.load(), listener.exceptions.load(), listener.stuck.load()};
 }
 
@@ -226,20 +230,22 @@ TEST(DdsMalformed, ComponentReaderSurvivesMalformedAndOversizedSamples) {
   auto participant = dds::Participant::Create(options);
   std::atomic<int> received{0};
   dds::Reader<msg::CameraPosePubSubType> reader(participant, dds::topics::kCameraPose,
-                                               dds::TopicKind::kCameraPose,
-                                               [&received](msg::CameraPose&& pose) {
-                                                 if (pose.has_pose()) ++received;
-                                               });
+                                                dds::TopicKind::kCameraPose,
+                                                [&received](msg::CameraPose&& pose) {
+                                                  if (pose.has_pose()) ++received;
+                                                });
 
   DomainParticipant* writer_p = MakeParticipant("intruder", 2);
   ASSERT_NE(writer_p, nullptr);
   TypeSupport raw(new RawType(msg::CameraPosePubSubType().getName()));
   ASSERT_EQ(raw.register_type(writer_p), ReturnCode_t::RETCODE_OK);
-  Topic* topic = writer_p->create_topic(dds::topics::kCameraPose, raw.get_type_name(), TOPIC_QOS_DEFAULT);
+  Topic* topic =
+      writer_p->create_topic(dds::topics::kCameraPose, raw.get_type_name(), TOPIC_QOS_DEFAULT);
   ASSERT_NE(topic, nullptr);
   DataWriterQos wq = dds::WriterQos(dds::TopicKind::kCameraPose);
   wq.history().kind = KEEP_ALL_HISTORY_QOS;
-  DataWriter* writer = writer_p->create_publisher(PUBLISHER_QOS_DEFAULT)->create_datawriter(topic, wq);
+  DataWriter* writer =
+      writer_p->create_publisher(PUBLISHER_QOS_DEFAULT)->create_datawriter(topic, wq);
   ASSERT_NE(writer, nullptr);
   EXPECT_TRUE(reader.WaitForWriters(1, std::chrono::seconds(15)));
   for (int i = 0; i < 5; ++i) {

@@ -2,6 +2,7 @@
 // from any participant on the domain) through the generated deserialize() and the convert.h
 // decoders. Truncated payloads, absurd sequence lengths, inconsistent image sizes and absurd
 // values are rejected with a reason; nothing crashes or allocates without bound.
+#include <gtest/gtest.h>
 #include <sys/resource.h>
 
 #include <cmath>
@@ -9,11 +10,9 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-#include <opencv2/core.hpp>
 
 #include "components/convert.h"
 #include "fuzz/dds_decoders.h"
@@ -43,8 +42,9 @@ msg::RgbdFrame Frame(int w = 8, int h = 6) {
   return RgbdFrameToMsg(f);
 }
 
-std::vector<uint8_t> Bytes(const msg::RgbdFrame& m) { return fuzz::Serialize<msg::RgbdFramePubSubType>(m); }
-
+std::vector<uint8_t> Bytes(const msg::RgbdFrame& m) {
+  return fuzz::Serialize<msg::RgbdFramePubSubType>(m);
+}
 
 DecodeStatus StatusOf(SampleKind kind, const std::vector<uint8_t>& b) {
   return DecodeSample(kind, b.data(), b.size()).status;
@@ -74,7 +74,8 @@ std::vector<std::pair<SampleKind, std::vector<uint8_t>>> ValidSamples() {
   dets[0].label = "person";
   dets[0].score = 0.9f;
   out.emplace_back(SampleKind::kDetections,
-                   fuzz::Serialize<msg::DetectionsPubSubType>(DetectionsToMsg(dets, Timestamp::FromNanoseconds(5), 1)));
+                   fuzz::Serialize<msg::DetectionsPubSubType>(
+                       DetectionsToMsg(dets, Timestamp::FromNanoseconds(5), 1)));
   const Rigid3d pose(Eigen::Quaterniond(0.9, 0.1, -0.2, 0.3), Eigen::Vector3d(1, -2, 0.5));
   msg::CameraPose cp;
   cp.has_pose(true);
@@ -89,12 +90,15 @@ std::vector<std::pair<SampleKind, std::vector<uint8_t>>> ValidSamples() {
   k.keypoints = {cv::KeyPoint(1, 2, 7, 30, 0.5f, 1), cv::KeyPoint(5, 4, 7, 60, 0.2f, 0)};
   k.keypoint_dynamic = {0, 1};
   k.detections = dets;
-  out.emplace_back(SampleKind::kKeyframe, fuzz::Serialize<msg::KeyframePubSubType>(KeyframeToMsg(k, Camera(8, 6))));
-  out.emplace_back(SampleKind::kGroundTruth, fuzz::Serialize<msg::GroundTruthPosePubSubType>(
-                                                 GroundTruthToMsg(StampedPose{Timestamp(), pose}, 2)));
-  out.emplace_back(SampleKind::kTrajectory,
-                   fuzz::Serialize<msg::TrajectoryPubSubType>(TrajectoryToMsg(
-                       {{Timestamp::FromNanoseconds(1), pose}, {Timestamp::FromNanoseconds(2), pose}}, false)));
+  out.emplace_back(SampleKind::kKeyframe,
+                   fuzz::Serialize<msg::KeyframePubSubType>(KeyframeToMsg(k, Camera(8, 6))));
+  out.emplace_back(SampleKind::kGroundTruth,
+                   fuzz::Serialize<msg::GroundTruthPosePubSubType>(
+                       GroundTruthToMsg(StampedPose{Timestamp(), pose}, 2)));
+  out.emplace_back(
+      SampleKind::kTrajectory,
+      fuzz::Serialize<msg::TrajectoryPubSubType>(TrajectoryToMsg(
+          {{Timestamp::FromNanoseconds(1), pose}, {Timestamp::FromNanoseconds(2), pose}}, false)));
   msg::StreamStatus s;
   s.source("player");
   out.emplace_back(SampleKind::kStreamStatus, fuzz::Serialize<msg::StreamStatusPubSubType>(s));
@@ -150,7 +154,8 @@ TEST(DdsWire, InconsistentImageSizesNameTheField) {
   const std::vector<Case> cases = {
       {"RgbdFrame.color.data", [](msg::RgbdFrame* m) { m->color().data().resize(8 * 6 * 3 - 1); }},
       {"RgbdFrame.depth.data", [](msg::RgbdFrame* m) { m->depth().data().resize(8 * 6 * 2 + 2); }},
-      {"RgbdFrame.color", [](msg::RgbdFrame* m) {  // consistent image, but not the camera's size
+      {"RgbdFrame.color",
+       [](msg::RgbdFrame* m) {  // consistent image, but not the camera's size
          m->color().width(6);
          m->color().step(18);
          m->color().data().resize(6 * 6 * 3);
@@ -158,7 +163,8 @@ TEST(DdsWire, InconsistentImageSizesNameTheField) {
       {"RgbdFrame.depth.step", [](msg::RgbdFrame* m) { m->depth().step(15); }},
       {"RgbdFrame.color.width", [](msg::RgbdFrame* m) { m->color().width(0xffffffffu); }},
       {"RgbdFrame.color.height", [](msg::RgbdFrame* m) { m->color().height(0); }},
-      {"RgbdFrame.depth.width", [](msg::RgbdFrame* m) {  // 16384 x 16384 x 4 bytes: would be 1 GiB
+      {"RgbdFrame.depth.width",
+       [](msg::RgbdFrame* m) {  // 16384 x 16384 x 4 bytes: would be 1 GiB
          m->depth().width(16385);
          m->depth().height(16384);
          m->depth().encoding("32FC1");
@@ -166,11 +172,14 @@ TEST(DdsWire, InconsistentImageSizesNameTheField) {
        }},
       {"RgbdFrame.depth.encoding", [](msg::RgbdFrame* m) { m->depth().encoding("bgr8"); }},
       {"RgbdFrame.color.encoding", [](msg::RgbdFrame* m) { m->color().encoding("yuv422"); }},
-      {"RgbdFrame.camera.fx", [](msg::RgbdFrame* m) { m->camera().fx(std::numeric_limits<double>::quiet_NaN()); }},
+      {"RgbdFrame.camera.fx",
+       [](msg::RgbdFrame* m) { m->camera().fx(std::numeric_limits<double>::quiet_NaN()); }},
       {"RgbdFrame.camera.fy", [](msg::RgbdFrame* m) { m->camera().fy(-1); }},
-      {"RgbdFrame.camera.depth_scale", [](msg::RgbdFrame* m) { m->camera().depth_scale(std::numeric_limits<double>::infinity()); }},
+      {"RgbdFrame.camera.depth_scale",
+       [](msg::RgbdFrame* m) { m->camera().depth_scale(std::numeric_limits<double>::infinity()); }},
       {"RgbdFrame.camera.depth_scale", [](msg::RgbdFrame* m) { m->camera().depth_scale(0); }},
-      {"RgbdFrame.header.stamp.nanosec", [](msg::RgbdFrame* m) { m->header().stamp().nanosec(1000000000u); }},
+      {"RgbdFrame.header.stamp.nanosec",
+       [](msg::RgbdFrame* m) { m->header().stamp().nanosec(1000000000u); }},
   };
   for (const Case& c : cases) {
     msg::RgbdFrame m = Frame();
@@ -178,7 +187,8 @@ TEST(DdsWire, InconsistentImageSizesNameTheField) {
     const std::vector<uint8_t> bytes = Bytes(m);
     const auto r = DecodeSample(SampleKind::kRgbdFrame, bytes.data(), bytes.size());
     EXPECT_EQ(r.status, DecodeStatus::kRejectedContent) << c.field << ": " << r.message;
-    EXPECT_NE(r.message.find(c.field), std::string::npos) << "'" << r.message << "' does not name " << c.field;
+    EXPECT_NE(r.message.find(c.field), std::string::npos)
+        << "'" << r.message << "' does not name " << c.field;
   }
 }
 
@@ -214,7 +224,8 @@ TEST(DdsWire, AbsurdPosesDetectionsAndKeyframesAreRejected) {
 TEST(DdsWire, SequenceLengthClaimsAllocateAtMostElementSizeTimesPayload) {
   std::vector<Detection> one(1);
   one[0].box = cv::Rect2f(1.25f, 2, 3, 4);
-  std::vector<uint8_t> b = fuzz::Serialize<msg::DetectionsPubSubType>(DetectionsToMsg(one, Timestamp(), 0));
+  std::vector<uint8_t> b =
+      fuzz::Serialize<msg::DetectionsPubSubType>(DetectionsToMsg(one, Timestamp(), 0));
   const float x = 1.25f;
   size_t at = std::string::npos;
   for (size_t i = 0; i + 8 <= b.size(); ++i) {
@@ -247,7 +258,8 @@ TEST(DdsWire, BadBooleanByteEscapesGeneratedDeserialize) {
   cp.is_keyframe(true);
   cp.world_from_cam().orientation().w(1);
   std::vector<uint8_t> b = fuzz::Serialize<msg::CameraPosePubSubType>(cp);
-  // encapsulation(4) + Header{Time(8), frame_id(4 + len + pad), seq(8)} + tracking_state(1) + has_pose(1)
+  // encapsulation(4) + Header{Time(8), frame_id(4 + len + pad), seq(8)} + tracking_state(1) +
+  // has_pose(1)
   const std::string frame_id = cp.header().frame_id();
   size_t at = 4 + 8 + 4 + frame_id.size() + 1;
   at = (at - 4 + 7) / 8 * 8 + 4 + 8;  // seq is 8-aligned relative to the CDR origin

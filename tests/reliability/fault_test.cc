@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <regex>
 #include <string>
 #include <thread>
@@ -210,6 +211,29 @@ TEST_F(Faults, RecorderAndPlayerSayWhenSlamIsStoppedBeforeTheEnd) {
   EXPECT_LT(poses, 300u);
 }
 
+// The recorder killed (SIGKILL) mid-stream in a run of components started by hand: nobody writes
+// the run's trajectory. The player, the command a user watches, waits for the recorder's DONE
+// after slam's and exits 3 naming it. Before, player, slam and mapper all exited 0 and no
+// trajectory.txt was anywhere.
+TEST_F(Faults, PlayerSaysWhenTheRecorderIsKilled) {
+  const std::string tmp = testing::MakeTempDir("fault_recorder_killed");
+  const int domain = 138;
+  const pid_t recorder = Run("recorder", tmp, domain, "0:300");
+  const pid_t slam = Run("slam", tmp, domain, "0:300", {"--filter", "none"});
+  const pid_t player =
+      Run("player", tmp, domain, "0:300",
+          {"--rate", "1", "--wait-for-components", "--no-mapper", "--no-detector"});
+  std::this_thread::sleep_for(std::chrono::seconds(4));
+  kill(recorder, SIGKILL);
+  EXPECT_EQ(Wait(recorder), 128 + SIGKILL);
+  EXPECT_EQ(Wait(player), 3) << ReadAll(tmp + "/player.log");  // kExitComponentCutShort
+  Wait(slam);
+  EXPECT_TRUE(Contains(ReadAll(tmp + "/player.log"),
+                       "the recorder left without announcing that it is done"))
+      << ReadAll(tmp + "/player.log");
+  EXPECT_FALSE(fs::exists(tmp + "/out/trajectory.txt"));
+}
+
 // The player dies (SIGKILL: no END_OF_STREAM): slam and the detector do not wait for the rest of
 // the stream for ever; once the frame writer is gone and nothing came for 5 s slam finishes with
 // the frames it got (final trajectory to the recorder, COMPONENT_DONE) and the detector ends. The
@@ -291,13 +315,16 @@ TEST_F(Faults, DetectorKilledAndRestartedIsUsedAgain) {
   EXPECT_GT(ReadTumTrajectory(tmp + "/out/trajectory.txt").size(), 280u);
 }
 
-// A detector that fails at start (no models) in `dygslam run --processes --deterministic`: it
-// announces FAILED and slam stops waiting for its detections (geometry-only) instead of waiting
-// for them forever (before: the run hung; found while measuring this branch).
+// A detector that fails at start (model files that are no network: the run's check before
+// starting finds the files, the detector cannot load them) in `dygslam run --processes
+// --deterministic`: it announces FAILED and slam stops waiting for its detections
+// (geometry-only) instead of waiting for them forever (before: the run hung).
 TEST_F(Faults, DetectorFailingAtStartDoesNotHangADeterministicRun) {
   const std::string tmp = testing::MakeTempDir("fault_detector_fails");
-  const std::string no_models = tmp + "/no_models";
-  fs::create_directories(no_models);
+  const std::string no_models = tmp + "/broken_models";
+  fs::create_directories(no_models + "/yolo-fastest-1.1_coco");
+  for (const char* name : {"yolo-fastest-1.1.cfg", "yolo-fastest-1.1.weights", "coco.names"})
+    std::ofstream(no_models + "/yolo-fastest-1.1_coco/" + name) << "not a model\n";
   const std::vector<std::string> args = {
       "run",      dataset_,   "--config", Config(), "--out",           tmp + "/out",
       "--frames", "0:30",     "--filter", "full",   "--deterministic", "--processes",
@@ -311,6 +338,27 @@ TEST_F(Faults, DetectorFailingAtStartDoesNotHangADeterministicRun) {
   EXPECT_NE(log.find("slam: the detector failed"), std::string::npos) << log;
   EXPECT_NE(log.find("slam: 30 frames"), std::string::npos) << log;
   EXPECT_GT(ReadTumTrajectory(tmp + "/out/trajectory.txt").size(), 20u) << log;
+}
+
+// Missing detector model files in a DDS run: the run fails before it starts any component
+// (exit 1 naming the file), as --direct does. Before, the detector component failed before it
+// announced itself and a deterministic slam waited 30 s for the boxes of every frame.
+TEST_F(Faults, MissingDetectorModelFailsADdsRunBeforeItStarts) {
+  const std::string tmp = testing::MakeTempDir("fault_detector_missing");
+  const std::string no_models = tmp + "/no_models";
+  fs::create_directories(no_models);
+  const std::vector<std::string> args = {
+      "run",      dataset_,   "--config", Config(), "--out",           tmp + "/out",
+      "--frames", "0:30",     "--filter", "full",   "--deterministic", "--processes",
+      "--quiet",  "--domain", "126"};
+  ::setenv("DYGSLAM_MODELS_DIR", no_models.c_str(), 1);
+  const pid_t run = Spawn(args, tmp + "/run.log");
+  ::unsetenv("DYGSLAM_MODELS_DIR");
+  EXPECT_EQ(Wait(run, 30.0), 1);
+  const std::string log = ReadAll(tmp + "/run.log");
+  EXPECT_TRUE(Contains(log, "detector model cfg file not found")) << log;
+  EXPECT_FALSE(Contains(log, "started component")) << log;
+  EXPECT_FALSE(fs::exists(tmp + "/out/trajectory.txt"));
 }
 
 // True once process PID catches `sig` (its handler is installed), within 20 s.

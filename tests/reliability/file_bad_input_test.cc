@@ -1,16 +1,16 @@
 // Bad files on disk: truncated / corrupt / oddly encoded PNGs, absurd PNG headers, depth lists with
 // holes, settings with non-finite values or garbage. Each gives an InputError naming the file
 // (and line / key where there is one), or a documented, counted skip -- never a crash.
+#include <gtest/gtest.h>
+
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
-#include <string>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
 
 #include "core/base/error.h"
 #include "core/config/settings.h"
@@ -24,7 +24,8 @@ namespace fs = std::filesystem;
 
 void WriteBytes(const fs::path& path, const std::vector<uint8_t>& bytes) {
   std::ofstream out(path, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
 }
 std::vector<uint8_t> ReadBytes(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -92,7 +93,8 @@ TEST_F(FileBadInput, TruncatedPngsAreDecodeErrorsNamingTheFile) {
   const std::vector<uint8_t> depth = ReadBytes(d.frame(0).depth_path);
   ASSERT_GT(rgb.size(), 50000u);
   // Cut inside the signature, the header, the image data (early, middle, just before the end).
-  for (size_t keep : {size_t{0}, size_t{5}, size_t{30}, size_t{200}, rgb.size() / 2, rgb.size() - 40}) {
+  for (size_t keep :
+       {size_t{0}, size_t{5}, size_t{30}, size_t{200}, rgb.size() / 2, rgb.size() - 40}) {
     WriteBytes(d.frame(1).rgb_path, std::vector<uint8_t>(rgb.begin(), rgb.begin() + keep));
     ExpectFileError([&] { d.LoadRgb(1, 640, 480); }, d.frame(1).rgb_path, "rgb");
   }
@@ -126,7 +128,9 @@ TEST_F(FileBadInput, AbsurdPngHeaderIsRejectedWithoutAllocating) {
   std::vector<uint8_t> png = ReadBytes(d.frame(0).depth_path);
   // IHDR starts at byte 8: length(4) "IHDR"(4) width(4) height(4) ... crc(4) at 29.
   ASSERT_EQ(std::string(png.begin() + 12, png.begin() + 16), "IHDR");
-  for (auto [w, h] : {std::pair<uint32_t, uint32_t>{0x7fffffffu, 0x7fffffffu}, {1u << 20, 1u << 20}, {0u, 480u}}) {
+  for (auto [w, h] : {std::pair<uint32_t, uint32_t>{0x7fffffffu, 0x7fffffffu},
+                      {1u << 20, 1u << 20},
+                      {0u, 480u}}) {
     PutBe32(&png, 16, w);
     PutBe32(&png, 20, h);
     PutBe32(&png, 29, Crc32(png.data() + 12, 17));  // a valid chunk: only the values are absurd

@@ -2,12 +2,12 @@
 // convert.h's checks, which only require finite values): far-away poses, absurd depth values,
 // masks of the wrong size. A clear InputError or a bounded map -- never a crash or a map that
 // explodes in size.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <limits>
-#include <string>
-
-#include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "core/base/error.h"
 #include "mapping/octomap_builder.h"

@@ -249,8 +249,7 @@ TEST_F(OutputClashCli, StoppedSynthLeavesTheEarlierSequenceWhole) {
   expect_earlier_sequence();
   const auto again = Run({"synth", target, "--frames", "3", "--seed", "4", "--quiet", "--replace"});
   EXPECT_EQ(again.code, 0) << again.err;
-  EXPECT_TRUE(Contains(again.err, "the unfinished render of a synth that was killed"))
-      << again.err;
+  EXPECT_TRUE(Contains(again.err, "the unfinished render of a synth that was killed")) << again.err;
   EXPECT_FALSE(fs::exists(target + "/.synth-partial"));
   EXPECT_FALSE(fs::exists(target + "/.dygslam-synth-render"));
   // A folder of the user's under that name is not synth's to remove.
@@ -277,6 +276,12 @@ TEST_F(OutputClashCli, SynthReplaceKeepsWhatIsNotASequenceFile) {
               {"depth/nested' is not an image of a sequence"});
   EXPECT_TRUE(fs::is_directory(target + "/depth/nested"));
   fs::remove(target + "/depth/nested");
+  // An image of the user's that no sequence would name (not a timestamp).
+  fs::copy_file(fs::directory_iterator(target + "/rgb")->path(), target + "/rgb/extra.png");
+  ExpectError(Run({"synth", target, "--frames", "2", "--quiet", "--replace"}), 2,
+              {"rgb/extra.png' is not an image of a sequence"});
+  EXPECT_TRUE(fs::exists(target + "/rgb/extra.png"));
+  fs::remove(target + "/rgb/extra.png");
   // Files beside the sequence are kept; the sequence is replaced.
   std::ofstream(target + "/README.md") << "the user's readme\n";
   const auto replaced = Run({"synth", target, "--frames", "3", "--quiet", "--replace"});

@@ -63,11 +63,15 @@ TEST(DepthPlausibility, MostPixelsOutsideTheSensorRangeAreReported) {
       ImplausibleDepth(SampleDepthRange(real, 0, real.num_rgb_entries(), 1e6, 640, 480), 1e6);
   EXPECT_TRUE(Contains(near, "closer than 0.05 m")) << near;
   // DepthMapFactor 1e5 (20 times the sequence's): most pixels still beyond 5 cm, but the median
-  // scene a hand's width away.
+  // scene within arm's reach.
   const std::string close =
       ImplausibleDepth(SampleDepthRange(real, 0, real.num_rgb_entries(), 1e5, 640, 480), 1e5);
   EXPECT_TRUE(Contains(close, "the median depth of 5 sampled depth images")) << close;
-  EXPECT_TRUE(Contains(close, "DepthMapFactor 100000: closer than 0.2 m")) << close;
+  EXPECT_TRUE(Contains(close, "DepthMapFactor 100000: closer than 0.5 m")) << close;
+  // 10 times the sequence's: the median a few decimetres away.
+  const std::string tenfold =
+      ImplausibleDepth(SampleDepthRange(real, 0, real.num_rgb_entries(), 5e4, 640, 480), 5e4);
+  EXPECT_TRUE(Contains(tenfold, "DepthMapFactor 50000: closer than 0.5 m")) << tenfold;
   // Saturated images: every pixel 65535 (13.1 m at 5000).
   const std::string dir = testing::MakeTempDir("plausible_depth");
   const RgbdDataset saturated =

@@ -655,7 +655,6 @@ TEST_F(RunIntegrity, TheComponentsOfARunKilledOutrightEndWithIt) {
   EXPECT_FALSE(fs::exists(out + "/trajectory.txt")) << "written after the run was killed";
 }
 
-
 // `run --processes` suspended as a whole (Ctrl-Z of its process group, a laptop asleep) for longer
 // than the DDS participant lease (20 s), then continued: each component was paused as long as its
 // peers, so none of them is gone; they find each other again and the run completes. Before, every

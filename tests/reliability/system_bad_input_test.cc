@@ -1,20 +1,20 @@
 // Bad input into the System (core/system): every case gives a clear InputError / InvalidOptions
 // or a frame without a pose -- never a crash, never a made-up pose. Real frames from
 // bonn_crowd_part (people-free first 60 frames).
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
-#include <gtest/gtest.h>
-#include <opencv2/core.hpp>
-
 #include "core/base/error.h"
 #include "core/config/settings.h"
-#include "run/system_config.h"
 #include "core/io/dataset.h"
 #include "core/system/system.h"
+#include "run/system_config.h"
 #include "tests/support/test_support.h"
 
 namespace dygslam {
@@ -144,7 +144,8 @@ TEST_F(SystemBadInput, DepthDropoutMidRunGivesNoWrongPose) {
   int dropout_with_pose = 0;
   for (int i = 0; i < kFrames; ++i) {
     const bool dropout = i >= 15 && i < 25;
-    const FrameResult r = system.FeedRgbdFrame(f().rgb[i], dropout ? zero : f().depth[i], f().stamps[i]);
+    const FrameResult r =
+        system.FeedRgbdFrame(f().rgb[i], dropout ? zero : f().depth[i], f().stamps[i]);
     EXPECT_EQ(r.world_from_cam.has_value(), HasPose(r.state));
     if (!r.world_from_cam) continue;
     dropout_with_pose += dropout ? 1 : 0;
@@ -154,8 +155,9 @@ TEST_F(SystemBadInput, DepthDropoutMidRunGivesNoWrongPose) {
   }
   // After the dropout the system is tracking again.
   for (int i = 0; i < 1; ++i) {
-    const FrameResult r = system.FeedRgbdFrame(f().rgb[kFrames - 1], f().depth[kFrames - 1],
-                                               Timestamp::FromNanoseconds(f().stamps.back().nanoseconds() + 33000000));
+    const FrameResult r = system.FeedRgbdFrame(
+        f().rgb[kFrames - 1], f().depth[kFrames - 1],
+        Timestamp::FromNanoseconds(f().stamps.back().nanoseconds() + 33000000));
     EXPECT_TRUE(HasPose(r.state)) << ToString(r.state);
   }
   system.Shutdown();
@@ -191,9 +193,11 @@ TEST_F(SystemBadInput, WrongSizesAndEncodingsNameTheImage) {
   ExpectThrowNaming<InputError>([&] { system.FeedRgbdFrame(rgb16, f().depth[0], t); },
                                 {"rgb image", "type"});
   cv::Mat rgba(480, 640, CV_8UC4, cv::Scalar(1, 2, 3, 4));
-  ExpectThrowNaming<InputError>([&] { system.FeedRgbdFrame(rgba, f().depth[0], t); }, {"rgb image"});
+  ExpectThrowNaming<InputError>([&] { system.FeedRgbdFrame(rgba, f().depth[0], t); },
+                                {"rgb image"});
   cv::Mat depth8(480, 640, CV_8UC1, cv::Scalar(5));
-  ExpectThrowNaming<InputError>([&] { system.FeedRgbdFrame(f().rgb[0], depth8, t); }, {"depth image"});
+  ExpectThrowNaming<InputError>([&] { system.FeedRgbdFrame(f().rgb[0], depth8, t); },
+                                {"depth image"});
   cv::Mat depth_2ch(480, 640, CV_16UC2, cv::Scalar(5000, 5000));
   ExpectThrowNaming<InputError>([&] { system.FeedRgbdFrame(f().rgb[0], depth_2ch, t); },
                                 {"depth image"});
@@ -201,11 +205,11 @@ TEST_F(SystemBadInput, WrongSizesAndEncodingsNameTheImage) {
                                 {"rgb image"});
   // Masks must match the image (a wrongly sized mask would be silently rescaled).
   cv::Mat small_mask = cv::Mat::zeros(240, 320, CV_8UC1);
-  ExpectThrowNaming<InputError>([&] { system.FeedRgbdFrame(f().rgb[0], f().depth[0], t, small_mask); },
-                                {"mask", "320x240"});
+  ExpectThrowNaming<InputError>(
+      [&] { system.FeedRgbdFrame(f().rgb[0], f().depth[0], t, small_mask); }, {"mask", "320x240"});
   cv::Mat float_mask = cv::Mat::zeros(480, 640, CV_32FC1);
-  ExpectThrowNaming<InputError>([&] { system.FeedRgbdFrame(f().rgb[0], f().depth[0], t, float_mask); },
-                                {"mask"});
+  ExpectThrowNaming<InputError>(
+      [&] { system.FeedRgbdFrame(f().rgb[0], f().depth[0], t, float_mask); }, {"mask"});
   // None of the rejected frames consumed the stamp: the same frame is accepted afterwards.
   const FrameResult r = system.FeedRgbdFrame(f().rgb[0], f().depth[0], t);
   EXPECT_TRUE(HasPose(r.state)) << ToString(r.state);
@@ -213,12 +217,15 @@ TEST_F(SystemBadInput, WrongSizesAndEncodingsNameTheImage) {
 
 TEST_F(SystemBadInput, TimestampBackwardsOrRepeatedIsAnErrorNamingBothStamps) {
   System system(BonnOptions());
-  for (int i = 0; i < 5; ++i) ASSERT_TRUE(HasPose(system.FeedRgbdFrame(f().rgb[i], f().depth[i], f().stamps[i]).state));
+  for (int i = 0; i < 5; ++i)
+    ASSERT_TRUE(HasPose(system.FeedRgbdFrame(f().rgb[i], f().depth[i], f().stamps[i]).state));
   // Jump backwards (a replayed or looped stream) and a repeated stamp.
-  ExpectThrowNaming<InputError>([&] { system.FeedRgbdFrame(f().rgb[5], f().depth[5], f().stamps[2]); },
-                                {f().stamps[2].ToString(), f().stamps[4].ToString(), "not after"});
-  ExpectThrowNaming<InputError>([&] { system.FeedRgbdFrame(f().rgb[5], f().depth[5], f().stamps[4]); },
-                                {f().stamps[4].ToString(), "not after"});
+  ExpectThrowNaming<InputError>(
+      [&] { system.FeedRgbdFrame(f().rgb[5], f().depth[5], f().stamps[2]); },
+      {f().stamps[2].ToString(), f().stamps[4].ToString(), "not after"});
+  ExpectThrowNaming<InputError>(
+      [&] { system.FeedRgbdFrame(f().rgb[5], f().depth[5], f().stamps[4]); },
+      {f().stamps[4].ToString(), "not after"});
   // The rejected frames left no trace: the trajectory has exactly the 5 accepted frames and the
   // next frame in order is tracked.
   const FrameResult r = system.FeedRgbdFrame(f().rgb[5], f().depth[5], f().stamps[5]);
@@ -226,7 +233,8 @@ TEST_F(SystemBadInput, TimestampBackwardsOrRepeatedIsAnErrorNamingBothStamps) {
   system.Shutdown();
   const auto trajectory = system.Trajectory();
   ASSERT_EQ(trajectory.size(), 6u);
-  for (size_t i = 1; i < trajectory.size(); ++i) EXPECT_LT(trajectory[i - 1].stamp, trajectory[i].stamp);
+  for (size_t i = 1; i < trajectory.size(); ++i)
+    EXPECT_LT(trajectory[i - 1].stamp, trajectory[i].stamp);
 }
 
 TEST_F(SystemBadInput, BlackAndSaturatedFramesGiveNoPose) {
@@ -236,7 +244,8 @@ TEST_F(SystemBadInput, BlackAndSaturatedFramesGiveNoPose) {
   FrameResult r = system.FeedRgbdFrame(black, f().depth[0], f().stamps[0]);
   EXPECT_FALSE(HasPose(r.state));
   EXPECT_EQ(r.num_features, 0);
-  for (int i = 1; i < 8; ++i) ASSERT_TRUE(HasPose(system.FeedRgbdFrame(f().rgb[i], f().depth[i], f().stamps[i]).state));
+  for (int i = 1; i < 8; ++i)
+    ASSERT_TRUE(HasPose(system.FeedRgbdFrame(f().rgb[i], f().depth[i], f().stamps[i]).state));
   // Camera covered / blinded after initialisation: lost, no pose, and tracking comes back.
   r = system.FeedRgbdFrame(white, f().depth[8], f().stamps[8]);
   EXPECT_EQ(r.state, TrackingState::kLost);
@@ -308,7 +317,8 @@ TEST(SystemBadOptions, NonFiniteOptionsAreRejectedAtConstruction) {
       {"ORBextractor.scaleFactor", [&](SystemOptions* o) { o->orb.scale_factor = nan; }},
       {"Tracking.motion_radius_px", [&](SystemOptions* o) { o->tracking.motion_radius_px = nan; }},
       {"Tracking.ref_ratio", [&](SystemOptions* o) { o->tracking.ref_ratio = nan; }},
-      {"LocalMapping.redundancy_ratio", [&](SystemOptions* o) { o->local_mapping.redundancy_ratio = nan; }},
+      {"LocalMapping.redundancy_ratio",
+       [&](SystemOptions* o) { o->local_mapping.redundancy_ratio = nan; }},
       {"DynamicFilter.c1", [&](SystemOptions* o) { o->filter.c1 = nan; }},
       {"DynamicFilter.threshold", [&](SystemOptions* o) { o->filter.threshold = nan; }},
       {"DynamicFilter.p_init", [&](SystemOptions* o) { o->filter.p_init = inf; }},

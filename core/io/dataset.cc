@@ -161,6 +161,95 @@ std::string UnlistedImagesNote(const fs::path& dir, const std::string& folder,
          " not listed): a list cut short? The run uses the listed images only";
 }
 
+// The frames of a dataset folder and how the rgb.txt entries map onto them.
+struct DatasetFrames {
+  std::vector<RgbdFrameEntry> frames;
+  std::vector<std::optional<size_t>> rgb_entry_to_frame;
+  size_t num_rgb_entries = 0;
+  std::string listing_problem;
+};
+
+// From associations.txt ("t_rgb rgb_path t_depth depth_path", sorted by rgb stamp); `rgb`: the
+// rgb.txt entries when there is one (entries map onto frames by stamp), else empty.
+DatasetFrames FramesFromAssociations(const fs::path& dir, const std::vector<ListEntry>& rgb,
+                                     const DatasetOptions& options) {
+  const std::string file = (dir / "associations.txt").string();
+  OutsidePaths outside(file);
+  DatasetFrames out;
+  for (const TextLine& l : ReadDataLines(file)) {
+    if (l.tokens.size() != 4) {
+      throw InputError(file, l.line_number,
+                       "expected 4 columns 't_rgb rgb_path t_depth depth_path', found " +
+                           std::to_string(l.tokens.size()));
+    }
+    RgbdFrameEntry f;
+    f.rgb_stamp = ParseStamp(file, l.line_number, l.tokens[0]);
+    f.depth_stamp = ParseStamp(file, l.line_number, l.tokens[2]);
+    CheckOrder(file, l.line_number, out.frames.empty() ? Timestamp() : out.frames.back().rgb_stamp,
+               f.rgb_stamp, !out.frames.empty());
+    if (std::abs(SecondsBetween(f.rgb_stamp, f.depth_stamp)) >= options.max_time_difference) {
+      throw InputError(file, l.line_number,
+                       "rgb and depth stamps differ by more than max_time_difference");
+    }
+    f.rgb_path =
+        ResolveImage(dir, file, l.line_number, l.tokens[1], options.refuse_outside_paths, &outside);
+    f.depth_path =
+        ResolveImage(dir, file, l.line_number, l.tokens[3], options.refuse_outside_paths, &outside);
+    f.rgb_listed_at = f.depth_listed_at = file + ":" + std::to_string(l.line_number);
+    out.frames.push_back(std::move(f));
+  }
+  if (out.frames.empty()) throw InputError(file, 0, "no entries");
+  outside.Warn();
+  if (rgb.empty()) {
+    out.num_rgb_entries = out.frames.size();
+    for (size_t i = 0; i < out.frames.size(); ++i) out.rgb_entry_to_frame.push_back(i);
+    return out;
+  }
+  std::map<int64_t, size_t> frame_of_stamp;
+  for (size_t i = 0; i < out.frames.size(); ++i)
+    frame_of_stamp[out.frames[i].rgb_stamp.nanoseconds()] = i;
+  out.num_rgb_entries = rgb.size();
+  for (const ListEntry& e : rgb) {
+    auto it = frame_of_stamp.find(e.stamp.nanoseconds());
+    out.rgb_entry_to_frame.push_back(
+        it == frame_of_stamp.end() ? std::nullopt : std::optional<size_t>(it->second));
+  }
+  return out;
+}
+
+// From rgb.txt and depth.txt, paired by the nearest stamps within options.max_time_difference.
+DatasetFrames FramesFromLists(const fs::path& dir, const std::vector<ListEntry>& rgb,
+                              const DatasetOptions& options) {
+  DatasetFrames out;
+  const std::vector<ListEntry> depth =
+      ReadImageList(dir, "depth.txt", options.refuse_outside_paths);
+  for (const std::string& note : {UnlistedImagesNote(dir, "rgb", "rgb.txt", rgb),
+                                  UnlistedImagesNote(dir, "depth", "depth.txt", depth)}) {
+    if (!note.empty()) out.listing_problem += (out.listing_problem.empty() ? "" : "; ") + note;
+  }
+  std::vector<Timestamp> rgb_stamps, depth_stamps;
+  for (const ListEntry& e : rgb) rgb_stamps.push_back(e.stamp);
+  for (const ListEntry& e : depth) depth_stamps.push_back(e.stamp);
+  const std::vector<TimestampMatch> matches =
+      AssociateTimestamps(rgb_stamps, depth_stamps, options.max_time_difference);
+  out.num_rgb_entries = rgb.size();
+  out.rgb_entry_to_frame.assign(rgb.size(), std::nullopt);
+  const std::string rgb_file = (dir / "rgb.txt").string();
+  const std::string depth_file = (dir / "depth.txt").string();
+  for (const TimestampMatch& m : matches) {
+    out.rgb_entry_to_frame[m.first] = out.frames.size();
+    out.frames.push_back({rgb[m.first].stamp, rgb[m.first].path, depth[m.second].stamp,
+                          depth[m.second].path, rgb_file + ":" + std::to_string(rgb[m.first].line),
+                          depth_file + ":" + std::to_string(depth[m.second].line)});
+  }
+  if (out.frames.empty()) {
+    throw InputError(dir.string(), 0,
+                     "no rgb/depth pairs within " + std::to_string(options.max_time_difference) +
+                         " s (rgb.txt and depth.txt do not overlap in time)");
+  }
+  return out;
+}
+
 }  // namespace
 
 RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions& options) {
@@ -169,90 +258,19 @@ RgbdDataset RgbdDataset::Open(const std::string& directory, const DatasetOptions
   if (!fs::exists(directory, ec)) throw InputError(directory, 0, "dataset directory not found");
   if (!fs::is_directory(directory, ec)) throw InputError(directory, 0, "not a directory");
   const fs::path dir = fs::absolute(directory).lexically_normal();
-
-  RgbdDataset dataset;
-  dataset.directory_ = dir.string();
-  const fs::path assoc_path = dir / "associations.txt";
-  const bool use_assoc = options.use_associations_file && fs::is_regular_file(assoc_path, ec);
+  const bool use_assoc =
+      options.use_associations_file && fs::is_regular_file(dir / "associations.txt", ec);
   const bool has_rgb_list = fs::is_regular_file(dir / "rgb.txt", ec);
-
   std::vector<ListEntry> rgb;
   if (has_rgb_list || !use_assoc) rgb = ReadImageList(dir, "rgb.txt", options.refuse_outside_paths);
-
-  if (use_assoc) {
-    // "t_rgb rgb_path t_depth depth_path", sorted by rgb stamp.
-    const std::string file = assoc_path.string();
-    OutsidePaths outside(file);
-    for (const TextLine& l : ReadDataLines(file)) {
-      if (l.tokens.size() != 4) {
-        throw InputError(file, l.line_number,
-                         "expected 4 columns 't_rgb rgb_path t_depth depth_path', found " +
-                             std::to_string(l.tokens.size()));
-      }
-      RgbdFrameEntry f;
-      f.rgb_stamp = ParseStamp(file, l.line_number, l.tokens[0]);
-      f.depth_stamp = ParseStamp(file, l.line_number, l.tokens[2]);
-      CheckOrder(file, l.line_number,
-                 dataset.frames_.empty() ? Timestamp() : dataset.frames_.back().rgb_stamp,
-                 f.rgb_stamp, !dataset.frames_.empty());
-      if (std::abs(SecondsBetween(f.rgb_stamp, f.depth_stamp)) >= options.max_time_difference) {
-        throw InputError(file, l.line_number,
-                         "rgb and depth stamps differ by more than max_time_difference");
-      }
-      f.rgb_path = ResolveImage(dir, file, l.line_number, l.tokens[1], options.refuse_outside_paths,
-                                &outside);
-      f.depth_path = ResolveImage(dir, file, l.line_number, l.tokens[3],
-                                  options.refuse_outside_paths, &outside);
-      f.rgb_listed_at = f.depth_listed_at = file + ":" + std::to_string(l.line_number);
-      dataset.frames_.push_back(std::move(f));
-    }
-    if (dataset.frames_.empty()) throw InputError(file, 0, "no entries");
-    outside.Warn();
-    if (rgb.empty()) {
-      dataset.num_rgb_entries_ = dataset.frames_.size();
-      for (size_t i = 0; i < dataset.frames_.size(); ++i) dataset.rgb_entry_to_frame_.push_back(i);
-    } else {
-      std::map<int64_t, size_t> frame_of_stamp;
-      for (size_t i = 0; i < dataset.frames_.size(); ++i) {
-        frame_of_stamp[dataset.frames_[i].rgb_stamp.nanoseconds()] = i;
-      }
-      dataset.num_rgb_entries_ = rgb.size();
-      for (const ListEntry& e : rgb) {
-        auto it = frame_of_stamp.find(e.stamp.nanoseconds());
-        dataset.rgb_entry_to_frame_.push_back(
-            it == frame_of_stamp.end() ? std::nullopt : std::optional<size_t>(it->second));
-      }
-    }
-  } else {
-    const std::vector<ListEntry> depth =
-        ReadImageList(dir, "depth.txt", options.refuse_outside_paths);
-    for (const std::string& note : {UnlistedImagesNote(dir, "rgb", "rgb.txt", rgb),
-                                    UnlistedImagesNote(dir, "depth", "depth.txt", depth)}) {
-      if (!note.empty())
-        dataset.listing_problem_ += (dataset.listing_problem_.empty() ? "" : "; ") + note;
-    }
-    std::vector<Timestamp> rgb_stamps, depth_stamps;
-    for (const ListEntry& e : rgb) rgb_stamps.push_back(e.stamp);
-    for (const ListEntry& e : depth) depth_stamps.push_back(e.stamp);
-    const std::vector<TimestampMatch> matches =
-        AssociateTimestamps(rgb_stamps, depth_stamps, options.max_time_difference);
-    dataset.num_rgb_entries_ = rgb.size();
-    dataset.rgb_entry_to_frame_.assign(rgb.size(), std::nullopt);
-    for (const TimestampMatch& m : matches) {
-      dataset.rgb_entry_to_frame_[m.first] = dataset.frames_.size();
-      const std::string rgb_file = (dir / "rgb.txt").string();
-      const std::string depth_file = (dir / "depth.txt").string();
-      dataset.frames_.push_back({rgb[m.first].stamp, rgb[m.first].path, depth[m.second].stamp,
-                                 depth[m.second].path,
-                                 rgb_file + ":" + std::to_string(rgb[m.first].line),
-                                 depth_file + ":" + std::to_string(depth[m.second].line)});
-    }
-    if (dataset.frames_.empty()) {
-      throw InputError(dir.string(), 0,
-                       "no rgb/depth pairs within " + std::to_string(options.max_time_difference) +
-                           " s (rgb.txt and depth.txt do not overlap in time)");
-    }
-  }
+  DatasetFrames frames =
+      use_assoc ? FramesFromAssociations(dir, rgb, options) : FramesFromLists(dir, rgb, options);
+  RgbdDataset dataset;
+  dataset.directory_ = dir.string();
+  dataset.frames_ = std::move(frames.frames);
+  dataset.rgb_entry_to_frame_ = std::move(frames.rgb_entry_to_frame);
+  dataset.num_rgb_entries_ = frames.num_rgb_entries;
+  dataset.listing_problem_ = std::move(frames.listing_problem);
   const fs::path gt = dir / "groundtruth.txt";
   if (fs::is_regular_file(gt, ec)) {
     dataset.groundtruth_path_ = gt.string();

@@ -22,86 +22,92 @@ Tracker::Tracker(const TrackingOptions& options, std::shared_ptr<Map> map,
 TrackResult Tracker::Track(Frame frame) {
   TrackResult result;
   ++frames_seen_;
-  // A local BA due before this frame lands now (the schedule: core/slam/local_mapping/local_mapping.h).
+  // A local BA due before this frame lands now (the schedule:
+  // core/slam/local_mapping/local_mapping.h).
   local_mapper_.BeginFrame(frame.id);
-  {
-    std::unique_lock<std::mutex> lock(map_->mutex());
-    if (!initialized_) {
-      if (Initialize(frame, &result)) {
-        initialized_ = true;
-        RememberDenseKeyFrame(result.new_keyframe, frame);
-        result.map_points = frame.map_points;
-        last_frame_ = frame;
-      }
-    } else {
-      bool ok = false;
-      bool relocalized = false;
-      std::optional<Rigid3d> predicted;  // motion model: the seed of the dense fallback
-      if (!lost_) {
-        PrepareLastFrame();
-        if (last_frame_.has_pose)
-          predicted =
-              velocity_ ? *velocity_ * last_frame_.cam_from_world : last_frame_.cam_from_world;
-        if (velocity_ && frame.id > last_relocalization_frame_id_ + 1)
-          ok = TrackWithMotionModel(frame);
-        if (!ok) ok = TrackReferenceKeyFrame(frame);
-      }
-      if (!ok) {
-        ok = Relocalize(frame);
-        relocalized = ok;
-      }
-      if (ok) ok = TrackLocalMap(frame);
-      // A pose held by few features is checked against the dense estimate (tracking_fallback.cc).
-      const bool dense_override =
-          ok && options_.dense_fallback && DenseOverridesFeaturePose(frame, predicted);
-      if (ok && !dense_override) {
-        lost_ = false;
-        if (options_.dense_fallback && options_.fallback_smoothing && !records_.empty() &&
-            records_.back().state == TrackingState::kFallback)
-          SmoothFallbackStretch(frame, predicted);
-        result.state = relocalized ? TrackingState::kRelocalized : TrackingState::kOk;
-        result.cam_from_world = frame.cam_from_world;
-        result.num_inliers = last_inliers_;
-        velocity_ = last_frame_.has_pose
-                        ? std::optional<Rigid3d>(frame.cam_from_world *
-                                                 last_frame_.cam_from_world.Inverse())
-                        : std::nullopt;
-        // Points matched as outliers are dropped before the frame becomes "last".
-        for (size_t i = 0; i < frame.size(); ++i) {
-          if (frame.outlier[i]) frame.map_points[i] = nullptr;
-        }
-        if (!localization_ && NeedNewKeyFrame(frame))
-          result.new_keyframe = CreateKeyFrame(frame);
-        if (result.new_keyframe) RememberDenseKeyFrame(result.new_keyframe, frame);
-        result.map_points = frame.map_points;
-        records_.push_back({frame.stamp, reference_kf_->id,
-                            frame.cam_from_world * reference_kf_->cam_from_world.Inverse(),
-                            result.state, last_inliers_});
-        last_frame_ = frame;
-      } else if (dense_override ||
-                 (options_.dense_fallback && TrackWithStaticDepth(frame, predicted))) {
-        // A dense pose (verified); no keyframe, no map points from it. Features take over again
-        // as soon as they hold the pose (the next frame tries them first).
-        lost_ = false;
-        result.state = TrackingState::kFallback;
-        result.cam_from_world = frame.cam_from_world;
-        result.num_inliers = 0;
-        velocity_ = frame.cam_from_world * last_frame_.cam_from_world.Inverse();
-        records_.push_back({frame.stamp, reference_kf_->id,
-                            frame.cam_from_world * reference_kf_->cam_from_world.Inverse(),
-                            result.state});
-        last_frame_ = frame;
-      } else {
-        lost_ = true;
-        velocity_.reset();
-        result.state = TrackingState::kLost;
-        records_.push_back({frame.stamp, -1, Rigid3d(), TrackingState::kLost});
-        frame.has_pose = false;
-        last_frame_ = frame;
-      }
-    }
+  std::unique_lock<std::mutex> lock(map_->mutex());
+  if (initialized_) {
+    TrackNext(frame, &result);
+  } else if (Initialize(frame, &result)) {
+    initialized_ = true;
+    RememberDenseKeyFrame(result.new_keyframe, frame);
+    result.map_points = frame.map_points;
+    last_frame_ = frame;
   }
   return result;
+}
+
+void Tracker::TrackNext(Frame& frame, TrackResult* result) {
+  bool ok = false;
+  bool relocalized = false;
+  std::optional<Rigid3d> predicted;  // motion model: the seed of the dense fallback
+  if (!lost_) {
+    PrepareLastFrame();
+    if (last_frame_.has_pose)
+      predicted = velocity_ ? *velocity_ * last_frame_.cam_from_world : last_frame_.cam_from_world;
+    if (velocity_ && frame.id > last_relocalization_frame_id_ + 1) ok = TrackWithMotionModel(frame);
+    if (!ok) ok = TrackReferenceKeyFrame(frame);
+  }
+  if (!ok) {
+    ok = Relocalize(frame);
+    relocalized = ok;
+  }
+  if (ok) ok = TrackLocalMap(frame);
+  // A pose held by few features is checked against the dense estimate (tracking_fallback.cc).
+  const bool dense_override =
+      ok && options_.dense_fallback && DenseOverridesFeaturePose(frame, predicted);
+  if (ok && !dense_override) {
+    AcceptFeaturePose(frame, predicted, relocalized, result);
+  } else if (dense_override ||
+             (options_.dense_fallback && TrackWithStaticDepth(frame, predicted))) {
+    // Features take over again as soon as they hold the pose (the next frame tries them first).
+    AcceptDensePose(frame, result);
+  } else {
+    lost_ = true;
+    velocity_.reset();
+    result->state = TrackingState::kLost;
+    records_.push_back({frame.stamp, -1, Rigid3d(), TrackingState::kLost});
+    frame.has_pose = false;
+    last_frame_ = frame;
+  }
+}
+
+void Tracker::AcceptFeaturePose(Frame& frame, const std::optional<Rigid3d>& predicted,
+                                bool relocalized, TrackResult* result) {
+  lost_ = false;
+  if (options_.dense_fallback && options_.fallback_smoothing && !records_.empty() &&
+      records_.back().state == TrackingState::kFallback)
+    SmoothFallbackStretch(frame, predicted);
+  result->state = relocalized ? TrackingState::kRelocalized : TrackingState::kOk;
+  result->cam_from_world = frame.cam_from_world;
+  result->num_inliers = last_inliers_;
+  velocity_ =
+      last_frame_.has_pose
+          ? std::optional<Rigid3d>(frame.cam_from_world * last_frame_.cam_from_world.Inverse())
+          : std::nullopt;
+  // Points matched as outliers are dropped before the frame becomes "last".
+  for (size_t i = 0; i < frame.size(); ++i) {
+    if (frame.outlier[i]) frame.map_points[i] = nullptr;
+  }
+  if (!localization_ && NeedNewKeyFrame(frame)) result->new_keyframe = CreateKeyFrame(frame);
+  if (result->new_keyframe) RememberDenseKeyFrame(result->new_keyframe, frame);
+  result->map_points = frame.map_points;
+  records_.push_back({frame.stamp, reference_kf_->id,
+                      frame.cam_from_world * reference_kf_->cam_from_world.Inverse(), result->state,
+                      last_inliers_});
+  last_frame_ = frame;
+}
+
+void Tracker::AcceptDensePose(Frame& frame, TrackResult* result) {
+  lost_ = false;
+  result->state = TrackingState::kFallback;
+  result->cam_from_world = frame.cam_from_world;
+  result->num_inliers = 0;
+  velocity_ = frame.cam_from_world * last_frame_.cam_from_world.Inverse();
+  records_.push_back({frame.stamp, reference_kf_->id,
+                      frame.cam_from_world * reference_kf_->cam_from_world.Inverse(),
+                      result->state});
+  last_frame_ = frame;
 }
 
 void Tracker::SetPlaceRecognition(std::shared_ptr<const Vocabulary> vocabulary,

@@ -7,12 +7,12 @@
 #include <vector>
 
 #include "core/base/types.h"
-#include "core/slam/map/frame.h"
-#include "core/slam/local_mapping/local_mapping.h"
-#include "core/slam/map/map.h"
 #include "core/slam/feature/matcher.h"
-#include "core/slam/optimize/optimizer.h"
+#include "core/slam/local_mapping/local_mapping.h"
+#include "core/slam/map/frame.h"
+#include "core/slam/map/map.h"
 #include "core/slam/map/place_recognition.h"
+#include "core/slam/optimize/optimizer.h"
 #include "core/slam/tracking/static_depth_odometry.h"
 
 namespace dygslam {
@@ -157,6 +157,14 @@ class Tracker {
   bool TrackReferenceKeyFrame(Frame& frame);
   bool Relocalize(Frame& frame);
   bool TrackLocalMap(Frame& frame);
+  // A frame after initialization: features (motion model, reference keyframe, relocalization,
+  // local map), else the dense fallback, else lost. Called with the map locked.
+  void TrackNext(Frame& frame, TrackResult* result);
+  // The frame's feature pose accepted: velocity, keyframe decision, the record, the last frame.
+  void AcceptFeaturePose(Frame& frame, const std::optional<Rigid3d>& predicted, bool relocalized,
+                         TrackResult* result);
+  // The frame's dense pose accepted (verified): no keyframe, no map points from it.
+  void AcceptDensePose(Frame& frame, TrackResult* result);
   void UpdateLocalMap(Frame& frame);
   bool NeedNewKeyFrame(const Frame& frame);
   std::shared_ptr<KeyFrame> CreateKeyFrame(Frame& frame);

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <set>
 
 #include "core/base/memory.h"
@@ -84,7 +85,7 @@ void LocalMapper::InsertKeyFrame(std::shared_ptr<KeyFrame> kf) {
     Land();  // solved and landed here, at once
   } else if (threaded_) {
     solver_.Push(job);  // solved on the mapping thread; lands at the due frame
-  }  // unthreaded: solved and landed here at the due frame (BeginFrame)
+  }                     // unthreaded: solved and landed here at the due frame (BeginFrame)
 }
 
 void LocalMapper::BeginFrame(int64_t frame_id) {
@@ -186,6 +187,72 @@ void LocalMapper::CullRecentPoints(const std::shared_ptr<KeyFrame>& kf) {
   stats_.points_culled += culled;
 }
 
+namespace {
+
+// The world position of the match (i1 of kf1, i2 of kf2): triangulated when the viewing rays
+// have parallax, else kf1's depth of i1; nullopt when neither gives one.
+std::optional<Eigen::Vector3d> TriangulateMatch(const KeyFrame& kf1, int i1, const KeyFrame& kf2,
+                                                int i2) {
+  const PinholeCamera& cam = kf1.geometry->camera;
+  const cv::KeyPoint& k1 = kf1.undistorted[i1];
+  const cv::KeyPoint& k2 = kf2.undistorted[i2];
+  const Eigen::Vector3d x1((k1.pt.x - cam.cx) / cam.fx, (k1.pt.y - cam.cy) / cam.fy, 1.0);
+  const Eigen::Vector3d x2((k2.pt.x - cam.cx) / cam.fx, (k2.pt.y - cam.cy) / cam.fy, 1.0);
+  // Parallax between the viewing rays decides: triangulate, or trust the depth.
+  const Eigen::Vector3d ray1 = kf1.cam_from_world.rotation.conjugate() * x1;
+  const Eigen::Vector3d ray2 = kf2.cam_from_world.rotation.conjugate() * x2;
+  const double cos_parallax = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
+  if (cos_parallax < 0.9998 && cos_parallax > 0) {
+    const Eigen::Matrix<double, 3, 4> p1 = kf1.cam_from_world.ToMatrix().topRows<3>();
+    const Eigen::Matrix<double, 3, 4> p2 = kf2.cam_from_world.ToMatrix().topRows<3>();
+    Eigen::Matrix4d a;
+    a.row(0) = x1.x() * p1.row(2) - p1.row(0);
+    a.row(1) = x1.y() * p1.row(2) - p1.row(1);
+    a.row(2) = x2.x() * p2.row(2) - p2.row(0);
+    a.row(3) = x2.y() * p2.row(2) - p2.row(1);
+    Eigen::JacobiSVD<Eigen::Matrix4d> svd(a, Eigen::ComputeFullV);
+    const Eigen::Vector4d h = svd.matrixV().col(3);
+    if (std::abs(h(3)) < 1e-12) return std::nullopt;
+    return Eigen::Vector3d(h.head<3>() / h(3));
+  }
+  if (kf1.depth[i1] > 0) return kf1.UnprojectWorld(i1);
+  return std::nullopt;
+}
+
+// In front of the keyframe, with a small reprojection error (stereo coordinate included).
+bool ReprojectsWell(const KeyFrame& k, int idx, const Eigen::Vector3d& position) {
+  const CameraGeometry& g = *k.geometry;
+  const PinholeCamera& cam = g.camera;
+  const Eigen::Vector3d p = k.cam_from_world * position;
+  if (p.z() <= 0) return false;
+  const cv::KeyPoint& kp = k.undistorted[idx];
+  const double u = cam.fx * p.x() / p.z() + cam.cx, v = cam.fy * p.y() / p.z() + cam.cy;
+  double chi2 = (u - kp.pt.x) * (u - kp.pt.x) + (v - kp.pt.y) * (v - kp.pt.y);
+  double th = 5.991;
+  if (k.u_right[idx] >= 0) {
+    const double ur = u - g.bf / p.z();
+    chi2 += (ur - k.u_right[idx]) * (ur - k.u_right[idx]);
+    th = 7.8;
+  }
+  return chi2 * g.inv_sigma2[kp.octave] <= th;
+}
+
+// The distances from the two camera centres agree with the two keypoints' pyramid levels.
+bool ScaleConsistent(const KeyFrame& kf1, int i1, const KeyFrame& kf2, int i2,
+                     const Eigen::Vector3d& position) {
+  const CameraGeometry& g = *kf1.geometry;
+  const double d1 = (position - kf1.CameraCenter()).norm(),
+               d2 = (position - kf2.CameraCenter()).norm();
+  if (d1 == 0 || d2 == 0) return false;
+  const double ratio_dist = d2 / d1;
+  const double ratio_octave =
+      g.scales[kf1.undistorted[i1].octave] / g.scales[kf2.undistorted[i2].octave];
+  const double factor = 1.5 * g.scales[1];
+  return !(ratio_dist * factor < ratio_octave || ratio_dist > ratio_octave * factor);
+}
+
+}  // namespace
+
 void LocalMapper::CreateNewMapPoints(const std::shared_ptr<KeyFrame>& kf) {
   std::vector<std::shared_ptr<KeyFrame>> neighbors;
   {
@@ -196,72 +263,20 @@ void LocalMapper::CreateNewMapPoints(const std::shared_ptr<KeyFrame>& kf) {
     }
   }
   const CameraGeometry& g = *kf->geometry;
-  const PinholeCamera& cam = g.camera;
   int created = 0;
   for (const auto& other : neighbors) {
     std::lock_guard<std::mutex> lock(map_->mutex());
     if (other->bad || kf->bad) continue;
     const Eigen::Vector3d c1 = kf->CameraCenter(), c2 = other->CameraCenter();
-    if ((c2 - c1).norm() < g.bf / cam.fx) continue;  // baseline shorter than the sensor's
-    const auto matches = matcher_.SearchForTriangulation(*kf, *other);
-    const Eigen::Matrix<double, 3, 4> p1 = kf->cam_from_world.ToMatrix().topRows<3>();
-    const Eigen::Matrix<double, 3, 4> p2 = other->cam_from_world.ToMatrix().topRows<3>();
-    for (const auto& [i1, i2] : matches) {
+    if ((c2 - c1).norm() < g.bf / g.camera.fx) continue;  // baseline shorter than the sensor's
+    for (const auto& [i1, i2] : matcher_.SearchForTriangulation(*kf, *other)) {
       if (kf->map_points[i1] || other->map_points[i2]) continue;
-      const cv::KeyPoint& k1 = kf->undistorted[i1];
-      const cv::KeyPoint& k2 = other->undistorted[i2];
-      const Eigen::Vector3d x1((k1.pt.x - cam.cx) / cam.fx, (k1.pt.y - cam.cy) / cam.fy, 1.0);
-      const Eigen::Vector3d x2((k2.pt.x - cam.cx) / cam.fx, (k2.pt.y - cam.cy) / cam.fy, 1.0);
-      // Parallax between the viewing rays decides: triangulate, or trust the depth.
-      const Eigen::Vector3d ray1 = kf->cam_from_world.rotation.conjugate() * x1;
-      const Eigen::Vector3d ray2 = other->cam_from_world.rotation.conjugate() * x2;
-      const double cos_parallax = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
-      Eigen::Vector3d position;
-      if (cos_parallax < 0.9998 && cos_parallax > 0) {
-        Eigen::Matrix4d a;
-        a.row(0) = x1.x() * p1.row(2) - p1.row(0);
-        a.row(1) = x1.y() * p1.row(2) - p1.row(1);
-        a.row(2) = x2.x() * p2.row(2) - p2.row(0);
-        a.row(3) = x2.y() * p2.row(2) - p2.row(1);
-        Eigen::JacobiSVD<Eigen::Matrix4d> svd(a, Eigen::ComputeFullV);
-        const Eigen::Vector4d h = svd.matrixV().col(3);
-        if (std::abs(h(3)) < 1e-12) continue;
-        position = h.head<3>() / h(3);
-      } else if (kf->depth[i1] > 0) {
-        position = kf->UnprojectWorld(i1);
-      } else {
-        continue;
-      }
+      const std::optional<Eigen::Vector3d> position = TriangulateMatch(*kf, i1, *other, i2);
+      if (!position) continue;
       // Checks: in front of both cameras, small reprojection error, consistent scale.
-      bool ok = true;
-      for (int view = 0; view < 2 && ok; ++view) {
-        const KeyFrame& k = view == 0 ? *kf : *other;
-        const int idx = view == 0 ? i1 : i2;
-        const Eigen::Vector3d p = k.cam_from_world * position;
-        if (p.z() <= 0) {
-          ok = false;
-          break;
-        }
-        const cv::KeyPoint& kp = k.undistorted[idx];
-        const double u = cam.fx * p.x() / p.z() + cam.cx, v = cam.fy * p.y() / p.z() + cam.cy;
-        double chi2 = (u - kp.pt.x) * (u - kp.pt.x) + (v - kp.pt.y) * (v - kp.pt.y);
-        double th = 5.991;
-        if (k.u_right[idx] >= 0) {
-          const double ur = u - g.bf / p.z();
-          chi2 += (ur - k.u_right[idx]) * (ur - k.u_right[idx]);
-          th = 7.8;
-        }
-        if (chi2 * g.inv_sigma2[kp.octave] > th) ok = false;
-      }
-      if (!ok) continue;
-      const double d1 = (position - c1).norm(), d2 = (position - c2).norm();
-      if (d1 == 0 || d2 == 0) continue;
-      const double ratio_dist = d2 / d1;
-      const double ratio_octave = g.scales[k1.octave] / g.scales[k2.octave];
-      const double factor = 1.5 * g.scales[1];
-      if (ratio_dist * factor < ratio_octave || ratio_dist > ratio_octave * factor) continue;
-
-      auto mp = std::make_shared<MapPoint>(map_->NextMapPointId(), position, kf->id);
+      if (!ReprojectsWell(*kf, i1, *position) || !ReprojectsWell(*other, i2, *position)) continue;
+      if (!ScaleConsistent(*kf, i1, *other, i2, *position)) continue;
+      auto mp = std::make_shared<MapPoint>(map_->NextMapPointId(), *position, kf->id);
       mp->ref_kf_id = kf->id;
       map_->AddObservation(mp, kf, i1);
       map_->AddObservation(mp, other, i2);

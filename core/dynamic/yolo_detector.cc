@@ -287,6 +287,52 @@ struct YoloDetector::Impl {
 YoloDetector::YoloDetector(const DetectorOptions& options) : options_(options), impl_(new Impl) {}
 YoloDetector::~YoloDetector() = default;
 
+namespace {
+
+// Weights: header (major, minor, revision int32; `seen` uint64 from version 0.2, else int32),
+// then the float parameters. A short file would make OpenCV read garbage or fail obscurely.
+void CheckWeightsSize(const DetectorOptions& options, const DarknetCfgInfo& info) {
+  std::ifstream w(options.weights_path, std::ios::binary);
+  int32_t header[3] = {0, 0, 0};
+  if (!w.read(reinterpret_cast<char*>(header), sizeof(header)))
+    throw InputError(options.weights_path, 0, "Darknet weights file is too short for its header");
+  const bool seen64 = (header[0] * 10 + header[1]) >= 2 && header[0] < 1000 && header[1] < 1000;
+  const int64_t header_bytes = 12 + (seen64 ? 8 : 4);
+  const int64_t expected = header_bytes + 4 * info.num_parameters;
+  std::error_code ec;
+  const int64_t actual = static_cast<int64_t>(fs::file_size(options.weights_path, ec));
+  if (actual != expected)
+    throw InputError(options.weights_path, 0,
+                     std::string(actual < expected ? "Darknet weights file is truncated or"
+                                                   : "Darknet weights file is too large:") +
+                         " does not belong to " + options.cfg_path + ": " + std::to_string(actual) +
+                         " bytes, the cfg needs " + std::to_string(expected));
+}
+
+}  // namespace
+
+void YoloDetector::ClassifyClasses() {
+  bool any_dynamic = false;
+  for (const std::string& n : class_names_) {
+    auto it = options_.class_aliases.find(n);
+    const std::string canonical = it == options_.class_aliases.end() ? n : it->second;
+    const bool dyn = std::find(options_.dynamic_classes.begin(), options_.dynamic_classes.end(),
+                               canonical) != options_.dynamic_classes.end();
+    canonical_names_.push_back(canonical);
+    is_dynamic_.push_back(dyn ? 1 : 0);
+    any_dynamic |= dyn;
+  }
+  if (!any_dynamic && !options_.report_all_classes) {
+    std::string wanted;
+    for (const auto& c : options_.dynamic_classes) wanted += (wanted.empty() ? "" : ", ") + c;
+    throw InputError(options_.names_path, 0,
+                     "none of the dynamic classes {" + wanted +
+                         "} is in the class names file "
+                         "(after aliases); first class is '" +
+                         class_names_.front() + "'");
+  }
+}
+
 std::unique_ptr<YoloDetector> YoloDetector::Create(const DetectorOptions& options) {
   options.Check();
   RequireReadableFile(options.cfg_path, "Darknet cfg");
@@ -297,26 +343,7 @@ std::unique_ptr<YoloDetector> YoloDetector::Create(const DetectorOptions& option
   if (info.num_classes <= 0)
     throw InputError(options.cfg_path, 0, "Darknet cfg has no [yolo] or [region] output layer");
 
-  // Weights: header (major, minor, revision int32; `seen` uint64 from version 0.2, else int32),
-  // then the float parameters. A short file would make OpenCV read garbage or fail obscurely.
-  {
-    std::ifstream w(options.weights_path, std::ios::binary);
-    int32_t header[3] = {0, 0, 0};
-    if (!w.read(reinterpret_cast<char*>(header), sizeof(header)))
-      throw InputError(options.weights_path, 0, "Darknet weights file is too short for its header");
-    const bool seen64 = (header[0] * 10 + header[1]) >= 2 && header[0] < 1000 && header[1] < 1000;
-    const int64_t header_bytes = 12 + (seen64 ? 8 : 4);
-    const int64_t expected = header_bytes + 4 * info.num_parameters;
-    std::error_code ec;
-    const int64_t actual = static_cast<int64_t>(fs::file_size(options.weights_path, ec));
-    if (actual != expected)
-      throw InputError(options.weights_path, 0,
-                       std::string(actual < expected ? "Darknet weights file is truncated or"
-                                                     : "Darknet weights file is too large:") +
-                           " does not belong to " + options.cfg_path + ": " +
-                           std::to_string(actual) + " bytes, the cfg needs " +
-                           std::to_string(expected));
-  }
+  CheckWeightsSize(options, info);
 
   std::unique_ptr<YoloDetector> det(new YoloDetector(options));
   det->class_names_ = ReadNames(options.names_path);
@@ -325,25 +352,7 @@ std::unique_ptr<YoloDetector> YoloDetector::Create(const DetectorOptions& option
                      "class names file has " + std::to_string(det->class_names_.size()) +
                          " names but " + options.cfg_path + " declares " +
                          std::to_string(info.num_classes) + " classes");
-  bool any_dynamic = false;
-  for (const std::string& n : det->class_names_) {
-    auto it = options.class_aliases.find(n);
-    const std::string canonical = it == options.class_aliases.end() ? n : it->second;
-    const bool dyn = std::find(options.dynamic_classes.begin(), options.dynamic_classes.end(),
-                               canonical) != options.dynamic_classes.end();
-    det->canonical_names_.push_back(canonical);
-    det->is_dynamic_.push_back(dyn ? 1 : 0);
-    any_dynamic |= dyn;
-  }
-  if (!any_dynamic && !options.report_all_classes) {
-    std::string wanted;
-    for (const auto& c : options.dynamic_classes) wanted += (wanted.empty() ? "" : ", ") + c;
-    throw InputError(options.names_path, 0,
-                     "none of the dynamic classes {" + wanted +
-                         "} is in the class names file "
-                         "(after aliases); first class is '" +
-                         det->class_names_.front() + "'");
-  }
+  det->ClassifyClasses();
 
   if (options.confidence_threshold < 0.2f) {
     LOG_WARNING

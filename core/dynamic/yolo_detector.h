@@ -127,6 +127,9 @@ class YoloDetector {
 
  private:
   explicit YoloDetector(const DetectorOptions& options);
+  // Canonical names (after the aliases) and which classes are dynamic; InputError naming the
+  // names file when none of the wanted dynamic classes is among them.
+  void ClassifyClasses();
   struct Impl;
   DetectorOptions options_;
   std::vector<std::string> class_names_;

@@ -418,7 +418,7 @@ std::string FindForeignFileInRunOutputs(const std::filesystem::path& out_dir) {
       {"map.bt", "# Octomap OcTree binary file"},
       {"map.ot", "# Octomap OcTree file"},
       {kRealtimeReportFile, "rate "},
-      {"eval.json", "{"},
+      {"eval.json", "{\"mode\": "},  // RunSummaryJson's first key (run/run_summary.h)
       // `dygslam map`'s pictures and reference map in the same folder.
       {"map_top.png", "\x89PNG\r\n\x1a\n"},
       {"map_slice.png", "\x89PNG\r\n\x1a\n"},

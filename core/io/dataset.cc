@@ -572,7 +572,9 @@ std::string DatasetImageFolderOf(const std::filesystem::path& dir) {
     }
     return false;
   };
-  const fs::path absolute = fs::absolute(dir, ec).lexically_normal();
+  // Through links too: a link to a dataset's rgb/ is that folder.
+  fs::path absolute = fs::weakly_canonical(fs::absolute(dir, ec), ec);
+  if (ec) absolute = fs::absolute(dir, ec).lexically_normal();
   for (fs::path a = absolute; a.has_relative_path(); a = a.parent_path()) {
     const std::string name = a.filename().string();
     if (name.empty() || !IsDatasetFolder(a.parent_path())) continue;

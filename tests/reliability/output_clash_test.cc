@@ -307,6 +307,13 @@ TEST_F(OutputClashCli, OutputsNeverGoIntoADatasetsImageFolder) {
   ExpectError(Run({"synth", dataset + "/rgb/more", "--frames", "2", "--quiet"}), 2,
               {"lies in the image folder"});
   EXPECT_FALSE(fs::exists(dataset + "/rgb/more"));
+  // Through a link to the image folder.
+  fs::create_directory_symlink(dataset + "/rgb", dir_ + "/images");
+  ExpectError(Run({"run", dataset, "--direct", "--filter", "none", "--no-map", "--quiet", "--out",
+                   dir_ + "/images/results"}),
+              1, {"lies in the image folder"});
+  ExpectError(Run({"synth", dir_ + "/images/more", "--frames", "2", "--quiet"}), 2,
+              {"lies in the image folder"});
   EXPECT_EQ(std::distance(fs::directory_iterator(dataset + "/rgb"), fs::directory_iterator()),
             static_cast<std::ptrdiff_t>(images));
   // A results folder beside the images is fine.
@@ -457,6 +464,13 @@ TEST_F(OutputClashCli, RunNeverReplacesAFileOfAnotherKindInItsOutputFolder) {
     EXPECT_EQ(ReadAll(file), ReadAll(Config())) << name;
     fs::remove(file);
   }
+  // A JSON file of the user's under the name eval.json (a JSON object, not a run's summary).
+  const std::string notes = (out / "eval.json").string();
+  std::ofstream(notes) << "{\"my\": \"notes\"}\n";
+  ExpectError(Run({"run", data, "--config", Config(), "--direct", "--quiet", "--filter", "none",
+                   "--out", out.string()}),
+              2, {"the output eval.json '" + notes + "' exists and is not"});
+  EXPECT_EQ(ReadAll(notes), "{\"my\": \"notes\"}\n");
 }
 
 }  // namespace

@@ -263,6 +263,14 @@ void MapperShell::Finish() {
     LOG_WARNING << "mapper: "
                 << IgnoredSamplesNote(std::to_string(stats_.foreign_samples) + " keyframes");
   }
+  stats_.keyframe_messages_missed = static_cast<size_t>(keyframes_.losses().missed);
+  if (stats_.keyframe_messages_missed > 0) {
+    stats_.input_cut_short = true;
+    LOG_WARNING << "mapper: " << stats_.keyframe_messages_missed << " keyframe messages of slam "
+                << "never arrived (they left slam's history of the newest "
+                << dds::kKeyframeHistoryDepth << " while this mapper was paused or unreachable "
+                << "for longer than the DDS lease): the map lacks them";
+  }
   core_.Finalize();
   Publish();
   const bool full_written = core_.has_map() && core_.WriteFull();

@@ -32,6 +32,10 @@ struct MapperStats {
   // slam's keyframe writer left without the end of its run reaching the mapper (this process
   // paused or starved while slam finished, slam killed): the map may lack its last keyframes.
   bool input_cut_short = false;
+  // Keyframe messages of slam that never arrived (gaps in its writer's sequence: they left slam's
+  // bounded history while this mapper was paused or unreachable for longer than the DDS lease):
+  // the map lacks them, the input is cut short as well.
+  size_t keyframe_messages_missed = 0;
 };
 
 MapperStats RunMapper(std::shared_ptr<dds::Participant> participant, const MapperOptions& options,

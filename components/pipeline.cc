@@ -175,12 +175,14 @@ struct FrameSourceRefused : std::runtime_error {
 };
 
 // What a component reports when it ends: the samples it ignored (writers outside this run), and
-// whether its input ended without the end of the run reaching it (its outputs may lack the last
-// samples).
+// why its part of the run is incomplete ("" when it is not): its input ended without the end of
+// the run reaching it, or messages it published did not reach their reader.
 struct ComponentOutcome {
   size_t ignored_samples = 0;
-  bool input_cut_short = false;
+  std::string incomplete;
 };
+constexpr const char* kInputEndedEarly = "its input ended early";
+std::string InputEndedEarly(bool cut_short) { return cut_short ? kInputEndedEarly : ""; }
 
 // The player of the pipeline: the dataset's frames, paced or windowed; with --rate the real-time
 // report into the run's output folder.
@@ -223,7 +225,8 @@ ComponentOutcome RunPipelinePlayer(const PipelineOptions& options,
     WriteRealtimeReport((fs::path(options.output_dir) / kRealtimeReportFile).string(), report);
   }
   if (stats.refused) throw FrameSourceRefused();
-  return {0, stats.slam_left_early || stats.recorder_left_early};
+  return {0, InputEndedEarly(stats.slam_left_early || stats.recorder_left_early ||
+                             stats.mapper_left_early)};
 }
 
 // slam of the pipeline, with the detector's settings for the keyframes the detector skips.
@@ -258,8 +261,11 @@ ComponentOutcome RunPipelineSlam(const PipelineOptions& options,
   const SlamStats stats = RunSlam(participant, s, stop);
   // The final trajectories are out (the recorder writes them): now the map file's failure.
   if (!stats.save_map_error.empty()) throw InputError(stats.save_map_error);
-  return {stats.foreign_frames + stats.foreign_detections + stats.foreign_statuses,
-          stats.input_cut_short};
+  const size_t foreign = stats.foreign_frames + stats.foreign_detections + stats.foreign_statuses;
+  if (stats.keyframe_messages_undelivered > 0)
+    return {foreign, std::to_string(stats.keyframe_messages_undelivered) +
+                         " keyframe messages not delivered: the map lacks them"};
+  return {foreign, InputEndedEarly(stats.input_cut_short)};
 }
 
 ComponentOutcome RunComponentKind(ComponentKind kind, const PipelineOptions& options,
@@ -286,7 +292,7 @@ ComponentOutcome RunComponentKind(ComponentKind kind, const PipelineOptions& opt
       m.octomap = options.octomap;
       fs::create_directories(options.output_dir);
       const MapperStats stats = RunMapper(participant, m, stop);
-      return {stats.foreign_samples, stats.input_cut_short};
+      return {stats.foreign_samples, InputEndedEarly(stats.input_cut_short)};
     }
     case ComponentKind::kRecorder: {
       RecorderOptions r;
@@ -294,7 +300,7 @@ ComponentOutcome RunComponentKind(ComponentKind kind, const PipelineOptions& opt
       r.flush_timeout_s = options.flush_timeout_s;
       r.progress = options.progress;
       const RecorderStats stats = RunRecorder(participant, r, stop);
-      return {stats.foreign_samples, stats.input_cut_short};
+      return {stats.foreign_samples, InputEndedEarly(stats.input_cut_short)};
     }
     case ComponentKind::kRos2Bridge:
       break;
@@ -306,15 +312,16 @@ ComponentOutcome RunComponentKind(ComponentKind kind, const PipelineOptions& opt
 // Runs component `kind`; one that fails announces FAILED with the reason on the status topic
 // (its peers react: slam finishes when the frame source failed, mapper and recorder write what
 // they have when slam failed) and the error goes on to the caller.
-// 0, or kExitComponentCutShort when the component's input ended without the end of the run (its
-// outputs are written, the run is incomplete). Throws when the component failed.
+// 0, or kExitComponentCutShort when the component's part of the run is incomplete (its outputs
+// are written; *incomplete says why). Throws when the component failed.
 int RunComponentOn(ComponentKind kind, const PipelineOptions& options,
                    std::shared_ptr<dds::Participant> participant, const StopFlagPtr& stop,
-                   size_t* ignored_samples = nullptr) {
+                   size_t* ignored_samples, std::string* incomplete) {
   try {
     const ComponentOutcome outcome = RunComponentKind(kind, options, participant, stop);
-    if (ignored_samples != nullptr) *ignored_samples += outcome.ignored_samples;
-    if (outcome.input_cut_short) return kExitComponentCutShort;
+    *ignored_samples += outcome.ignored_samples;
+    *incomplete = outcome.incomplete;
+    if (!outcome.incomplete.empty()) return kExitComponentCutShort;
   } catch (const FrameSourceRefused&) {
     return 1;  // the player said why
   } catch (const std::exception& e) {
@@ -365,8 +372,9 @@ std::shared_ptr<dds::Participant> MakeParticipant(const PipelineOptions& options
   return dds::Participant::Create(p);
 }
 
-int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop,
-                     size_t* ignored_samples) {
+// A component whose part is incomplete (exit kExitComponentCutShort) is listed in
+// report->components_cut_short with why, as with --processes; a failed one makes the result 1.
+int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop, StopReport* report) {
   auto participant = MakeParticipant(options, "pipeline");
   std::map<ComponentKind, int> codes;
   std::mutex mutex;
@@ -376,21 +384,25 @@ int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop,
       SetCurrentThreadName(ToString(kind));
       int code = 1;
       size_t ignored = 0;
+      std::string incomplete;
       try {
-        code = RunComponentOn(kind, options, participant, stop, &ignored);
+        code = RunComponentOn(kind, options, participant, stop, &ignored, &incomplete);
       } catch (const std::exception& e) {
         LOG_ERROR << ToString(kind) << ": " << e.what();
         stop->Request();  // one component failed: stop the others (they flush)
       }
       std::lock_guard<std::mutex> lock(mutex);
       codes[kind] = code;
-      *ignored_samples += ignored;
+      report->ignored_samples += ignored;
+      if (code == kExitComponentCutShort)
+        report->components_cut_short.push_back(std::string(ToString(kind)) + " (" + incomplete +
+                                               ")");
     });
   }
   for (std::thread& t : threads) t.join();
   int result = 0;
   for (const auto& [kind, code] : codes) {
-    if (code != 0) result = 1;
+    if (code != 0 && code != kExitComponentCutShort) result = 1;
   }
   return result;
 }
@@ -414,13 +426,15 @@ bool ComponentCatchesSignal(pid_t pid, ComponentKind component, int sig) {
 // variable.
 constexpr const char* kReportFdVariable = "DYGSLAM_COMPONENT_REPORT_FD";
 
-void ReportToRunner(size_t ignored, int stop_signal) {
+void ReportToRunner(size_t ignored, int stop_signal, const std::string& incomplete) {
   const char* fd_text = std::getenv(kReportFdVariable);
   if (fd_text == nullptr) return;
   char* end = nullptr;
   const long fd = std::strtol(fd_text, &end, 10);
   if (end == fd_text || *end != '\0' || fd < 0) return;
-  const std::string line = std::to_string(ignored) + " " + std::to_string(stop_signal) + "\n";
+  std::string line = std::to_string(ignored) + " " + std::to_string(stop_signal);
+  if (!incomplete.empty()) line += " " + incomplete;
+  line += "\n";
   if (write(static_cast<int>(fd), line.data(), line.size()) < 0) {
     LOG_WARNING << "could not report the ignored-sample count to the runner: "
                 << std::strerror(errno);
@@ -431,7 +445,8 @@ void ReportToRunner(size_t ignored, int stop_signal) {
 // What a child reported (zeros when nothing: it died before reporting). Closes `fd`.
 struct ChildReport {
   size_t ignored_samples = 0;
-  int stop_signal = 0;  // the stop signal the child received (0: none)
+  int stop_signal = 0;     // the stop signal the child received (0: none)
+  std::string incomplete;  // why its part is incomplete (ComponentOutcome), "" when it is not
 };
 ChildReport ReadChildReport(int fd) {
   std::string text;
@@ -447,6 +462,11 @@ ChildReport ReadChildReport(int fd) {
   char* sig_end = nullptr;
   const long sig = std::strtol(end, &sig_end, 10);
   if (sig_end != end && sig > 0 && sig < 65) report.stop_signal = static_cast<int>(sig);
+  if (sig_end != end && *sig_end == ' ') {
+    report.incomplete = sig_end + 1;
+    if (const size_t eol = report.incomplete.find('\n'); eol != std::string::npos)
+      report.incomplete.resize(eol);
+  }
   return report;
 }
 
@@ -557,7 +577,7 @@ class ComponentProcesses {
       report_->components_cut_short.push_back(std::string(name) +
                                               " (did not stop at the end of the run: killed)");
     }
-    JudgeExit(pid, kind, status);
+    JudgeExit(pid, kind, status, child.incomplete);
     // The run is over when the recorder (and mapper) have written their outputs.
     bool outputs_done = true;
     for (const auto& [p, k] : children_) {
@@ -566,7 +586,7 @@ class ComponentProcesses {
     if (outputs_done && !forwarded_) stop_->Request();
   }
 
-  void JudgeExit(pid_t pid, ComponentKind kind, int status) {
+  void JudgeExit(pid_t pid, ComponentKind kind, int status, const std::string& incomplete) {
     const char* name = ToString(kind);
     const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
     // After the outputs are written the runner stops the others with SIGTERM; a component that
@@ -575,9 +595,10 @@ class ComponentProcesses {
     // Its outputs are written, but its input ended without the end of the run.
     const bool cut_short = WIFEXITED(status) && WEXITSTATUS(status) == kExitComponentCutShort;
     if (cut_short) {
+      const std::string why = incomplete.empty() ? kInputEndedEarly : incomplete;
       LOG_WARNING << "component " << name << " (pid " << pid << ") wrote its outputs, but its "
-                  << "input ended without the end of the run (see its warning above)";
-      report_->components_cut_short.push_back(std::string(name) + " (its input ended early)");
+                  << "part of the run is incomplete: " << why << " (see its warning above)";
+      report_->components_cut_short.push_back(std::string(name) + " (" + why + ")");
     } else if (stopped_by_runner) {
       LOG_INFO << "component " << name << " (pid " << pid << ") stopped at the end of the run";
     } else if (!ok) {
@@ -642,8 +663,10 @@ int RunComponent(const std::string& name, const PipelineOptions& options, const 
   BoundMallocArenas();
   const ComponentKind kind = ComponentKindOrThrow(name);
   size_t ignored = 0;
-  const int code = RunComponentOn(kind, options, MakeParticipant(options, name), stop, &ignored);
-  ReportToRunner(ignored, stop->signal());
+  std::string incomplete;
+  const int code =
+      RunComponentOn(kind, options, MakeParticipant(options, name), stop, &ignored, &incomplete);
+  ReportToRunner(ignored, stop->signal(), incomplete);
   return code;
 }
 
@@ -667,8 +690,8 @@ int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
   StopReport local;
   StopReport* out = report != nullptr ? report : &local;
   *out = StopReport{};
-  const int code = options.processes ? RunProcesses(options, stop, out)
-                                     : RunSingleProcess(options, stop, &out->ignored_samples);
+  const int code =
+      options.processes ? RunProcesses(options, stop, out) : RunSingleProcess(options, stop, out);
   if (const int sig = stop->signal(); sig != 0) {
     LOG_INFO << "stopped by signal " << sig << "; outputs flushed";
   }
@@ -681,7 +704,7 @@ int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
   if (code == 0 && !out->components_cut_short.empty()) {
     std::string names;
     for (const std::string& c : out->components_cut_short) names += (names.empty() ? "" : ", ") + c;
-    LOG_ERROR << "the run is incomplete: " << names << " ended before the run did";
+    LOG_ERROR << "the run is incomplete: " << names;
     return kExitComponentCutShort;
   }
   return code;

@@ -85,10 +85,11 @@ struct StopReport {
   // (components/protocol.h). With --processes each child reports its count to the runner when it
   // ends (a pipe); a child that died before reporting counts 0.
   size_t ignored_samples = 0;
-  // --processes: components that ended before the run did, with why: a stop signal sent to them
-  // alone ("mapper (signal 15)"), or an input that ended without the end of the run ("mapper (its
-  // input ended early)": the process was paused while slam finished). Their part of the outputs
-  // covers the frames until then.
+  // Components whose part of the run is incomplete, with why: (--processes) a stop signal sent
+  // to them alone ("mapper (signal 15)"); an input that ended without the end of the run ("mapper
+  // (its input ended early)": the process was paused while slam finished); messages that did not
+  // all arrive ("slam (12 keyframe messages not delivered: ...)"). Their part of the outputs
+  // covers the frames until then, or lacks those messages.
   std::vector<std::string> components_cut_short;
 };
 // The exit code of a component whose outputs are written but whose input ended without the end

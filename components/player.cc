@@ -184,6 +184,9 @@ class PlayerShell {
   // After slam's end: waits for the recorder's DONE when the run has one; false when it left
   // without (killed: the run's trajectory is not written).
   bool RecorderFinished(const StopFlagPtr& stop);
+  // Then the mapper's DONE when the run has one (READY); false when it left without (killed: the
+  // run's map lacks the rest). Its presence: its status writer, matched on the status reader.
+  bool MapperFinished(const StopFlagPtr& stop);
   void WaitForPeers(const StopFlagPtr& stop);
   void PlayFrames(const StopFlagPtr& stop);
   // Paced runs: waits until frame `n` is due; false when stopped meanwhile.
@@ -227,6 +230,9 @@ class PlayerShell {
   bool slam_done_ = false;
   bool recorder_done_ = false;
   WriterGoneWatch recorder_watch_{std::chrono::seconds(5)};
+  bool mapper_done_ = false;
+  std::optional<WriterGuid> mapper_status_writer_;  // from the mapper's announcements
+  WriterGoneWatch mapper_watch_{std::chrono::seconds(5)};
   // slam ended before the end of the stream: it said why (stopped by a signal, failed), or it
   // was done before this player announced the end of its stream.
   std::string slam_cut_short_;
@@ -322,6 +328,12 @@ void PlayerShell::OnStatus(const ComponentStatus& s, const WriterGuid& from) {
     if (s.source == ComponentKind::kRecorder &&
         (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed))
       recorder_done_ = true;
+    if (s.source == ComponentKind::kMapper) {
+      if (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed)
+        mapper_done_ = true;
+      else if (s.event == StreamEvent::kReady)
+        mapper_status_writer_ = from;
+    }
     if (s.event == StreamEvent::kStarted && s.source == ComponentKind::kSlam) {
       if (const auto it = s.writers.find(DataTopic::kCameraPose); it != s.writers.end())
         slam_pose_writers_.insert(it->second);
@@ -481,6 +493,25 @@ void PlayerShell::EndStream(const StopFlagPtr& stop) {
                    "trajectory and frames.csv were not written";
     stats_.recorder_left_early = true;
   }
+  if (slam_said_done && !MapperFinished(stop)) {
+    LOG_WARNING << "player: the mapper left without announcing that it is done; the run's map "
+                   "lacks what it had not written";
+    stats_.mapper_left_early = true;
+  }
+}
+
+bool PlayerShell::MapperFinished(const StopFlagPtr& stop) {
+  const auto& wanted = options_.wait_for_components;
+  std::unique_lock<std::mutex> lock(mutex_);
+  if (std::find(wanted.begin(), wanted.end(), ComponentKind::kMapper) == wanted.end() ||
+      !mapper_status_writer_)
+    return true;
+  bool gone = false;
+  mapper_watch_.Seen();
+  while (!mapper_done_ && !stop->requested() &&
+         !(gone = mapper_watch_.Update(status_reader_.IsMatched(*mapper_status_writer_))))
+    cv_.wait_for(lock, std::chrono::milliseconds(50));
+  return !gone || mapper_done_;
 }
 
 bool PlayerShell::RecorderFinished(const StopFlagPtr& stop) {
@@ -490,6 +521,7 @@ bool PlayerShell::RecorderFinished(const StopFlagPtr& stop) {
       !ready_.count(ComponentKind::kRecorder))
     return true;
   bool gone = false;
+  recorder_watch_.Seen();  // READY: it was there, also when it left before slam's end
   while (!recorder_done_ && !stop->requested() && !(gone = RecorderGone()))
     cv_.wait_for(lock, std::chrono::milliseconds(50));
   return !gone || recorder_done_;

@@ -117,6 +117,8 @@ struct PlayerStats {
   // The run's recorder left without announcing that it is done (killed): the run's outputs are
   // not written, the run is incomplete.
   bool recorder_left_early = false;
+  // Likewise the run's mapper (waited for, and READY): the map lacks what it had not written.
+  bool mapper_left_early = false;
 };
 
 // Publishes the dataset; returns when slam reported done, or stop was requested.

@@ -349,6 +349,9 @@ class WriterGoneWatch {
   static constexpr std::chrono::seconds kResumeGrace{12};
   explicit WriterGoneWatch(Clock::duration after)
       : after_(after), continued_seen_(TimesContinued()) {}
+  // The peer is known to have been there (it announced READY) although no Update saw it matched:
+  // it may have left before the first Update.
+  void Seen() { seen_ = true; }
   bool Update(bool matched, Clock::time_point now = Clock::now()) {
     if (const unsigned continued = TimesContinued(); continued != continued_seen_) {
       continued_seen_ = continued;

@@ -291,6 +291,12 @@ TEST(Protocol, WriterGoneWatchNeedsSeenThenUnmatchedLongerThanItsTime) {
   EXPECT_FALSE(watch.Update(false, t0 + seconds(8)));
   EXPECT_FALSE(watch.Update(false, t0 + seconds(12)));
   EXPECT_TRUE(watch.Update(false, t0 + seconds(14)));
+
+  // A peer known to have been there (READY) that left before the first look: gone too.
+  WriterGoneWatch left_before(seconds(5));
+  left_before.Seen();
+  EXPECT_FALSE(left_before.Update(false, t0));
+  EXPECT_TRUE(left_before.Update(false, t0 + seconds(6)));
 }
 
 TEST(Protocol, IgnoredSamplesNote) {

@@ -11,6 +11,7 @@
 
 #include "components/dds/participant.h"
 #include "components/dds/pubsub.h"
+#include "components/sample_order.h"
 #include "components/status_reader.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
@@ -31,6 +32,12 @@ constexpr size_t kMaxHeldDetections = 256;
 // A frame source whose writer is gone, with nothing new for this long, has ended (killed: its
 // writer leaves with the participant's lease, 20 s by default).
 constexpr std::chrono::seconds kSourceGone{5};
+// Keyframe messages the writer refused wait for a reader that does not acknowledge (a paused
+// mapper keeps the bounded history full) until it does or its lease (20 s) runs out; at most
+// this many wait (memory stays bounded: most are small pose updates, new keyframes ~2.5 MB).
+constexpr size_t kMaxPendingKeyframeMessages = 1024;
+// At the end, the time the last keyframe messages get to be accepted: a lease and a margin.
+constexpr std::chrono::milliseconds kKeyframeDeliveryTimeout{25000};
 
 using Clock = FramePairer::Clock;
 
@@ -57,6 +64,14 @@ class SlamShell {
         pairer_(pairing_options_),
         pose_writer_(participant, dds::topics::kCameraPose, dds::TopicKind::kCameraPose),
         keyframe_writer_(participant, dds::topics::kKeyframe, dds::TopicKind::kKeyframe),
+        keyframe_sender_([this](const msg::Keyframe& m) { return keyframe_writer_.Write(m); },
+                         kMaxPendingKeyframeMessages, std::chrono::milliseconds(100),
+                         [](size_t pending) {
+                           LOG_WARNING << "slam: a reader of the keyframe topic has not "
+                                       << "acknowledged its history (a paused or stalled "
+                                       << "mapper): holding " << pending << " keyframe "
+                                       << "messages until it does or its lease runs out";
+                         }),
         trajectory_writer_(participant, dds::topics::kTrajectory, dds::TopicKind::kTrajectory),
         status_(participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus),
         frames_(participant, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame,
@@ -150,6 +165,8 @@ class SlamShell {
   // The endpoints last: their listeners use the state above.
   dds::Writer<msg::CameraPosePubSubType> pose_writer_;
   dds::Writer<msg::KeyframePubSubType> keyframe_writer_;
+  // Keyframe messages go out in order on their own thread: tracking never waits for a reader.
+  OrderedSender<msg::Keyframe> keyframe_sender_;
   dds::Writer<msg::TrajectoryPubSubType> trajectory_writer_;
   dds::Writer<msg::StreamStatusPubSubType> status_;
   dds::Reader<msg::RgbdFramePubSubType> frames_;
@@ -249,11 +266,7 @@ void SlamShell::OnStatus(const ComponentStatus& s, const msg::StreamStatus& m,
 
 void SlamShell::PublishKeyframes(const std::vector<KeyframeData>& keyframes) {
   for (const KeyframeData& k : keyframes) {
-    if (!keyframe_writer_.Write(KeyframeToMsg(k, core_.camera()))) {
-      // The bounded history was full of samples a reader had not acknowledged for
-      // max_blocking_time (1 s): that reader misses this message.
-      LOG_WARNING << "slam: keyframe message " << k.id << " not accepted by the writer";
-    }
+    keyframe_sender_.Send(KeyframeToMsg(k, core_.camera()));
     ++stats_.keyframes_published;
     if (k.removed) {
       ++stats_.keyframes_removed;
@@ -378,6 +391,14 @@ void SlamShell::Finish(const std::string& cut_short) {
   stats_.save_map_error = core_.save_map_error();
   trajectory_writer_.Write(TrajectoryToMsg(core_.Trajectory(), false));
   trajectory_writer_.Write(TrajectoryToMsg(core_.KeyframeTrajectory(), true));
+  // Every keyframe message before DONE (the mapper ends on DONE).
+  stats_.keyframe_messages_undelivered = keyframe_sender_.Finish(kKeyframeDeliveryTimeout);
+  if (stats_.keyframe_messages_undelivered > 0) {
+    LOG_WARNING << "slam: " << stats_.keyframe_messages_undelivered << " of "
+                << stats_.keyframes_published << " keyframe messages were not delivered (a "
+                << "reader of the keyframe topic did not acknowledge them, nor left, within "
+                << kKeyframeDeliveryTimeout.count() / 1000 << " s): the map lacks them";
+  }
   {
     std::lock_guard<std::mutex> lock(mutex_);
     stats_.pairing = pairer_.stats();

@@ -39,6 +39,9 @@ struct SlamStats {
   size_t keyframes_published = 0;  // Keyframe messages: new + pose updates + removals
   size_t keyframe_pose_updates = 0;
   size_t keyframes_removed = 0;
+  // Keyframe messages no reader got (refused by the writer until the end: a reader that never
+  // acknowledged; or more than the bounded backlog): the map lacks them, the run is incomplete.
+  size_t keyframe_messages_undelivered = 0;
   size_t bad_samples = 0;
   size_t frames_carrying_boxes = 0;  // detector skipped by the cadence: the System's carried boxes
   bool detector_lost = false;

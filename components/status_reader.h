@@ -64,6 +64,8 @@ class StatusReader {
   StatusReader& operator=(const StatusReader&) = delete;
 
   int matched() const { return reader_.matched(); }
+  // Whether the status writer `writer` (a component's, from its statuses) is still matched.
+  bool IsMatched(const WriterGuid& writer) const { return reader_.IsMatched(writer); }
   // Status samples that were not understood (malformed), so far.
   size_t malformed() const { return malformed_->count(); }
 

@@ -584,8 +584,9 @@ int RunController::ReportExit(const Outcome& outcome, size_t in_trajectory, bool
     for (const std::string& c : summary.components_cut_short)
       names += (names.empty() ? "" : ", ") + c;
     std::fprintf(stderr,
-                 "dygslam run: error: %s ended before the run did: its part of the outputs "
-                 "(map.bt for the mapper, the boxes for the detector) ends there; exit %d\n",
+                 "dygslam run: error: incomplete part: %s (a component ended before the run "
+                 "did, or what it published did not all arrive: map.bt for the mapper and "
+                 "slam's keyframes, the boxes for the detector, lack the rest); exit %d\n",
                  names.c_str(), kExitIncompleteRun);
     return kExitIncompleteRun;
   }

@@ -23,7 +23,8 @@ const char* ToString(Shortfall shortfall) {
              "source or a second slam on the run's DDS partition: the outputs mix two streams)";
     case Shortfall::kComponentCutShort:
       return "a component ended before the run did (stopped by a signal sent to it alone, or its "
-             "input ended without the end of the run): its part of the outputs ends there";
+             "input ended without the end of the run), or what it published did not all arrive: "
+             "its part of the outputs is incomplete";
     case Shortfall::kCutShort:
       return "the stream was cut short (a component stopped or stalled, or an end of stream came "
              "from outside the run)";

@@ -26,9 +26,11 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "components/dds/participant.h"
 #include "components/protocol.h"
+#include "components/sample_order.h"
 
 namespace dygslam::dds {
 
@@ -49,8 +51,12 @@ bool WaitForMatched(const Matched& matched, int count, std::chrono::milliseconds
 // SampleLostStatus: a gap in the writer's sequence, e.g. a fragmented sample that never arrived
 // whole because its fragments overflowed the socket buffers) and `rejected` (SampleRejectedStatus:
 // the reader's resource limits).
+// `missed` and `duplicates` come from the samples' sequence numbers (SequenceTracker): samples
+// of a writer that never reached this reader (they left the writer's history while the reader
+// was unreachable), and samples delivered again after a re-match (dropped, never handed on).
 struct ReaderLosses {
   uint64_t lost = 0, rejected = 0;
+  uint64_t missed = 0, duplicates = 0;
   std::string last_rejected_reason;  // "" before the first rejection
 };
 // Called on a DDS listener thread with the totals so far: keep it short.
@@ -151,6 +157,20 @@ class TypedReader {
   TypedReader& operator=(const TypedReader&) = delete;
 
   int matched() const { return listener_.matched.load(); }
+  // Whether `writer` is matched now (its participant is there: announced writers tell a peer's
+  // presence without a topic of its own).
+  bool IsMatched(const WriterGuid& writer) const {
+    std::vector<eprosima::fastdds::dds::InstanceHandle_t> handles;
+    if (reader_->get_matched_publications(handles) !=
+        eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK)
+      return false;
+    for (const auto& h : handles) {
+      bool same = true;
+      for (size_t i = 0; i < writer.size(); ++i) same = same && writer[i] == h.value[i];
+      if (same) return true;
+    }
+    return false;
+  }
   // Samples lost / rejected so far (ReaderLosses).
   ReaderLosses losses() const {
     std::lock_guard<std::mutex> lock(listener_.loss_mutex);
@@ -178,6 +198,7 @@ class TypedReader {
         if (!info.valid_data) continue;
         WriterGuid writer{};
         for (size_t i = 0; i < writer.size(); ++i) writer[i] = info.publication_handle.value[i];
+        if (!Sequenced(writer, info)) continue;
         callback(std::move(message), writer);
       }
     }
@@ -219,8 +240,20 @@ class TypedReader {
       }
       if (on_loss) on_loss(now);
     }
+    // False for a sample that came before (dropped); counts the samples a jump skipped.
+    bool Sequenced(const WriterGuid& writer, const eprosima::fastdds::dds::SampleInfo& info) {
+      const uint64_t sequence = info.sample_identity.sequence_number().to64long();
+      std::lock_guard<std::mutex> lock(loss_mutex);
+      if (!sequences.Accept(writer, sequence)) {
+        losses.duplicates = sequences.duplicates();
+        return false;
+      }
+      losses.missed = sequences.missed();
+      return true;
+    }
     CallbackWithWriter callback;
     LossCallback on_loss;
+    SequenceTracker sequences;
     std::atomic<int> matched{0};
     mutable std::mutex loss_mutex;
     ReaderLosses losses;

@@ -31,7 +31,9 @@
 //   and mask) plus every pose update: `dygslam run` grew ~0.5 MB per frame. Keep-all
 //   with a bound (not keep-last) so a live reader never loses a message: when the history is full
 //   the writer drops the oldest sample only once every matched reader acknowledged it (waiting up
-//   to max_blocking_time). Payloads are sized per sample (DYNAMIC_RESERVE), so the ~16 small pose
+//   to max_blocking_time); slam sends from a thread of its own and retries a refused message
+//   (components/sample_order.h), so a paused reader delays keyframe messages (until it
+//   acknowledges, or its lease unmatches it) but neither loses them nor blocks tracking. Payloads are sized per sample (DYNAMIC_RESERVE), so the ~16 small pose
 //   updates per new keyframe do not each pin a 2.5 MB buffer: ~10 MB typical, 64 x 2.5 MB at most.
 // - The map update carries the whole octree: only the newest one matters (keep-last 1), and a
 //   late viewer gets it (transient-local).

@@ -191,6 +191,20 @@ int RunEval(const std::vector<std::string>& args) {
             "' is a file of the dataset " + EchoValue(dataset) +
             " (it holds rgb.txt and depth.txt, or associations.txt): choose another path");
     }
+    // Nor an image of the dataset the trajectories belong to, wherever its lists put it (an
+    // absolute path outside the dataset folder).
+    for (const std::string& input : {gt_path, est_path}) {
+      const std::string dataset_dir = DatasetFolderOf(input);
+      if (dataset_dir.empty() || outputs.empty()) continue;
+      std::string clash;
+      try {
+        clash = FindOutputOnDatasetImage(RgbdDataset::Open(dataset_dir, DatasetOptions()),
+                                         dataset_dir, outputs);
+      } catch (const std::exception&) {
+        continue;  // lists eval does not need: nothing to protect that it could name
+      }
+      if (!clash.empty()) return p.UsageError(clash);
+    }
     if (p.Has("save-aligned")) {
       const std::string foreign =
           FindForeignFileAtTrajectoryOutput({"--save-aligned", p.Get("save-aligned")});

@@ -65,16 +65,8 @@ void DefineMapOptions(ArgParser* parser) {
   AddDatasetRunFlags(&p);
 }
 
-// No output may replace an input or another output, nor a user's file of an output's name:
-// checked before any work. 0, or the usage error's exit code.
-int CheckMapOutputs(const ArgParser& p, const std::string& dataset_dir, const std::string& config,
-                    const fs::path& out) {
-  std::vector<NamedPath> inputs;
-  for (const char* name : {"rgb.txt", "depth.txt", "groundtruth.txt", "associations.txt"})
-    inputs.push_back(
-        {std::string("the dataset's ") + name, (fs::path(dataset_dir) / name).string()});
-  inputs.push_back({p.Has("config") ? "--config" : "the settings file", config});
-  if (p.Has("trajectory")) inputs.push_back({"--trajectory", p.Get("trajectory")});
+// The files `map` writes into `out`.
+std::vector<NamedPath> MapOutputs(const ArgParser& p, const fs::path& out) {
   std::vector<NamedPath> outputs;
   for (const char* name : {"map.bt", "map.ot", "map_top.png", "map_slice.png", "reference.bt",
                            "ghosts_top.png", "ghost_cells.txt"})
@@ -83,7 +75,21 @@ int CheckMapOutputs(const ArgParser& p, const std::string& dataset_dir, const st
     for (const char* name : {"trajectory.txt", "keyframes.txt"})
       outputs.push_back({"the output " + std::string(name), (out / name).string()});
   }
-  if (const std::string clash = FindOutputClash(inputs, outputs); !clash.empty())
+  return outputs;
+}
+
+// No output may replace an input or another output, nor a user's file of an output's name:
+// checked before any work. 0, or the usage error's exit code. (The dataset's images once its
+// lists are read.)
+int CheckMapOutputs(const ArgParser& p, const std::string& dataset_dir, const std::string& config,
+                    const fs::path& out) {
+  std::vector<NamedPath> inputs;
+  for (const char* name : {"rgb.txt", "depth.txt", "groundtruth.txt", "associations.txt"})
+    inputs.push_back(
+        {std::string("the dataset's ") + name, (fs::path(dataset_dir) / name).string()});
+  inputs.push_back({p.Has("config") ? "--config" : "the settings file", config});
+  if (p.Has("trajectory")) inputs.push_back({"--trajectory", p.Get("trajectory")});
+  if (const std::string clash = FindOutputClash(inputs, MapOutputs(p, out)); !clash.empty())
     return p.UsageError(clash);
   // An earlier map's files are replaced, never a user's files of the same names.
   if (const std::string foreign = FindForeignFileInRunOutputs(out); !foreign.empty())
@@ -167,6 +173,9 @@ int RunMap(const std::vector<std::string>& args) {
   DatasetOptions dataset_options;
   dataset_options.refuse_outside_paths = p.Flag("strict-paths");
   const RgbdDataset dataset = RgbdDataset::Open(dataset_dir, dataset_options);
+  if (const std::string clash = FindOutputOnDatasetImage(dataset, dataset_dir, MapOutputs(p, out));
+      !clash.empty())
+    return p.UsageError(clash);
   std::pair<size_t, size_t> range{0, dataset.num_rgb_entries()};
   std::string frames_note;  // --frames beyond the dataset: cut, with a warning
   if (p.Has("frames")) {

@@ -313,27 +313,12 @@ int ReadRunInputs(ArgParser& p, const fs::path& out_dir, RunControllerOptions* s
 // the usage error's exit code; the range into `s`.
 int CheckRunDataset(ArgParser& p, const RgbdDataset& dataset, const fs::path& out_dir,
                     RunControllerOptions* s) {
-  {
-    // Nor a dataset image (a --save-map onto rgb/….png would destroy it): checked once the
-    // lists are read, before any work (exit 2).
-    std::vector<NamedPath> images;
-    images.reserve(2 * dataset.frames().size());
-    for (const RgbdFrameEntry& f : dataset.frames()) {
-      images.push_back({"the dataset's image listed at " + f.rgb_listed_at, f.rgb_path});
-      images.push_back({"the dataset's image listed at " + f.depth_listed_at, f.depth_path});
-    }
-    // And every file in its image folders (entries without a partner are not in frames()).
-    for (const char* folder : {"rgb", "depth"}) {
-      std::error_code ec;
-      for (fs::directory_iterator it(fs::path(s->dataset_dir) / folder, ec), end; !ec && it != end;
-           it.increment(ec))
-        images.push_back(
-            {std::string("a file of the dataset's ") + folder + "/ folder", it->path().string()});
-    }
-    if (const std::string clash = FindOutputAmongInputs(images, DatasetRunOutputs(p, out_dir));
-        !clash.empty())
-      return p.UsageError(clash);
-  }
+  // Nor a dataset image (a --save-map onto rgb/….png would destroy it): checked once the lists
+  // are read, before any work (exit 2).
+  if (const std::string clash =
+          FindOutputOnDatasetImage(dataset, s->dataset_dir, DatasetRunOutputs(p, out_dir));
+      !clash.empty())
+    return p.UsageError(clash);
   if (const std::string foreign = FindForeignFileAtSaveMap(p); !foreign.empty())
     return p.UsageError(foreign);
   // The folder the map goes into is the one there now, even if it is replaced while the run goes.

@@ -322,6 +322,43 @@ TEST_F(OutputClashCli, OutputsNeverGoIntoADatasetsImageFolder) {
   EXPECT_EQ(beside.code, 0) << beside.err;
 }
 
+// A dataset whose rgb.txt names an image by an absolute path outside the dataset folder: `map`'s
+// pictures and `eval --plot` never go onto it (before, map_top.png replaced it, exit 0).
+TEST_F(OutputClashCli, OutputsNeverGoOntoAnImageTheListsNameOutsideTheDataset) {
+  const std::string dataset = dir_ + "/sequence";
+  ASSERT_EQ(Run({"synth", dataset, "--frames", "6", "--quiet"}).code, 0);
+  const fs::path outside = fs::path(dir_) / "elsewhere";
+  fs::create_directories(outside);
+  const fs::path image = outside / "map_top.png";
+  // The first rgb entry moved out, listed by its absolute path.
+  std::ifstream in(dataset + "/rgb.txt");
+  std::string lists, line;
+  bool moved = false;
+  while (std::getline(in, line)) {
+    if (!moved && !line.empty() && line[0] != '#') {
+      const std::string stamp = line.substr(0, line.find(' '));
+      const std::string relative = line.substr(line.find(' ') + 1);
+      fs::rename(dataset + "/" + relative, image);
+      line = stamp + " " + image.string();
+      moved = true;
+    }
+    lists += line + "\n";
+  }
+  in.close();
+  ASSERT_TRUE(moved);
+  std::ofstream(dataset + "/rgb.txt") << lists;
+  const std::string listed = "the dataset's image listed at";
+  ExpectClash({"map", dataset, "--filter", "none", "--quiet", "--out", outside.string()},
+              image.string(), {listed, image.string()});
+  fs::copy_file(dataset + "/groundtruth.txt", dir_ + "/estimate.txt");
+  ExpectClash(
+      {"eval", dataset + "/groundtruth.txt", dir_ + "/estimate.txt", "--plot", image.string()},
+      image.string(), {listed, image.string()});
+  ExpectClash({"run", dataset, "--direct", "--filter", "none", "--quiet", "--out", dir_ + "/out",
+               "--save-map", image.string()},
+              image.string(), {listed, image.string()});
+}
+
 // The component command checks its files as `run` does: a slam's --save-map onto its own
 // --config (or onto any file that is not a map file) is refused before any DDS work.
 TEST_F(OutputClashCli, ComponentRefusesAnOutputOntoAnInputOrAForeignFile) {

@@ -72,7 +72,7 @@ class MapperShell {
   void Publish();
   void Apply(Prepared& sample, bool flushing);
   Idle AtIdle(bool writer_gone, const StopFlagPtr& stop);
-  void Finish();
+  void Finish(const StopFlagPtr& stop);
 
   const MapperOptions options_;
   MapperCore core_;
@@ -252,7 +252,7 @@ void MapperShell::Apply(Prepared& sample, bool flushing) {
   }
 }
 
-void MapperShell::Finish() {
+void MapperShell::Finish(const StopFlagPtr& stop) {
   stats_.bad_samples += bad_samples_;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -274,7 +274,13 @@ void MapperShell::Finish() {
   core_.Finalize();
   Publish();
   const bool full_written = core_.has_map() && core_.WriteFull();
-  status_.Write(ToMsg(ComponentStatus::Done(ComponentKind::kMapper, core_.num_keyframes())));
+  bool slam_done = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    slam_done = slam_done_;
+  }
+  status_.Write(ToMsg(ComponentStatus::Done(ComponentKind::kMapper, core_.num_keyframes(),
+                                            StoppedBeforeTheEnd(*stop, slam_done))));
   updates_.WaitForAcknowledgments(std::chrono::milliseconds(3000));
   status_.WaitForAcknowledgments(std::chrono::milliseconds(2000));
   LOG_INFO << "mapper: " << stats_.keyframes_received << " keyframe messages ("
@@ -313,7 +319,7 @@ MapperStats MapperShell::Run(const StopFlagPtr& stop) {
   }
   prepare_stop_ = true;
   prepare_thread.join();
-  Finish();
+  Finish(stop);
   return stats_;
 }
 

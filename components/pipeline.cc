@@ -300,6 +300,9 @@ ComponentOutcome RunComponentKind(ComponentKind kind, const PipelineOptions& opt
       r.flush_timeout_s = options.flush_timeout_s;
       r.progress = options.progress;
       const RecorderStats stats = RunRecorder(participant, r, stop);
+      if (stats.poses_missed > 0 && !stats.input_cut_short)
+        return {stats.foreign_samples, std::to_string(stats.poses_missed) +
+                                           " per-frame poses never arrived: frames.csv lacks them"};
       return {stats.foreign_samples, InputEndedEarly(stats.input_cut_short)};
     }
     case ComponentKind::kRos2Bridge:
@@ -372,8 +375,8 @@ std::shared_ptr<dds::Participant> MakeParticipant(const PipelineOptions& options
   return dds::Participant::Create(p);
 }
 
-// A component whose part is incomplete (exit kExitComponentCutShort) is listed in
-// report->components_cut_short with why, as with --processes; a failed one makes the result 1.
+// A component whose part is incomplete for a reason of its own (messages that did not arrive) is
+// listed in report->components_cut_short, as with --processes; a failed one makes the result 1.
 int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop, StopReport* report) {
   auto participant = MakeParticipant(options, "pipeline");
   std::map<ComponentKind, int> codes;
@@ -394,7 +397,9 @@ int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop, St
       std::lock_guard<std::mutex> lock(mutex);
       codes[kind] = code;
       report->ignored_samples += ignored;
-      if (code == kExitComponentCutShort)
+      // In one process no component ends alone: an input that ended early is the stream's cut
+      // (the frame counts say it); other reasons (messages that did not arrive) are listed.
+      if (code == kExitComponentCutShort && incomplete != kInputEndedEarly)
         report->components_cut_short.push_back(std::string(ToString(kind)) + " (" + incomplete +
                                                ")");
     });

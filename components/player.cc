@@ -231,6 +231,8 @@ class PlayerShell {
   bool recorder_done_ = false;
   WriterGoneWatch recorder_watch_{std::chrono::seconds(5)};
   bool mapper_done_ = false;
+  // Recorder / mapper that announced DONE with a reason (stopped before the end) or FAILED.
+  std::map<ComponentKind, std::string> consumers_cut_short_;
   std::optional<WriterGuid> mapper_status_writer_;  // from the mapper's announcements
   WriterGoneWatch mapper_watch_{std::chrono::seconds(5)};
   // slam ended before the end of the stream: it said why (stopped by a signal, failed), or it
@@ -325,15 +327,16 @@ void PlayerShell::OnStatus(const ComponentStatus& s, const WriterGuid& from) {
         slam_cut_short_ = "was done before the end of the stream";
     }
     if (s.event == StreamEvent::kReady) ready_.insert(s.source);
-    if (s.source == ComponentKind::kRecorder &&
-        (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed))
-      recorder_done_ = true;
-    if (s.source == ComponentKind::kMapper) {
-      if (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed)
-        mapper_done_ = true;
-      else if (s.event == StreamEvent::kReady)
-        mapper_status_writer_ = from;
+    if ((s.source == ComponentKind::kRecorder || s.source == ComponentKind::kMapper) &&
+        (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed)) {
+      (s.source == ComponentKind::kRecorder ? recorder_done_ : mapper_done_) = true;
+      // Its output ends early: it failed, or a stop signal ended it before slam's end.
+      if (s.event == StreamEvent::kFailed || !s.reason.empty())
+        consumers_cut_short_[s.source] =
+            s.event == StreamEvent::kFailed ? "failed: " + s.reason : s.reason;
     }
+    if (s.source == ComponentKind::kMapper && s.event == StreamEvent::kReady)
+      mapper_status_writer_ = from;
     if (s.event == StreamEvent::kStarted && s.source == ComponentKind::kSlam) {
       if (const auto it = s.writers.find(DataTopic::kCameraPose); it != s.writers.end())
         slam_pose_writers_.insert(it->second);
@@ -497,6 +500,18 @@ void PlayerShell::EndStream(const StopFlagPtr& stop) {
     LOG_WARNING << "player: the mapper left without announcing that it is done; the run's map "
                    "lacks what it had not written";
     stats_.mapper_left_early = true;
+  }
+  std::map<ComponentKind, std::string> cut_short;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    cut_short = consumers_cut_short_;
+  }
+  for (const auto& [kind, reason] : cut_short) {
+    if (stop->requested()) break;
+    LOG_WARNING << "player: the " << ToString(kind) << " " << reason << "; "
+                << (kind == ComponentKind::kMapper ? "the run's map" : "the run's trajectory")
+                << " ends there";
+    (kind == ComponentKind::kMapper ? stats_.mapper_left_early : stats_.recorder_left_early) = true;
   }
 }
 

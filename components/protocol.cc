@@ -364,4 +364,11 @@ unsigned TimesContinued() {
   return continued_count.load(std::memory_order_relaxed);
 }
 
+std::string StoppedBeforeTheEnd(const StopFlag& stop, bool slam_done) {
+  if (!stop.requested() || slam_done) return "";
+  return stop.signal() != 0
+             ? "stopped by signal " + std::to_string(stop.signal()) + " before the end of the run"
+             : "stopped before the end of the run";
+}
+
 }  // namespace dygslam

@@ -36,6 +36,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/base/stop_signal.h"
 #include "dygslam_msg/StreamStatus.h"
 
 namespace dygslam {
@@ -317,6 +318,11 @@ class ReadyAnnouncer {
 // How many times this process was continued after a stop (SIGSTOP, Ctrl-Z): a SIGCONT handler,
 // installed on the first call, counts them.
 unsigned TimesContinued();
+
+// The detail of a consumer's COMPONENT_DONE (recorder, mapper) when a stop signal ended it before
+// slam's end of the run, "" otherwise: its peers (a hand-started player) tell an output that ends
+// there from a complete one.
+std::string StoppedBeforeTheEnd(const StopFlag& stop, bool slam_done);
 
 // Whether this process was stopped and continued since the watch began, and the longest gap
 // between two Tick()s of the calling loop (about how long it was stopped). A component stopped

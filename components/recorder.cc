@@ -254,6 +254,7 @@ void RecorderShell::CheckStreamEnded(std::unique_lock<std::mutex>& lock, const S
 }
 
 RecorderStats RecorderShell::Run(const StopFlagPtr& stop) {
+  bool slam_done = false;
   {
     std::unique_lock<std::mutex> lock(mutex_);
     WaitForSlam(lock, stop);
@@ -264,11 +265,20 @@ RecorderStats RecorderShell::Run(const StopFlagPtr& stop) {
     truth_gate_.Close();
     stats_.foreign_samples =
         pose_gate_.ignored() + trajectory_gate_.ignored() + truth_gate_.ignored();
+    stats_.poses_missed = static_cast<size_t>(poses_.losses().missed);
+    if (stats_.poses_missed > 0) {
+      LOG_WARNING << "recorder: " << stats_.poses_missed << " per-frame poses of slam never "
+                  << "arrived (they left slam's pose history while this process was paused or "
+                  << "starved): frames.csv and trajectory_online.txt lack them";
+    }
     stats_.final_trajectory = core_.has_final_trajectory();
+    slam_done = slam_done_;
     stats_.trajectory_path = core_.Write();
     if (options_.progress && core_.num_frames() > 0) std::fprintf(stderr, "\n");
   }
-  status_.Write(ToMsg(ComponentStatus::Done(ComponentKind::kRecorder)));
+  // Stopped before slam's end: the peers (a hand-started player) are told the outputs end there.
+  status_.Write(ToMsg(
+      ComponentStatus::Done(ComponentKind::kRecorder, 0, StoppedBeforeTheEnd(*stop, slam_done))));
   status_.WaitForAcknowledgments(std::chrono::milliseconds(2000));
   if (stats_.foreign_samples > 0) {
     LOG_WARNING << "recorder: "

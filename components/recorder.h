@@ -36,6 +36,10 @@ struct RecorderStats {
   // slam left without its end reaching the recorder (this process paused or starved while slam
   // finished, slam killed): the trajectory may lack its last frames.
   bool input_cut_short = false;
+  // Per-frame poses of slam that never arrived (gaps in its writer's sequence: they left slam's
+  // pose history while this process was paused or starved): frames.csv and the online
+  // trajectory lack them.
+  size_t poses_missed = 0;
 };
 
 RecorderStats RunRecorder(std::shared_ptr<dds::Participant> participant,

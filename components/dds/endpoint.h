@@ -23,6 +23,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -158,18 +159,11 @@ class TypedReader {
 
   int matched() const { return listener_.matched.load(); }
   // Whether `writer` is matched now (its participant is there: announced writers tell a peer's
-  // presence without a topic of its own).
+  // presence without a topic of its own). From the match events (Fast DDS 2.9 has no
+  // get_matched_publications).
   bool IsMatched(const WriterGuid& writer) const {
-    std::vector<eprosima::fastdds::dds::InstanceHandle_t> handles;
-    if (reader_->get_matched_publications(handles) !=
-        eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK)
-      return false;
-    for (const auto& h : handles) {
-      bool same = true;
-      for (size_t i = 0; i < writer.size(); ++i) same = same && writer[i] == h.value[i];
-      if (same) return true;
-    }
-    return false;
+    std::lock_guard<std::mutex> lock(listener_.loss_mutex);
+    return listener_.matched_writers.count(writer) > 0;
   }
   // Samples lost / rejected so far (ReaderLosses).
   ReaderLosses losses() const {
@@ -206,6 +200,12 @@ class TypedReader {
         eprosima::fastdds::dds::DataReader*,
         const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
       matched.store(status.current_count);
+      WriterGuid writer{};
+      for (size_t i = 0; i < writer.size(); ++i)
+        writer[i] = status.last_publication_handle.value[i];
+      std::lock_guard<std::mutex> lock(loss_mutex);
+      if (status.current_count_change > 0) matched_writers.insert(writer);
+      if (status.current_count_change < 0) matched_writers.erase(writer);
     }
     void on_sample_lost(eprosima::fastdds::dds::DataReader*,
                         const eprosima::fastdds::dds::SampleLostStatus& status) override {
@@ -254,6 +254,7 @@ class TypedReader {
     CallbackWithWriter callback;
     LossCallback on_loss;
     SequenceTracker sequences;
+    std::set<WriterGuid> matched_writers;  // guarded by loss_mutex
     std::atomic<int> matched{0};
     mutable std::mutex loss_mutex;
     ReaderLosses losses;

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -87,6 +88,29 @@ TEST(Transport, AStatusSampleIsAcknowledgedWellWithinASecond) {
   }
   EXPECT_EQ(received_here.load(), 3);
   EXPECT_EQ(received_there.load(), 3);
+}
+
+// A reader knows which writers are matched (a player tells by the mapper's status writer that the
+// mapper is there): from the match events, as a writer comes and goes.
+TEST(Transport, AReaderKnowsWhichWritersAreMatched) {
+  const int domain = 105;
+  auto pub = MakeParticipant(domain, "test_presence_pub");
+  auto sub = MakeParticipant(domain, "test_presence_sub");
+  dds::Reader<msg::StreamStatusPubSubType> reader(
+      sub, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus, [](msg::StreamStatus&&) {});
+  auto writer = std::make_unique<dds::Writer<msg::StreamStatusPubSubType>>(
+      pub, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus);
+  const WriterGuid guid = writer->guid();
+  WriterGuid other = guid;
+  other[15] ^= 0xff;
+  ASSERT_TRUE(reader.WaitForWriters(1, 10s));
+  EXPECT_TRUE(reader.IsMatched(guid));
+  EXPECT_FALSE(reader.IsMatched(other));
+  writer.reset();
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (reader.IsMatched(guid) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(10ms);
+  EXPECT_FALSE(reader.IsMatched(guid)) << "a deleted writer is unmatched";
 }
 
 TEST(Transport, RgbdFramesRoundTripBetweenParticipants) {

@@ -432,6 +432,15 @@ TEST_F(OutputClashCli, BenchUpdateFileIsCheckedBeforeAnyRun) {
   ExpectError(r, 1, {unmarked, "marker <!-- bench:begin --> not found"});
   EXPECT_EQ(ReadAll(unmarked), "no markers here\n");
   EXPECT_FALSE(Contains(r.err, "no sequence found")) << r.err;  // before the data is looked at
+  // A settings file named .md that carries the markers in comments is no report.
+  const std::string settings = dir_ + "/other.md";
+  const std::string yaml =
+      "%YAML:1.0\nCamera.fx: 517.3\n# <!-- bench:begin -->\n# <!-- bench:end -->\n";
+  std::ofstream(settings) << yaml;
+  const auto s = Run({"bench", dir_, "--out", out.string(), "--update-benchmarks", settings});
+  EXPECT_NE(s.code, 0);
+  EXPECT_TRUE(Contains(s.err, "is a settings file")) << s.err;
+  EXPECT_EQ(ReadAll(settings), yaml);
 }
 
 // `bench --update-benchmarks FILE` writes only into a Markdown file outside the data: a dataset's

@@ -159,6 +159,27 @@ std::vector<std::string> BenchController::AllConfigs() const {
   return all;
 }
 
+namespace {
+// A settings file given a Markdown name (it may carry the markers in comments): opened by
+// `%YAML`, or holding a line that sets a dotted settings key ("Camera.fx: 517.3").
+bool LooksLikeSettings(const std::string& text) {
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.rfind("%YAML", 0) == 0) return true;
+    size_t i = 0;
+    while (i < line.size() && std::isalnum(static_cast<unsigned char>(line[i]))) ++i;
+    if (i == 0 || i >= line.size() || line[i] != '.') continue;
+    size_t j = i + 1;
+    while (j < line.size() &&
+           (std::isalnum(static_cast<unsigned char>(line[j])) || line[j] == '_' || line[j] == '.'))
+      ++j;
+    if (j > i + 1 && j < line.size() && line[j] == ':') return true;
+  }
+  return false;
+}
+}  // namespace
+
 std::string BenchController::CheckUpdateFile() const {
   const std::string& target = options_.update_benchmarks;
   const std::string extension = fs::path(target).extension().string();
@@ -180,6 +201,10 @@ std::string BenchController::CheckUpdateFile() const {
   if (!in) throw InputError(target, 0, "--update-benchmarks: cannot read");
   std::stringstream text;
   text << in.rdbuf();
+  if (LooksLikeSettings(text.str()))
+    return "--update-benchmarks " + target +
+           " is a settings file (YAML with settings keys), not a Markdown report; a bench "
+           "never writes into a settings file";
   ReplaceBetweenMarkers(text.str(), "", target);  // throws naming the file and the marker
   PinFolderOfOutput(target);
   return "";

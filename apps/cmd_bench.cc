@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "apps/command.h"
+#include "core/base/child_process.h"
 #include "core/base/error.h"
 #include "core/base/number_option.h"
 #include "core/base/stop_signal.h"

@@ -62,14 +62,11 @@ std::string FindUnreplaceableFile(const std::string& out_dir) {
              " is not a folder of images; --replace replaces a sequence's files only: move it "
              "or choose another folder";
     for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
-      std::string ext = it->path().extension().string();
-      for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
       // A sequence's image is named by its timestamp (1305031102.175304.png).
       const std::string stem = it->path().stem().string();
       const bool stamp_named =
           !stem.empty() && stem.find_first_not_of("0123456789.") == std::string::npos;
-      const bool image = ext == ".png" || ext == ".jpg" || ext == ".jpeg";
-      if (!image || !stamp_named || !fs::is_regular_file(it->symlink_status()))
+      if (!HasImageExtension(it->path()) || !stamp_named || !fs::is_regular_file(it->symlink_status()))
         return "OUT_DIR '" + EchoValue(out_dir) + "': '" + EchoValue(it->path().string()) +
                "' is not an image of a sequence (a .png / .jpg named by its timestamp); "
                "--replace " +

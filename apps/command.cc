@@ -344,21 +344,6 @@ std::string ConfigDir() {
   return (std::filesystem::path(ScriptsDir()).parent_path() / "config").string();
 }
 
-std::string ShellQuote(const std::string& s) {
-  if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-                                        "0123456789-_./:=,+@") == std::string::npos)
-    return s;
-  std::string out = "'";
-  for (char c : s) {
-    if (c == '\'') {
-      out += "'\\''";
-    } else {
-      out += c;
-    }
-  }
-  return out + "'";
-}
-
 std::vector<NamedPath> DatasetRunInputs(const ArgParser& p, const std::string& dataset_dir,
                                         const std::string& settings_role,
                                         const std::string& settings_path,
@@ -387,26 +372,6 @@ std::vector<NamedPath> DatasetRunOutputs(const ArgParser& p, const std::filesyst
   for (const std::string& name : RunOutputNames())
     outputs.push_back({"the output " + name, (out_dir / name).string()});
   return outputs;
-}
-
-std::string FindOutputOnDatasetImage(const RgbdDataset& dataset, const std::string& dataset_dir,
-                                     const std::vector<NamedPath>& outputs) {
-  std::vector<NamedPath> images;
-  images.reserve(2 * dataset.frames().size());
-  for (const RgbdFrameEntry& f : dataset.frames()) {
-    images.push_back({"the dataset's image listed at " + f.rgb_listed_at, f.rgb_path});
-    images.push_back({"the dataset's image listed at " + f.depth_listed_at, f.depth_path});
-  }
-  // And every file in its image folders (entries without a partner are not in frames()).
-  for (const char* folder : {"rgb", "depth"}) {
-    std::error_code ec;
-    for (std::filesystem::directory_iterator it(std::filesystem::path(dataset_dir) / folder, ec),
-         end;
-         !ec && it != end; it.increment(ec))
-      images.push_back(
-          {std::string("a file of the dataset's ") + folder + "/ folder", it->path().string()});
-  }
-  return FindOutputAmongInputs(images, outputs);
 }
 
 std::string FindDatasetRunOutputClash(const std::vector<NamedPath>& inputs, const ArgParser& p,

@@ -152,11 +152,6 @@ std::vector<NamedPath> DatasetRunInputs(const ArgParser& p, const std::string& d
                                         const std::vector<std::string>& file_options);
 // --save-map (when given) and every file of RunOutputNames() in `out_dir`.
 std::vector<NamedPath> DatasetRunOutputs(const ArgParser& p, const std::filesystem::path& out_dir);
-// The first output that is one of the dataset's images, "" when there is none: every image its
-// lists name (also by an absolute path outside the dataset folder) and every file in its rgb/
-// and depth/ folders.
-std::string FindOutputOnDatasetImage(const RgbdDataset& dataset, const std::string& dataset_dir,
-                                     const std::vector<NamedPath>& outputs);
 // The first output of a dataset run that is an input or another output (FindOutputClash), ""
 // when there is none.
 std::string FindDatasetRunOutputClash(const std::vector<NamedPath>& inputs, const ArgParser& p,
@@ -182,8 +177,5 @@ std::string FindForeignFileAtSaveMap(const ArgParser& p);
 void WarnAboutDataset(const std::string& command, const RgbdDataset& dataset, size_t first,
                       size_t last, double depth_map_factor, int width, int height,
                       const std::vector<StampedPose>* groundtruth);
-
-// `s` as one POSIX shell word: unchanged when it has only safe characters, else single-quoted.
-std::string ShellQuote(const std::string& s);
 
 }  // namespace dygslam::cli

@@ -199,6 +199,7 @@ ComponentOutcome RunPipelinePlayer(const PipelineOptions& options,
   p.window = options.window;
   p.loop_minutes = options.loop_minutes;
   p.expected_readers = options.NeedsDetectorComponent() ? 2 : 1;
+  p.watch_consumers = !options.judged_by_runner;
   if (options.wait_for_components) {
     for (const ComponentKind component : PipelineComponents(options)) {
       if (component != ComponentKind::kPlayer) p.wait_for_components.push_back(component);
@@ -416,9 +417,7 @@ int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop, St
 // runner's handlers, and a signal it takes there is lost) and /proc/PID/status lists `sig` among
 // the signals it catches (SigCgt: its main() has installed the handler).
 bool ComponentCatchesSignal(pid_t pid, ComponentKind component, int sig) {
-  std::ifstream cmdline_file("/proc/" + std::to_string(pid) + "/cmdline");
-  const std::string cmdline((std::istreambuf_iterator<char>(cmdline_file)),
-                            std::istreambuf_iterator<char>());
+  const std::string cmdline = ReadProcessFile(pid, "cmdline");
   if (cmdline.find(std::string("component") + '\0' + ToString(component) + '\0') ==
       std::string::npos)
     return false;
@@ -667,10 +666,12 @@ int RunComponent(const std::string& name, const PipelineOptions& options, const 
   options.Check();
   BoundMallocArenas();
   const ComponentKind kind = ComponentKindOrThrow(name);
+  PipelineOptions own = options;
+  own.judged_by_runner = std::getenv(kReportFdVariable) != nullptr;  // a child of a run
   size_t ignored = 0;
   std::string incomplete;
   const int code =
-      RunComponentOn(kind, options, MakeParticipant(options, name), stop, &ignored, &incomplete);
+      RunComponentOn(kind, own, MakeParticipant(own, name), stop, &ignored, &incomplete);
   ReportToRunner(ignored, stop->signal(), incomplete);
   return code;
 }
@@ -680,6 +681,7 @@ int RunPipeline(const PipelineOptions& pipeline_options, StopReport* report) {
   BoundMallocArenas();
   PipelineOptions options = pipeline_options;
   options.wait_for_components = true;
+  options.judged_by_runner = true;
   if (options.processes && !options.security_dir.empty()) {
     // Before any process starts: every component's credentials readable, its certificate issued
     // by its CA, and all of them trusting one CA (else they could not authenticate each other

@@ -64,6 +64,10 @@ struct PipelineOptions {
   // The player waits for the READY announcement of every other component of this pipeline
   // (set by RunPipeline; `dygslam component player --wait-for-components` by hand).
   bool wait_for_components = false;
+  // A component of `dygslam run` (one process, or a child of --processes that reports to the
+  // runner): the runner judges each component's end itself, so the player does not watch the
+  // recorder and the mapper (by hand, with --wait-for-components, it does). Not an option.
+  bool judged_by_runner = false;
   // On stop: how long mapper and recorder wait for slam's last outputs (seconds).
   double flush_timeout_s = 5.0;
   std::string executable;  // --processes: the dygslam binary (default /proc/self/exe)

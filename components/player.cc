@@ -239,8 +239,9 @@ class PlayerShell {
   // was done before this player announced the end of its stream.
   std::string slam_cut_short_;
   bool end_of_stream_sent_ = false;
-  std::set<ComponentKind> ready_;  // components that announced READY
-  RepeatedWarning rival_warning_;  // a rival announces itself again as peers join
+  std::set<ComponentKind> ready_;   // components that announced READY
+  std::set<ComponentKind> failed_;  // components that announced FAILED: not waited for
+  RepeatedWarning rival_warning_;   // a rival announces itself again as peers join
   WriterGoneWatch slam_watch_{std::chrono::seconds(5)};
   bool slam_gone_reported_ = false;
   // The endpoints last: their listeners use the state above.
@@ -327,6 +328,7 @@ void PlayerShell::OnStatus(const ComponentStatus& s, const WriterGuid& from) {
         slam_cut_short_ = "was done before the end of the stream";
     }
     if (s.event == StreamEvent::kReady) ready_.insert(s.source);
+    if (s.event == StreamEvent::kFailed) failed_.insert(s.source);
     if ((s.source == ComponentKind::kRecorder || s.source == ComponentKind::kMapper) &&
         (s.event == StreamEvent::kComponentDone || s.event == StreamEvent::kFailed)) {
       (s.source == ComponentKind::kRecorder ? recorder_done_ : mapper_done_) = true;
@@ -349,11 +351,17 @@ void PlayerShell::WaitForPeers(const StopFlagPtr& stop) {
   const auto readers_deadline =
       Clock::now() +
       std::chrono::milliseconds(static_cast<int64_t>(options_.wait_for_readers_s * 1000));
-  while (frames_.matched() < options_.expected_readers && Clock::now() < readers_deadline &&
+  // A frame reader (detector, slam) that announced FAILED will not come.
+  auto expected_readers = [&] {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return options_.expected_readers - static_cast<int>(failed_.count(ComponentKind::kDetector) +
+                                                        failed_.count(ComponentKind::kSlam));
+  };
+  while (frames_.matched() < expected_readers() && Clock::now() < readers_deadline &&
          !stop->WaitFor(std::chrono::milliseconds(10))) {
   }
-  if (frames_.matched() < options_.expected_readers && !stop->requested()) {
-    LOG_WARNING << "player: only " << frames_.matched() << " of " << options_.expected_readers
+  if (frames_.matched() < expected_readers() && !stop->requested()) {
+    LOG_WARNING << "player: only " << frames_.matched() << " of " << expected_readers()
                 << " frame readers after " << options_.wait_for_readers_s << " s; playing anyway";
   }
   const auto deadline =
@@ -363,7 +371,8 @@ void PlayerShell::WaitForPeers(const StopFlagPtr& stop) {
   auto missing = [&] {
     std::string names;
     for (const ComponentKind kind : options_.wait_for_components) {
-      if (!ready_.count(kind)) names += std::string(names.empty() ? "" : ", ") + ToString(kind);
+      if (!ready_.count(kind) && !failed_.count(kind))
+        names += std::string(names.empty() ? "" : ", ") + ToString(kind);
     }
     return names;
   };
@@ -491,6 +500,7 @@ void PlayerShell::EndStream(const StopFlagPtr& stop) {
                    "did not process have no pose)";
     stats_.slam_left_early = true;
   }
+  if (!options_.watch_consumers) return;
   if (slam_said_done && !RecorderFinished(stop)) {
     LOG_WARNING << "player: the recorder left without announcing that it is done; the run's "
                    "trajectory and frames.csv were not written";

@@ -48,6 +48,9 @@ struct PlayerOptions {
   // first frame (the pipeline lists the ones it runs), at most wait_for_components_s seconds.
   std::vector<ComponentKind> wait_for_components;
   double wait_for_components_s = 60.0;
+  // After slam's end, wait for the DONE of the recorder and the mapper among wait_for_components
+  // (they write the run's outputs) and say when one left without it or stopped early.
+  bool watch_consumers = true;
   bool publish_ground_truth = true;
   // > 0: replay the range again and again until this much wall time has passed (soak runs); each
   // replay's stamps continue after the previous one's (+ 1 s), seq keeps counting.

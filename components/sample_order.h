@@ -20,9 +20,11 @@
 #include <functional>
 #include <map>
 #include <mutex>
+#include <string>
 #include <thread>
 
 #include "components/protocol.h"
+#include "core/base/thread_setup.h"
 
 namespace dygslam {
 
@@ -54,14 +56,16 @@ class OrderedSender {
   // `write` returns false when the writer refused the message (it blocked for its
   // max_blocking_time first); `retry_pause` between attempts; at most `max_pending` messages wait
   // (more are counted as not delivered: memory stays bounded when a reader never acknowledges);
-  // `on_refused(pending)` once per refusal episode (its first refusal).
+  // `on_refused(pending)` once per refusal episode (its first refusal); the sending thread is
+  // named `thread_name` (top -H) when given.
   OrderedSender(std::function<bool(const Message&)> write, size_t max_pending,
                 std::chrono::milliseconds retry_pause,
-                std::function<void(size_t pending)> on_refused = {})
+                std::function<void(size_t pending)> on_refused = {}, std::string thread_name = "")
       : write_(std::move(write)),
         on_refused_(std::move(on_refused)),
         max_pending_(max_pending),
         retry_pause_(retry_pause),
+        thread_name_(std::move(thread_name)),
         thread_([this] { Loop(); }) {}
   ~OrderedSender() { Finish(std::chrono::milliseconds(0)); }
   OrderedSender(const OrderedSender&) = delete;
@@ -106,6 +110,7 @@ class OrderedSender {
 
  private:
   void Loop() {
+    if (!thread_name_.empty()) SetCurrentThreadName(thread_name_);
     bool refusing = false;
     std::unique_lock<std::mutex> lock(mutex_);
     while (true) {
@@ -138,6 +143,7 @@ class OrderedSender {
   std::function<void(size_t)> on_refused_;
   const size_t max_pending_;
   const std::chrono::milliseconds retry_pause_;
+  const std::string thread_name_;
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   std::deque<Message> pending_;

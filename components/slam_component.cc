@@ -71,7 +71,8 @@ class SlamShell {
                                        << "acknowledged its history (a paused or stalled "
                                        << "mapper): holding " << pending << " keyframe "
                                        << "messages until it does or its lease runs out";
-                         }),
+                         },
+                         "keyframe sender"),
         trajectory_writer_(participant, dds::topics::kTrajectory, dds::TopicKind::kTrajectory),
         status_(participant, dds::topics::kStreamStatus, dds::TopicKind::kStreamStatus),
         frames_(participant, dds::topics::kRgbdFrame, dds::TopicKind::kRgbdFrame,
@@ -448,8 +449,15 @@ SlamStats SlamShell::Run(const StopFlagPtr& stop) {
   bool end = false;
   while (!stop->requested()) {
     started_.Poll(status_);
-    announcer.Poll(status_, frames_.matched() > 0 &&
-                                (!pairing_options_.needs_detections || detections_.matched() > 0));
+    bool detector_failed = false;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      detector_failed = detector_failed_;
+    }
+    // A detector that failed will not come: ready without it (geometry-only).
+    announcer.Poll(status_,
+                   frames_.matched() > 0 && (!pairing_options_.needs_detections ||
+                                             detections_.matched() > 0 || detector_failed));
     if (announcer.done() && !map_announced_) AnnounceLoadedMap();
     const std::optional<PairedFrame> paired = NextPaired(&end);
     if (end) break;

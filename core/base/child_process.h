@@ -34,4 +34,13 @@ struct ChildExit {
 // meanwhile (ScopedStopSignals) is passed on to the child once, so that it ends cleanly.
 ChildExit WaitForChildProcess(pid_t pid, bool forward_stop_signals);
 
+// The text of /proc/PID/`name` ("cmdline", "stat", "status"), "" when the process is gone: it may
+// end between the open and the read, which then fails with ESRCH (an exception when read through
+// std::istreambuf_iterator).
+std::string ReadProcessFile(pid_t pid, const std::string& name);
+
+// `s` as one POSIX shell word: unchanged when it has only safe characters, else single-quoted
+// (for a command line a user may copy, or one given to a shell).
+std::string ShellQuote(const std::string& s);
+
 }  // namespace dygslam

@@ -147,10 +147,7 @@ std::string UnlistedImagesNote(const fs::path& dir, const std::string& folder,
   for (const ListEntry& e : entries) listed.insert(fs::path(e.path).lexically_normal().string());
   size_t images = 0, unlisted = 0;
   for (fs::directory_iterator it(dir / folder, ec), end; !ec && it != end; it.increment(ec)) {
-    std::string ext = it->path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return std::tolower(c); });
-    if (ext != ".png" && ext != ".jpg" && ext != ".jpeg") continue;
+    if (!HasImageExtension(it->path())) continue;
     if (!it->is_regular_file(ec)) continue;
     ++images;
     unlisted += listed.count(it->path().lexically_normal().string()) == 0;
@@ -552,6 +549,32 @@ std::string ImplausibleDepth(const DepthRangeSample& s, double depth_map_factor)
   return text;
 }
 
+std::string FindOutputOnDatasetImage(const RgbdDataset& dataset, const std::string& dataset_dir,
+                                     const std::vector<NamedPath>& outputs) {
+  std::vector<NamedPath> images;
+  images.reserve(2 * dataset.frames().size());
+  for (const RgbdFrameEntry& f : dataset.frames()) {
+    images.push_back({"the dataset's image listed at " + f.rgb_listed_at, f.rgb_path});
+    images.push_back({"the dataset's image listed at " + f.depth_listed_at, f.depth_path});
+  }
+  // And every file in its image folders (entries without a partner are not in frames()).
+  for (const char* folder : {"rgb", "depth"}) {
+    std::error_code ec;
+    for (std::filesystem::directory_iterator it(std::filesystem::path(dataset_dir) / folder, ec),
+         end;
+         !ec && it != end; it.increment(ec))
+      images.push_back(
+          {std::string("a file of the dataset's ") + folder + "/ folder", it->path().string()});
+  }
+  return FindOutputAmongInputs(images, outputs);
+}
+
+bool HasImageExtension(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
+}
+
 bool IsDatasetFolder(const std::filesystem::path& dir) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -566,9 +589,7 @@ std::string DatasetImageFolderOf(const std::filesystem::path& dir) {
     int looked = 0;
     for (fs::directory_iterator it(folder, ec), end; !ec && it != end && looked < 200;
          it.increment(ec), ++looked) {
-      std::string ext = it->path().extension().string();
-      for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-      if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") return true;
+      if (HasImageExtension(it->path())) return true;
     }
     return false;
   };

@@ -14,6 +14,7 @@
 
 #include "core/base/timestamp.h"
 #include "core/base/types.h"
+#include "core/io/file_util.h"
 
 namespace dygslam {
 
@@ -143,6 +144,13 @@ std::string ImplausibleDepth(const DepthRangeSample& sample, double depth_map_fa
 // Whether `dir` is a dataset folder (TUM / Bonn layout): it holds rgb.txt and depth.txt, or an
 // associations.txt that pairs the images.
 bool IsDatasetFolder(const std::filesystem::path& dir);
+// The first output that is one of the dataset's images, "" when there is none: every image its
+// lists name (also by an absolute path outside the dataset folder) and every file in its rgb/
+// and depth/ folders.
+std::string FindOutputOnDatasetImage(const RgbdDataset& dataset, const std::string& dataset_dir,
+                                     const std::vector<NamedPath>& outputs);
+// Whether `path` names an image file a dataset holds: .png, .jpg or .jpeg, in any case.
+bool HasImageExtension(const std::filesystem::path& path);
 // The dataset folder (IsDatasetFolder) that an existing file `path` belongs
 // to: the folder itself or its parent (rgb/, depth/); "" when it belongs to none or does not exist.
 // An output onto such a file would destroy a user's data.

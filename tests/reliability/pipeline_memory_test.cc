@@ -33,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "core/base/child_process.h"
 #include "tests/support/test_support.h"
 
 namespace dygslam {
@@ -59,8 +60,7 @@ std::map<pid_t, pid_t> ParentPids() {
   while (const dirent* entry = readdir(dir)) {
     const pid_t pid = static_cast<pid_t>(std::atoi(entry->d_name));
     if (pid <= 0) continue;
-    std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
-    std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+    const std::string text = ReadProcessFile(pid, "stat");
     const size_t paren = text.rfind(')');
     if (paren == std::string::npos) continue;
     std::istringstream rest(text.substr(paren + 2));
@@ -74,7 +74,7 @@ std::map<pid_t, pid_t> ParentPids() {
 }
 
 double RssMb(pid_t pid) {
-  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  std::istringstream status(ReadProcessFile(pid, "status"));
   std::string line;
   while (std::getline(status, line)) {
     if (line.rfind("VmRSS:", 0) == 0) return std::atof(line.c_str() + 6) / 1024.0;
@@ -95,7 +95,7 @@ std::map<std::string, double> TreeRssMb(pid_t root) {
   }
   std::map<std::string, double> result;
   for (pid_t pid : tree) {
-    std::ifstream cmdline_file("/proc/" + std::to_string(pid) + "/cmdline");
+    std::istringstream cmdline_file(ReadProcessFile(pid, "cmdline"));
     std::vector<std::string> argv;
     for (std::string arg; std::getline(cmdline_file, arg, '\0');) argv.push_back(arg);
     const std::string name = argv.size() > 2 && argv[1] == "component" ? argv[2] : "run";

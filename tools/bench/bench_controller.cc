@@ -116,12 +116,6 @@ std::string SafeName(const std::string& s) {
   return out;
 }
 
-std::string ShellWord(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
 std::string ReadWhole(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path, 0, "cannot read");
@@ -536,7 +530,7 @@ void BenchController::DrawPictures() {
   const std::string manifest_path = (work_dir / "plots.json").string();
   WriteFileAtomically(manifest_path, manifest.str());
   const std::string cmd =
-      "python3 " + ShellWord(options_.plots_script) + " --manifest " + ShellWord(manifest_path);
+      "python3 " + ShellQuote(options_.plots_script) + " --manifest " + ShellQuote(manifest_path);
   const int status = std::system(cmd.c_str());
   const int code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
   if (code != 0) {

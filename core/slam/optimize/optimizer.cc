@@ -320,22 +320,23 @@ void SolveBundle(BundleProblem& bundle, const OptimizerOptions& options, int ite
   if (bundle.observations.empty()) return;
   const double delta_mono = std::sqrt(options.chi2_mono),
                delta_stereo = std::sqrt(options.chi2_stereo);
-  // Local windows: the dedicated solver; larger problems: Ceres.
-  std::function<void(int, bool)> solve;
-  if (bundle.poses.size() - bundle.fixed.size() <= kDedicatedSolverMaxPoses) {
-    auto dedicated = std::make_shared<DedicatedBundleSolve>(&bundle);
-    solve = [=](int iterations, bool robust) {
-      dedicated->Solve(iterations, robust ? delta_mono : 0.0, robust ? delta_stereo : 0.0, abort);
-    };
-  } else {
-    auto general = std::make_shared<CeresBundleSolve>(&bundle, delta_mono, delta_stereo);
-    solve = [=](int iterations, bool robust) { general->Solve(iterations, robust, abort); };
-  }
   // Robust first, then without the kernel on the inliers.
-  solve(iterations_first, true);
-  if (!(abort && abort->load())) {
-    ClassifyBundleOutliers(&bundle, options);
-    solve(iterations_second, false);
+  const auto two_passes = [&](auto&& solve) {
+    solve(iterations_first, true);
+    if (!(abort && abort->load())) {
+      ClassifyBundleOutliers(&bundle, options);
+      solve(iterations_second, false);
+    }
+  };
+  // Local windows: the dedicated solver; larger problems: Ceres.
+  if (bundle.poses.size() - bundle.fixed.size() <= kDedicatedSolverMaxPoses) {
+    DedicatedBundleSolve dedicated(&bundle);
+    two_passes([&](int iterations, bool robust) {
+      dedicated.Solve(iterations, robust ? delta_mono : 0.0, robust ? delta_stereo : 0.0, abort);
+    });
+  } else {
+    CeresBundleSolve general(&bundle, delta_mono, delta_stereo);
+    two_passes([&](int iterations, bool robust) { general.Solve(iterations, robust, abort); });
   }
   ClassifyBundleOutliers(&bundle, options);
   bundle.solved = true;

@@ -24,6 +24,9 @@
 
 namespace dygslam {
 namespace {
+// A pause longer than this (the DDS participant lease, 20 s, with a margin) makes the peers drop
+// each other; they find each other again within moments of the continue.
+constexpr std::chrono::seconds kPauseOverLease{18};
 
 // Poses of another frame source's frames (a second of them at 30 Hz) with none for this player's:
 // the run's consumers took the other source, and this player's frames are refused.
@@ -188,6 +191,13 @@ class PlayerShell {
   // run's map lacks the rest). Its presence: its status writer, matched on the status reader.
   bool MapperFinished(const StopFlagPtr& stop);
   void WaitForPeers(const StopFlagPtr& stop);
+  // The frame readers this player waits for (those that announced FAILED are not).
+  int ExpectedReaders();
+  // After this process was stopped and continued: peers whose lease ran out meanwhile are dropped
+  // and found again within moments, and frames sent before that are lost. Waits (at most
+  // WriterGoneWatch::kResumeGrace) until the frame readers are matched again.
+  // `paused`: how long the replay stood still (longer than kPauseOverLease: the leases ran out).
+  void AwaitReadersAfterResume(Clock::duration paused, const StopFlagPtr& stop);
   void PlayFrames(const StopFlagPtr& stop);
   // Paced runs: waits until frame `n` is due; false when stopped meanwhile.
   bool WaitUntilDue(size_t n, const RgbdFrameData& frame, const StopFlagPtr& stop);
@@ -351,12 +361,7 @@ void PlayerShell::WaitForPeers(const StopFlagPtr& stop) {
   const auto readers_deadline =
       Clock::now() +
       std::chrono::milliseconds(static_cast<int64_t>(options_.wait_for_readers_s * 1000));
-  // A frame reader (detector, slam) that announced FAILED will not come.
-  auto expected_readers = [&] {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return options_.expected_readers - static_cast<int>(failed_.count(ComponentKind::kDetector) +
-                                                        failed_.count(ComponentKind::kSlam));
-  };
+  const auto expected_readers = [this] { return ExpectedReaders(); };
   while (frames_.matched() < expected_readers() && Clock::now() < readers_deadline &&
          !stop->WaitFor(std::chrono::milliseconds(10))) {
   }
@@ -385,6 +390,24 @@ void PlayerShell::WaitForPeers(const StopFlagPtr& stop) {
   }
 }
 
+int PlayerShell::ExpectedReaders() {
+  // A frame reader (detector, slam) that announced FAILED will not come.
+  std::lock_guard<std::mutex> lock(mutex_);
+  return options_.expected_readers - static_cast<int>(failed_.count(ComponentKind::kDetector) +
+                                                      failed_.count(ComponentKind::kSlam));
+}
+
+void PlayerShell::AwaitReadersAfterResume(Clock::duration paused, const StopFlagPtr& stop) {
+  if (paused < kPauseOverLease) return;  // the peers' leases held: nobody was dropped
+  const auto deadline = Clock::now() + WriterGoneWatch::kResumeGrace;
+  bool dropped = false;
+  while (Clock::now() < deadline && !stop->WaitFor(std::chrono::milliseconds(10))) {
+    const bool all = frames_.matched() >= ExpectedReaders();
+    dropped = dropped || !all;
+    if (dropped && all) return;  // dropped for the expired lease, and found again
+  }
+}
+
 bool PlayerShell::WaitUntilDue(size_t n, const RgbdFrameData& frame, const StopFlagPtr& stop) {
   auto due = [&] {
     return start_ + std::chrono::nanoseconds(static_cast<int64_t>(
@@ -392,6 +415,7 @@ bool PlayerShell::WaitUntilDue(size_t n, const RgbdFrameData& frame, const StopF
   };
   if (const unsigned continued = TimesContinued(); continued != continued_at_last_frame_) {
     continued_at_last_frame_ = continued;
+    AwaitReadersAfterResume(Clock::now() - due(), stop);
     if (const auto behind = Clock::now() - due(); behind > Clock::duration::zero()) {
       start_ += behind;
       LOG_INFO << "player: stopped and continued; the replay goes on at the camera's rate "

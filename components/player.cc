@@ -181,15 +181,10 @@ class PlayerShell {
     slam_gone_reported_ = slam_gone_reported_ || slam_watch_.Update(poses_.matched() > 0);
     return slam_gone_reported_;
   }
-  // The run's recorder (waited for, and READY) that left without COMPONENT_DONE: its ground-truth
-  // reader unmatched for 5 s.
-  bool RecorderGone() { return recorder_watch_.Update(gt_writer_.matched() > 0); }
-  // After slam's end: waits for the recorder's DONE when the run has one; false when it left
-  // without (killed: the run's trajectory is not written).
-  bool RecorderFinished(const StopFlagPtr& stop);
-  // Then the mapper's DONE when the run has one (READY); false when it left without (killed: the
-  // run's map lacks the rest). Its presence: its status writer, matched on the status reader.
-  bool MapperFinished(const StopFlagPtr& stop);
+  // After slam's end: waits for the DONE of the run's recorder or mapper (`kind`) when the run has
+  // one (waited for, and READY); false when it left without (killed: the run's trajectory is not
+  // written, its map lacks the rest): not present for 5 s.
+  bool ConsumerFinished(ComponentKind kind, const StopFlagPtr& stop);
   void WaitForPeers(const StopFlagPtr& stop);
   // The frame readers this player waits for (those that announced FAILED are not).
   int ExpectedReaders();
@@ -204,6 +199,8 @@ class PlayerShell {
   // With a window: waits for the acknowledgement of frame n - window (bounded).
   void WaitForWindow(size_t n, const StopFlagPtr& stop);
   void EndStream(const StopFlagPtr& stop);
+  // Says that the run's consumers take another frame source's frames (mutex_ held).
+  void ReportRefused(size_t frames_sent);
   void Summarize();
 
   const PlayerOptions options_;
@@ -466,11 +463,7 @@ void PlayerShell::PlayFrames(const StopFlagPtr& stop) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (refused_) {
-        stats_.refused = true;
-        LOG_ERROR << "player: the consumers on this partition take the frames of another frame "
-                  << "source (" << foreign_poses_ << " poses for its frames, none for this "
-                  << "player's " << n << "): this player's frames are refused; stopping (give "
-                  << "each run its own --partition)";
+        ReportRefused(n);
         break;
       }
       const auto now = Clock::now();
@@ -484,6 +477,14 @@ void PlayerShell::PlayFrames(const StopFlagPtr& stop) {
     }
     ++stats_.frames_published;
   }
+}
+
+void PlayerShell::ReportRefused(size_t frames_sent) {
+  stats_.refused = true;
+  LOG_ERROR << "player: the consumers on this partition take the frames of another frame "
+            << "source (" << foreign_poses_ << " poses for its frames, none for this player's "
+            << frames_sent << "): this player's frames are refused; stopping (give each run its "
+            << "own --partition)";
 }
 
 void PlayerShell::EndStream(const StopFlagPtr& stop) {
@@ -504,15 +505,22 @@ void PlayerShell::EndStream(const StopFlagPtr& stop) {
   LOG_INFO << "player: published " << stats_.frames_published << " frames, end of stream";
   // Stay alive (frames and ground truth remain available to late readers) until slam is done, or
   // gone without saying so.
+  // A player refused after its last frame (a short stretch, or a slam slower than the camera)
+  // learns it here: poses for another source's frames and, when slam is done, none for its own.
   bool slam_said_done = false;
   std::string slam_cut_short;
   {
     std::unique_lock<std::mutex> lock(mutex_);
-    while (!slam_done_ && !stop->requested() && !SlamGone()) {
+    while (!slam_done_ && !stop->requested() && !SlamGone() && (stats_.refused || !refused_)) {
       cv_.wait_for(lock, std::chrono::milliseconds(50));
     }
     slam_said_done = slam_done_;
     slam_cut_short = slam_cut_short_;
+    if (!stats_.refused && !stop->requested() && stats_.frames_published > 0 && own_poses_ == 0 &&
+        (refused_ || (slam_said_done && foreign_poses_ > 0))) {
+      ReportRefused(stats_.frames_published);
+      return;
+    }
   }
   if (slam_said_done && !slam_cut_short.empty() && !stop->requested()) {
     LOG_WARNING << "player: slam " << slam_cut_short
@@ -525,12 +533,12 @@ void PlayerShell::EndStream(const StopFlagPtr& stop) {
     stats_.slam_left_early = true;
   }
   if (!options_.watch_consumers) return;
-  if (slam_said_done && !RecorderFinished(stop)) {
+  if (slam_said_done && !ConsumerFinished(ComponentKind::kRecorder, stop)) {
     LOG_WARNING << "player: the recorder left without announcing that it is done; the run's "
                    "trajectory and frames.csv were not written";
     stats_.recorder_left_early = true;
   }
-  if (slam_said_done && !MapperFinished(stop)) {
+  if (slam_said_done && !ConsumerFinished(ComponentKind::kMapper, stop)) {
     LOG_WARNING << "player: the mapper left without announcing that it is done; the run's map "
                    "lacks what it had not written";
     stats_.mapper_left_early = true;
@@ -549,31 +557,26 @@ void PlayerShell::EndStream(const StopFlagPtr& stop) {
   }
 }
 
-bool PlayerShell::MapperFinished(const StopFlagPtr& stop) {
+bool PlayerShell::ConsumerFinished(ComponentKind kind, const StopFlagPtr& stop) {
   const auto& wanted = options_.wait_for_components;
+  const bool recorder = kind == ComponentKind::kRecorder;
   std::unique_lock<std::mutex> lock(mutex_);
-  if (std::find(wanted.begin(), wanted.end(), ComponentKind::kMapper) == wanted.end() ||
-      !mapper_status_writer_)
-    return true;
+  // It was there: it said READY (the mapper's status writer is known from its READY), also when
+  // it left before slam's end.
+  const bool announced = recorder ? ready_.count(kind) > 0 : mapper_status_writer_.has_value();
+  if (std::find(wanted.begin(), wanted.end(), kind) == wanted.end() || !announced) return true;
+  const bool& done = recorder ? recorder_done_ : mapper_done_;
+  WriterGoneWatch& watch = recorder ? recorder_watch_ : mapper_watch_;
+  // Its presence: the recorder's ground-truth reader matched on this player's writer, the
+  // mapper's status writer on this player's status reader.
+  const auto present = [&] {
+    return recorder ? gt_writer_.matched() > 0 : status_reader_.IsMatched(*mapper_status_writer_);
+  };
   bool gone = false;
-  mapper_watch_.Seen();
-  while (!mapper_done_ && !stop->requested() &&
-         !(gone = mapper_watch_.Update(status_reader_.IsMatched(*mapper_status_writer_))))
+  watch.Seen();
+  while (!done && !stop->requested() && !(gone = watch.Update(present())))
     cv_.wait_for(lock, std::chrono::milliseconds(50));
-  return !gone || mapper_done_;
-}
-
-bool PlayerShell::RecorderFinished(const StopFlagPtr& stop) {
-  const auto& wanted = options_.wait_for_components;
-  std::unique_lock<std::mutex> lock(mutex_);
-  if (std::find(wanted.begin(), wanted.end(), ComponentKind::kRecorder) == wanted.end() ||
-      !ready_.count(ComponentKind::kRecorder))
-    return true;
-  bool gone = false;
-  recorder_watch_.Seen();  // READY: it was there, also when it left before slam's end
-  while (!recorder_done_ && !stop->requested() && !(gone = RecorderGone()))
-    cv_.wait_for(lock, std::chrono::milliseconds(50));
-  return !gone || recorder_done_;
+  return !gone || done;
 }
 
 void PlayerShell::Summarize() {

@@ -33,16 +33,19 @@ constexpr int kDomain = 194;
 constexpr int kRunFrames = 200;   // frames [0, 200) of the dataset: the run
 constexpr int kRivalFirst = 260;  // frames [260, 360): the second player, in real time
 constexpr int kRivalLast = 360;
+constexpr int kShortRivalFrames = 5;  // a sixth of a second at the camera's rate
 
 bool Contains(const std::string& text, const std::string& needle) {
   return text.find(needle) != std::string::npos;
 }
 
-TEST(DdsSecondPlayer, RunRejectsASecondFrameSourceOnItsPartition) {
+// Plays the run and, once its frames flow, a second player on frames [rival_first, rival_last)
+// at the camera's rate, on `domain`.
+void ExpectSecondPlayerRefused(int domain, int rival_first, int rival_last) {
   DYGSLAM_REQUIRE_DATASET(dataset, "bonn_crowd_part");
   DYGSLAM_REQUIRE_FILE(testing::DygslamBinary(), "dygslam binary");
   const RgbdDataset frames = RgbdDataset::Open(dataset);
-  ASSERT_GE(frames.size(), size_t(kRivalLast));
+  ASSERT_GE(frames.size(), size_t(rival_last));
   const std::string dir = testing::MakeTempDir("dds_second_player");
   const std::string partition = "dygslam_second_player_" + std::to_string(getpid());
   const std::string config = std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml";
@@ -50,7 +53,7 @@ TEST(DdsSecondPlayer, RunRejectsASecondFrameSourceOnItsPartition) {
   // A watcher on the run's partition: the first frame it sees means the run's player announced
   // itself, so the second player below is the later one (the first to announce plays).
   dds::ParticipantOptions po;
-  po.domain_id = kDomain;
+  po.domain_id = domain;
   po.name = "second_player_watcher";
   po.partition = partition;
   auto watcher = dds::Participant::Create(po);
@@ -62,16 +65,18 @@ TEST(DdsSecondPlayer, RunRejectsASecondFrameSourceOnItsPartition) {
   const pid_t run =
       testing::SpawnDygslam({"run", dataset, "--config", config, "--filter", "none", "--frames",
                              "0:" + std::to_string(kRunFrames), "--out", dir + "/out", "--domain",
-                             std::to_string(kDomain), "--partition", partition},
+                             std::to_string(domain), "--partition", partition},
                             dir + "/run.out", dir + "/run.err");
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (seen.load() == 0 && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   const bool run_started = seen.load() > 0;
+  // With the run's filter (no detector): it waits for the run's one frame reader, slam, and
+  // plays at once rather than waiting 10 s for a detector that is not there.
   const pid_t rival = testing::SpawnDygslam(
-      {"component", "player", "--dataset", dataset, "--config", config, "--frames",
-       std::to_string(kRivalFirst) + ":" + std::to_string(kRivalLast), "--rate", "1", "--domain",
-       std::to_string(kDomain), "--partition", partition},
+      {"component", "player", "--dataset", dataset, "--config", config, "--filter", "none",
+       "--frames", std::to_string(rival_first) + ":" + std::to_string(rival_last), "--rate", "1",
+       "--domain", std::to_string(domain), "--partition", partition},
       dir + "/rival.out", dir + "/rival.err");
 
   std::string diagnostics;
@@ -102,7 +107,7 @@ TEST(DdsSecondPlayer, RunRejectsASecondFrameSourceOnItsPartition) {
 
   // Only the run's frames: every pose is at a stamp of frames [0, kRunFrames).
   const double last_run_stamp = frames.frame(kRunFrames - 1).rgb_stamp.seconds();
-  const double first_rival_stamp = frames.frame(kRivalFirst).rgb_stamp.seconds();
+  const double first_rival_stamp = frames.frame(rival_first).rgb_stamp.seconds();
   ASSERT_LT(last_run_stamp, first_rival_stamp);
   const auto trajectory = ReadTumTrajectory(dir + "/out/trajectory.txt");
   EXPECT_GE(trajectory.size(), size_t(kRunFrames * 9 / 10)) << log;
@@ -114,6 +119,17 @@ TEST(DdsSecondPlayer, RunRejectsASecondFrameSourceOnItsPartition) {
     }
   }
   fs::remove_all(dir);
+}
+
+TEST(DdsSecondPlayer, RunRejectsASecondFrameSourceOnItsPartition) {
+  ExpectSecondPlayerRefused(kDomain, kRivalFirst, kRivalLast);
+}
+
+// A second player whose few frames are all sent before a second's worth of the run's poses came
+// back learns after its end of stream that its frames were refused, and fails the same way
+// (before, it ended saying slam was done early, exit 3).
+TEST(DdsSecondPlayer, ASecondPlayerEndedBeforeItSawTheRunsPosesIsStillRefused) {
+  ExpectSecondPlayerRefused(kDomain + 2, kRivalFirst, kRivalFirst + kShortRivalFrames);
 }
 
 // A second detector on a run's partition (started by hand before the run, with the run's

@@ -5,18 +5,14 @@
 // Compiled only when the bridge is built (dygslam_bridge defines DYGSLAM_HAVE_BRIDGE).
 #ifdef DYGSLAM_HAVE_BRIDGE
 #include <algorithm>
-#include <iostream>
-#include <map>
-#include <mutex>
-#include <thread>
+#include <memory>
 
 #include "apps/command.h"
-#include "bridge/ros2_bridge.h"
+#include "bridge/bridge_session.h"
 #include "components/dds/participant.h"
 #include "components/dds/qos.h"
 #include "components/pipeline.h"
 #include "core/base/error.h"
-#include "core/base/log.h"
 #include "core/config/settings.h"
 #include "run/run_settings.h"
 
@@ -149,10 +145,10 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
 
   if (domain < 0) domain = dds::DomainIdFromEnvironment(0);
 
-  PipelineOptions pipeline;
-  const bool run_slam = p.Flag("run-slam");
-  if (run_slam) {
+  ros2::BridgeSessionOptions session;
+  if (p.Flag("run-slam")) {
     if (!p.Has("config")) return p.UsageError("--run-slam needs --config FILE");
+    PipelineOptions pipeline;
     pipeline.dataset_dir = "-";
     pipeline.settings_path = p.Get("config");
     pipeline.output_dir = PrepareOutputDir("out", p.Get("out")).string();
@@ -163,73 +159,17 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
     pipeline.domain_id = domain;
     pipeline.partition = partition;
     pipeline.Check();
+    session.components = pipeline;
   }
 
-  auto stop = std::make_shared<StopFlag>(StopFlag::Signals::kStop);
-  std::vector<std::thread> threads;
-  std::mutex mutex;
-  int result = 0;
-  if (run_slam) {
-    std::vector<std::string> names = {"recorder", "slam"};
-    if (pipeline.run_mapper) names.push_back("mapper");
-    if (pipeline.NeedsDetectorComponent()) names.push_back("detector");
-    if (!p.Has("wait-for")) o.wait_for_components = names;
-    for (const std::string& name : names) {
-      threads.emplace_back([&, name] {
-        try {
-          const int code = RunComponent(name, pipeline, stop);
-          std::lock_guard<std::mutex> lock(mutex);
-          if (code != 0) result = 1;
-        } catch (const std::exception& e) {
-          LOG_ERROR << name << ": " << e.what();
-          std::lock_guard<std::mutex> lock(mutex);
-          result = 1;
-          stop->Request();
-        }
-      });
-    }
-  }
-  dds::ParticipantOptions po;
-  po.domain_id = domain;
-  po.name = "dygslam_ros2_bridge_pipeline";
-  po.partition = partition;
-  LOG_INFO << "ros2 bridge on domain " << domain
-           << (partition.empty() ? "" : " (pipeline partition '" + partition + "')") << ": in "
-           << o.color_topic << " + " << o.depth_topic << " + " << o.camera_info_topic << "; out "
-           << o.pose_topic << ", " << o.path_topic << ", " << o.odom_topic << ", " << o.tf_topic
-           << ", " << o.detections_topic << ", " << o.octomap_topic;
-  ros2::RosBridgeStats s;
-  try {
-    auto pipeline_participant = dds::Participant::Create(po);
-    std::shared_ptr<dds::Participant> ros_participant = pipeline_participant;
-    if (!p.Flag("ros-loopback")) {
-      ros_participant =
-          dds::Participant::Create(ros2::RosParticipantOptions(domain, !p.Flag("ros-no-shm")));
-    }
-    s = ros2::RunBridge(pipeline_participant, ros_participant, o, stop);
-  } catch (...) {
-    stop->Request();
-    for (std::thread& t : threads) t.join();
-    throw;
-  }
-  stop->Request();
-  for (std::thread& t : threads) t.join();
-  std::cerr << "ros2 bridge: " << s.frames_forwarded << " frames forwarded (colour "
-            << s.color_received << ", depth " << s.depth_received << ", unpaired "
-            << s.dropped_unsynchronized << ", no camera info " << s.dropped_no_camera_info
-            << ", dropped waiting " << s.dropped_pending << ", bad " << s.bad_samples
-            << ", lost before the bridge " << s.samples_lost << "); " << s.poses << " poses, "
-            << s.paths << " paths, " << s.detections << " detection arrays, " << s.maps
-            << " maps published\n";
-  for (const auto& [kind, count] : s.rejected) {
-    std::cerr << "ros2 bridge: rejected " << count << " sample(s): " << kind << "\n";
-  }
-  for (const auto& [topic, count] : s.lost_by_topic) {
-    if (count > 0)
-      std::cerr << "ros2 bridge: " << count << " sample(s) lost before the bridge on " << topic
-                << " (in transport or rejected by the reader)\n";
-  }
-  return result;
+  session.bridge = o;
+  session.domain_id = domain;
+  session.partition = partition;
+  session.wait_for_given = p.Has("wait-for");
+  session.ros_on_pipeline_participant = p.Flag("ros-loopback");
+  session.ros_shared_memory = !p.Flag("ros-no-shm");
+  return ros2::RunBridgeSession(std::move(session),
+                                std::make_shared<StopFlag>(StopFlag::Signals::kStop));
 }
 
 const CommandRegistrar kRegistrar({"bridge", "ROS 2 bridge (camera in; pose, path, TF, map out)",

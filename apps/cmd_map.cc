@@ -176,17 +176,8 @@ int RunMap(const std::vector<std::string>& args) {
   if (const std::string clash = FindOutputOnDatasetImage(dataset, dataset_dir, MapOutputs(p, out));
       !clash.empty())
     return p.UsageError(clash);
-  std::pair<size_t, size_t> range{0, dataset.num_rgb_entries()};
-  std::string frames_note;  // --frames beyond the dataset: cut, with a warning
-  if (p.Has("frames")) {
-    try {  // a malformed or out-of-range --frames is a usage error (exit 2), as other numbers
-      range = ParseFrameRange(p.Get("frames"), dataset.num_rgb_entries(), &frames_note);
-    } catch (const std::exception& e) {
-      return p.UsageError(e.what());
-    }
-  }
-  if (!frames_note.empty()) std::fprintf(stderr, "dygslam map: warning: %s\n", frames_note.c_str());
-  auto [first, last] = range;
+  size_t first = 0, last = 0;
+  if (!p.GetFrameRange("frames", dataset.num_rgb_entries(), &first, &last)) return p.exit_code();
   std::optional<Timestamp> reference_until;
   if (p.Has("reference-until")) {
     if (static_cast<size_t>(reference_entry) > dataset.num_rgb_entries())

@@ -13,34 +13,19 @@
 //                is built by a KeyframeMapper thread
 // SIGINT / SIGTERM stop the run at any time: outputs are flushed (atomically) and the exit code
 // is 0.
-#include <octomap/OcTree.h>
-#include <unistd.h>
-
-#include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <map>
-#include <random>
 
 #include "apps/command.h"
 #include "core/base/echo.h"
 #include "core/base/error.h"
-#include "core/config/settings.h"
-#include "core/dynamic/yolo_detector.h"
 #include "core/io/dataset.h"
-#include "core/io/detections_io.h"
-#include "core/io/file_util.h"
-#include "core/io/trajectory_io.h"
-#include "core/system/system.h"
-#include "mapping/octomap_builder.h"
 #include "run/run_controller.h"
+#include "run/run_inputs.h"
 #include "run/run_settings.h"
 #ifdef DYGSLAM_HAVE_COMPONENTS
-#include "components/pipeline.h"
-#include "components/protocol.h"
+#include "components/run_pipeline.h"
 #endif
 
 namespace dygslam::cli {
@@ -49,117 +34,6 @@ namespace fs = std::filesystem;
 
 // --rate above 0: the slowest replay that is still a replay (0.01x = a 30 Hz frame every 3.3 s).
 constexpr double kMinRate = 0.01;
-
-// Lines of a class names file that name a class (0 when there is no such file).
-int CountClassNames(const std::string& path) {
-  std::error_code ec;
-  if (path.empty() || !fs::is_regular_file(path, ec)) return 0;
-  std::ifstream in(path);
-  int n = 0;
-  for (std::string line; std::getline(in, line);) {
-    if (line.find_first_not_of(" \t\r") != std::string::npos) ++n;
-  }
-  return n;
-}
-
-// --detections: a file whose stamps match no frame (another sequence, stamps in another unit)
-// would run the filter without any box, silently, and so would boxes outside the image. Warns
-// with the counts.
-void WarnUnmatchedDetections(const std::string& path, const RunControllerOptions& s,
-                             const RgbdDataset& dataset) {
-  size_t frames = 0, frames_with_boxes = 0;
-  for (size_t k = s.first; k < s.last; ++k) {
-    const auto index = dataset.FrameForRgbEntry(k);
-    if (!index) continue;
-    ++frames;
-    if (!DetectionsNear(s.detections, dataset.frame(*index).rgb_stamp).empty()) ++frames_with_boxes;
-  }
-  size_t stamps_unmatched = 0;
-  for (const auto& [stamp, boxes] : s.detections) {
-    bool matched = false;
-    for (const RgbdFrameEntry& f : dataset.frames()) {
-      if (std::abs(SecondsBetween(stamp, f.rgb_stamp)) <= 0.02) {
-        matched = true;
-        break;
-      }
-    }
-    if (!matched) ++stamps_unmatched;
-  }
-  // Boxes that do not overlap the image (pixels in another resolution, a unit mix-up) mask
-  // nothing: said, with how many.
-  size_t boxes = 0, boxes_outside = 0;
-  const cv::Rect2f image(0.f, 0.f, static_cast<float>(s.system.camera.width),
-                         static_cast<float>(s.system.camera.height));
-  for (const auto& [stamp, frame_boxes] : s.detections) {
-    for (const Detection& d : frame_boxes) {
-      ++boxes;
-      if ((d.box & image).area() <= 0.f) ++boxes_outside;
-    }
-  }
-  if (boxes_outside > 0) {
-    std::fprintf(stderr,
-                 "dygslam run: warning: --detections %s: %zu of its %zu boxes lie outside the "
-                 "%dx%d image (Camera.width x Camera.height) and mask nothing\n",
-                 EchoValue(path).c_str(), boxes_outside, boxes, s.system.camera.width,
-                 s.system.camera.height);
-  }
-  if (stamps_unmatched == 0 && (frames_with_boxes > 0 || s.detections.empty())) return;
-  std::fprintf(stderr,
-               "dygslam run: warning: --detections %s: %zu of its %zu stamps match no frame of "
-               "the dataset (within 0.02 s); %zu of the run's %zu frames have boxes, %zu have "
-               "none%s\n",
-               EchoValue(path).c_str(), stamps_unmatched, s.detections.size(), frames_with_boxes,
-               frames, frames - frames_with_boxes,
-               frames_with_boxes == 0 ? " (the file matches no frame: no box is used; is it of "
-                                        "another sequence?)"
-                                      : "");
-}
-
-#ifdef DYGSLAM_HAVE_COMPONENTS
-// A partition name unique to this run: concurrent runs on one DDS domain never mix.
-std::string RunPartition() {
-  char host[64] = {0};
-  gethostname(host, sizeof(host) - 1);
-  std::random_device rd;
-  return "dygslam_run_" + std::string(host) + "_" + std::to_string(getpid()) + "_" +
-         std::to_string(rd() % 100000);
-}
-
-// The DDS pipeline of `dygslam run` (components/pipeline.h) for the run controller.
-PipelineRunResult RunThroughPipeline(const RunControllerOptions& s) {
-  PipelineOptions o;
-  o.dataset_dir = s.dataset_dir;
-  o.output_dir = s.out.string();
-  o.settings_path = s.settings_path;
-  o.system = s.system;
-  o.octomap = s.octomap;
-  o.first_entry = s.first;
-  o.last_entry = s.last;
-  o.processes = s.mode == RunMode::kPipelineProcesses;
-  o.run_mapper = s.map;
-  o.domain_id = s.domain_id;
-  o.partition = s.partition.empty() ? RunPartition() : s.partition;
-  o.security_dir = s.security_dir;
-  std::fprintf(stderr, "[run] DDS partition '%s' (a bridge joins with --partition %s)\n",
-               EchoValue(o.partition).c_str(), EchoValue(o.partition).c_str());
-  o.progress = s.progress;
-  o.loop_minutes = s.loop_minutes;
-  o.rate = s.rate;
-  if (s.rate > 0) o.window = 0;  // a camera does not wait for the pipeline
-  o.save_map = s.save_map;
-  o.load_octomap = s.load_octomap;
-  StopReport report;
-  PipelineRunResult result;
-  result.exit_code = RunPipeline(o, &report);
-  result.interrupted = report.signaled;
-  result.ignored_samples = report.ignored_samples;
-  if (report.ignored_samples > 0)
-    result.ignored_samples_note =
-        IgnoredSamplesNote(std::to_string(report.ignored_samples) + " samples");
-  result.components_cut_short = report.components_cut_short;
-  return result;
-}
-#endif
 
 // The options of `dygslam run` (`security_env`: the default of --security).
 void DefineRunOptions(ArgParser* parser, const char* security_env) {
@@ -263,11 +137,7 @@ int ReadRunInputs(ArgParser& p, const fs::path& out_dir, RunControllerOptions* s
   if (p.Has("load-octomap")) {
     if (!s->map) return p.UsageError("--load-octomap and --no-map exclude each other");
     s->load_octomap = p.Get("load-octomap");
-    try {  // checked before any work (InputError naming the option and the file)
-      ReadOctoMap(s->load_octomap);
-    } catch (const InputError& e) {
-      throw InputError(std::string("--load-octomap: ") + e.what());
-    }
+    CheckOctoMapToContinue("--load-octomap", s->load_octomap);
   }
   if (p.Has("load-map")) {
     // Checked before any work: a bad map is an error naming the file, no output is written.
@@ -279,16 +149,7 @@ int ReadRunInputs(ArgParser& p, const fs::path& out_dir, RunControllerOptions* s
   }
   if (p.Has("detections")) {
     if (p.Flag("processes")) return p.UsageError("--detections works with --direct only");
-    // Class ids are checked against the detector's classes (its names file) when it is found.
-    DetectorOptions names_of = s->system.detector;
-    if (names_of.names_path.empty()) {
-      try {
-        names_of = DetectorOptionsForModel("yolo-fastest-1.1");
-      } catch (const InputError&) {  // no models here: class ids are not checked
-      }
-    }
-    const int num_classes = CountClassNames(names_of.names_path);
-    s->detections = ReadDetections(p.Get("detections"), num_classes, names_of.names_path);
+    s->detections = ReadRunDetections(p.Get("detections"), s->system);
     s->use_detection_file = true;
   }
   s->progress = !p.Flag("quiet");
@@ -325,44 +186,9 @@ int CheckRunDataset(ArgParser& p, const RgbdDataset& dataset, const fs::path& ou
   if (p.Has("save-map")) PinFolderOfOutput(p.Get("save-map"));
   if (const std::string foreign = FindForeignFileInRunOutputs(out_dir); !foreign.empty())
     return p.UsageError(foreign);
-  s->first = 0;
-  s->last = dataset.num_rgb_entries();
-  std::string frames_note;  // --frames beyond the dataset: cut, with a warning
-  if (p.Has("frames")) {
-    try {  // a malformed or out-of-range --frames is a usage error (exit 2), as other numbers
-      std::tie(s->first, s->last) =
-          ParseFrameRange(p.Get("frames"), dataset.num_rgb_entries(), &frames_note);
-    } catch (const std::exception& e) {
-      return p.UsageError(e.what());
-    }
-  }
-  if (!frames_note.empty()) std::fprintf(stderr, "dygslam run: warning: %s\n", frames_note.c_str());
+  if (!p.GetFrameRange("frames", dataset.num_rgb_entries(), &s->first, &s->last))
+    return p.exit_code();
   return 0;
-}
-
-// The dataset's ground truth, or none (a warning says why): it only scores the run.
-std::vector<StampedPose> ReadRunGroundTruth(const RgbdDataset& dataset) {
-  // The ground truth is optional and only scores the run: a malformed groundtruth.txt is found
-  // here, before any frame, and the run goes on without evaluation (its trajectory is what
-  // matters; `dygslam eval` scores it once the file is fixed).
-  std::vector<StampedPose> groundtruth;
-  if (dataset.has_groundtruth()) {
-    try {
-      groundtruth = ReadTumTrajectory(dataset.groundtruth_path());
-    } catch (const InputError& e) {
-      groundtruth.clear();
-      std::fprintf(stderr,
-                   "dygslam run: warning: %s; the run goes on without evaluation (fix the file, "
-                   "then `dygslam eval GROUNDTRUTH OUT/trajectory.txt`)\n",
-                   e.what());
-    }
-  } else if (!dataset.groundtruth_problem().empty()) {
-    std::fprintf(stderr,
-                 "dygslam run: warning: %s; the run goes on without evaluation (replace it by "
-                 "the ground truth file, then `dygslam eval GROUNDTRUTH OUT/trajectory.txt`)\n",
-                 EchoValue(dataset.groundtruth_problem(), 500).c_str());
-  }
-  return groundtruth;
 }
 
 // The run's mode from the flags (and the build), and the pipeline runner of the DDS modes.
@@ -371,7 +197,7 @@ PipelineRunner SelectMode(const ArgParser& p, RunControllerOptions* s) {
   if (p.Flag("direct") || s->use_detection_file) s->mode = RunMode::kDirect;
   PipelineRunner pipeline;
 #ifdef DYGSLAM_HAVE_COMPONENTS
-  pipeline = RunThroughPipeline;
+  pipeline = RunControllerPipeline;
 #else
   if (p.Flag("processes")) {
     throw InvalidOptions(
@@ -414,7 +240,9 @@ int RunRun(const std::vector<std::string>& args) {
   const RgbdDataset dataset = RgbdDataset::Open(s.dataset_dir, dataset_options);
   if (const int code = CheckRunDataset(p, dataset, out_dir, &s); code != 0) return code;
   std::vector<StampedPose> groundtruth = ReadRunGroundTruth(dataset);
-  if (s.use_detection_file) WarnUnmatchedDetections(p.Get("detections"), s, dataset);
+  if (s.use_detection_file)
+    WarnUnmatchedDetections(p.Get("detections"), s.detections, s.system.camera, dataset, s.first,
+                            s.last);
   WarnAboutDataset("run", dataset, s.first, s.last, s.system.sensor.depth_map_factor,
                    s.system.camera.width, s.system.camera.height,
                    groundtruth.empty() ? nullptr : &groundtruth);
@@ -428,18 +256,7 @@ int RunRun(const std::vector<std::string>& args) {
   if (!s.use_detection_file) ResolveDetectorModel(&s.system);
 
   // This run's outputs: written atomically, nothing deleted up front (see RunOutputs).
-  RunController controller(s, dataset, std::move(groundtruth), pipeline);
-  if (controller.without_depth_partner() > 0) {
-    // Said before the run, not only counted in the summary: a depth.txt cut short or with a gap
-    // leaves frames out without any other sign.
-    std::fprintf(stderr,
-                 "dygslam run: warning: %zu of the %zu rgb.txt entries %zu to %zu have no depth "
-                 "image to pair with (depth.txt / associations): they are left out, %zu frames "
-                 "requested\n",
-                 controller.without_depth_partner(), s.last - s.first, s.first, s.last,
-                 controller.requested());
-  }
-  return controller.Run();
+  return RunController(s, dataset, std::move(groundtruth), pipeline).Run();
 }
 
 const CommandRegistrar kRegistrar({"run", "run the SLAM on a dataset folder", RunRun});

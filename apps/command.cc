@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <iostream>
 #include <sstream>
+#include <tuple>
 
 #include "core/base/echo.h"
 #include "core/base/error.h"
@@ -228,6 +229,23 @@ bool ArgParser::GetNumber(const std::string& option, double min_value, double ma
     exit_code_ = UsageError(e.what());
     return false;
   }
+}
+
+bool ArgParser::GetFrameRange(const std::string& option, size_t num_entries, size_t* first,
+                              size_t* last) {
+  *first = 0;
+  *last = num_entries;
+  if (!Has(option)) return true;
+  std::string note;  // LAST beyond the dataset: cut, with a warning
+  try {  // a malformed or out-of-range range is a usage error (exit 2), as other numbers
+    std::tie(*first, *last) = ParseFrameRange(Get(option), num_entries, &note);
+  } catch (const std::exception& e) {
+    exit_code_ = UsageError(e.what());
+    return false;
+  }
+  if (!note.empty())
+    std::fprintf(stderr, "dygslam %s: warning: %s\n", command_.c_str(), note.c_str());
+  return true;
 }
 
 bool ArgParser::Parse(const std::vector<std::string>& args) {

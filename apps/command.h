@@ -92,6 +92,10 @@ class ArgParser {
   bool GetInt(const std::string& option, int64_t min_value, int64_t max_value, int64_t* value);
   bool GetInt(const std::string& option, int min_value, int max_value, int* value);
   bool GetNumber(const std::string& option, double min_value, double max_value, double* value);
+  // The option's FIRST:LAST range of rgb.txt entries (all `num_entries` when not given); a
+  // LAST beyond them is cut, with a warning on stderr. A malformed or empty range: false after
+  // the usage error.
+  bool GetFrameRange(const std::string& option, size_t num_entries, size_t* first, size_t* last);
   // An empty or blank option value is a usage error unless allowed here: `dygslam component`
   // allows it, as compose files pass optional settings as empty variables (`--load-octomap ""`:
   // none); the user-facing commands do not (`--config=` would only show up later as a nameless

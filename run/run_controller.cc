@@ -373,6 +373,16 @@ RunController::Outcome RunController::RunPipeline() {
 }
 
 int RunController::Run() {
+  if (without_depth_partner_ > 0) {
+    // Said before the run, not only counted in the summary: a depth.txt cut short or with a gap
+    // leaves frames out without any other sign.
+    std::fprintf(stderr,
+                 "dygslam run: warning: %zu of the %zu rgb.txt entries %zu to %zu have no depth "
+                 "image to pair with (depth.txt / associations): they are left out, %zu frames "
+                 "requested\n",
+                 without_depth_partner_, options_.last - options_.first, options_.first,
+                 options_.last, requested_);
+  }
   Outcome outcome;
   const auto t0 = std::chrono::steady_clock::now();
   if (options_.mode == RunMode::kDirect) {

@@ -83,11 +83,12 @@ class RunController {
   RunController(RunControllerOptions options, const RgbdDataset& dataset,
                 std::vector<StampedPose> ground_truth, PipelineRunner pipeline = {});
 
-  // Runs, writes the outputs (each atomically; one that fails does not stop the others), prints
-  // the summary on stdout and writes OUT/eval.json. Returns the exit code: 0, 1 (a failure: an
-  // output not written, a component failed, tracking failed), kExitIncompleteRun (fewer frames
-  // than requested without a stop the user gave). Rethrows an error that stopped the direct loop
-  // (after writing the outputs of the frames before it).
+  // Warns when frames of the range have no depth partner, runs, writes the outputs (each
+  // atomically; one that fails does not stop the others), prints the summary on stdout and writes
+  // OUT/eval.json. Returns the exit code: 0, 1 (a failure: an output not written, a component
+  // failed, tracking failed), kExitIncompleteRun (fewer frames than requested without a stop the
+  // user gave). Rethrows an error that stopped the direct loop (after writing the outputs of the
+  // frames before it).
   int Run();
 
   const RunSummary& summary() const { return summary_; }

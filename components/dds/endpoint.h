@@ -162,12 +162,12 @@ class TypedReader {
   // presence without a topic of its own). From the match events (Fast DDS 2.9 has no
   // get_matched_publications).
   bool IsMatched(const WriterGuid& writer) const {
-    std::lock_guard<std::mutex> lock(listener_.loss_mutex);
+    std::lock_guard<std::mutex> lock(listener_.state_mutex);
     return listener_.matched_writers.count(writer) > 0;
   }
   // Samples lost / rejected so far (ReaderLosses).
   ReaderLosses losses() const {
-    std::lock_guard<std::mutex> lock(listener_.loss_mutex);
+    std::lock_guard<std::mutex> lock(listener_.state_mutex);
     return listener_.losses;
   }
   // The reader's GUID (GUID prefix of its participant + entity id).
@@ -203,7 +203,7 @@ class TypedReader {
       WriterGuid writer{};
       for (size_t i = 0; i < writer.size(); ++i)
         writer[i] = status.last_publication_handle.value[i];
-      std::lock_guard<std::mutex> lock(loss_mutex);
+      std::lock_guard<std::mutex> lock(state_mutex);
       if (status.current_count_change > 0) matched_writers.insert(writer);
       if (status.current_count_change < 0) matched_writers.erase(writer);
     }
@@ -211,7 +211,7 @@ class TypedReader {
                         const eprosima::fastdds::dds::SampleLostStatus& status) override {
       ReaderLosses now;
       {
-        std::lock_guard<std::mutex> lock(loss_mutex);
+        std::lock_guard<std::mutex> lock(state_mutex);
         losses.lost = static_cast<uint64_t>(std::max(0, status.total_count));
         now = losses;
       }
@@ -221,7 +221,7 @@ class TypedReader {
                             const eprosima::fastrtps::SampleRejectedStatus& status) override {
       ReaderLosses now;
       {
-        std::lock_guard<std::mutex> lock(loss_mutex);
+        std::lock_guard<std::mutex> lock(state_mutex);
         losses.rejected = status.total_count;
         switch (status.last_reason) {
           case eprosima::fastdds::dds::REJECTED_BY_INSTANCES_LIMIT:
@@ -243,7 +243,7 @@ class TypedReader {
     // False for a sample that came before (dropped); counts the samples a jump skipped.
     bool Sequenced(const WriterGuid& writer, const eprosima::fastdds::dds::SampleInfo& info) {
       const uint64_t sequence = info.sample_identity.sequence_number().to64long();
-      std::lock_guard<std::mutex> lock(loss_mutex);
+      std::lock_guard<std::mutex> lock(state_mutex);
       if (!sequences.Accept(writer, sequence)) {
         losses.duplicates = sequences.duplicates();
         return false;
@@ -254,9 +254,10 @@ class TypedReader {
     CallbackWithWriter callback;
     LossCallback on_loss;
     SequenceTracker sequences;
-    std::set<WriterGuid> matched_writers;  // guarded by loss_mutex
+    // The sequence tracking, the losses and the matched writers: guarded by state_mutex.
+    std::set<WriterGuid> matched_writers;
     std::atomic<int> matched{0};
-    mutable std::mutex loss_mutex;
+    mutable std::mutex state_mutex;
     ReaderLosses losses;
   };
 

@@ -86,14 +86,22 @@ namespace {
 
 bool FastPngAvailable() { return true; }
 
-bool DecodePngFast(const unsigned char* data, size_t size, cv::Mat* image) {
+namespace {
+
+// The fields of a PNG's IHDR and its IDAT data (concatenated).
+struct PngChunks {
+  uint32_t width = 0, height = 0;
+  int bit_depth = 0, color_type = -1;
+  std::vector<unsigned char> compressed;
+};
+
+// The chunks of a PNG file, each CRC-checked; false for anything this decoder does not take
+// (interlaced, unknown critical chunks, no IEND).
+bool ReadChunks(const unsigned char* data, size_t size, PngChunks* png) {
   static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (size < 8 + 25 || std::memcmp(data, kSignature, 8) != 0) return false;
   size_t pos = 8;
-  uint32_t width = 0, height = 0;
-  int bit_depth = 0, color_type = -1;
   bool seen_header = false, seen_end = false;
-  std::vector<unsigned char> compressed;
   while (pos + 12 <= size && !seen_end) {
     const uint32_t length = BigEndian32(data + pos);
     const unsigned char* type = data + pos + 4;
@@ -103,15 +111,15 @@ bool DecodePngFast(const unsigned char* data, size_t size, cv::Mat* image) {
     if (libdeflate_crc32(0, type, length + 4) != crc) return false;
     if (!seen_header) {
       if (std::memcmp(type, "IHDR", 4) != 0 || length != 13) return false;
-      width = BigEndian32(body);
-      height = BigEndian32(body + 4);
-      bit_depth = body[8];
-      color_type = body[9];
+      png->width = BigEndian32(body);
+      png->height = BigEndian32(body + 4);
+      png->bit_depth = body[8];
+      png->color_type = body[9];
       // compression 0, filter method 0, not interlaced
       if (body[10] != 0 || body[11] != 0 || body[12] != 0) return false;
       seen_header = true;
     } else if (std::memcmp(type, "IDAT", 4) == 0) {
-      compressed.insert(compressed.end(), body, body + length);
+      png->compressed.insert(png->compressed.end(), body, body + length);
     } else if (std::memcmp(type, "IEND", 4) == 0) {
       seen_end = true;
     } else if (!IsIgnoredAncillary(type)) {
@@ -119,8 +127,41 @@ bool DecodePngFast(const unsigned char* data, size_t size, cv::Mat* image) {
     }
     pos += 12 + size_t(length);
   }
-  if (!seen_end || compressed.empty()) return false;
+  return seen_end && !png->compressed.empty();
+}
+
+// The unfiltered rows (each after its filter byte) into `out`, as OpenCV gives them: RGB(A) as
+// BGR(A), 16-bit samples in host order.
+void CopyRows(const std::vector<unsigned char>& raw, size_t row_bytes, int channels, int bit_depth,
+              cv::Mat* out) {
+  const int width = out->cols;
+  for (int y = 0; y < out->rows; ++y) {
+    const unsigned char* src = raw.data() + y * (row_bytes + 1) + 1;
+    unsigned char* dst = out->ptr<unsigned char>(y);
+    if (channels == 3 || channels == 4) {
+      for (int x = 0; x < width; ++x, src += channels, dst += channels) {
+        dst[0] = src[2];
+        dst[1] = src[1];
+        dst[2] = src[0];
+        if (channels == 4) dst[3] = src[3];
+      }
+    } else if (bit_depth == 16) {
+      uint16_t* d16 = reinterpret_cast<uint16_t*>(dst);
+      for (int x = 0; x < width; ++x) d16[x] = uint16_t((src[2 * x] << 8) | src[2 * x + 1]);
+    } else {
+      std::memcpy(dst, src, row_bytes);
+    }
+  }
+}
+
+}  // namespace
+
+bool DecodePngFast(const unsigned char* data, size_t size, cv::Mat* image) {
+  PngChunks png;
+  if (!ReadChunks(data, size, &png)) return false;
+  const uint32_t width = png.width, height = png.height;
   if (width == 0 || height == 0 || width > 16384 || height > 16384) return false;
+  const int bit_depth = png.bit_depth, color_type = png.color_type;
   int channels = 0, cv_type = -1;
   if (bit_depth == 8 && color_type == 0) channels = 1, cv_type = CV_8UC1;
   if (bit_depth == 8 && color_type == 2) channels = 3, cv_type = CV_8UC3;
@@ -133,7 +174,7 @@ bool DecodePngFast(const unsigned char* data, size_t size, cv::Mat* image) {
   // Deflate expands at most 1032:1 (258 bytes from a 1-bit length and a 1-bit distance code):
   // a header asking for more than the IDAT data could fill is refused before allocating (a
   // 100-byte file claiming 16384x16384 RGBA would cost 1 GB here; OpenCV then reports it).
-  if (raw_size / 1032 > compressed.size() + 1024) return false;
+  if (raw_size / 1032 > png.compressed.size() + 1024) return false;
   std::vector<unsigned char> raw(raw_size);
 
   struct DecompressorDeleter {
@@ -143,29 +184,13 @@ bool DecodePngFast(const unsigned char* data, size_t size, cv::Mat* image) {
       libdeflate_alloc_decompressor());
   if (!decompressor) return false;
   // The stream must fill the image exactly (NULL actual size: a shorter one is an error).
-  if (libdeflate_zlib_decompress(decompressor.get(), compressed.data(), compressed.size(),
+  if (libdeflate_zlib_decompress(decompressor.get(), png.compressed.data(), png.compressed.size(),
                                  raw.data(), raw.size(), nullptr) != LIBDEFLATE_SUCCESS)
     return false;
   if (!Unfilter(raw.data(), int(height), row_bytes, bpp)) return false;
 
   cv::Mat out(int(height), int(width), cv_type);
-  for (int y = 0; y < int(height); ++y) {
-    const unsigned char* src = raw.data() + y * (row_bytes + 1) + 1;
-    unsigned char* dst = out.ptr<unsigned char>(y);
-    if (channels == 3 || channels == 4) {  // RGB(A) -> BGR(A), as OpenCV
-      for (uint32_t x = 0; x < width; ++x, src += channels, dst += channels) {
-        dst[0] = src[2];
-        dst[1] = src[1];
-        dst[2] = src[0];
-        if (channels == 4) dst[3] = src[3];
-      }
-    } else if (bit_depth == 16) {  // big-endian samples -> host order
-      uint16_t* d16 = reinterpret_cast<uint16_t*>(dst);
-      for (uint32_t x = 0; x < width; ++x) d16[x] = uint16_t((src[2 * x] << 8) | src[2 * x + 1]);
-    } else {
-      std::memcpy(dst, src, row_bytes);
-    }
-  }
+  CopyRows(raw, row_bytes, channels, bit_depth, &out);
   *image = out;
   return true;
 }

@@ -73,6 +73,80 @@ T Get(const uint8_t* data, size_t* offset) {
   return value;
 }
 
+// k-means++ seeding with Hamming distances: up to k centres, each drawn with probability
+// proportional to its squared distance from the nearest centre so far (fewer when the remaining
+// descriptors all equal a centre).
+std::vector<Descriptor> SeedCenters(const std::vector<const Descriptor*>& descriptors, int k,
+                                    uint64_t* rng_state) {
+  const size_t n = descriptors.size();
+  std::vector<Descriptor> centers;
+  centers.push_back(*descriptors[NextRandom(rng_state) % n]);
+  std::vector<double> min_dist(n, std::numeric_limits<double>::max());
+  while (static_cast<int>(centers.size()) < k) {
+    double total = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const double d = HammingDistance(*descriptors[i], centers.back());
+      min_dist[i] = std::min(min_dist[i], d * d);
+      total += min_dist[i];
+    }
+    if (total <= 0) break;  // all remaining descriptors equal a center
+    const double target =
+        total * (static_cast<double>(NextRandom(rng_state) >> 11) / 9007199254740992.0);
+    double acc = 0;
+    size_t pick = n - 1;
+    for (size_t i = 0; i < n; ++i) {
+      acc += min_dist[i];
+      if (acc >= target && min_dist[i] > 0) {
+        pick = i;
+        break;
+      }
+    }
+    centers.push_back(*descriptors[pick]);
+  }
+  return centers;
+}
+
+// k-medians in Hamming space from `centers` (bitwise majority as the centre), at most
+// `max_iterations` rounds; the descriptors of each centre into `groups`, empty clusters dropped.
+void ClusterDescriptors(const std::vector<const Descriptor*>& descriptors, int max_iterations,
+                        std::vector<Descriptor>* centers,
+                        std::vector<std::vector<const Descriptor*>>* groups) {
+  const size_t n = descriptors.size();
+  std::vector<int> assignment(n, -1);
+  for (int it = 0; it < max_iterations; ++it) {
+    bool changed = false;
+    groups->assign(centers->size(), {});
+    for (size_t i = 0; i < n; ++i) {
+      int best = 0, best_d = 257;
+      for (size_t c = 0; c < centers->size(); ++c) {
+        const int d = HammingDistance(*descriptors[i], (*centers)[c]);
+        if (d < best_d) {
+          best_d = d;
+          best = static_cast<int>(c);
+        }
+      }
+      if (assignment[i] != best) {
+        assignment[i] = best;
+        changed = true;
+      }
+      (*groups)[best].push_back(descriptors[i]);
+    }
+    if (!changed && it > 0) break;
+    for (size_t c = 0; c < centers->size(); ++c) {
+      if (!(*groups)[c].empty()) (*centers)[c] = Majority((*groups)[c]);
+    }
+  }
+  std::vector<Descriptor> kept_centers;
+  std::vector<std::vector<const Descriptor*>> kept_groups;
+  for (size_t c = 0; c < centers->size(); ++c) {
+    if ((*groups)[c].empty()) continue;
+    kept_centers.push_back((*centers)[c]);
+    kept_groups.push_back(std::move((*groups)[c]));
+  }
+  centers->swap(kept_centers);
+  groups->swap(kept_groups);
+}
+
 }  // namespace
 
 void Vocabulary::BuildNode(uint32_t node, const std::vector<const Descriptor*>& descriptors,
@@ -89,65 +163,8 @@ void Vocabulary::BuildNode(uint32_t node, const std::vector<const Descriptor*>& 
       groups.push_back({d});
     }
   } else {
-    // k-means++ seeding with Hamming distances.
-    const size_t n = descriptors.size();
-    centers.push_back(*descriptors[NextRandom(rng_state) % n]);
-    std::vector<double> min_dist(n, std::numeric_limits<double>::max());
-    while (static_cast<int>(centers.size()) < k) {
-      double total = 0;
-      for (size_t i = 0; i < n; ++i) {
-        const double d = HammingDistance(*descriptors[i], centers.back());
-        min_dist[i] = std::min(min_dist[i], d * d);
-        total += min_dist[i];
-      }
-      if (total <= 0) break;  // all remaining descriptors equal a center
-      const double target =
-          total * (static_cast<double>(NextRandom(rng_state) >> 11) / 9007199254740992.0);
-      double acc = 0;
-      size_t pick = n - 1;
-      for (size_t i = 0; i < n; ++i) {
-        acc += min_dist[i];
-        if (acc >= target && min_dist[i] > 0) {
-          pick = i;
-          break;
-        }
-      }
-      centers.push_back(*descriptors[pick]);
-    }
-    std::vector<int> assignment(n, -1);
-    for (int it = 0; it < options.max_iterations; ++it) {
-      bool changed = false;
-      groups.assign(centers.size(), {});
-      for (size_t i = 0; i < n; ++i) {
-        int best = 0, best_d = 257;
-        for (size_t c = 0; c < centers.size(); ++c) {
-          const int d = HammingDistance(*descriptors[i], centers[c]);
-          if (d < best_d) {
-            best_d = d;
-            best = static_cast<int>(c);
-          }
-        }
-        if (assignment[i] != best) {
-          assignment[i] = best;
-          changed = true;
-        }
-        groups[best].push_back(descriptors[i]);
-      }
-      if (!changed && it > 0) break;
-      for (size_t c = 0; c < centers.size(); ++c) {
-        if (!groups[c].empty()) centers[c] = Majority(groups[c]);
-      }
-    }
-    // Drop empty clusters.
-    std::vector<Descriptor> kept_centers;
-    std::vector<std::vector<const Descriptor*>> kept_groups;
-    for (size_t c = 0; c < centers.size(); ++c) {
-      if (groups[c].empty()) continue;
-      kept_centers.push_back(centers[c]);
-      kept_groups.push_back(std::move(groups[c]));
-    }
-    centers.swap(kept_centers);
-    groups.swap(kept_groups);
+    centers = SeedCenters(descriptors, k, rng_state);
+    ClusterDescriptors(descriptors, options.max_iterations, &centers, &groups);
   }
   const uint32_t first = static_cast<uint32_t>(nodes_.size());
   nodes_[node].first_child = first;

@@ -2,8 +2,6 @@
 
 #include <string>
 
-#include "run/settings_limits.h"
-
 namespace dygslam {
 
 void ReadOptions(const ConfigReader& root, OctoMapOptions* options) {
@@ -20,13 +18,9 @@ void ReadOptions(const ConfigReader& root, OctoMapOptions* options) {
   s.ReadIfPresent("use_voxel_filter", &options->use_voxel_filter);
   s.ReadIfPresent("use_dynamic_mask", &options->use_dynamic_mask);
   s.ReadIfPresent("dynamic_mask_dilation_px", &options->dynamic_mask_dilation_px);
-  s.ReadIfPresent("dynamic_keypoint_radius_px", &options->dynamic_keypoint_radius_px);
-  s.ReadIfPresent("lazy_eval", &options->lazy_eval);
-  s.ReadIfPresent("rebuild_displacement", &options->rebuild_displacement);
   // A misspelt key is reported where every other section's is: LoadSettings warns about it with
   // its line and the closest known key (an error with --strict-settings), KnownSettingsKeys().
   s.CheckOptions(*options);
-  CheckSettingAtMost(s, "rebuild_displacement", options->rebuild_displacement, 1000, "m");
 }
 
 }  // namespace dygslam

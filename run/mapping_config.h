@@ -14,9 +14,6 @@
 //     use_voxel_filter: true    # one point per cell of the map's resolution before insertion
 //     use_dynamic_mask: true    # false: every valid depth pixel goes in (no filter)
 //     dynamic_mask_dilation_px: 5
-//     dynamic_keypoint_radius_px: 8
-//     lazy_eval: true
-//     rebuild_displacement: 0.0 # pose correction that triggers a rebuild (m); <= 0: half a voxel
 //
 // Flat keys ("OctoMap.resolution: 0.05") work too. Bad values: InputError "<file>:<line>: key
 // 'OctoMap.<name>': ...".

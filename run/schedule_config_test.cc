@@ -37,24 +37,6 @@ SystemOptions Options(const std::string& section) {
       ParseSettings(testing::WithoutSection(ReadText(path), "Tracking") + "\n" + section, path));
 }
 
-void ExpectNamed(const std::string& section, const std::string& field) {
-  try {
-    Options(section);
-    ADD_FAILURE() << "expected InputError for " << section;
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
-  }
-}
-
-TEST(ScheduleConfig, BaLagIsReadAndChecked) {
-  const SystemOptions defaults = Options("");
-  EXPECT_EQ(defaults.local_mapping.ba_lag_frames, LocalMappingOptions{}.ba_lag_frames);
-  const SystemOptions set = Options("LocalMapping:\n  ba_lag_frames: 4\n");
-  EXPECT_EQ(set.local_mapping.ba_lag_frames, 4);
-  ExpectNamed("LocalMapping:\n  ba_lag_frames: -1\n", "LocalMapping.ba_lag_frames");
-  ExpectNamed("LocalMapping:\n  ba_lag_frames: 31\n", "LocalMapping.ba_lag_frames");
-}
-
 // A file that still sets a key that is no longer a setting is told so, with the reason and the
 // line: a warning by default, an error where unknown keys are errors (--strict-settings).
 TEST(ScheduleConfig, RetiredKeysAreNamedWithTheirReason) {

@@ -1,7 +1,7 @@
 // Upper bounds of settings values that the options' own Check() leaves open (finite, >= 0, ...):
-// given 1e20, 17 keys would otherwise take it without a word
-// (LoopClosing.ransac_threshold_px: every loop candidate point an inlier, DynamicFilter.C1,
-// OctoMap.rebuild_displacement, ...). The bounds are far beyond any useful value (pixels: the
+// given 1e20, such a key would otherwise take it without a word (DynamicFilter.C1,
+// DynamicFilter.fundamental_threshold: every point consistent, LoopClosing.revisit_min_path_m,
+// ...). The bounds are far beyond any useful value (pixels: the
 // largest image side; metres: a kilometre or more): only absurd values are refused.
 #pragma once
 

@@ -83,28 +83,14 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   // Keyframe spacing follows the frame rate unless set.
   options.tracking.max_frames_between_keyframes = static_cast<int>(settings.sensor.fps);
   const ConfigReader tracking = root.Section("Tracking");
-  ReadFields(
-      tracking,
-      {{"init_min_features", &options.tracking.init_min_features},
-       {"motion_radius_px", &options.tracking.motion_radius_px},
-       {"max_frames_between_keyframes", &options.tracking.max_frames_between_keyframes},
-       {"ref_ratio", &options.tracking.ref_ratio},
-       {"localization_local_keyframes", &options.tracking.localization_local_keyframes},
-       {"keyframe_counts_odometry_points", &options.tracking.keyframe_counts_odometry_points},
-       {"keyframe_min_map_inliers", &options.tracking.keyframe_min_map_inliers},
-       {"dense_fallback", &options.tracking.dense_fallback},
-       {"fallback_min_inlier_fraction", &options.tracking.fallback.min_inlier_fraction},
-       {"fallback_min_inliers", &options.tracking.fallback.min_inliers},
-       {"fallback_check_below_inliers", &options.tracking.fallback_check_below_inliers},
-       {"fallback_override_fraction_gain", &options.tracking.fallback_override_fraction_gain},
-       {"fallback_smoothing", &options.tracking.fallback_smoothing},
-       {"fallback_smoothing_weak_inliers", &options.tracking.fallback_smoothing_weak_inliers}});
+  ReadFields(tracking,
+             {{"init_min_features", &options.tracking.init_min_features},
+              {"max_frames_between_keyframes", &options.tracking.max_frames_between_keyframes},
+              {"dense_fallback", &options.tracking.dense_fallback},
+              {"fallback_smoothing", &options.tracking.fallback_smoothing}});
   tracking.CheckOptions(options.tracking);
   const ConfigReader mapping = root.Section("LocalMapping");
-  ReadFields(mapping, {{"triangulation_neighbors", &options.local_mapping.triangulation_neighbors},
-                       {"cull_keyframes", &options.local_mapping.cull_keyframes},
-                       {"ba_lag_frames", &options.local_mapping.ba_lag_frames},
-                       {"redundancy_ratio", &options.local_mapping.redundancy_ratio}});
+  ReadFields(mapping, {{"cull_keyframes", &options.local_mapping.cull_keyframes}});
   mapping.CheckOptions(options.local_mapping);
 
   // LoopClosing: place recognition and loop closing. vocabulary: a path relative to the settings
@@ -143,36 +129,12 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                         ? beside.string()
                         : std::string(DYGSLAM_DEFAULT_VOCABULARY);
   }
-  ReadFields(loops, {DYGSLAM_SAME_NAME_FIELD(lc, enabled),
-                     DYGSLAM_SAME_NAME_FIELD(lc, min_keyframe_gap),
-                     DYGSLAM_SAME_NAME_FIELD(lc, revisit_min_path_m),
-                     DYGSLAM_SAME_NAME_FIELD(lc, consistency),
-                     DYGSLAM_SAME_NAME_FIELD(lc, min_bow_matches),
-                     DYGSLAM_SAME_NAME_FIELD(lc, ransac_iterations),
-                     DYGSLAM_SAME_NAME_FIELD(lc, ransac_threshold_px),
-                     DYGSLAM_SAME_NAME_FIELD(lc, min_ransac_inliers),
-                     DYGSLAM_SAME_NAME_FIELD(lc, min_inlier_ratio),
-                     DYGSLAM_SAME_NAME_FIELD(lc, min_projection_matches),
-                     DYGSLAM_SAME_NAME_FIELD(lc, max_correction_m),
-                     DYGSLAM_SAME_NAME_FIELD(lc, max_drift_per_meter),
-                     DYGSLAM_SAME_NAME_FIELD(lc, max_correction_deg),
-                     DYGSLAM_SAME_NAME_FIELD(lc, max_drift_deg_per_meter),
-                     DYGSLAM_SAME_NAME_FIELD(lc, fusion_radius_px),
-                     DYGSLAM_SAME_NAME_FIELD(lc, essential_min_weight),
-                     DYGSLAM_SAME_NAME_FIELD(lc, pose_graph_iterations),
-                     DYGSLAM_SAME_NAME_FIELD(lc, pose_graph_min_correction_m),
-                     DYGSLAM_SAME_NAME_FIELD(lc, pose_graph_min_correction_deg),
-                     DYGSLAM_SAME_NAME_FIELD(lc, global_bundle_adjustment),
-                     DYGSLAM_SAME_NAME_FIELD(lc, global_ba_iterations)});
+  ReadFields(loops,
+             {DYGSLAM_SAME_NAME_FIELD(lc, enabled), DYGSLAM_SAME_NAME_FIELD(lc, revisit_min_path_m),
+              DYGSLAM_SAME_NAME_FIELD(lc, max_correction_m),
+              DYGSLAM_SAME_NAME_FIELD(lc, global_bundle_adjustment)});
   loops.CheckOptions(lc);
   CheckSettingAtMost(loops, "revisit_min_path_m", lc.revisit_min_path_m, 1e5, "m");
-  CheckSettingAtMost(loops, "ransac_threshold_px", lc.ransac_threshold_px, 1000, "px");
-  CheckSettingAtMost(loops, "fusion_radius_px", lc.fusion_radius_px, 1000, "px");
-  CheckSettingAtMost(loops, "max_drift_per_meter", lc.max_drift_per_meter, 100, "m per m");
-  CheckSettingAtMost(loops, "max_drift_deg_per_meter", lc.max_drift_deg_per_meter, 360,
-                     "degrees per m");
-  CheckSettingAtMost(loops, "pose_graph_min_correction_m", lc.pose_graph_min_correction_m, 10000,
-                     "m");
 
   // DynamicFilter: the paper's parameters (defaults in DynamicFilterOptions).
   const ConfigReader filter = root.Section("DynamicFilter");
@@ -195,19 +157,10 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
                       {"threshold", &f.threshold},
                       {"box_margin", &f.box_margin},
                       {"box_margin_fraction", &f.box_margin_fraction},
-                      {"search_radius", &f.search_radius},
-                      {"max_hamming", &f.max_hamming},
                       {"fundamental_threshold", &f.fundamental_threshold},
                       {"depth_residual", &f.depth_residual},
-                      {"depth_residual_scale", &f.depth_residual_scale},
-                      {"anchor_max_age", &f.anchor_max_age},
-                      {"outside_p_init", &f.outside_p_init},
                       {"world_anchors", &f.world_anchors},
-                      {"box_depth_band", &f.box_depth_band},
-                      {"consensus_radius", &f.consensus_radius},
-                      {"consensus_depth_gap", &f.consensus_depth_gap},
-                      {"expand_outside", &f.expand_outside},
-                      {"expansion_depth_gap", &f.expansion_depth_gap}});
+                      {"expand_outside", &f.expand_outside}});
   filter.CheckOptions(f);
   CheckSettingAtMost(filter, "C1", f.c1, 1000, "");
   CheckSettingAtMost(filter, "R", f.r, 1e6, "");
@@ -215,9 +168,6 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   CheckSettingAtMost(filter, "delta", f.delta, 16384, "px");
   CheckSettingAtMost(filter, "box_margin", f.box_margin, 16384, "px");
   CheckSettingAtMost(filter, "fundamental_threshold", f.fundamental_threshold, 1000, "px");
-  CheckSettingAtMost(filter, "depth_residual_scale", f.depth_residual_scale, 1000, "");
-  CheckSettingAtMost(filter, "expansion_depth_gap", f.expansion_depth_gap, 1000, "m");
-  CheckSettingAtMost(filter, "consensus_depth_gap", f.consensus_depth_gap, 1000, "m");
 
   // Detector: a shipped model by name, or explicit Darknet files.
   const ConfigReader detector = root.Section("Detector");

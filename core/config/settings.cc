@@ -145,6 +145,18 @@ Settings ReadSettings(ConfigReader reader, const SettingsReadOptions& read_optio
 }  // namespace
 
 const std::vector<std::pair<std::string, std::string>>& RetiredSettingsKeys() {
+  static const char* const kTrackingFixed =
+      "a fixed part of tracking (the value it had), not a setting of the camera or the run";
+  static const char* const kLocalMappingFixed =
+      "a fixed part of local mapping (the value it had), not a setting of the camera or the run";
+  static const char* const kLoopClosingFixed =
+      "a fixed part of loop detection and correction (the value it had); LoopClosing.enabled, "
+      "max_correction_m and global_bundle_adjustment remain";
+  static const char* const kDynamicFilterFixed =
+      "a fixed part of our filter's extensions (the value it had); the paper's parameters and the "
+      "switches of the extensions remain";
+  static const char* const kOctoMapFixed =
+      "a fixed part of the map builder (the value it had), not a setting of the map";
   static const std::vector<std::pair<std::string, std::string>> kKeys = {
       {"Tracking.handoff_wait_ms", "local mapping's results land at a fixed frame instead"},
       {"Tracking.keyframe_wait_ms", "local mapping's results land at a fixed frame instead"},
@@ -158,10 +170,50 @@ const std::vector<std::pair<std::string, std::string>>& RetiredSettingsKeys() {
       {"OctoMap.voxel_filter_size",
        "the voxel filter's cell is the map's resolution (OctoMap.resolution); "
        "OctoMap.use_voxel_filter turns it off"},
-      {"LoopClosing.global_ba_min_correction_m",
-       "a global BA follows every loop above LoopClosing.pose_graph_min_correction_m / _deg"},
-      {"LoopClosing.global_ba_min_correction_deg",
-       "a global BA follows every loop above LoopClosing.pose_graph_min_correction_m / _deg"},
+      {"LoopClosing.global_ba_min_correction_m", "a global BA follows every loop it corrects"},
+      {"LoopClosing.global_ba_min_correction_deg", "a global BA follows every loop it corrects"},
+      {"Tracking.motion_radius_px", kTrackingFixed},
+      {"Tracking.ref_ratio", kTrackingFixed},
+      {"Tracking.keyframe_counts_odometry_points", kTrackingFixed},
+      {"Tracking.keyframe_min_map_inliers", kTrackingFixed},
+      {"Tracking.localization_local_keyframes", kTrackingFixed},
+      {"Tracking.fallback_check_below_inliers", kTrackingFixed},
+      {"Tracking.fallback_min_inlier_fraction", kTrackingFixed},
+      {"Tracking.fallback_min_inliers", kTrackingFixed},
+      {"Tracking.fallback_override_fraction_gain", kTrackingFixed},
+      {"Tracking.fallback_smoothing_weak_inliers", kTrackingFixed},
+      {"LocalMapping.ba_lag_frames", kLocalMappingFixed},
+      {"LocalMapping.triangulation_neighbors", kLocalMappingFixed},
+      {"LocalMapping.redundancy_ratio", kLocalMappingFixed},
+      {"LoopClosing.min_keyframe_gap", kLoopClosingFixed},
+      {"LoopClosing.consistency", kLoopClosingFixed},
+      {"LoopClosing.min_bow_matches", kLoopClosingFixed},
+      {"LoopClosing.ransac_iterations", kLoopClosingFixed},
+      {"LoopClosing.ransac_threshold_px", kLoopClosingFixed},
+      {"LoopClosing.min_ransac_inliers", kLoopClosingFixed},
+      {"LoopClosing.min_inlier_ratio", kLoopClosingFixed},
+      {"LoopClosing.min_projection_matches", kLoopClosingFixed},
+      {"LoopClosing.max_drift_per_meter", kLoopClosingFixed},
+      {"LoopClosing.max_correction_deg", kLoopClosingFixed},
+      {"LoopClosing.max_drift_deg_per_meter", kLoopClosingFixed},
+      {"LoopClosing.fusion_radius_px", kLoopClosingFixed},
+      {"LoopClosing.essential_min_weight", kLoopClosingFixed},
+      {"LoopClosing.pose_graph_iterations", kLoopClosingFixed},
+      {"LoopClosing.pose_graph_min_correction_m", kLoopClosingFixed},
+      {"LoopClosing.pose_graph_min_correction_deg", kLoopClosingFixed},
+      {"LoopClosing.global_ba_iterations", kLoopClosingFixed},
+      {"DynamicFilter.search_radius", kDynamicFilterFixed},
+      {"DynamicFilter.max_hamming", kDynamicFilterFixed},
+      {"DynamicFilter.depth_residual_scale", kDynamicFilterFixed},
+      {"DynamicFilter.anchor_max_age", kDynamicFilterFixed},
+      {"DynamicFilter.outside_p_init", kDynamicFilterFixed},
+      {"DynamicFilter.box_depth_band", kDynamicFilterFixed},
+      {"DynamicFilter.consensus_radius", kDynamicFilterFixed},
+      {"DynamicFilter.consensus_depth_gap", kDynamicFilterFixed},
+      {"DynamicFilter.expansion_depth_gap", kDynamicFilterFixed},
+      {"OctoMap.lazy_eval", kOctoMapFixed},
+      {"OctoMap.rebuild_displacement", kOctoMapFixed},
+      {"OctoMap.dynamic_keypoint_radius_px", kOctoMapFixed},
   };
   return kKeys;
 }
@@ -176,44 +228,24 @@ const std::vector<std::string>& KnownSettingsKeys() {
       // ORB-SLAM2 / ORB-SLAM3 keys accepted and not used.
       "Camera.RGB", "Camera.type", "File.version", "Viewer.*",
       // run/system_config.cc.
-      "Tracking.init_min_features", "Tracking.motion_radius_px",
-      "Tracking.max_frames_between_keyframes", "Tracking.ref_ratio",
-      "Tracking.keyframe_counts_odometry_points", "Tracking.keyframe_min_map_inliers",
-      "Tracking.localization_local_keyframes", "Tracking.fallback_smoothing",
-      "Tracking.fallback_smoothing_weak_inliers", "Tracking.dense_fallback",
-      "Tracking.fallback_check_below_inliers", "Tracking.fallback_min_inlier_fraction",
-      "Tracking.fallback_min_inliers", "Tracking.fallback_override_fraction_gain",
-      "LocalMapping.ba_lag_frames", "DynamicFilter.box_depth_band", "DynamicFilter.world_anchors",
-      "LocalMapping.triangulation_neighbors", "LocalMapping.cull_keyframes",
-      "LocalMapping.redundancy_ratio", "DynamicFilter.mode", "DynamicFilter.C1",
+      "Tracking.init_min_features", "Tracking.max_frames_between_keyframes",
+      "Tracking.fallback_smoothing", "Tracking.dense_fallback", "DynamicFilter.world_anchors",
+      "LocalMapping.cull_keyframes", "DynamicFilter.mode", "DynamicFilter.C1",
       "DynamicFilter.alpha", "DynamicFilter.Q", "DynamicFilter.R", "DynamicFilter.P_init",
       "DynamicFilter.C2", "DynamicFilter.delta", "DynamicFilter.threshold",
       "DynamicFilter.box_margin", "DynamicFilter.box_margin_fraction",
-      "DynamicFilter.search_radius", "DynamicFilter.max_hamming",
       "DynamicFilter.fundamental_threshold", "DynamicFilter.depth_residual",
-      "DynamicFilter.depth_residual_scale", "DynamicFilter.anchor_max_age",
-      "DynamicFilter.outside_p_init", "DynamicFilter.expansion_depth_gap",
-      "DynamicFilter.consensus_radius", "DynamicFilter.consensus_depth_gap",
       "DynamicFilter.expand_outside", "Detector.model", "Detector.cfg", "Detector.weights",
       "Detector.names", "Detector.input_width", "Detector.input_height",
       "Detector.confidence_threshold", "Detector.nms_threshold", "Detector.num_threads",
       "Detector.every_n_frames", "Detector.shift_carried_boxes", "Detector.dynamic_classes",
-      "LoopClosing.vocabulary", "LoopClosing.enabled", "LoopClosing.min_keyframe_gap",
-      "LoopClosing.revisit_min_path_m", "LoopClosing.consistency", "LoopClosing.min_bow_matches",
-      "LoopClosing.ransac_iterations", "LoopClosing.ransac_threshold_px",
-      "LoopClosing.min_ransac_inliers", "LoopClosing.min_inlier_ratio",
-      "LoopClosing.min_projection_matches", "LoopClosing.max_correction_m",
-      "LoopClosing.max_drift_per_meter", "LoopClosing.max_correction_deg",
-      "LoopClosing.max_drift_deg_per_meter", "LoopClosing.fusion_radius_px",
-      "LoopClosing.essential_min_weight", "LoopClosing.pose_graph_iterations",
-      "LoopClosing.global_bundle_adjustment", "LoopClosing.global_ba_iterations",
-      "LoopClosing.pose_graph_min_correction_m", "LoopClosing.pose_graph_min_correction_deg",
+      "LoopClosing.vocabulary", "LoopClosing.enabled", "LoopClosing.revisit_min_path_m",
+      "LoopClosing.max_correction_m", "LoopClosing.global_bundle_adjustment",
       // run/mapping_config.cc.
       "OctoMap.resolution", "OctoMap.max_range", "OctoMap.min_range", "OctoMap.prob_hit",
       "OctoMap.prob_miss", "OctoMap.clamping_min", "OctoMap.clamping_max",
       "OctoMap.occupancy_threshold", "OctoMap.pixel_stride", "OctoMap.use_voxel_filter",
-      "OctoMap.use_dynamic_mask", "OctoMap.dynamic_mask_dilation_px",
-      "OctoMap.dynamic_keypoint_radius_px", "OctoMap.lazy_eval", "OctoMap.rebuild_displacement"};
+      "OctoMap.use_dynamic_mask", "OctoMap.dynamic_mask_dilation_px"};
   return kKeys;
 }
 

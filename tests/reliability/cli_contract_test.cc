@@ -72,7 +72,7 @@ class CliContract : public ::testing::Test {
 // SIGSEGV (rc 139) in `run` and `map` before the fix.
 TEST_F(CliContract, RecursiveAliasInSettingsIsAnErrorInRunAndMap) {
   const int line = CountLines(ReadAll(Config())) + 1;
-  const std::string config = ConfigWith("Tracking: &t {motion_radius_px: 7, self: *t}\n");
+  const std::string config = ConfigWith("Tracking: &t {init_min_features: 300, self: *t}\n");
   for (const char* command : {"run", "map"}) {
     const auto r = Run({command, dir_, "--config", config, "--out", dir_ + "/out", "--quiet"});
     ExpectInputError(r, {config + ":" + std::to_string(line) + ":", "recursive alias"});

@@ -58,7 +58,7 @@ bool Contains(const std::string& text, const std::string& needle) {
 TEST(SettingsBadInput, RecursiveAliasIsAnErrorWithTheLine) {
   const std::string base = BonnYaml();
   const int line = CountLines(base) + 1;
-  const std::string message = ErrorOf(base + "Tracking: &t {motion_radius_px: 7, self: *t}\n");
+  const std::string message = ErrorOf(base + "Tracking: &t {init_min_features: 300, self: *t}\n");
   EXPECT_TRUE(Contains(message, "bad.yaml:" + std::to_string(line) + ":")) << message;
   EXPECT_TRUE(Contains(message, "recursive alias")) << message;
   // Through a list, and two levels down.
@@ -137,7 +137,7 @@ TEST(SettingsBadInput, SectionGivenAsAListIsAnError) {
   const std::string message = ErrorOf(base + "DynamicFilter: [threshold, 0.5]\n");
   EXPECT_TRUE(Contains(message, "bad.yaml:" + std::to_string(line) + ":")) << message;
   EXPECT_TRUE(Contains(message, "section 'DynamicFilter' must be a map")) << message;
-  EXPECT_TRUE(Contains(ErrorOf(base + "Tracking:\n  - motion_radius_px\n  - 7\n"),
+  EXPECT_TRUE(Contains(ErrorOf(base + "Tracking:\n  - init_min_features\n  - 300\n"),
                        "section 'Tracking' must be a map"));
 }
 

@@ -91,12 +91,10 @@ TEST(SettingsMessages, RangeMessagesUseTheFilesKeysNotTheCxxCheck) {
        "DepthMapFactor > 0 and DepthMapFactor finite"},
       {WithFlat("ThDepth", "0"), "ThDepth", "ThDepth > 0"},
       {WithFlat("Camera.fps", "0"), "Camera.fps", "fps > 0"},
-      {BonnYaml() + "DynamicFilter:\n  anchor_max_age: 0\n", "DynamicFilter.anchor_max_age",
-       "anchor_max_age >= 1"},
+      {BonnYaml() + "DynamicFilter:\n  P_init: 2\n", "DynamicFilter.P_init", "P_init <= 1"},
       {BonnYaml() + "DynamicFilter:\n  box_margin_fraction: 2\n",
        "DynamicFilter.box_margin_fraction", "box_margin_fraction <= 1"},
-      {BonnYaml() + "DynamicFilter:\n  depth_residual_scale: 0\n",
-       "DynamicFilter.depth_residual_scale", "depth_residual_scale > 0"},
+      {BonnYaml() + "DynamicFilter:\n  delta: 0\n", "DynamicFilter.delta", "delta > 0"},
       {BonnYaml() + "Detector:\n  dynamic_classes: []\n", "Detector.dynamic_classes",
        "dynamic_classes not empty"},
   };
@@ -125,9 +123,8 @@ TEST(SettingsMessages, UserConditionRewritesFieldsToKeys) {
   EXPECT_EQ(UserCondition("min_th_fast > 0 && min_th_fast <= ini_th_fast", "ORBextractor.minThFAST",
                           keys),
             "minThFAST > 0 and minThFAST <= iniThFAST");
-  EXPECT_EQ(UserCondition("depth_residual_scale > 0 && std::isfinite(depth_residual_scale)",
-                          "DynamicFilter.depth_residual_scale", keys),
-            "depth_residual_scale > 0 and depth_residual_scale finite");
+  EXPECT_EQ(UserCondition("delta > 0 && std::isfinite(delta)", "DynamicFilter.delta", keys),
+            "delta > 0 and delta finite");
 }
 
 // `Detector.dynamic_classes: {a: 1}` warned "unknown key 'Detector.dynamic_classes.a'"

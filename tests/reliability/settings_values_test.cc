@@ -67,7 +67,7 @@ std::string Replace(const std::string& line, const std::string& replacement) {
 TEST(SettingsValues, AbsurdMagnitudesOfTheRemainingKeysAreErrors) {
   for (const auto& [section, key] : {std::pair<std::string, std::string>{"DynamicFilter", "alpha"},
                                      {"DynamicFilter", "Q"},
-                                     {"Tracking", "motion_radius_px"},
+                                     {"LoopClosing", "revisit_min_path_m"},
                                      {"LoopClosing", "max_correction_m"}}) {
     for (const char* value : {"1e20", ".nan"}) {
       const std::string text = BonnYaml() + "\n" + section + ":\n  " + key + ": " + value + "\n";
@@ -163,12 +163,12 @@ TEST(SettingsValues, HugeAndBinaryValuesAreEchoedBoundedAndEscaped) {
   EXPECT_TRUE(Contains(m1, "Detector.model")) << m1.substr(0, 300);
   EXPECT_TRUE(Contains(m1, "(4194304 bytes)")) << m1;
   const std::string m2 =
-      ErrorOf(BonnYaml() + "Tracking.ref_ratio: " + std::string(1 << 20, '7') + "x\n");
+      ErrorOf(BonnYaml() + "Tracking.init_min_features: " + std::string(1 << 20, '7') + "x\n");
   EXPECT_LT(m2.size(), 1000u) << m2.substr(0, 300);
-  EXPECT_TRUE(Contains(m2, "Tracking.ref_ratio")) << m2;
+  EXPECT_TRUE(Contains(m2, "Tracking.init_min_features")) << m2;
   EXPECT_TRUE(Contains(m2, "(1048577 bytes)")) << m2;
   // A quoted value with an escape sequence and a NUL: escaped in the message.
-  const std::string m3 = ErrorOf(BonnYaml() + "Tracking.ref_ratio: \"4\\e[31m\\0\"\n");
+  const std::string m3 = ErrorOf(BonnYaml() + "Tracking.init_min_features: \"4\\e[31m\\0\"\n");
   EXPECT_FALSE(Contains(m3, "\x1b")) << m3;
   EXPECT_TRUE(Contains(m3, "4\\x1b[31m\\x00")) << m3;
   // A long unknown key (YAML's simple keys stop at 1024 characters): the warning is bounded too.

@@ -60,13 +60,13 @@ if family settings; then
     Camera.width Camera.height Camera.fps Camera.bf ThDepth DepthMapFactor ORBextractor.nFeatures
     ORBextractor.scaleFactor ORBextractor.nLevels ORBextractor.iniThFAST ORBextractor.minThFAST
     OctoMap.resolution OctoMap.max_range OctoMap.prob_hit OctoMap.clamping_max OctoMap.pixel_stride
-    Tracking.max_frames_between_keyframes Tracking.motion_radius_px Tracking.dense_fallback
-    Tracking.fallback_min_inlier_fraction LocalMapping.cull_keyframes DynamicFilter.alpha
+    Tracking.max_frames_between_keyframes Tracking.init_min_features Tracking.dense_fallback
+    Tracking.fallback_smoothing LocalMapping.cull_keyframes DynamicFilter.alpha
     DynamicFilter.Q DynamicFilter.P_init DynamicFilter.threshold DynamicFilter.box_margin_fraction
-    DynamicFilter.anchor_max_age DynamicFilter.world_anchors DynamicFilter.mode
+    DynamicFilter.fundamental_threshold DynamicFilter.world_anchors DynamicFilter.mode
     Detector.input_width Detector.confidence_threshold Detector.num_threads
-    Detector.every_n_frames Detector.model LoopClosing.enabled LoopClosing.consistency
-    LoopClosing.ransac_threshold_px LoopClosing.max_correction_m LoopClosing.vocabulary"
+    Detector.every_n_frames Detector.model LoopClosing.enabled LoopClosing.revisit_min_path_m
+    LoopClosing.global_bundle_adjustment LoopClosing.max_correction_m LoopClosing.vocabulary"
   for key in $keys; do
     i=0
     for value in .nan 1e400 '[1, 2]' '{a: 1}' 'abc' '99999999999999999999'; do
@@ -89,12 +89,12 @@ if family yaml; then
   probe_cfg y_merge_key 1 "$(yaml merge_key 'base: &b {alpha: 0.9}\nDynamicFilter:\n  <<: *b\n')"
   probe_cfg y_merge_flow '0|1' "$(yaml merge_flow 'DynamicFilter: {<<: {threshold: 0.7}}\n')"
   grep -q "<<\|merge" logs/y_merge_flow.err || note y_merge_flow SILENT "merge key dropped"
-  probe_cfg y_tab_indent 1 "$(yaml tab_indent 'Tracking:\n\tmotion_radius_px: 9\n')"
+  probe_cfg y_tab_indent 1 "$(yaml tab_indent 'Tracking:\n\tinit_min_features: 200\n')"
   grep -q ":[0-9]" logs/y_tab_indent.err || note y_tab_indent NOLINE "no line"
   probe_cfg y_two_docs 1 "$(yaml two_docs '---\nCamera.fx: 500\n')"
   probe_cfg y_doc_end '0|1' "$(yaml doc_end '...\nCamera.fx: 12\n')"
   [ "$(grep -c . logs/y_doc_end.err)" -gt 0 ] || note y_doc_end SILENT "text after '...' ignored"
-  probe_cfg y_dup_in_section 1 "$(yaml dup_in_section 'Tracking:\n  motion_radius_px: 7\n  motion_radius_px: 9\n')"
+  probe_cfg y_dup_in_section 1 "$(yaml dup_in_section 'Tracking:\n  init_min_features: 300\n  init_min_features: 200\n')"
   probe_cfg y_flat_and_nested 1 "$(yaml flat_and_nested 'Camera:\n  fy: 500\n')"
   probe_cfg y_tag_str '0|1' "$(sed 's/^Camera.fx:.*/Camera.fx: !!str 542/' "$CFG" >y_tag_str.yaml; echo y_tag_str.yaml)"
   probe_cfg y_tag_custom '0|1' "$(sed 's/^Camera.fx:.*/Camera.fx: !weird 542.8/' "$CFG" >y_tag_c.yaml; echo y_tag_c.yaml)"
@@ -120,7 +120,7 @@ if family yaml; then
   probe_cfg y_comments_only 1 "$(printf '# nothing\n' >y_co.yaml; echo y_co.yaml)"
   probe_cfg y_top_list 1 "$(printf -- '- 1\n- 2\n' >y_tl.yaml; echo y_tl.yaml)"
   probe_cfg y_top_scalar 1 "$(printf 'hello\n' >y_ts.yaml; echo y_ts.yaml)"
-  probe_cfg y_anchor_reuse 0 "$(yaml anchor_reuse 'Tracking: &t {motion_radius_px: 7}\nLocalMapping: {cull_keyframes: true}\n')"
+  probe_cfg y_anchor_reuse 0 "$(yaml anchor_reuse 'Tracking: &t {init_min_features: 300}\nLocalMapping: {cull_keyframes: true}\n')"
   probe_cfg y_alias_scalar 0 "$(sed 's/^Camera.fx:.*/Camera.fx: \&f 542.822841/; s/^Camera.fy:.*/Camera.fy: *f/' "$CFG" >y_as.yaml; echo y_as.yaml)"
   probe_cfg y_alias_undefined 1 "$(yaml alias_undefined 'Tracking: *nothere\n')"
   probe_cfg y_crlf 0 "$(sed 's/$/\r/' "$CFG" >y_crlf.yaml; echo y_crlf.yaml)"

@@ -45,7 +45,7 @@ probe_cfg() {
 }
 
 echo "== settings files"
-probe_cfg y_alias_self 1 "$(yaml alias_self 'Tracking: &t {motion_radius_px: 7, self: *t}\n')"
+probe_cfg y_alias_self 1 "$(yaml alias_self 'Tracking: &t {init_min_features: 300, self: *t}\n')"
 probe_cfg y_alias_list 1 "$(yaml alias_list 'a: &a [*a]\n')"
 deep=$(python3 -c "print('Deep: ' + '['*5000 + ']'*5000)")
 probe_cfg y_deep_flow 1 "$(yaml deep_flow "$deep\n")"

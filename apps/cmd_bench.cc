@@ -33,7 +33,9 @@ void DefineOptions(ArgParser* parser) {
   p.AddOption("runs", "N", "runs per sequence and configuration (median reported)", "5");
   p.AddFlag("quick",
             "development mode: 1 run (unless --runs), 60 frames from the middle (unless --frames)");
-  p.AddOption("configs", "LIST", "filter configurations, comma-separated",
+  p.AddOption("configs", "LIST",
+              "filter configurations, comma-separated: none, boxes, geometry, paper, full and the\n"
+              "ablation steps paper+margin, paper+margin+demotion",
               "none,boxes,geometry,full");
   p.AddFlag("no-baseline", "skip the cv::rgbd::RgbdICPOdometry baseline");
   p.AddOption("frames", "FIRST:LAST",

@@ -83,9 +83,7 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   p.AddFlag("run-slam", "also run the detector, slam, mapper and recorder components here");
   p.AddOption("config", "FILE",
               "--run-slam: settings YAML (camera intrinsics must match CameraInfo)");
-  p.AddOption("filter", "MODE",
-              "--run-slam: none | boxes | geometry | full | paper (+margin, +margin+demotion)",
-              "full");
+  p.AddOption("filter", "MODE", "--run-slam: none | boxes | geometry | paper | full", "full");
   p.AddOption("out", "DIR", "--run-slam: output folder (trajectory, map.bt)", "out/bridge");
   p.AddFlag("no-mapper", "--run-slam: no mapper component");
   if (!p.Parse(args)) return p.exit_code();

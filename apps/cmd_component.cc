@@ -35,8 +35,7 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   p.AddOption("dataset", "DIR", "dataset folder (player)");
   p.AddOption("config", "FILE", "settings YAML (camera, sensor, modules)");
   p.AddOption("out", "DIR", "output folder (recorder, mapper)", "out/run");
-  p.AddOption("filter", "MODE",
-              "none | boxes | geometry | full | paper (+margin, +margin+demotion)", "full");
+  p.AddOption("filter", "MODE", "none | boxes | geometry | paper | full", "full");
   p.AddOption("frames", "FIRST:LAST", "rgb.txt entries [FIRST, LAST) (player)", "0:");
   p.AddOption("rate", "R", "player: 0 = as fast as consumed, 1 = real time", "0");
   p.AddOption(

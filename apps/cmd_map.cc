@@ -37,9 +37,7 @@ void DefineMapOptions(ArgParser* parser) {
   p.AddPositional("DATASET_DIR", "folder with rgb.txt, depth.txt (groundtruth.txt optional)");
   p.AddOption("config", "FILE", "settings YAML; default: DATASET_DIR/camera.yaml or a preset");
   p.AddOption("filter", "MODE",
-              "dynamic filter of the SLAM: none | boxes | geometry | full | paper (+margin, "
-              "+margin+demotion)",
-              "full");
+              "dynamic filter of the SLAM: none | boxes | geometry | paper | full", "full");
   p.AddOption("frames", "FIRST:LAST",
               "rgb.txt entries FIRST (inclusive, 0-based) to LAST (exclusive)");
   p.AddOption("out", "DIR", "output folder", "out/map");

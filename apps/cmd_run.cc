@@ -41,9 +41,7 @@ void DefineRunOptions(ArgParser* parser, const char* security_env) {
   p.AddPositional("DATASET_DIR", "folder with rgb.txt, depth.txt (groundtruth.txt optional)");
   p.AddOption("config", "FILE",
               "settings YAML (ORB-SLAM2 keys); default: DATASET_DIR/camera.yaml or a preset");
-  p.AddOption("filter", "MODE",
-              "dynamic filter: none | boxes | geometry | full | paper (+margin, +margin+demotion)",
-              "full");
+  p.AddOption("filter", "MODE", "dynamic filter: none | boxes | geometry | paper | full", "full");
   p.AddOption("frames", "FIRST:LAST",
               "rgb.txt entries FIRST (inclusive, 0-based) to LAST (exclusive)");
   p.AddOption("out", "DIR", "output folder", "out/run");

@@ -47,8 +47,7 @@ double MsSince(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 const std::vector<std::string>& FilterConfigurationNames() {
-  static const std::vector<std::string> names = {
-      "none", "boxes", "geometry", "paper", "paper+margin", "paper+margin+demotion", "full"};
+  static const std::vector<std::string> names = {"none", "boxes", "geometry", "paper", "full"};
   return names;
 }
 
@@ -59,8 +58,7 @@ void ApplyFilterConfiguration(const std::string& name, SystemOptions* options) {
     for (const std::string& n : names) list += (list.empty() ? "" : "|") + n;
     throw InvalidOptions("invalid filter configuration '" + name + "': expected " + list);
   }
-  const bool paper_family = name.rfind("paper", 0) == 0;
-  if (!paper_family) {
+  if (name != "paper") {
     options->filter.mode = ParseFilterMode(name);
     return;
   }
@@ -71,10 +69,6 @@ void ApplyFilterConfiguration(const std::string& name, SystemOptions* options) {
   options->static_top_up_fraction = 0.0;
   options->filter.depth_residual = false;  // the paper's epipolar test (F between frames)
   options->dynamic_points.enabled = false;
-  if (name == "paper+margin" || name == "paper+margin+demotion") {
-    options->filter.box_margin_fraction = 0.1;
-  }
-  if (name == "paper+margin+demotion") options->demote_in_box_features = true;
 }
 
 void SystemOptions::Check() const {

@@ -7,9 +7,10 @@
 //   FrameResult r = system.FeedRgbdFrame(rgb, depth, stamp);  // loose images, raw / DepthMapFactor
 //
 // Inside, like stella_vslam's create-frame / feed-frame: the frame is prepared (checks, grey
-// image, depth in metres, ORB features while the detector runs; core/slam/feature/frame_preparation.h),
-// then filtered (dynamic features out, top-up outside the boxes on crowded frames), tracked, and
-// a new keyframe is emitted to the keyframe callback and handed to local mapping.
+// image, depth in metres, ORB features while the detector runs;
+// core/slam/feature/frame_preparation.h), then filtered (dynamic features out, top-up outside the
+// boxes on crowded frames), tracked, and a new keyframe is emitted to the keyframe callback and
+// handed to local mapping.
 #pragma once
 
 #include <functional>
@@ -26,11 +27,11 @@
 #include "core/dynamic/dynamic_filter.h"
 #include "core/dynamic/dynamic_mask.h"
 #include "core/dynamic/yolo_detector.h"
-#include "core/slam/map/dynamic_points.h"
+#include "core/slam/feature/orb_extractor.h"
 #include "core/slam/local_mapping/local_mapping.h"
 #include "core/slam/loop_closing/loop_closing.h"
+#include "core/slam/map/dynamic_points.h"
 #include "core/slam/map/map_file.h"
-#include "core/slam/feature/orb_extractor.h"
 #include "core/slam/tracking/tracking.h"
 
 namespace dygslam {
@@ -121,21 +122,19 @@ struct SystemOptions {
   void Check() const;
 };
 
-// Named filter configurations (`--filter NAME`, bench `--configs`): the four modes, the paper's
-// method as written, and the ablation steps from it to our default (docs/how_it_works.md, "Dynamic filter"):
-//   paper                  DYG-SLAM as the paper describes it (mode full): boxes exactly as
-//                          detected, features the filter keeps inside boxes are ordinary static
-//                          features, no re-extraction. Our documented choices only where the
-//                          paper is silent (matching, degenerate motion, variance of a new state).
-//   paper+margin           + boxes grown by 10 % of their width on each side
-//   paper+margin+demotion  + features kept inside boxes never seed map points and do not count
-//                          toward the local-map inlier minimum
-//   full                   + features extracted again outside the boxes on crowded frames (our
-//                          default; the values of the settings file apply)
-// Sets options->filter.mode and, for the paper family, the three extensions' options. Throws
-// InvalidOptions naming the accepted names.
+// Named filter configurations (`--filter NAME`): the four modes and the paper's method as written
+// (docs/how_it_works.md, "Dynamic filter"):
+//   paper  DYG-SLAM as the paper describes it (mode full): boxes exactly as detected, features
+//          the filter keeps inside boxes are ordinary static features, no re-extraction, the
+//          paper's epipolar test. Our documented choices only where the paper is silent
+//          (matching, degenerate motion, variance of a new state).
+//   full   our default: the paper's filter with our extensions (box margin, in-box demotion,
+//          re-extraction outside the boxes, depth residual; the values of the settings file apply)
+// (The ablation steps between them are configurations of the benchmark: tools/bench.) Sets
+// options->filter.mode and, for paper, the extensions' options. Throws InvalidOptions naming the
+// accepted names.
 void ApplyFilterConfiguration(const std::string& name, SystemOptions* options);
-// Every accepted name, in the order above after none, boxes, geometry.
+// Every accepted name: none, boxes, geometry, paper, full.
 const std::vector<std::string>& FilterConfigurationNames();
 
 // Loads the map file `path` against the settings in `options` (camera, ORB pyramid, vocabulary)

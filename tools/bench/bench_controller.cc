@@ -27,6 +27,7 @@
 #include "core/io/trajectory_io.h"
 #include "run/run_settings.h"
 #include "run/system_config.h"
+#include "tools/bench/bench_configurations.h"
 #include "tools/bench/bench_runner.h"
 #include "tools/bench/feature_figure.h"
 
@@ -130,9 +131,8 @@ void BenchControllerOptions::Check() const {
   DYGSLAM_CHECK_OPTION(runs >= 1 && runs <= 100, "--runs");
   if (configs.empty()) throw InvalidOptions("--configs: empty list");
   for (const std::string& c : configs) {  // an unknown name is a usage error naming --configs
-    SystemOptions check;
     try {
-      ApplyFilterConfiguration(c, &check);
+      BaseFilterConfiguration(c);
     } catch (const InvalidOptions& e) {
       throw InvalidOptions(std::string("--configs: ") + e.what());
     }
@@ -631,9 +631,11 @@ void BenchController::WriteReports() {
 
 void RunBenchWorker(const BenchWorkerOptions& o) {
   // The baseline reads only the camera; its name is no filter configuration.
-  const RunConfiguration c = LoadRunConfiguration(
+  RunConfiguration c = LoadRunConfiguration(
       {o.settings_path, o.settings_read,
-       o.config == kBaselineConfig ? std::string("full") : o.config, o.deterministic});
+       o.config == kBaselineConfig ? std::string("full") : BaseFilterConfiguration(o.config),
+       o.deterministic});
+  if (o.config != kBaselineConfig) ApplyAblationStep(o.config, &c.system);
   const RgbdDataset dataset = RgbdDataset::Open(o.dataset_dir);
   size_t first = 0, last = dataset.num_rgb_entries();
   if (!o.frames.empty()) std::tie(first, last) = ParseFrameRange(o.frames, last);

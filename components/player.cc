@@ -358,12 +358,11 @@ void PlayerShell::WaitForPeers(const StopFlagPtr& stop) {
   const auto readers_deadline =
       Clock::now() +
       std::chrono::milliseconds(static_cast<int64_t>(options_.wait_for_readers_s * 1000));
-  const auto expected_readers = [this] { return ExpectedReaders(); };
-  while (frames_.matched() < expected_readers() && Clock::now() < readers_deadline &&
+  while (frames_.matched() < ExpectedReaders() && Clock::now() < readers_deadline &&
          !stop->WaitFor(std::chrono::milliseconds(10))) {
   }
-  if (frames_.matched() < expected_readers() && !stop->requested()) {
-    LOG_WARNING << "player: only " << frames_.matched() << " of " << expected_readers()
+  if (frames_.matched() < ExpectedReaders() && !stop->requested()) {
+    LOG_WARNING << "player: only " << frames_.matched() << " of " << ExpectedReaders()
                 << " frame readers after " << options_.wait_for_readers_s << " s; playing anyway";
   }
   const auto deadline =

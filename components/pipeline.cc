@@ -266,6 +266,14 @@ ComponentOutcome RunPipelineSlam(const PipelineOptions& options,
   if (stats.keyframe_messages_undelivered > 0)
     return {foreign, std::to_string(stats.keyframe_messages_undelivered) +
                          " keyframe messages not delivered: the map lacks them"};
+  // Frames due their own boxes that ran with none (the detector lost: paused, gone or more than
+  // the detection wait behind, and no recent boxes to carry): filtered geometry-only, not as the
+  // run asked. The poses are there; the run is not what was requested.
+  const size_t without_boxes = stats.pairing.missing_detections - stats.pairing.carried_forward;
+  if (without_boxes > 0 && !stats.input_cut_short)
+    return {foreign, std::to_string(without_boxes) +
+                         " frames ran without person boxes (geometry-only): the detector was " +
+                         (stats.detector_lost ? "lost" : "late")};
   return {foreign, InputEndedEarly(stats.input_cut_short)};
 }
 

@@ -130,12 +130,18 @@ Settings ReadSettings(ConfigReader reader, const SettingsReadOptions& read_optio
                                Short(kMaxThDepth) + ", TUM / Bonn use 40: " +
                                Short(40.0 * s.sensor.bf / s.camera.fx) + " m)");
   }
-  constexpr double kMaxDepthMapFactor = 1e5;
-  if (s.sensor.depth_map_factor > kMaxDepthMapFactor) {
+  // Depth image units per metre: 1 for float images in metres, 1000 for millimetres, 5000 for
+  // TUM / Bonn. Below 1 a unit would be longer than a metre (a 16-bit image would reach beyond
+  // 65 km): every point lands kilometres away and nothing downstream can tell.
+  constexpr double kMinDepthMapFactor = 1, kMaxDepthMapFactor = 1e5;
+  if (s.sensor.depth_map_factor < kMinDepthMapFactor ||
+      s.sensor.depth_map_factor > kMaxDepthMapFactor) {
     reader.Fail("DepthMapFactor", "implausible depth scale " + Short(s.sensor.depth_map_factor) +
-                                      " (depth image units per metre; expected at most " +
+                                      " (depth image units per metre; expected " +
+                                      Short(kMinDepthMapFactor) + " to " +
                                       Short(kMaxDepthMapFactor) +
-                                      ", TUM / Bonn use 5000: 0.2 mm per unit)");
+                                      ": 1 for float depth in metres, 1000 for millimetres, "
+                                      "TUM / Bonn use 5000: 0.2 mm per unit)");
   }
   reader.CheckOptions(s.orb);
   s.reader = std::move(reader);

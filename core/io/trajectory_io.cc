@@ -19,7 +19,9 @@ double ParseValue(const std::string& file, int line, int column, const std::stri
   char* end = nullptr;
   errno = 0;
   const double v = std::strtod(begin, &end);
-  if (end == begin || *end != '\0') {
+  // Decimal only: strtod also reads hexadecimal ("0x10" is 16), which no trajectory writes.
+  const bool hexadecimal = text.find_first_of("xX") != std::string::npos;
+  if (end == begin || *end != '\0' || hexadecimal) {
     throw InputError(
         file, line,
         "column " + std::to_string(column) + ": not a number: '" + Abbreviate(text) + "'");

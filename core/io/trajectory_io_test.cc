@@ -88,6 +88,7 @@ TEST(TrajectoryIo, BadInputNamesFileAndLine) {
   ExpectError(ok + "2.0 0 0 0 0 0 0 1 5\n", ":2: expected 8 columns");
   ExpectError(ok + "x 0 0 0 0 0 0 1\n", ":2: malformed timestamp");
   ExpectError(ok + "2.0 0 abc 0 0 0 0 1\n", ":2: column 3: not a number");
+  ExpectError(ok + "2.0 0x10 0 0 0 0 0 1\n", ":2: column 2: not a number: '0x10'");
   ExpectError(ok + "2.0 0 0 nan 0 0 0 1\n", ":2: column 4: non-finite");
   ExpectError(ok + "2.0 0 0 inf 0 0 0 1\n", ":2: column 4: non-finite");
   ExpectError(ok + "2.0 0 0 0 0 0 0 2\n", ":2: quaternion is not unit length");

@@ -51,6 +51,7 @@ constexpr int kPlayerPausedDomain = 152;
 constexpr int kKilledRunDomain = 153;
 constexpr int kDetectorPausedDomain = 154;
 constexpr int kSuspendedDomain = 155;
+constexpr int kDetectorLostDomain = 157;
 
 class RunIntegrity : public testing::CliFixture {
  protected:
@@ -459,6 +460,42 @@ TEST_F(RunIntegrity, ADetectorPausedUntilTheEndMakesTheRunIncomplete) {
   EXPECT_FALSE(Contains(summary, "(complete)")) << summary;
   EXPECT_TRUE(Contains(ReadAll(out + "/eval.json"), "\"complete\": false"))
       << ReadAll(out + "/eval.json");
+}
+
+// --processes --rate 1 (12 s of frames): the detector paused (SIGSTOP) for 5 s mid-run, then
+// continued. slam stops waiting for its boxes, carries the last ones a few frames, then runs
+// geometry-only until the detections come again. Before, every frame had a pose, the run said
+// "complete" and exited 0 although a third of the frames had not been filtered as asked ("(detector
+// lost)" only in a log line). Those frames are the run's shortfall: incomplete (exit 3), named in
+// the summary and in eval.json.
+TEST_F(RunIntegrity, FramesRunWithoutTheirBoxesMakeTheRunIncomplete) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  DYGSLAM_REQUIRE_MODELS(models);
+  const std::string out = dir_ + "/out";
+  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "full", "--quiet",
+                           "--no-map", "--processes", "--rate", "1", "--out", out, "--domain",
+                           std::to_string(kDetectorLostDomain)});
+  ASSERT_GT(pid, 0);
+  const pid_t detector = RunningComponentPid("detector", out);
+  ASSERT_GT(detector, 0) << ReadAll(dir_ + "/run.err");
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  kill(detector, SIGSTOP);
+  std::this_thread::sleep_for(std::chrono::seconds(5));
+  kill(detector, SIGCONT);
+  std::string diagnostics;
+  const int code = testing::WaitForExit(pid, 150, &diagnostics);
+  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  EXPECT_EQ(code, 3) << summary << err << diagnostics;
+  EXPECT_EQ(ReadTumTrajectory(out + "/trajectory.txt").size(), 360u) << err;
+  EXPECT_TRUE(Contains(err, "detections are arriving again")) << err;
+  EXPECT_TRUE(Contains(err,
+                       "frames ran without person boxes (geometry-only): the detector was "
+                       "lost"))
+      << err;
+  EXPECT_FALSE(Contains(summary, "(complete)")) << summary;
+  const std::string json = ReadAll(out + "/eval.json");
+  EXPECT_TRUE(Contains(json, "\"complete\": false")) << json;
+  EXPECT_TRUE(Contains(json, "frames ran without person boxes")) << json;
 }
 
 // --out replaced while the run goes (renamed away, a link to a dataset folder put in its place):

@@ -91,14 +91,17 @@ TEST(SettingsYaml, UnderflowIsNamed) {
   EXPECT_NE(ReadError("Camera.fx: 1e400\n").find("finite"), std::string::npos);
 }
 
-// Absurd frame rate and close-depth factor are errors naming their own key and line.
+// Absurd frame rate, close-depth factor and depth scale (either way) are errors naming their own
+// key and line.
 TEST(SettingsYaml, AbsurdFpsAndThDepthNameTheirKey) {
   std::ifstream in(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
   const std::string bonn((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   for (const auto& [key, line_text] :
        {std::pair<std::string, std::string>{"Camera.fps", "Camera.fps: 1e20"},
         {"ThDepth", "ThDepth: 1e20"},
-        {"DepthMapFactor", "DepthMapFactor: 1e20"}}) {
+        {"DepthMapFactor", "DepthMapFactor: 1e20"},
+        {"DepthMapFactor", "DepthMapFactor: 1e-9"},
+        {"DepthMapFactor", "DepthMapFactor: 0.5"}}) {
     std::string text = bonn;
     const size_t at = text.find("\n" + key + ":");
     ASSERT_NE(at, std::string::npos) << key;

@@ -1,7 +1,5 @@
 #include "core/slam/loop_closing/loop_verification.h"
 
-#include <ceres/ceres.h>
-
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
@@ -14,6 +12,7 @@
 #include "core/base/log.h"
 #include "core/slam/loop_closing/loop_detection.h"
 #include "core/slam/optimize/cost_functions.h"
+#include "core/slam/optimize/pose_solver.h"
 
 namespace dygslam {
 
@@ -142,66 +141,49 @@ int FlagPoseOutliers(const KeyFrame& kf, const OptimizerOptions& optimizer,
   return inliers;
 }
 
-// One Huber-robust pose-only solve over the matches not flagged as outliers; false when fewer
-// than 3 take part.
-bool SolveLoopPose(const KeyFrame& kf, const OptimizerOptions& optimizer,
-                   const ProjectionModel& model, const std::vector<PointCopy>& points,
-                   const std::vector<int>& matches, const std::vector<uint8_t>& outlier,
-                   double* pose) {
-  const auto& g = *kf.geometry;
-  const double delta_mono = std::sqrt(optimizer.chi2_mono),
-               delta_stereo = std::sqrt(optimizer.chi2_stereo);
-  ceres::Problem::Options problem_options;
-  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  PoseManifold manifold;
-  problem.AddParameterBlock(pose, 7, &manifold);
-  int added = 0;
-  for (size_t i = 0; i < matches.size(); ++i) {
-    const int m = matches[i];
-    if (m < 0 || outlier[i]) continue;
-    const cv::KeyPoint& kp = kf.undistorted[i];
-    const double sqrt_info = std::sqrt(g.inv_sigma2[kp.octave]);
-    const bool stereo = kf.u_right[i] >= 0;
-    ceres::CostFunction* cost = stereo ? static_cast<ceres::CostFunction*>(new StereoPoseCost(
-                                             Eigen::Vector3d(kp.pt.x, kp.pt.y, kf.u_right[i]),
-                                             points[m].position, sqrt_info, model))
-                                       : new MonoPoseCost(Eigen::Vector2d(kp.pt.x, kp.pt.y),
-                                                          points[m].position, sqrt_info, model);
-    problem.AddResidualBlock(cost, new ceres::HuberLoss(stereo ? delta_stereo : delta_mono), pose);
-    ++added;
-  }
-  if (added < 3) return false;
-  ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::DENSE_QR;
-  solver_options.max_num_iterations = optimizer.pose_iterations;
-  solver_options.num_threads = 1;
-  solver_options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(solver_options, &problem, &summary);
-  return true;
-}
-
 // Refines the current keyframe's corrected pose against the loop-side points matched to its
-// features (pose-only, reprojection with the depth's virtual right coordinate, Huber then
-// outlier rounds as in tracking); outlier matches are removed. Returns the inliers.
+// features (tracking's pose-only solver: reprojection with the depth's virtual right coordinate,
+// Huber-robust, then outlier rounds as in tracking); outlier matches are removed. Returns the
+// inliers.
 int RefineLoopPose(const KeyFrame& kf, const OptimizerOptions& optimizer,
                    const std::vector<PointCopy>& points, std::vector<int>* matches,
                    Rigid3d* cam_from_world) {
   const auto& g = *kf.geometry;
   const ProjectionModel model{g.camera.fx, g.camera.fy, g.camera.cx, g.camera.cy, g.bf};
-  std::vector<uint8_t> outlier(matches->size(), 0);
-  double pose[7];
-  PoseToParameters(*cam_from_world, pose);
+  std::vector<PoseObservation> observations;
+  std::vector<size_t> feature_of;  // observation -> feature
+  for (size_t i = 0; i < matches->size(); ++i) {
+    const int m = (*matches)[i];
+    if (m < 0) continue;
+    const cv::KeyPoint& kp = kf.undistorted[i];
+    PoseObservation o;
+    o.point = points[m].position;
+    o.stereo = kf.u_right[i] >= 0;
+    o.measurement = Eigen::Vector3d(kp.pt.x, kp.pt.y, o.stereo ? kf.u_right[i] : 0.0);
+    o.information = g.inv_sigma2[kp.octave];
+    observations.push_back(o);
+    feature_of.push_back(i);
+  }
+  PoseSolverOptions solver;
+  solver.max_iterations = optimizer.pose_iterations;
+  const double delta_mono = std::sqrt(optimizer.chi2_mono),
+               delta_stereo = std::sqrt(optimizer.chi2_stereo);
+  std::vector<uint8_t> outlier(matches->size(), 0), active(observations.size(), 1);
+  Rigid3d pose = *cam_from_world;
   int inliers = 0;
   for (int round = 0; round < optimizer.pose_rounds; ++round) {
-    if (!SolveLoopPose(kf, optimizer, model, points, *matches, outlier, pose)) return 0;
-    inliers = FlagPoseOutliers(kf, optimizer, model, points, *matches, PoseFromParameters(pose),
-                               &outlier);
+    int added = 0;
+    for (size_t k = 0; k < observations.size(); ++k) {
+      active[k] = outlier[feature_of[k]] ? 0 : 1;
+      added += active[k];
+    }
+    if (added < 3) return 0;
+    SolvePose(observations, active.data(), model, delta_mono, delta_stereo, solver, &pose);
+    inliers = FlagPoseOutliers(kf, optimizer, model, points, *matches, pose, &outlier);
     if (inliers < 10) return inliers;
   }
-  if (!PoseFromParameters(pose).AllFinite()) return 0;
-  *cam_from_world = PoseFromParameters(pose);
+  if (!pose.AllFinite()) return 0;
+  *cam_from_world = pose;
   for (size_t i = 0; i < matches->size(); ++i)
     if (outlier[i]) (*matches)[i] = -1;
   return inliers;

@@ -360,13 +360,11 @@ RunController::Outcome RunController::RunPipeline() {
   outcome.ignored_samples_note = result.ignored_samples_note;
   outcome.components_cut_short = result.components_cut_short;
   if (outputs_.Fresh("frames.csv")) {
-    for (const TextLine& line : ReadDataLines(outputs_.PathOf("frames.csv"))) {
-      if (line.tokens.size() < 2 || line.tokens[0] == "stamp") continue;
+    for (const FrameRow& row : ReadFramesCsv(outputs_.PathOf("frames.csv"))) {
       ++outcome.processed;
-      if (line.tokens[1] == ToString(TrackingState::kLost)) ++outcome.lost;
-      ++outcome.states[line.tokens[1]];
-      if (const std::optional<Timestamp> t = Timestamp::Parse(line.tokens[0]))
-        outcome.stamps.push_back(*t);
+      if (row.state == TrackingState::kLost) ++outcome.lost;
+      ++outcome.states[ToString(row.state)];
+      outcome.stamps.push_back(row.stamp);
     }
   }
   return outcome;

@@ -2,12 +2,15 @@
 
 #include <octomap/OcTree.h>
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <memory>
 
 #include "core/base/echo.h"
+#include "core/base/error.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 #include "core/place/vocabulary.h"
@@ -98,19 +101,93 @@ FrameRow FrameRowFromResult(const FrameResult& result) {
   return row;
 }
 
+namespace {
+
+// The stage columns of frames.csv after the frame's counts, in order, with their field.
+const std::vector<std::pair<const char*, double StageTimes::*>>& StageColumns() {
+  static const std::vector<std::pair<const char*, double StageTimes::*>> kColumns = {
+      {"orb_ms", &StageTimes::orb_extraction_ms},
+      {"detection_ms", &StageTimes::detection_ms},
+      {"matching_ms", &StageTimes::matching_ms},
+      {"probability_ms", &StageTimes::probability_ms},
+      {"tracking_ms", &StageTimes::tracking_ms},
+      {"total_ms", &StageTimes::total_ms},
+      {"detection_wait_ms", &StageTimes::detection_wait_ms},
+      {"local_mapping_ms", &StageTimes::local_mapping_ms},
+      {"top_up_ms", &StageTimes::top_up_ms}};
+  return kColumns;
+}
+
+}  // namespace
+
 std::string FramesCsvHeader() {
-  return "stamp,state,keyframe,features,dynamic,tracked,orb_ms,detection_ms,matching_ms,"
-         "probability_ms,tracking_ms,total_ms\n";
+  std::string header = "stamp,state,keyframe,features,dynamic,tracked";
+  for (const auto& [name, field] : StageColumns()) header += std::string(",") + name;
+  return header + "\n";
 }
 
 std::string FramesCsvRow(const FrameRow& r) {
   char line[512];
-  std::snprintf(line, sizeof(line), "%s,%s,%d,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n",
-                r.stamp.ToString().c_str(), ToString(r.state), r.is_keyframe ? 1 : 0,
-                r.num_features, r.num_dynamic, r.num_tracked, r.times.orb_extraction_ms,
-                r.times.detection_ms, r.times.matching_ms, r.times.probability_ms,
-                r.times.tracking_ms, r.times.total_ms);
-  return line;
+  std::snprintf(line, sizeof(line), "%s,%s,%d,%d,%d,%d", r.stamp.ToString().c_str(),
+                ToString(r.state), r.is_keyframe ? 1 : 0, r.num_features, r.num_dynamic,
+                r.num_tracked);
+  std::string row = line;
+  for (const auto& [name, field] : StageColumns()) {
+    std::snprintf(line, sizeof(line), ",%.3f", r.times.*field);
+    row += line;
+  }
+  return row + "\n";
+}
+
+std::vector<FrameRow> ReadFramesCsv(const std::string& path) {
+  const std::vector<TextLine> lines = ReadDataLines(path);
+  if (lines.empty() || lines.front().tokens.empty() || lines.front().tokens[0] != "stamp")
+    throw InputError(path, lines.empty() ? 0 : lines.front().line_number,
+                     "not a frames.csv: its first line is not the header 'stamp,state,...'");
+  std::map<std::string, size_t> column;
+  for (size_t i = 0; i < lines.front().tokens.size(); ++i) column[lines.front().tokens[i]] = i;
+  if (column.count("state") == 0)
+    throw InputError(path, lines.front().line_number, "no 'state' column");
+  std::map<std::string, TrackingState> states;
+  for (const TrackingState s :
+       {TrackingState::kNotInitialized, TrackingState::kOk, TrackingState::kFallback,
+        TrackingState::kRelocalized, TrackingState::kLost})
+    states[ToString(s)] = s;
+  auto number = [&](const TextLine& l, const std::string& name, double fallback) {
+    const auto it = column.find(name);
+    if (it == column.end()) return fallback;
+    const std::string& text = l.tokens[it->second];
+    char* end = nullptr;
+    const double v = std::strtod(text.c_str(), &end);
+    if (text.empty() || *end != '\0' || !std::isfinite(v))
+      throw InputError(path, l.line_number, name + ": not a number: '" + EchoValue(text) + "'");
+    return v;
+  };
+  std::vector<FrameRow> rows;
+  for (size_t k = 1; k < lines.size(); ++k) {
+    const TextLine& l = lines[k];
+    if (l.tokens.size() != lines.front().tokens.size())
+      throw InputError(path, l.line_number,
+                       "expected " + std::to_string(lines.front().tokens.size()) +
+                           " columns as the header, found " + std::to_string(l.tokens.size()));
+    FrameRow r;
+    const std::optional<Timestamp> stamp = Timestamp::Parse(l.tokens[0]);
+    if (!stamp)
+      throw InputError(path, l.line_number, "malformed stamp '" + EchoValue(l.tokens[0]) + "'");
+    r.stamp = *stamp;
+    const auto state = states.find(l.tokens[column["state"]]);
+    if (state == states.end())
+      throw InputError(path, l.line_number,
+                       "unknown state '" + EchoValue(l.tokens[column["state"]]) + "'");
+    r.state = state->second;
+    r.is_keyframe = number(l, "keyframe", 0) != 0;
+    r.num_features = static_cast<int>(number(l, "features", 0));
+    r.num_dynamic = static_cast<int>(number(l, "dynamic", 0));
+    r.num_tracked = static_cast<int>(number(l, "tracked", 0));
+    for (const auto& [name, field] : StageColumns()) r.times.*field = number(l, name, 0);
+    rows.push_back(r);
+  }
+  return rows;
 }
 
 void WriteSystemTrajectories(const std::string& directory, const System& system) {

@@ -3,7 +3,9 @@
 // System and the map of a KeyframeMapper.
 //
 // frames.csv: stamp,state,keyframe,features,dynamic,tracked,orb_ms,detection_ms,matching_ms,
-//             probability_ms,tracking_ms,total_ms   (stage times in ms, StageTimes)
+//             probability_ms,tracking_ms,total_ms,detection_wait_ms,local_mapping_ms,top_up_ms
+//             (stage times in ms, StageTimes). The same layout for `dygslam run` in every mode
+//             and for `dygslam bench`'s runs.
 #pragma once
 
 #include <filesystem>
@@ -84,6 +86,10 @@ void RecreateOutputDirIfRemoved(const std::string& command, const std::string& o
 FrameRow FrameRowFromResult(const FrameResult& result);
 std::string FramesCsvHeader();
 std::string FramesCsvRow(const FrameRow& row);
+// The rows of a frames.csv, columns found by the header's names (a stage column the file lacks
+// reads 0). Throws InputError naming the file and line for a missing stamp/state column, an
+// unknown state, a malformed stamp or number.
+std::vector<FrameRow> ReadFramesCsv(const std::string& path);
 
 // DIR/trajectory.txt (every tracked frame, refined) and DIR/keyframes.txt; atomically.
 void WriteSystemTrajectories(const std::string& directory, const System& system);

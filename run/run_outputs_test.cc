@@ -1,10 +1,15 @@
 #include "run/run_outputs.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "core/base/error.h"
 
 namespace dygslam {
 namespace {
@@ -34,7 +39,7 @@ TEST(RunOutputs, FramesCsvRowMatchesTheHeader) {
   r.times.total_ms = 14.0625;
   const std::vector<std::string> header = Split(FramesCsvHeader());
   const std::vector<std::string> row = Split(FramesCsvRow(FrameRowFromResult(r)));
-  ASSERT_EQ(header.size(), 12u);
+  ASSERT_EQ(header.size(), 15u);
   ASSERT_EQ(row.size(), header.size());
   EXPECT_EQ(header[0], "stamp");
   EXPECT_EQ(row[0], r.stamp.ToString());
@@ -61,6 +66,87 @@ TEST(RunOutputs, FrameRowKeepsEveryField) {
   EXPECT_FALSE(row.is_keyframe);
   EXPECT_EQ(row.num_features, 3);
   EXPECT_EQ(row.times.tracking_ms, 2);
+}
+
+std::string WriteText(const std::string& name, const std::string& text) {
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("run_outputs_test_" + std::to_string(::getpid()) + "_" + name))
+                               .string();
+  std::ofstream(path) << text;
+  return path;
+}
+
+// What the run and the benchmark write, they read back: every field, every stage column.
+TEST(RunOutputs, FramesCsvReadsBackWhatWasWritten) {
+  FrameRow a;
+  a.stamp = Timestamp::FromNanoseconds(1548266470123456789);
+  a.state = TrackingState::kRelocalized;
+  a.is_keyframe = true;
+  a.num_features = 1000;
+  a.num_dynamic = 12;
+  a.num_tracked = 300;
+  a.times.orb_extraction_ms = 6.25;
+  a.times.detection_wait_ms = 1.5;
+  a.times.local_mapping_ms = 9.75;
+  a.times.top_up_ms = 0.5;
+  a.times.total_ms = 20;
+  FrameRow b;
+  b.stamp = Timestamp::FromNanoseconds(1548266470156789012);
+  b.state = TrackingState::kLost;
+  const std::string path =
+      WriteText("ok.csv", FramesCsvHeader() + FramesCsvRow(a) + FramesCsvRow(b));
+  const std::vector<FrameRow> rows = ReadFramesCsv(path);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].stamp, a.stamp);
+  EXPECT_EQ(rows[0].state, TrackingState::kRelocalized);
+  EXPECT_TRUE(rows[0].is_keyframe);
+  EXPECT_EQ(rows[0].num_features, 1000);
+  EXPECT_EQ(rows[0].num_dynamic, 12);
+  EXPECT_EQ(rows[0].num_tracked, 300);
+  EXPECT_EQ(rows[0].times.orb_extraction_ms, 6.25);
+  EXPECT_EQ(rows[0].times.detection_wait_ms, 1.5);
+  EXPECT_EQ(rows[0].times.local_mapping_ms, 9.75);
+  EXPECT_EQ(rows[0].times.top_up_ms, 0.5);
+  EXPECT_EQ(rows[0].times.total_ms, 20);
+  EXPECT_EQ(rows[1].state, TrackingState::kLost);
+  EXPECT_FALSE(rows[1].is_keyframe);
+  std::filesystem::remove(path);
+}
+
+// A file of the earlier 12-column layout reads with the missing stage columns at 0; a broken one
+// is named with its line.
+TEST(RunOutputs, FramesCsvReadsByColumnNameAndNamesBadLines) {
+  const std::string old =
+      WriteText("old.csv",
+                "stamp,state,keyframe,features,dynamic,tracked,orb_ms,detection_ms,matching_ms,"
+                "probability_ms,tracking_ms,total_ms\n1.5,ok,0,900,3,250,5,6,7,8,9,30\n");
+  const std::vector<FrameRow> rows = ReadFramesCsv(old);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].times.total_ms, 30);
+  EXPECT_EQ(rows[0].times.top_up_ms, 0);
+  auto error_of = [](const std::string& path) {
+    try {
+      ReadFramesCsv(path);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  const std::string state =
+      WriteText("state.csv", FramesCsvHeader() + "1.5,flying,0,0,0,0,0,0,0,0,0,0,0,0,0\n");
+  EXPECT_NE(error_of(state).find(":2: unknown state 'flying'"), std::string::npos)
+      << error_of(state);
+  const std::string short_row = WriteText("short.csv", FramesCsvHeader() + "1.5,ok,0\n");
+  EXPECT_NE(error_of(short_row).find(":2: expected 15 columns"), std::string::npos)
+      << error_of(short_row);
+  const std::string number =
+      WriteText("number.csv", FramesCsvHeader() + "1.5,ok,0,0,0,0,0,0,0,0,0,nan,0,0,0\n");
+  EXPECT_NE(error_of(number).find(":2: total_ms: not a number"), std::string::npos)
+      << error_of(number);
+  const std::string headerless = WriteText("headerless.csv", "1.5,ok,0\n");
+  EXPECT_NE(error_of(headerless).find("not a frames.csv"), std::string::npos);
+  for (const std::string& p : {old, state, short_row, number, headerless})
+    std::filesystem::remove(p);
 }
 
 }  // namespace

@@ -50,9 +50,7 @@ RunOutput RunSystemOnSequence(const RgbdDataset& dataset, const SystemOptions& o
   const auto t0 = std::chrono::steady_clock::now();
   const DatasetRunSummary summary =
       RunDatasetFrames(dataset, system, run, [&](size_t k, const FrameResult& r) {
-        out.stamps.push_back(r.stamp);
-        out.ok.push_back(HasPose(r.state));
-        out.times.push_back(r.times);
+        out.rows.push_back(FrameRowFromResult(r));
         if (progress) progress(k + 1 - first, last - first);
       });
   out.frames = static_cast<int>(summary.processed);
@@ -79,11 +77,11 @@ RunOutput RunOdometryOnSequence(const RgbdDataset& dataset, const PinholeCamera&
     const OdometryStep step = odometry.Track(rgb, depth, dataset.frame(*index).rgb_stamp);
     ++out.frames;
     if (!step.ok) ++out.lost;
-    out.stamps.push_back(step.stamp);
-    out.ok.push_back(step.ok);
-    StageTimes times;
-    times.total_ms = step.time_ms;
-    out.times.push_back(times);
+    FrameRow row;
+    row.stamp = step.stamp;
+    row.state = step.ok ? TrackingState::kOk : TrackingState::kLost;
+    row.times.total_ms = step.time_ms;
+    out.rows.push_back(row);
     if (progress) progress(k + 1 - first, last - first);
   }
   out.loop_seconds = SecondsSince(t0);
@@ -96,19 +94,9 @@ void WriteRunOutput(const std::string& directory, const RunOutput& output) {
   fs::create_directories(directory, ec);
   if (!fs::is_directory(directory)) throw InputError(directory, 0, "cannot create the run folder");
   WriteTumTrajectory((fs::path(directory) / "trajectory.txt").string(), output.trajectory);
-  std::ostringstream csv;
-  csv << "stamp,ok,orb_ms,detection_ms,detection_wait_ms,matching_ms,probability_ms,tracking_ms,"
-         "local_mapping_ms,total_ms,top_up_ms\n";
-  char line[512];
-  for (size_t i = 0; i < output.times.size(); ++i) {
-    const StageTimes& t = output.times[i];
-    std::snprintf(line, sizeof(line), "%s,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
-                  output.stamps[i].ToString().c_str(), output.ok[i] ? 1 : 0, t.orb_extraction_ms,
-                  t.detection_ms, t.detection_wait_ms, t.matching_ms, t.probability_ms,
-                  t.tracking_ms, t.local_mapping_ms, t.total_ms, t.top_up_ms);
-    csv << line;
-  }
-  WriteFileAtomically((fs::path(directory) / "frames.csv").string(), csv.str());
+  std::string csv = FramesCsvHeader();
+  for (const FrameRow& row : output.rows) csv += FramesCsvRow(row);
+  WriteFileAtomically((fs::path(directory) / "frames.csv").string(), csv);
   std::ostringstream summary;
   summary << "frames " << output.frames << "\nlost " << output.lost << "\nloop_seconds "
           << output.loop_seconds << "\n";
@@ -160,31 +148,7 @@ BenchRun ScoreRun(const std::string& directory, const std::vector<StampedPose>& 
   // frames.csv
   const std::string frames_path = (dir / "frames.csv").string();
   std::vector<StageTimes> times;
-  for (const TextLine& line : ReadDataLines(frames_path)) {
-    if (line.line_number == 1) continue;  // header
-    if (line.tokens.size() != 11)
-      throw InputError(frames_path, line.line_number,
-                       "expected 11 columns, got " + std::to_string(line.tokens.size()));
-    double v[9];
-    for (int i = 0; i < 9; ++i) {
-      char* end = nullptr;
-      v[i] = std::strtod(line.tokens[2 + i].c_str(), &end);
-      if (*end != '\0')
-        throw InputError(frames_path, line.line_number,
-                         "column " + std::to_string(3 + i) + ": not a number");
-    }
-    StageTimes t;
-    t.orb_extraction_ms = v[0];
-    t.detection_ms = v[1];
-    t.detection_wait_ms = v[2];
-    t.matching_ms = v[3];
-    t.probability_ms = v[4];
-    t.tracking_ms = v[5];
-    t.local_mapping_ms = v[6];
-    t.total_ms = v[7];
-    t.top_up_ms = v[8];
-    times.push_back(t);
-  }
+  for (const FrameRow& row : ReadFramesCsv(frames_path)) times.push_back(row.times);
   run.stages = MeanStageTimes(times);
   {
     std::vector<double> totals;

@@ -19,6 +19,7 @@
 
 #include "core/io/dataset.h"
 #include "core/system/system.h"
+#include "run/run_outputs.h"
 #include "tools/bench/bench_report.h"
 #include "tools/bench/rgbd_odometry_baseline.h"
 
@@ -26,9 +27,8 @@ namespace dygslam {
 
 struct RunOutput {
   std::vector<StampedPose> trajectory;
-  std::vector<Timestamp> stamps;  // every processed frame
-  std::vector<bool> ok;           // per frame: a pose (SLAM) / step accepted (baseline)
-  std::vector<StageTimes> times;  // per frame (baseline: total_ms only)
+  // Every processed frame as frames.csv has it (baseline: state ok or lost, total_ms only).
+  std::vector<FrameRow> rows;
   int frames = 0;
   int lost = 0;
   double loop_seconds = 0;

@@ -400,14 +400,10 @@ std::string FindDatasetRunOutputClash(const std::vector<NamedPath>& inputs, cons
 std::string FindForeignFileAtTrajectoryOutput(const NamedPath& output) {
   struct stat st {};
   if (::stat(output.path.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || st.st_size == 0) return "";
-  try {
-    ReadTumTrajectory(output.path);
-    return "";
-  } catch (const InputError&) {
-    return output.role + " '" + EchoValue(output.path) +
-           "' exists and is not a TUM trajectory: it is not replaced; remove it first or choose "
-           "another path";
-  }
+  if (IsTumTrajectoryFile(output.path)) return "";
+  return output.role + " '" + EchoValue(output.path) +
+         "' exists and is not a TUM trajectory: it is not replaced; remove it first or choose "
+         "another path";
 }
 
 std::string FindForeignFileInRunOutputs(const std::filesystem::path& out_dir) {

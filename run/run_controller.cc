@@ -421,10 +421,7 @@ void RunController::Evaluate(const std::vector<StampedPose>& trajectory) {
                                ate.num_pairs};
       // The pose each frame got when it was tracked (what a robot receives at the moment),
       // against the final trajectory above, which later bundle adjustments refined.
-      const fs::path online_path = outputs_.PathOf("trajectory_online.txt");
-      const std::vector<StampedPose> online = outputs_.Fresh("trajectory_online.txt")
-                                                  ? ReadTumTrajectory(online_path.string())
-                                                  : std::vector<StampedPose>{};
+      const std::vector<StampedPose> online = ReadBackTrajectory("trajectory_online.txt");
       if (online.size() >= 3) {
         const AteResult online_ate = ComputeAte(ground_truth_, online);
         std::printf("online ATE RMSE %.4f m (mean %.4f, median %.4f, max %.4f; %zu pairs)\n",
@@ -505,14 +502,23 @@ void RunController::WriteLoadedMapOctoMap() {
   }
 }
 
+std::vector<StampedPose> RunController::ReadBackTrajectory(const std::string& name) {
+  if (!outputs_.Fresh(name)) return {};
+  try {
+    return ReadTumTrajectory(outputs_.PathOf(name));
+  } catch (const InputError& e) {
+    // Written, but not a trajectory the evaluation can take (poses kilometres away: a wrong depth
+    // scale). The run's other outputs and eval.json are still written; the run exits 1.
+    outputs_.RecordFailure(name, std::string("written but not readable back: ") + e.what());
+    return {};
+  }
+}
+
 int RunController::Finish(const Outcome& outcome, double elapsed) {
   const RunControllerOptions& s = options_;
   RunOutputs& outputs = outputs_;
   WriteLoadedMapOctoMap();
-  const fs::path trajectory_path = outputs.PathOf("trajectory.txt");
-  const std::vector<StampedPose> trajectory = outputs.Fresh("trajectory.txt")
-                                                  ? ReadTumTrajectory(trajectory_path.string())
-                                                  : std::vector<StampedPose>{};
+  const std::vector<StampedPose> trajectory = ReadBackTrajectory("trajectory.txt");
   Summarize(outcome, trajectory.size(), elapsed);
   RunSummary& summary = summary_;
   std::printf("mode: %s%s\n", summary.mode.c_str(),

@@ -112,6 +112,9 @@ class RunController {
   void Evaluate(const std::vector<StampedPose>& trajectory);
   // The summary of a run that ended (no output written).
   void Summarize(const Outcome& outcome, size_t in_trajectory, double elapsed);
+  // This run's trajectory file `name` as written (empty when not written); one that does not read
+  // back is recorded as a failed output.
+  std::vector<StampedPose> ReadBackTrajectory(const std::string& name);
   int Finish(const Outcome& outcome, double elapsed);
   // The exit code of a finished run, with its reason on stderr.
   int ReportExit(const Outcome& outcome, size_t in_trajectory, bool incomplete,

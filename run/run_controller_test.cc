@@ -139,6 +139,29 @@ TEST(RunController, PipelineRunJudgesTheFilesTheComponentsWrote) {
     EXPECT_NE(testing::ReadAll(out + "/eval.json").find("\"exit_code\": 1"), std::string::npos)
         << testing::ReadAll(out + "/eval.json");
   }
+  // A trajectory written with poses beyond any camera's reach (a depth scale off by orders of
+  // magnitude) does not read back: the run fails (exit 1) naming it, and eval.json and the other
+  // outputs are still written. Before, the read-back threw: no eval.json, no summary.
+  {
+    const std::string out = testing::MakeTempDir("run_controller_far");
+    RunControllerOptions o = Options(dir, out);
+    o.mode = RunMode::kPipeline;
+    RunController controller(o, dataset, {}, [&](const RunControllerOptions& options) {
+      WriteRecorderFiles(options.out, DatasetStamps(dataset, kFrames));
+      std::vector<StampedPose> far;
+      for (const Timestamp& t : DatasetStamps(dataset, kFrames))
+        far.push_back({t, Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(5e10, 0, 0))});
+      WriteTumTrajectory((options.out / "trajectory.txt").string(), far);
+      return PipelineRunResult{};
+    });
+    EXPECT_EQ(controller.Run(), 1);
+    const std::string json = testing::ReadAll(out + "/eval.json");
+    EXPECT_NE(json.find("\"exit_code\": 1"), std::string::npos) << json;
+    EXPECT_NE(json.find("trajectory.txt not written: written but not readable back"),
+              std::string::npos)
+        << json;
+    EXPECT_TRUE(fs::exists(out + "/frames.csv"));
+  }
 }
 
 TEST(RunControllerOptions, CheckNamesTheField) {

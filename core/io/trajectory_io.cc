@@ -36,7 +36,9 @@ double ParseValue(const std::string& file, int line, int column, const std::stri
 
 }  // namespace
 
-std::vector<StampedPose> ReadTumTrajectory(const std::string& path) {
+namespace {
+
+std::vector<StampedPose> ReadTum(const std::string& path, bool plausible_coordinates) {
   std::vector<StampedPose> poses;
   for (const TextLine& l : ReadDataLines(path)) {
     if (l.tokens.size() != 8) {
@@ -50,7 +52,7 @@ std::vector<StampedPose> ReadTumTrajectory(const std::string& path) {
                        "malformed timestamp '" + Abbreviate(l.tokens[0]) + "'");
     double v[7];
     for (int c = 0; c < 7; ++c) v[c] = ParseValue(path, l.line_number, c + 2, l.tokens[c + 1]);
-    for (int c = 0; c < 3; ++c) {
+    for (int c = 0; c < 3 && plausible_coordinates; ++c) {
       if (std::abs(v[c]) > kMaxTrajectoryCoordinate) {
         char why[160];
         std::snprintf(why, sizeof(why),
@@ -83,6 +85,21 @@ std::vector<StampedPose> ReadTumTrajectory(const std::string& path) {
     poses.push_back(pose);
   }
   return poses;
+}
+
+}  // namespace
+
+std::vector<StampedPose> ReadTumTrajectory(const std::string& path) {
+  return ReadTum(path, /*plausible_coordinates=*/true);
+}
+
+bool IsTumTrajectoryFile(const std::string& path) {
+  try {
+    ReadTum(path, /*plausible_coordinates=*/false);
+    return true;
+  } catch (const InputError&) {
+    return false;
+  }
 }
 
 void WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses) {

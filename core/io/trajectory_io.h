@@ -17,6 +17,9 @@ inline constexpr double kMaxTrajectoryCoordinate = 1e7;
 // coordinate beyond kMaxTrajectoryCoordinate, unsorted or duplicate stamps, non-unit quaternion
 // beyond tolerance).
 std::vector<StampedPose> ReadTumTrajectory(const std::string& path);
+// `path` reads as a TUM trajectory, whatever its coordinates (a file a run wrote with poses
+// kilometres away is still that run's trajectory, to be replaced by the next run).
+bool IsTumTrajectoryFile(const std::string& path);
 // Writes atomically (temporary file + rename). Quaternions normalised, qw >= 0 not enforced.
 void WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses);
 // The text WriteTumTrajectory writes (`path` names the file in its errors).

@@ -99,6 +99,17 @@ TEST(TrajectoryIo, BadInputNamesFileAndLine) {
   EXPECT_THROW(ReadTumTrajectory("/nonexistent/traj.txt"), InputError);
 }
 
+// A trajectory whose poses are kilometres beyond any camera is no input to evaluate, yet it is a
+// TUM trajectory file (the output of a run with a wrong depth scale, for the next run to replace);
+// text that is not one is neither.
+TEST(TrajectoryIo, FarPosesAreATumFileButNoTrajectoryToRead) {
+  const std::string far = WriteText("far.txt", "1.0 5e10 0 0 0 0 0 1\n2.0 6e10 0 0 0 0 0 1\n");
+  EXPECT_TRUE(IsTumTrajectoryFile(far));
+  EXPECT_THROW(ReadTumTrajectory(far), InputError);
+  EXPECT_FALSE(IsTumTrajectoryFile(WriteText("notes.txt", "my notes\n")));
+  EXPECT_FALSE(IsTumTrajectoryFile(WriteText("hex.txt", "1.0 0x10 0 0 0 0 0 1\n")));
+}
+
 TEST(TrajectoryIo, WriteRefusesBadPosesAndMissingDirectory) {
   std::vector<StampedPose> poses(2);
   poses[0].stamp = Timestamp::FromSeconds(1.0);

@@ -24,13 +24,9 @@
 namespace dygslam::cli {
 namespace {
 
-int RunComponentCommand(const std::vector<std::string>& args) {
-  ArgParser p(
-      "component",
-      "NAME --dataset DIR --config FILE [--out DIR] [--filter MODE] [--frames FIRST:LAST] "
-      "[--deterministic] [--domain N] ...",
-      "Runs one pipeline component (player | detector | slam | mapper | recorder) as its own\n"
-      "process over Fast DDS (the transport benchmark is its own tool: dygslam_bench_transport).");
+// The options of `dygslam component`.
+void DefineComponentOptions(ArgParser* parser) {
+  ArgParser& p = *parser;
   p.AddPositional("NAME", "player | detector | slam | mapper | recorder | pipeline");
   p.AddOption("dataset", "DIR", "dataset folder (player)");
   p.AddOption("config", "FILE", "settings YAML (camera, sensor, modules)");
@@ -74,20 +70,12 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   p.AddFlag("no-detector", "no detector component (slam runs the System's own detector)");
   p.AddFlag("no-mapper", "no mapper component");
   p.AddFlag("processes", "NAME = pipeline: one process per component (else threads)");
-  p.AllowEmptyValues();
-  if (!p.Parse(args)) return p.exit_code();
-  if (!CheckFilterOption(&p)) return 2;
-  // Everything the command line can get wrong is a usage error (exit 2) naming the option as the
-  // user types it, found before any DDS participant exists.
-  const std::string name = p.Positional("NAME");
-  static const char* const kNames[] = {"player", "detector", "slam",
-                                       "mapper", "recorder", "pipeline"};
-  if (std::find(std::begin(kNames), std::end(kNames), name) == std::end(kNames))
-    return p.UsageError("unknown component '" + EchoValue(name) +
-                        "' (expected player | detector | slam | mapper | recorder | pipeline; "
-                        "the transport benchmark is the tool dygslam_bench_transport)");
+}
 
-  PipelineOptions o;
+// The folders and files of the run (dataset, outputs, settings, frame range) into `o`: 0, or the
+// usage error's exit code.
+int ReadComponentFiles(ArgParser& p, const std::string& name, PipelineOptions* out) {
+  PipelineOptions& o = *out;
   o.dataset_dir = p.Get("dataset");
   o.output_dir = p.Get("out");
   o.settings_path = p.Get("config");
@@ -108,9 +96,7 @@ int RunComponentCommand(const std::vector<std::string>& args) {
       return p.UsageError(foreign);
   }
   if (o.dataset_dir.empty()) o.dataset_dir = "-";  // only the player reads it
-  if (p.Get("partition").find_first_of("*?[]") != std::string::npos)
-    return p.UsageError("--partition '" + EchoValue(p.Get("partition")) +
-                        "': wildcards (* ? [ ]) would join other runs; give a plain name");
+  if (!CheckPartitionOption(&p)) return 2;
   try {
     const FrameRangeText range = SplitFrameRange(p.Get("frames"));  // 0 = all
     o.first_entry = range.first.value_or(0);
@@ -127,6 +113,13 @@ int RunComponentCommand(const std::vector<std::string>& args) {
     o.system = c.system;
     o.octomap = c.octomap;
   }
+  return 0;
+}
+
+// The maps (SLAM map to load or save, OctoMap to continue) and the detector's model into `o`: 0,
+// or the usage error's exit code.
+int ReadComponentMapsAndModel(ArgParser& p, const std::string& name, PipelineOptions* out) {
+  PipelineOptions& o = *out;
   o.system.load_map = p.Get("load-map");
   o.system.localization = p.Flag("localization");
   if (o.system.localization && p.Get("load-map").empty())
@@ -166,6 +159,12 @@ int RunComponentCommand(const std::vector<std::string>& args) {
       throw InputError(std::string("--detector-model: ") + e.what());
     }
   }
+  return 0;
+}
+
+// The numbers, the DDS network and the switches into `o`: 0, or the usage error's exit code.
+int ReadComponentTransport(ArgParser& p, PipelineOptions* out) {
+  PipelineOptions& o = *out;
   // Bad numbers are usage errors naming the option (exit 2), as on `dygslam run`.
   int64_t window = 0, wait_ms = 0, domain = 0;
   if (!p.GetNumber("rate", 0, 1e6, &o.rate) ||
@@ -197,6 +196,34 @@ int RunComponentCommand(const std::vector<std::string>& args) {
   o.wait_for_components = p.Flag("wait-for-components");
 
   o.processes = p.Flag("processes");
+  return 0;
+}
+
+int RunComponentCommand(const std::vector<std::string>& args) {
+  ArgParser p(
+      "component",
+      "NAME --dataset DIR --config FILE [--out DIR] [--filter MODE] [--frames FIRST:LAST] "
+      "[--deterministic] [--domain N] ...",
+      "Runs one pipeline component (player | detector | slam | mapper | recorder) as its own\n"
+      "process over Fast DDS (the transport benchmark is its own tool: dygslam_bench_transport).");
+  DefineComponentOptions(&p);
+  p.AllowEmptyValues();
+  if (!p.Parse(args)) return p.exit_code();
+  if (!CheckFilterOption(&p)) return 2;
+  // Everything the command line can get wrong is a usage error (exit 2) naming the option as the
+  // user types it, found before any DDS participant exists.
+  const std::string name = p.Positional("NAME");
+  static const char* const kNames[] = {"player", "detector", "slam",
+                                       "mapper", "recorder", "pipeline"};
+  if (std::find(std::begin(kNames), std::end(kNames), name) == std::end(kNames))
+    return p.UsageError("unknown component '" + EchoValue(name) +
+                        "' (expected player | detector | slam | mapper | recorder | pipeline; "
+                        "the transport benchmark is the tool dygslam_bench_transport)");
+
+  PipelineOptions o;
+  if (const int code = ReadComponentFiles(p, name, &o); code != 0) return code;
+  if (const int code = ReadComponentMapsAndModel(p, name, &o); code != 0) return code;
+  if (const int code = ReadComponentTransport(p, &o); code != 0) return code;
   if (name == "pipeline") return RunPipeline(o);  // the whole pipeline
   auto stop = std::make_shared<StopFlag>(StopFlag::Signals::kStop);
   return RunComponent(name, o, stop);

@@ -96,9 +96,7 @@ int CheckModeOptions(ArgParser& p, const char* security_env) {
                  "dygslam run: warning: DYGSLAM_DDS_SECURITY_DIR is set but --direct uses no DDS "
                  "(nothing to secure)\n");
   }
-  if (p.Get("partition").find_first_of("*?[]") != std::string::npos)
-    return p.UsageError("--partition '" + EchoValue(p.Get("partition")) +
-                        "': wildcards (* ? [ ]) would join other runs; give a plain name");
+  if (!CheckPartitionOption(&p)) return 2;
   return 0;
 }
 

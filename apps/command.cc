@@ -132,6 +132,13 @@ void AddDatasetRunFlags(ArgParser* p) {
   p->AddFlag("strict-paths", "image paths outside DATASET_DIR are errors, not warnings");
 }
 
+bool CheckPartitionOption(ArgParser* p) {
+  if (p->Get("partition").find_first_of("*?[]") == std::string::npos) return true;
+  p->UsageError("--partition '" + EchoValue(p->Get("partition")) +
+                "': wildcards (* ? [ ]) would join other runs; give a plain name");
+  return false;
+}
+
 bool CheckFilterOption(ArgParser* p) {
   try {
     SystemOptions scratch;

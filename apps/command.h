@@ -144,6 +144,9 @@ void AddDatasetRunFlags(ArgParser* p);
 // ("--filter 'x': unknown filter (expected none | boxes | ...)"); false after printing it (the
 // command then exits 2).
 bool CheckFilterOption(ArgParser* p);
+// --partition (run, component): a plain name; wildcards would join other runs' partitions. False
+// after printing the usage error.
+bool CheckPartitionOption(ArgParser* p);
 
 // The files of a SLAM run on a dataset folder, named as the user knows them, for FindOutputClash:
 // the dataset's lists, the settings file (`settings_role`: "--config" or "the settings file"), the

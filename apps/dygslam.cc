@@ -17,6 +17,7 @@
 #include "apps/command.h"
 #include "core/base/echo.h"
 #include "core/base/error.h"
+#include "core/base/standard_output.h"
 #include "core/base/stop_signal.h"
 #include "core/config/config_reader.h"
 #include "core/config/settings.h"
@@ -140,23 +141,11 @@ int Dispatch(const std::vector<std::string>& argv) {
 // exiting 0. A reader that closed its pipe on purpose (`dygslam run ... | head`) is not a failure:
 // the command's files are written and its exit code stands.
 int CheckStandardOutput(const std::string& command, int code) {
-  std::cout.flush();
-  errno = 0;
-  const bool flushed = std::fflush(stdout) == 0;
-  int error = flushed ? 0 : errno;
-  if (flushed && !std::ferror(stdout) && !std::cout.fail()) return code;
-  if (error == 0) {
-    // An earlier flush failed and its errno is gone: one byte tells the reason (the output is
-    // broken already).
-    errno = 0;
-    if (::write(STDOUT_FILENO, "\n", 1) < 0) error = errno;
-  }
-  if (error == EPIPE) return code;
-  struct stat st {};
-  if (error == 0 && ::fstat(STDOUT_FILENO, &st) == 0 && S_ISFIFO(st.st_mode)) return code;
+  const std::string error = StandardOutputError();
+  if (error.empty()) return code;
   const std::string name = command.empty() ? "dygslam" : "dygslam " + command;
   std::fprintf(stderr, "%s: error: cannot write to standard output: %s\n", name.c_str(),
-               error != 0 ? std::strerror(error) : "write error");
+               error.c_str());
   return code == 0 ? 1 : code;
 }
 

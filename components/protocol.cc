@@ -347,23 +347,6 @@ std::string IgnoredSamplesNote(const std::string& counted) {
          "without --security any local process can: see docs/dds_components.md)";
 }
 
-namespace {
-std::atomic<unsigned> continued_count{0};
-void CountContinue(int) { continued_count.fetch_add(1, std::memory_order_relaxed); }
-}  // namespace
-
-unsigned TimesContinued() {
-  static const bool installed = [] {
-    struct sigaction action {};
-    action.sa_handler = CountContinue;
-    sigemptyset(&action.sa_mask);
-    action.sa_flags = SA_RESTART;
-    return sigaction(SIGCONT, &action, nullptr) == 0;
-  }();
-  (void)installed;
-  return continued_count.load(std::memory_order_relaxed);
-}
-
 std::string StoppedBeforeTheEnd(const StopFlag& stop, bool slam_done) {
   if (!stop.requested() || slam_done) return "";
   return stop.signal() != 0

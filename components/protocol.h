@@ -315,9 +315,7 @@ class ReadyAnnouncer {
 // or its announcement was missed): Update(matched) is true once the peer's writers were matched
 // and have been unmatched for longer than `after`. Used by the components that would otherwise
 // wait for the peer's END_OF_STREAM / COMPONENT_DONE for ever.
-// How many times this process was continued after a stop (SIGSTOP, Ctrl-Z): a SIGCONT handler,
-// installed on the first call, counts them.
-unsigned TimesContinued();
+// TimesContinued(): core/base/stop_signal.h.
 
 // The detail of a consumer's COMPONENT_DONE (recorder, mapper) when a stop signal ended it before
 // slam's end of the run, "" otherwise: its peers (a hand-started player) tell an output that ends

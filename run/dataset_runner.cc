@@ -12,6 +12,8 @@
 #include <thread>
 
 #include "core/base/error.h"
+#include "core/base/log.h"
+#include "core/base/stop_signal.h"
 #include "core/base/thread_setup.h"
 #include "core/io/detections_io.h"
 
@@ -140,12 +142,28 @@ DatasetRunSummary RunDatasetFrames(const RgbdDataset& dataset, System& system,
   using Clock = std::chrono::steady_clock;
   DatasetRunSummary summary;
   const auto t0 = Clock::now();
+  // The replay's start; moved later by the time this process was stopped (SIGSTOP, Ctrl-Z): the
+  // camera of a paused replay is paused too, so its frames are not the pipeline's drops.
+  auto replay_start = t0;
+  unsigned continued_seen = TimesContinued();
   std::optional<Timestamp> first_stamp;
   // The time frame `f` arrives (paced runs): its stamp's offset from the first, over the rate.
   auto arrival = [&](const LoadedFrame& f) {
     if (!first_stamp) first_stamp = f.stamp;
     const double s = SecondsBetween(*first_stamp, f.stamp) / options.rate;
-    return t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+    return replay_start +
+           std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  };
+  // Paced runs, after a stop of this process: the replay goes on from `frame`, due now.
+  auto resume_after_stop = [&](const LoadedFrame& frame) {
+    if (TimesContinued() == continued_seen) return;
+    continued_seen = TimesContinued();
+    if (const auto behind = Clock::now() - arrival(frame); behind > Clock::duration::zero()) {
+      replay_start += behind;
+      LOG_INFO << "run: stopped and continued; the replay goes on at the camera's rate from "
+                  "rgb.txt entry "
+               << frame.entry;
+    }
   };
   FrameLoader loader(dataset, options);
   std::optional<Timestamp> prefetched;  // the stamp whose detection was started ahead
@@ -163,8 +181,10 @@ DatasetRunSummary RunDatasetFrames(const RgbdDataset& dataset, System& system,
     if (frame->error) std::rethrow_exception(frame->error);
     Clock::time_point arrived = Clock::now();
     if (paced) {
+      resume_after_stop(*frame);
+      std::this_thread::sleep_until(arrival(*frame));
+      resume_after_stop(*frame);  // stopped while it waited for the frame
       arrived = arrival(*frame);
-      std::this_thread::sleep_until(arrived);
       // A camera's queue of one: newer frames that have arrived replace this one.
       for (const LoadedFrame* next = loader.Peek();
            next && !next->skipped && !next->error && arrival(*next) <= Clock::now();

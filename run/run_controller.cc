@@ -14,6 +14,7 @@
 
 #include "core/base/echo.h"
 #include "core/base/error.h"
+#include "core/base/standard_output.h"
 #include "core/base/stop_signal.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/file_util.h"
@@ -479,8 +480,19 @@ void RunController::Summarize(const Outcome& outcome, size_t in_trajectory, doub
   // run's clock starts before the player's, so a complete replay always takes longer).
   summary.loop_ended_early =
       s.loop_minutes > 0 && !outcome.interrupted && elapsed < 60.0 * s.loop_minutes;
-  if (s.rate > 0 && outputs_.Fresh(kRealtimeReportFile))
+  if (s.rate > 0 && outputs_.Fresh(kRealtimeReportFile)) {
     summary.realtime = ReadRealtimeReport(outputs_.PathOf(kRealtimeReportFile));
+    // The player counts the results it timed; a pose it did not see (its reader behind after the
+    // whole run was stopped and continued) is still a frame the pipeline took: frames.csv has it.
+    // The frames the pipeline took are not dropped, in the summary and in realtime.txt.
+    RealtimeReport& r = *summary.realtime;
+    const size_t taken = std::min(r.frames, summary.processed);
+    if (taken > r.results) {
+      r.results = taken;
+      outputs_.Write(kRealtimeReportFile,
+                     [&] { WriteRealtimeReport(outputs_.PathOf(kRealtimeReportFile), r); });
+    }
+  }
 }
 
 void RunController::WriteLoadedMapOctoMap() {
@@ -544,12 +556,18 @@ int RunController::Finish(const Outcome& outcome, double elapsed) {
   // Frames of another source explain a failed component (the run's player, whose frames the
   // consumers refused): that reason first.
   const bool mixed = incomplete && summary.foreign_frames > 0;
-  summary.exit_code = !outputs.failures().empty() ? 1
-                      : mixed                     ? kExitIncompleteRun
-                      : outcome.exit_code != 0    ? 1
-                      : incomplete                ? kExitIncompleteRun
-                      : tracking_failure          ? 1
-                                                  : 0;
+  // The summary printed so far must have reached stdout's reader (`> /dev/full`): eval.json
+  // holds the exit code the command will end with.
+  const std::string stdout_error = StandardOutputError();
+  if (!stdout_error.empty())
+    summary.error += (summary.error.empty() ? "" : "; ") +
+                     std::string("cannot write to standard output: ") + stdout_error;
+  summary.exit_code = !outputs.failures().empty() || !stdout_error.empty() ? 1
+                      : mixed                                              ? kExitIncompleteRun
+                      : outcome.exit_code != 0                             ? 1
+                      : incomplete                                         ? kExitIncompleteRun
+                      : tracking_failure                                   ? 1
+                                                                           : 0;
   // A failed component's message is on stderr (its own line); eval.json says that one failed.
   if (summary.exit_code == 1 && summary.error.empty() && summary.component_failed)
     summary.error = "a component of the run failed (its error is on stderr)";

@@ -14,6 +14,7 @@
 #include "core/base/error.h"
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
+#include "run/realtime_report.h"
 #include "run/run_settings.h"
 #include "tests/support/test_support.h"
 
@@ -138,6 +139,28 @@ TEST(RunController, PipelineRunJudgesTheFilesTheComponentsWrote) {
     EXPECT_FALSE(controller.summary().error.empty());
     EXPECT_NE(testing::ReadAll(out + "/eval.json").find("\"exit_code\": 1"), std::string::npos)
         << testing::ReadAll(out + "/eval.json");
+  }
+  // --rate: the player timed 298 of 300 poses (its reader behind after the whole run was stopped
+  // and continued), frames.csv has all 300: the pipeline took every frame, none is dropped, in
+  // the summary and in realtime.txt. Before, "1 dropped" beside "300 of 300 processed".
+  {
+    const std::string out = testing::MakeTempDir("run_controller_untimed");
+    RunControllerOptions o = Options(dir, out);
+    o.mode = RunMode::kPipeline;
+    o.rate = 1;
+    RunController controller(o, dataset, {}, [&](const RunControllerOptions& options) {
+      WriteRecorderFiles(options.out, DatasetStamps(dataset, kFrames));
+      RealtimeReport report;
+      report.rate = 1;
+      report.frames = kFrames;
+      report.results = kFrames - 2;
+      WriteRealtimeReport((options.out / kRealtimeReportFile).string(), report);
+      return PipelineRunResult{};
+    });
+    EXPECT_EQ(controller.Run(), 0);
+    ASSERT_TRUE(controller.summary().realtime.has_value());
+    EXPECT_EQ(controller.summary().realtime->dropped(), 0u);
+    EXPECT_EQ(ReadRealtimeReport(out + "/" + kRealtimeReportFile).dropped(), 0u);
   }
   // A trajectory written with poses beyond any camera's reach (a depth scale off by orders of
   // magnitude) does not read back: the run fails (exit 1) naming it, and eval.json and the other

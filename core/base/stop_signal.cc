@@ -2,6 +2,7 @@
 
 #include <signal.h>
 
+#include <atomic>
 #include <csignal>
 #include <fstream>
 #include <mutex>
@@ -84,6 +85,23 @@ bool ProcessCatchesSignal(pid_t pid, int sig) {
     }
   }
   return false;
+}
+
+namespace {
+std::atomic<unsigned> continued_count{0};
+void CountContinue(int) { continued_count.fetch_add(1, std::memory_order_relaxed); }
+}  // namespace
+
+unsigned TimesContinued() {
+  static const bool installed = [] {
+    struct sigaction action {};
+    action.sa_handler = CountContinue;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESTART;
+    return sigaction(SIGCONT, &action, nullptr) == 0;
+  }();
+  (void)installed;
+  return continued_count.load(std::memory_order_relaxed);
 }
 
 }  // namespace dygslam

@@ -31,6 +31,11 @@ namespace dygslam {
 // handler is installed, so the signal will not end it by the default action. Linux only.
 bool ProcessCatchesSignal(pid_t pid, int sig);
 
+// How many times this process was continued after a stop (SIGSTOP, Ctrl-Z): a SIGCONT handler,
+// installed on the first call, counts them. A loop paced by the clock (a replay at the camera's
+// rate) tells its own pause from a slow consumer by it.
+unsigned TimesContinued();
+
 // A stop signal (SIGINT / SIGTERM / SIGHUP) ended a wait that has nothing to save, e.g. the read
 // of a settings pipe before any work: the command ends at once with exit code 128 + signal().
 class StopSignalError : public std::runtime_error {

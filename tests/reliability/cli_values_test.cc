@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/io/trajectory_io.h"
 #include "tests/support/cli_fixture.h"
 #include "tests/support/test_support.h"
 
@@ -160,6 +161,22 @@ TEST_F(Cli, AReaderThatClosedItsPipeIsNotAFailure) {
   const auto r = RunIn(dir_, {"help"}, "", /*closed_pipe=*/true);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_FALSE(Contains(r.err, "cannot write")) << r.err;
+}
+
+// A run whose summary cannot reach stdout (`> /dev/full`) exits 1, and its eval.json says so:
+// exit code 1 and the reason (before: the command exited 1, eval.json said 0 and no error).
+TEST_F(Cli, ARunWhoseSummaryCannotBeWrittenSaysSoInItsEvalJson) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string data = SmallDataset(source, 20, "data");
+  const auto r = RunIn(dir_,
+                       {"run", data, "--config", Config(), "--filter", "none", "--direct",
+                        "--no-map", "--quiet", "--out", dir_ + "/full"},
+                       "/dev/full");
+  ExpectError(r, 1, {"error: cannot write to standard output: No space left on device"});
+  const std::string json = ReadAll(dir_ + "/full/eval.json");
+  EXPECT_TRUE(Contains(json, "\"exit_code\": 1")) << json;
+  EXPECT_TRUE(Contains(json, "cannot write to standard output: No space left on device")) << json;
+  EXPECT_EQ(ReadTumTrajectory(dir_ + "/full/trajectory.txt").size(), 20u);
 }
 
 // A range beyond the dataset says which range and the dataset's size (before: "empty range").

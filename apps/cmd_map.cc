@@ -95,35 +95,17 @@ int CheckMapOutputs(const ArgParser& p, const std::string& dataset_dir, const st
   return 0;
 }
 
-// The stamp of rgb entry `entry`: the first frame with a depth partner at or after it (past the
-// last frame when there is none).
-Timestamp StampOfEntry(const RgbdDataset& dataset, size_t entry) {
-  for (size_t e = entry; e < dataset.num_rgb_entries(); ++e) {
-    if (const auto index = dataset.FrameForRgbEntry(e)) return dataset.frame(*index).rgb_stamp;
-  }
-  return Timestamp::FromNanoseconds(dataset.frames().back().rgb_stamp.nanoseconds() + 1);
-}
-
 int RunMap(const std::vector<std::string>& args) {
-  ArgParser p(
-      "map",
-      "DATASET_DIR [--config FILE] [--filter none|boxes|geometry|paper|full] [--frames FIRST:LAST] "
-      "[--out DIR]\n"
-      "            [--trajectory FILE [--every N] [--bonn-marker]] [--deterministic] [--resolution "
-      "R]\n"
-      "            [--no-mask] [--reference-until K] [--save-every SECONDS]",
-      "Builds an occupancy map (OctoMap) of the static scene: runs the SLAM and inserts its "
-      "keyframes with\n"
-      "the pixels judged dynamic left out (people), applying keyframe pose corrections. Writes "
-      "DIR/map.bt\n"
-      "(max-likelihood, octovis), DIR/map.ot (probabilities), DIR/map_top.png (top view, coloured "
-      "by\n"
-      "height), DIR/map_slice.png (occupancy slice just below the first camera's height) and\n"
-      "DIR/trajectory.txt (SLAM world = first camera frame). The map is levelled: z up with the "
-      "floor at\n"
-      "z = 0, the first camera above the origin looking along +y (map_from_slam_world is printed;\n"
-      "--save-every snapshots are in the SLAM world). Map settings: the OctoMap: section of the "
-      "settings.");
+  ArgParser p("map", R"(DATASET_DIR [--config FILE] [--filter none|boxes|geometry|paper|full] [--frames FIRST:LAST] [--out DIR]
+            [--trajectory FILE [--every N] [--bonn-marker]] [--deterministic] [--resolution R]
+            [--no-mask] [--reference-until K] [--save-every SECONDS])",
+              R"(Builds an occupancy map (OctoMap) of the static scene: runs the SLAM and inserts its keyframes with
+the pixels judged dynamic left out (people), applying keyframe pose corrections. Writes DIR/map.bt
+(max-likelihood, octovis), DIR/map.ot (probabilities), DIR/map_top.png (top view, coloured by
+height), DIR/map_slice.png (occupancy slice just below the first camera's height) and
+DIR/trajectory.txt (SLAM world = first camera frame). The map is levelled: z up with the floor at
+z = 0, the first camera above the origin looking along +y (map_from_slam_world is printed;
+--save-every snapshots are in the SLAM world). Map settings: the OctoMap: section of the settings.)");
   DefineMapOptions(&p);
   if (!p.Parse(args)) return p.exit_code();
   if (!CheckFilterOption(&p)) return 2;
@@ -181,7 +163,7 @@ int RunMap(const std::vector<std::string>& args) {
     if (static_cast<size_t>(reference_entry) > dataset.num_rgb_entries())
       return p.UsageError("--reference-until: expected an rgb entry index 1.." +
                           std::to_string(dataset.num_rgb_entries()));
-    reference_until = StampOfEntry(dataset, static_cast<size_t>(reference_entry));
+    reference_until = dataset.StampOfRgbEntry(static_cast<size_t>(reference_entry));
   }
   WarnAboutDataset("map", dataset, first, last, options.sensor.depth_map_factor,
                    options.camera.width, options.camera.height, nullptr);

@@ -210,18 +210,12 @@ PipelineRunner SelectMode(const ArgParser& p, RunControllerOptions* s) {
 }
 
 int RunRun(const std::vector<std::string>& args) {
-  ArgParser p(
-      "run",
-      "DATASET_DIR [--config FILE] [--filter none|boxes|geometry|paper|full] [--frames FIRST:LAST] "
-      "[--out DIR] "
-      "[--deterministic] [--processes | --direct] [--no-map]",
-      "Runs the SLAM on a TUM/Bonn dataset folder; writes DIR/trajectory.txt (TUM format, every "
-      "tracked\n"
-      "frame), DIR/keyframes.txt, DIR/frames.csv (state and stage times per frame) and DIR/map.bt\n"
-      "(OctoMap of the static scene). Default: the DDS components (player, detector, slam, "
-      "mapper,\n"
-      "recorder) on threads of this process; --processes: one process per component; --direct: no\n"
-      "DDS, the library loop. SIGINT / SIGTERM: outputs are flushed, exit 0.");
+  ArgParser p("run", R"(DATASET_DIR [--config FILE] [--filter none|boxes|geometry|paper|full] [--frames FIRST:LAST] [--out DIR] [--deterministic] [--processes | --direct] [--no-map])",
+              R"(Runs the SLAM on a TUM/Bonn dataset folder; writes DIR/trajectory.txt (TUM format, every tracked
+frame), DIR/keyframes.txt, DIR/frames.csv (state and stage times per frame) and DIR/map.bt
+(OctoMap of the static scene). Default: the DDS components (player, detector, slam, mapper,
+recorder) on threads of this process; --processes: one process per component; --direct: no
+DDS, the library loop. SIGINT / SIGTERM: outputs are flushed, exit 0.)");
   const char* security_env = std::getenv("DYGSLAM_DDS_SECURITY_DIR");
   DefineRunOptions(&p, security_env);
   if (!p.Parse(args)) return p.exit_code();

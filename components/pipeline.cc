@@ -272,8 +272,10 @@ ComponentOutcome RunPipelineSlam(const PipelineOptions& options,
   const size_t without_boxes = stats.pairing.missing_detections - stats.pairing.carried_forward;
   if (without_boxes > 0 && !stats.input_cut_short)
     return {foreign, std::to_string(without_boxes) +
-                         " frames ran without person boxes (geometry-only): the detector was " +
-                         (stats.detector_lost ? "lost" : "late")};
+                         " frames ran without person boxes (geometry-only): the detector " +
+                         (stats.detector_failed ? "failed"
+                          : stats.detector_lost ? "was lost"
+                                                : "was late")};
   return {foreign, InputEndedEarly(stats.input_cut_short)};
 }
 
@@ -681,6 +683,10 @@ int RunComponent(const std::string& name, const PipelineOptions& options, const 
   const int code =
       RunComponentOn(kind, own, MakeParticipant(own, name), stop, &ignored, &incomplete);
   ReportToRunner(ignored, stop->signal(), incomplete);
+  // Started by hand (not a child of `run --processes`, whose summary names it): the exit code 3
+  // says why here.
+  if (!incomplete.empty() && !own.judged_by_runner)
+    LOG_WARNING << name << ": its part of the run is incomplete: " << incomplete;
   return code;
 }
 

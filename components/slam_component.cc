@@ -404,6 +404,7 @@ void SlamShell::Finish(const std::string& cut_short) {
     std::lock_guard<std::mutex> lock(mutex_);
     stats_.pairing = pairer_.stats();
     stats_.detector_lost = stats_.pairing.lost_episodes > 0;
+    stats_.detector_failed = detector_failed_;
     frame_gate_.Close();
     detection_gate_.Close();
     stats_.foreign_frames = frame_gate_.ignored();

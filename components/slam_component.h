@@ -45,6 +45,7 @@ struct SlamStats {
   size_t bad_samples = 0;
   size_t frames_carrying_boxes = 0;  // detector skipped by the cadence: the System's carried boxes
   bool detector_lost = false;
+  bool detector_failed = false;  // it announced FAILED (a model it could not load)
   // Where slam waited between its first and its last frame (seconds): no frame had arrived
   // (upstream: player / transport), or the oldest frame waited for its detections (detector).
   double wait_for_frames_s = 0;

@@ -340,6 +340,14 @@ std::optional<size_t> RgbdDataset::FrameForRgbEntry(size_t k) const {
   return rgb_entry_to_frame_[k];
 }
 
+Timestamp RgbdDataset::StampOfRgbEntry(size_t k) const {
+  for (size_t e = k; e < num_rgb_entries(); ++e) {
+    if (const auto index = FrameForRgbEntry(e)) return frames_[*index].rgb_stamp;
+  }
+  if (frames_.empty()) return Timestamp();
+  return Timestamp::FromNanoseconds(frames_.back().rgb_stamp.nanoseconds() + 1);
+}
+
 namespace {
 
 const char* TypeName(int type) {

@@ -67,6 +67,9 @@ class RgbdDataset {
   size_t num_rgb_entries() const { return num_rgb_entries_; }
   // Index into frames() of rgb.txt entry k, or nullopt if that entry has no depth partner.
   std::optional<size_t> FrameForRgbEntry(size_t k) const;
+  // The stamp of rgb.txt entry k as a bound of a range: the first frame with a depth partner at
+  // or after it; past the last frame when there is none.
+  Timestamp StampOfRgbEntry(size_t k) const;
 
   // CV_8UC3 BGR. Throws InputError naming the file and its list line if missing, unreadable or of
   // the wrong size; a PNG's size is checked from its header before it is decoded (a 20000x20000

@@ -323,7 +323,9 @@ TEST_F(Faults, DetectorKilledAndRestartedIsUsedAgain) {
 // A detector that fails at start (model files that are no network: the run's check before
 // starting finds the files, the detector cannot load them) in `dygslam run --processes
 // --deterministic`: it announces FAILED and slam stops waiting for its detections
-// (geometry-only) instead of waiting for them forever (before: the run hung).
+// (geometry-only) instead of waiting for them forever (before: the run hung). Every frame has a
+// pose, but none was filtered with boxes as the run asked: the run is incomplete (exit 3) and
+// says why.
 TEST_F(Faults, DetectorFailingAtStartDoesNotHangADeterministicRun) {
   const std::string tmp = testing::MakeTempDir("fault_detector_fails");
   const std::string no_models = tmp + "/broken_models";
@@ -339,8 +341,11 @@ TEST_F(Faults, DetectorFailingAtStartDoesNotHangADeterministicRun) {
   ::unsetenv("DYGSLAM_MODELS_DIR");
   const int code = Wait(run, 90.0);
   const std::string log = ReadAll(tmp + "/run.log");
-  EXPECT_EQ(code, 0) << "a failed detector does not fail the run\n" << log;
+  EXPECT_EQ(code, 3) << "a failed detector does not stop the run; it is incomplete\n" << log;
   EXPECT_NE(log.find("slam: the detector failed"), std::string::npos) << log;
+  EXPECT_NE(log.find("frames ran without person boxes (geometry-only): the detector failed"),
+            std::string::npos)
+      << log;
   EXPECT_NE(log.find("slam: 30 frames"), std::string::npos) << log;
   EXPECT_GT(ReadTumTrajectory(tmp + "/out/trajectory.txt").size(), 20u) << log;
 }

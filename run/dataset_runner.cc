@@ -126,6 +126,41 @@ class FrameLoader {
   std::thread thread_;  // last: it uses everything above
 };
 
+// When each frame of a paced replay arrives, as from a camera: its stamp's offset from the first
+// frame's, over the rate, after the replay's start. The start moves later by the time this
+// process was stopped (SIGSTOP, Ctrl-Z): the camera of a paused replay is paused too, so its
+// frames are not the pipeline's drops.
+class ReplayClock {
+ public:
+  using Clock = std::chrono::steady_clock;
+  ReplayClock(double rate, Clock::time_point start)
+      : rate_(rate), start_(start), continued_seen_(TimesContinued()) {}
+
+  Clock::time_point Arrival(Timestamp stamp) {
+    if (!first_stamp_) first_stamp_ = stamp;
+    const double s = SecondsBetween(*first_stamp_, stamp) / rate_;
+    return start_ + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  }
+  // After a stop of this process: the replay goes on from the frame `stamp` (rgb.txt `entry`),
+  // due now.
+  void ResumeAfterStop(Timestamp stamp, size_t entry) {
+    if (TimesContinued() == continued_seen_) return;
+    continued_seen_ = TimesContinued();
+    if (const auto behind = Clock::now() - Arrival(stamp); behind > Clock::duration::zero()) {
+      start_ += behind;
+      LOG_INFO << "run: stopped and continued; the replay goes on at the camera's rate from "
+                  "rgb.txt entry "
+               << entry;
+    }
+  }
+
+ private:
+  double rate_;
+  Clock::time_point start_;
+  unsigned continued_seen_;
+  std::optional<Timestamp> first_stamp_;
+};
+
 }  // namespace
 
 DatasetRunSummary RunDatasetFrames(const RgbdDataset& dataset, System& system,
@@ -142,29 +177,8 @@ DatasetRunSummary RunDatasetFrames(const RgbdDataset& dataset, System& system,
   using Clock = std::chrono::steady_clock;
   DatasetRunSummary summary;
   const auto t0 = Clock::now();
-  // The replay's start; moved later by the time this process was stopped (SIGSTOP, Ctrl-Z): the
-  // camera of a paused replay is paused too, so its frames are not the pipeline's drops.
-  auto replay_start = t0;
-  unsigned continued_seen = TimesContinued();
-  std::optional<Timestamp> first_stamp;
-  // The time frame `f` arrives (paced runs): its stamp's offset from the first, over the rate.
-  auto arrival = [&](const LoadedFrame& f) {
-    if (!first_stamp) first_stamp = f.stamp;
-    const double s = SecondsBetween(*first_stamp, f.stamp) / options.rate;
-    return replay_start +
-           std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
-  };
-  // Paced runs, after a stop of this process: the replay goes on from `frame`, due now.
-  auto resume_after_stop = [&](const LoadedFrame& frame) {
-    if (TimesContinued() == continued_seen) return;
-    continued_seen = TimesContinued();
-    if (const auto behind = Clock::now() - arrival(frame); behind > Clock::duration::zero()) {
-      replay_start += behind;
-      LOG_INFO << "run: stopped and continued; the replay goes on at the camera's rate from "
-                  "rgb.txt entry "
-               << frame.entry;
-    }
-  };
+  ReplayClock camera(options.rate, t0);
+  auto arrival = [&](const LoadedFrame& f) { return camera.Arrival(f.stamp); };
   FrameLoader loader(dataset, options);
   std::optional<Timestamp> prefetched;  // the stamp whose detection was started ahead
   while (true) {
@@ -181,9 +195,9 @@ DatasetRunSummary RunDatasetFrames(const RgbdDataset& dataset, System& system,
     if (frame->error) std::rethrow_exception(frame->error);
     Clock::time_point arrived = Clock::now();
     if (paced) {
-      resume_after_stop(*frame);
+      camera.ResumeAfterStop(frame->stamp, frame->entry);
       std::this_thread::sleep_until(arrival(*frame));
-      resume_after_stop(*frame);  // stopped while it waited for the frame
+      camera.ResumeAfterStop(frame->stamp, frame->entry);  // stopped while it waited for it
       arrived = arrival(*frame);
       // A camera's queue of one: newer frames that have arrived replace this one.
       for (const LoadedFrame* next = loader.Peek();

@@ -72,33 +72,13 @@ void CheckDynamicClasses(const ConfigReader& detector, const DetectorOptions& op
   }
 }
 
-}  // namespace
-
-SystemOptions SystemOptionsFromSettings(const Settings& settings) {
-  SystemOptions options;
-  options.camera = settings.camera;
-  options.sensor = settings.sensor;
-  options.orb = settings.orb;
-  const ConfigReader& root = settings.reader;
-  // Keyframe spacing follows the frame rate unless set.
-  options.tracking.max_frames_between_keyframes = static_cast<int>(settings.sensor.fps);
-  const ConfigReader tracking = root.Section("Tracking");
-  ReadFields(tracking,
-             {{"init_min_features", &options.tracking.init_min_features},
-              {"max_frames_between_keyframes", &options.tracking.max_frames_between_keyframes},
-              {"dense_fallback", &options.tracking.dense_fallback},
-              {"fallback_smoothing", &options.tracking.fallback_smoothing}});
-  tracking.CheckOptions(options.tracking);
-  const ConfigReader mapping = root.Section("LocalMapping");
-  ReadFields(mapping, {{"cull_keyframes", &options.local_mapping.cull_keyframes}});
-  mapping.CheckOptions(options.local_mapping);
-
-  // LoopClosing: place recognition and loop closing. vocabulary: a path relative to the settings
-  // file, "none" (no place recognition: brute-force relocalization, no loops), or absent:
-  // $DYGSLAM_VOCABULARY, else vocabulary.dygvoc beside the settings file, else the shipped
-  // config/vocabulary.dygvoc of the source tree. A missing file fails when the system starts.
-  const ConfigReader loops = root.Section("LoopClosing");
-  LoopClosingOptions& lc = options.loop_closing;
+// LoopClosing: place recognition and loop closing. vocabulary: a path relative to the settings
+// file, "none" (no place recognition: brute-force relocalization, no loops), or absent:
+// $DYGSLAM_VOCABULARY, else vocabulary.dygvoc beside the settings file, else the shipped
+// config/vocabulary.dygvoc of the source tree. A missing file fails when the system starts.
+void ReadLoopClosing(const Settings& settings, LoopClosingOptions* options) {
+  const ConfigReader loops = settings.reader.Section("LoopClosing");
+  LoopClosingOptions& lc = *options;
   std::string vocabulary;
   if (loops.ReadIfPresent("vocabulary", &vocabulary)) {
     if (vocabulary == "none") {
@@ -135,18 +115,21 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
               DYGSLAM_SAME_NAME_FIELD(lc, global_bundle_adjustment)});
   loops.CheckOptions(lc);
   CheckSettingAtMost(loops, "revisit_min_path_m", lc.revisit_min_path_m, 1e5, "m");
+}
 
-  // DynamicFilter: the paper's parameters (defaults in DynamicFilterOptions).
+// DynamicFilter: the paper's parameters (defaults in DynamicFilterOptions) and the switches of
+// our extensions.
+void ReadDynamicFilter(const ConfigReader& root, DynamicFilterOptions* options) {
   const ConfigReader filter = root.Section("DynamicFilter");
+  DynamicFilterOptions& f = *options;
   std::string mode;
   if (filter.ReadIfPresent("mode", &mode)) {
     try {
-      options.filter.mode = ParseFilterMode(mode);
+      f.mode = ParseFilterMode(mode);
     } catch (const InvalidOptions& e) {
       filter.Fail("mode", EchoValue(e.what(), 600));
     }
   }
-  DynamicFilterOptions& f = options.filter;
   ReadFields(filter, {{"C1", &f.c1},
                       {"alpha", &f.alpha},
                       {"Q", &f.q},
@@ -168,8 +151,11 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   CheckSettingAtMost(filter, "delta", f.delta, 16384, "px");
   CheckSettingAtMost(filter, "box_margin", f.box_margin, 16384, "px");
   CheckSettingAtMost(filter, "fundamental_threshold", f.fundamental_threshold, 1000, "px");
+}
 
-  // Detector: a shipped model by name, or explicit Darknet files.
+// Detector: a shipped model by name, or explicit Darknet files; its cadence.
+void ReadDetector(const ConfigReader& root, SystemOptions* system) {
+  SystemOptions& options = *system;
   const ConfigReader detector = root.Section("Detector");
   std::string model = "yolo-fastest-1.1";
   detector.ReadIfPresent("model", &model);
@@ -231,6 +217,31 @@ SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   DetectorOptions check = options.detector;
   if (check.cfg_path.empty()) check.cfg_path = check.weights_path = check.names_path = "default";
   detector.CheckOptions(check);
+}
+
+}  // namespace
+
+SystemOptions SystemOptionsFromSettings(const Settings& settings) {
+  SystemOptions options;
+  options.camera = settings.camera;
+  options.sensor = settings.sensor;
+  options.orb = settings.orb;
+  const ConfigReader& root = settings.reader;
+  // Keyframe spacing follows the frame rate unless set.
+  options.tracking.max_frames_between_keyframes = static_cast<int>(settings.sensor.fps);
+  const ConfigReader tracking = root.Section("Tracking");
+  ReadFields(tracking,
+             {{"init_min_features", &options.tracking.init_min_features},
+              {"max_frames_between_keyframes", &options.tracking.max_frames_between_keyframes},
+              {"dense_fallback", &options.tracking.dense_fallback},
+              {"fallback_smoothing", &options.tracking.fallback_smoothing}});
+  tracking.CheckOptions(options.tracking);
+  const ConfigReader mapping = root.Section("LocalMapping");
+  ReadFields(mapping, {{"cull_keyframes", &options.local_mapping.cull_keyframes}});
+  mapping.CheckOptions(options.local_mapping);
+  ReadLoopClosing(settings, &options.loop_closing);
+  ReadDynamicFilter(root, &options.filter);
+  ReadDetector(root, &options);
   return options;
 }
 

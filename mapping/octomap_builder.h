@@ -49,6 +49,7 @@
 #include "core/base/camera.h"
 #include "core/base/rigid3.h"
 #include "core/base/types.h"
+#include "mapping/octomap_file.h"
 
 namespace octomap {
 class OcTree;
@@ -227,16 +228,5 @@ class OctoMapBuilder {
   size_t num_insertions_ = 0;
   size_t num_rebuilds_ = 0;
 };
-
-// Atomic writers / reader for any OcTree (same formats as the builder's).
-// The .bt stream of `tree`: the bytes of OcTree::writeBinaryConst (header, then the node data),
-// without the progress line ("Writing N nodes to output stream... done.") that the library
-// prints to stderr on every binary write, which would interleave with a running mapper's log.
-void WriteOctoMapBinaryStream(const octomap::OcTree& tree, std::ostream& out);
-void WriteOctoMapBinary(const octomap::OcTree& tree, const std::string& path);
-void WriteOctoMapFull(const octomap::OcTree& tree, const std::string& path);
-// Reads .bt (binary) or .ot (full); the format is taken from the file header, not the suffix.
-// Throws InputError naming the file if it is missing, unreadable or not an OcTree.
-std::unique_ptr<octomap::OcTree> ReadOctoMap(const std::string& path);
 
 }  // namespace dygslam

@@ -307,5 +307,39 @@ TEST_F(RunOutputsCli, ABenchWithAFailedRunLeavesTheBenchmarksFileAsItWas) {
   EXPECT_TRUE(fs::exists(fs::path(dir_) / "b" / "report.md"));
 }
 
+// A bench run that fails (or is stopped) leaves the earlier bench's run folder as it was: runs.csv
+// of that bench still names its files. Before, each run's folder was removed when the run
+// started: a failed or stopped bench deleted the earlier trajectory, frames.csv and summary.
+TEST_F(RunOutputsCli, AFailedBenchRunKeepsTheEarlierRunsFiles) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  std::vector<fs::path> images;
+  const fs::path data = fs::path(dir_) / "data";
+  CopiedDataset(source, 12, data / "seq", &images);
+  fs::copy_file(RgbdDataset::Open(source).groundtruth_path(), data / "seq" / "groundtruth.txt");
+  const std::vector<std::string> args = {"bench",
+                                         data.string(),
+                                         "--runs",
+                                         "1",
+                                         "--configs",
+                                         "none",
+                                         "--no-baseline",
+                                         "--no-pictures",
+                                         "--quiet",
+                                         "--out",
+                                         (fs::path(dir_) / "b").string()};
+  ASSERT_EQ(Run(args).code, 0);
+  const fs::path run = fs::path(dir_) / "b" / "runs" / "seq" / "none_0";
+  const std::string trajectory = ReadAll((run / "trajectory.txt").string());
+  ASSERT_FALSE(trajectory.empty());
+  fs::remove(images[6]);
+  WriteText(images[6], "not a png");
+  const auto r = Run(args);
+  EXPECT_EQ(r.code, 1) << r.out << r.err;
+  EXPECT_EQ(ReadAll((run / "trajectory.txt").string()), trajectory);
+  EXPECT_TRUE(fs::exists(run / "frames.csv"));
+  EXPECT_TRUE(fs::exists(run / "summary.txt"));
+  EXPECT_FALSE(fs::exists(run.string() + ".partial"));
+}
+
 }  // namespace
 }  // namespace dygslam

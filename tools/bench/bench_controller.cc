@@ -352,10 +352,27 @@ void BenchController::RunAll() {
   }
 }
 
+namespace {
+
+// `from` (a complete run folder) in place of `to`: the earlier folder is moved aside first and
+// removed only once the new one is in place.
+void ReplaceFolder(const fs::path& from, const fs::path& to) {
+  const fs::path previous = to.string() + ".previous";
+  fs::remove_all(previous);
+  if (fs::exists(to)) fs::rename(to, previous);
+  fs::rename(from, to);
+  fs::remove_all(previous);
+}
+
+}  // namespace
+
 void BenchController::RunOne(const Prepared& pr, int run, const std::string& config, int* done) {
   const fs::path run_dir = fs::path(options_.work_dir) / SafeName(pr.sequence.name) /
                            (config + "_" + std::to_string(run));
-  fs::remove_all(run_dir);
+  // The worker writes into a folder of its own; it replaces an earlier bench's run folder only
+  // once the run is complete (a stopped or failed run leaves the earlier one as it was).
+  const fs::path partial_dir = run_dir.string() + ".partial";
+  fs::remove_all(partial_dir);
   const double elapsed = SteadySeconds() - started_;
   const double eta = *done > 0 ? elapsed / *done * (summary_.total_runs - *done) : std::nan("");
   char prefix[512];
@@ -373,7 +390,7 @@ void BenchController::RunOne(const Prepared& pr, int run, const std::string& con
                  "--config",
                  pr.sequence.settings_path,
                  "--out",
-                 run_dir.string(),
+                 partial_dir.string(),
                  "--frames",
                  std::to_string(pr.first) + ":" + std::to_string(pr.last),
                  "--progress-prefix",
@@ -392,14 +409,17 @@ void BenchController::RunOne(const Prepared& pr, int run, const std::string& con
   };
   if ((summary_.stopped_by = ScopedStopSignals::Received()) != 0) {
     // The worker was stopped mid-run: its outputs cover part of the frames only.
+    fs::remove_all(partial_dir);
     leave_out("interrupted (signal " + std::to_string(summary_.stopped_by) + "), run left out");
     return;
   }
   if (child.exit_code != 0) {
+    fs::remove_all(partial_dir);
     leave_out("worker failed (exit code " + std::to_string(child.exit_code) + "), run left out");
     ++summary_.runs_left_out;
     return;
   }
+  ReplaceFolder(partial_dir, run_dir);
   BenchRun scored;
   try {
     scored = ScoreRun(run_dir.string(), pr.groundtruth);

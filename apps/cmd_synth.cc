@@ -147,6 +147,8 @@ keys). The same seed gives byte-identical files.)");
                         EchoValue(images) +
                         "' of a dataset: the sequence would be mixed with its images; choose "
                         "another folder");
+  if (const std::string recovered = RecoverInterruptedReplace(out_dir); !recovered.empty())
+    std::fprintf(stderr, "synth: %s\n", recovered.c_str());
   // A dataset in OUT_DIR (a recorded sequence, the user's ground truth) is never overwritten
   // without being asked to; with --replace, only its files are.
   if (const std::string why =

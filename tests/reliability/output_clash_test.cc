@@ -260,6 +260,76 @@ TEST_F(OutputClashCli, StoppedSynthLeavesTheEarlierSequenceWhole) {
   EXPECT_EQ(ReadAll(target + "/.synth-partial/thesis.tex"), "the user's text\n");
 }
 
+// A synth --replace killed while it moved its render in (SIGKILL between two renames) leaves the
+// replaced sequence set aside in .synth-previous: the next synth puts one whole sequence back
+// before anything else. Before, the old images were deleted while the old lists stayed, and the
+// next synth removed the new images too: neither sequence was left.
+TEST_F(OutputClashCli, ASynthKilledWhileMovingInLeavesOneWholeSequence) {
+  const std::vector<std::string> kNames = {
+      "rgb",      "depth",          "mask",        "rgb.txt",    "depth.txt", "groundtruth.txt",
+      "mask.txt", "detections.txt", "objects.txt", "camera.yaml"};
+  // `target`: the seed-2 sequence (old) and the seed-4 render (new) laid out as a killed synth
+  // leaves them: the old files in .synth-previous (all of them when `all_moved`), the first
+  // `moved_in` new ones in the folder, the rest in .synth-partial.
+  const auto killed_state = [&](const std::string& name, bool all_moved, size_t moved_in) {
+    const std::string target = dir_ + "/" + name, render = dir_ + "/" + name + "_render";
+    EXPECT_EQ(Run({"synth", target, "--frames", "3", "--seed", "2", "--quiet"}).code, 0);
+    EXPECT_EQ(Run({"synth", render, "--frames", "3", "--seed", "4", "--quiet"}).code, 0);
+    fs::create_directories(target + "/.synth-previous");
+    fs::create_directories(target + "/.synth-partial");
+    std::ofstream(target + "/.synth-previous/.dygslam-synth-previous") << "set aside\n";
+    std::ofstream(target + "/.synth-partial/.dygslam-synth-render") << "render\n";
+    const size_t set_aside = all_moved ? kNames.size() : 4;
+    for (size_t k = 0; k < set_aside; ++k)
+      fs::rename(target + "/" + kNames[k], target + "/.synth-previous/" + kNames[k]);
+    if (all_moved) std::ofstream(target + "/.synth-previous/.all-moved") << "all\n";
+    for (size_t k = 0; k < kNames.size(); ++k)
+      fs::rename(render + "/" + kNames[k],
+                 target + (k < moved_in ? "/" : "/.synth-partial/") + kNames[k]);
+    return target;
+  };
+  ASSERT_EQ(Run({"synth", dir_ + "/reference_old", "--frames", "3", "--seed", "2", "--quiet"}).code,
+            0);
+  ASSERT_EQ(Run({"synth", dir_ + "/reference_new", "--frames", "3", "--seed", "4", "--quiet"}).code,
+            0);
+  const std::string old_rgb = ReadAll(dir_ + "/reference_old/rgb.txt");
+  const std::string old_truth = ReadAll(dir_ + "/reference_old/groundtruth.txt");
+  const std::string new_truth = ReadAll(dir_ + "/reference_new/groundtruth.txt");
+  ASSERT_NE(old_truth, new_truth);
+  // Killed while the new files moved in (3 of 10 in place): the old sequence comes back whole.
+  {
+    const std::string target = killed_state("moving_in", true, 3);
+    const auto r = Run({"synth", target, "--frames", "3", "--quiet"});  // no --replace: refused
+    ExpectError(r, 2, {"holds a dataset"});
+    EXPECT_TRUE(Contains(r.err, "restored the sequence in " + target)) << r.err;
+    EXPECT_EQ(ReadAll(target + "/rgb.txt"), old_rgb);
+    EXPECT_EQ(ReadAll(target + "/groundtruth.txt"), old_truth);
+    EXPECT_EQ(RgbdDataset::Open(target).size(), 3u);
+    for (size_t k = 0; k < 3; ++k) EXPECT_FALSE(RgbdDataset::Open(target).LoadRgb(k).empty());
+    EXPECT_FALSE(fs::exists(target + "/.synth-previous"));
+  }
+  // Killed while the old files were set aside (4 of 10): the old sequence comes back whole.
+  {
+    const std::string target = killed_state("setting_aside", false, 0);
+    const auto r = Run({"synth", target, "--frames", "3", "--quiet"});
+    ExpectError(r, 2, {"holds a dataset"});
+    EXPECT_EQ(ReadAll(target + "/groundtruth.txt"), old_truth);
+    EXPECT_EQ(RgbdDataset::Open(target).size(), 3u);
+    EXPECT_FALSE(fs::exists(target + "/.synth-previous"));
+  }
+  // Killed once every new file was in place: the new sequence stays.
+  {
+    const std::string target = killed_state("all_in", true, kNames.size());
+    const auto r = Run({"synth", target, "--frames", "3", "--quiet"});
+    ExpectError(r, 2, {"holds a dataset"});
+    EXPECT_TRUE(Contains(r.err, "completed the replacement")) << r.err;
+    EXPECT_EQ(ReadAll(target + "/groundtruth.txt"), new_truth);
+    EXPECT_EQ(RgbdDataset::Open(target).size(), 3u);
+    EXPECT_FALSE(fs::exists(target + "/.synth-previous"));
+    EXPECT_FALSE(fs::exists(target + "/.synth-partial"));
+  }
+}
+
 // --replace replaces a sequence's files and its image folders, nothing else: an image folder
 // holding anything but images (the user's notes, a dataset made inside rgb/ earlier) is refused
 // before any work, and nothing is removed. Before, rgb/ went as a whole with what was in it.

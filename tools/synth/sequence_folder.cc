@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 #include "core/base/echo.h"
 #include "core/base/error.h"
@@ -22,8 +23,102 @@ const char* const kSequenceFolders[] = {"rgb", "depth", "mask"};
 // The staging folder OUT_DIR/.synth-partial holds this file from its start: one without it is
 // not synth's.
 const char* const kStagingMarker = ".dygslam-synth-render";
+// While --replace moves the render in, the replaced sequence's files wait in
+// OUT_DIR/.synth-previous (this marker from its start; kAllMoved once every one of them is there)
+// until the new ones are all in place: a synth killed midway leaves one whole sequence to restore.
+const char* const kPreviousMarker = ".dygslam-synth-previous";
+const char* const kAllMoved = ".all-moved";
+
+fs::path StagingOf(const fs::path& out_dir) { return out_dir / ".synth-partial"; }
+fs::path PreviousOf(const fs::path& out_dir) { return out_dir / ".synth-previous"; }
+
+bool IsSequenceName(const std::string& name) {
+  for (const char* n : kSequenceFiles)
+    if (name == n) return true;
+  for (const char* n : kSequenceFolders)
+    if (name == n) return true;
+  return false;
+}
+
+// Renames `from` to `to` (an InputError naming both when it fails).
+void Move(const fs::path& from, const fs::path& to) {
+  std::error_code ec;
+  fs::rename(from, to, ec);
+  if (ec)
+    throw InputError(from.string(), 0,
+                     "cannot move it to " + to.string() + ": " + ec.message() +
+                         " (nothing was removed: the files are where the message says)");
+}
+
+// The entries of `folder` other than the markers.
+std::vector<fs::path> EntriesOf(const fs::path& folder) {
+  std::vector<fs::path> entries;
+  std::error_code ec;
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name != kStagingMarker && name != kPreviousMarker && name != kAllMoved)
+      entries.push_back(it->path());
+  }
+  return entries;
+}
+
+// Removes the replaced sequence set aside: renamed first, so that a removal cut short never
+// leaves a .synth-previous with part of its files.
+void RemoveSetAside(const fs::path& previous) {
+  const fs::path done = previous.string() + ".done";
+  std::error_code ec;
+  fs::remove_all(done, ec);
+  fs::rename(previous, done, ec);
+  fs::remove_all(ec ? previous : done, ec);
+}
+
+// The render in `staging` in place of OUT_DIR's sequence: the old files are moved aside first,
+// then the new ones in, then the old ones removed; never a moment where a file is deleted before
+// a whole sequence (old or new) can be put back by RecoverInterruptedReplace.
+void MoveIntoPlace(const fs::path& target, const fs::path& staging) {
+  const fs::path previous = PreviousOf(target);
+  std::error_code ec;
+  fs::create_directory(previous, ec);
+  std::ofstream(previous / kPreviousMarker) << "the sequence dygslam synth --replace replaces\n";
+  for (fs::directory_iterator it(target, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (IsSequenceName(name)) Move(it->path(), previous / name);
+  }
+  std::ofstream(previous / kAllMoved) << "every file of the replaced sequence is here\n";
+  for (const fs::path& entry : EntriesOf(staging)) Move(entry, target / entry.filename());
+  fs::remove_all(staging, ec);  // its marker: the new sequence is in place
+  RemoveSetAside(previous);
+}
 
 }  // namespace
+
+std::string RecoverInterruptedReplace(const std::string& out_dir) {
+  const fs::path target(out_dir), previous = PreviousOf(target), staging = StagingOf(target);
+  std::error_code ec;
+  fs::remove_all(previous.string() + ".done", ec);  // a removal that was cut short
+  if (!fs::exists(fs::symlink_status(previous, ec))) return "";
+  if (!fs::is_regular_file(fs::symlink_status(previous / kPreviousMarker, ec)))
+    throw InputError(previous.string(), 0,
+                     "not a sequence that dygslam synth --replace set aside: remove it or choose "
+                     "another folder");
+  const bool all_moved = fs::exists(previous / kAllMoved, ec);
+  if (all_moved && EntriesOf(staging).empty()) {
+    // Every new file was in place: the replacement was complete.
+    fs::remove_all(staging, ec);
+    RemoveSetAside(previous);
+    return "completed the replacement of " + EchoValue(out_dir) +
+           " that a killed synth had made (the new sequence is in place)";
+  }
+  if (all_moved) {
+    // New files were moving in: they go (the render is in part elsewhere), the old ones return.
+    for (fs::directory_iterator it(target, ec), end; !ec && it != end; it.increment(ec))
+      if (IsSequenceName(it->path().filename().string())) fs::remove_all(it->path(), ec);
+  }
+  for (const fs::path& entry : EntriesOf(previous)) Move(entry, target / entry.filename());
+  RemoveSetAside(previous);
+  return "restored the sequence in " + EchoValue(out_dir) +
+         " that a killed synth --replace was replacing";
+}
 
 std::string FindDatasetFiles(const std::string& out_dir) {
   std::string found;
@@ -114,27 +209,15 @@ void RenderIntoPlace(const std::string& out_dir, const SyntheticOptions& options
     throw;
   }
   if (!quiet) std::fprintf(stderr, "\n");
-  fs::remove(marker, ec);
-  for (const auto& entry : fs::directory_iterator(staging)) {
-    const fs::path destination = target / entry.path().filename();
-    fs::remove_all(destination, ec);
-    fs::rename(entry.path(), destination, ec);
-    if (ec)
-      throw InputError(destination.string(), 0,
-                       "cannot move the rendered sequence into place: " + ec.message() +
-                           " (the rendered files are in " + staging.string() + ")");
-  }
-  fs::remove(staging, ec);
   // The pairs of the dataset replaced (a reader prefers associations.txt to rgb.txt + depth.txt)
-  // are not this sequence's.
-  if (const fs::path stale = target / "associations.txt";
-      fs::exists(fs::symlink_status(stale, ec))) {
-    fs::remove(stale, ec);
+  // are not this sequence's: they go with the replaced files.
+  const bool stale_pairs = fs::exists(fs::symlink_status(target / "associations.txt", ec));
+  MoveIntoPlace(target, staging);
+  if (stale_pairs)
     std::fprintf(stderr,
                  "synth: removed %s (the frame pairs of the replaced dataset; this sequence is "
                  "read from rgb.txt and depth.txt)\n",
-                 EchoValue(stale.string()).c_str());
-  }
+                 EchoValue((target / "associations.txt").string()).c_str());
   std::printf("wrote %d frames (%dx%d, %d moving objects, seed %llu) to %s in %.2f s\n",
               options.num_frames, options.camera.width, options.camera.height,
               options.num_moving_objects, static_cast<unsigned long long>(options.seed),

@@ -321,14 +321,22 @@ TEST(Pipeline, KillingTheDetectorDoesNotStopSlam) {
   std::this_thread::sleep_for(std::chrono::milliseconds(1800));
   kill(detector, SIGKILL);
   EXPECT_EQ(Wait(detector), 128 + SIGKILL);
-  EXPECT_EQ(Wait(slam), 3) << ReadAll(tmp + "/slam.log");
+  const int slam_code = Wait(slam);
   EXPECT_EQ(Wait(recorder), 0) << ReadAll(tmp + "/recorder.log");
   EXPECT_EQ(Wait(player), 0) << ReadAll(tmp + "/player.log");
   const std::string slam_log = ReadAll(tmp + "/slam.log");
-  EXPECT_NE(slam_log.find("geometry-only"), std::string::npos) << slam_log;
-  EXPECT_NE(slam_log.find("frames ran without person boxes (geometry-only): the detector was lost"),
-            std::string::npos)
+  // The frames after the carried boxes ran out had no boxes: slam's part is incomplete (exit 3).
+  std::smatch m;
+  ASSERT_TRUE(
+      std::regex_search(slam_log, m, std::regex(R"(carried forward, (\d+) geometry-only\))")))
       << slam_log;
+  const int geometry_only = std::stoi(m[1]);
+  EXPECT_EQ(slam_code, geometry_only > 0 ? 3 : 0) << slam_log;
+  if (geometry_only > 0)
+    EXPECT_NE(
+        slam_log.find("frames ran without person boxes (geometry-only): the detector was lost"),
+        std::string::npos)
+        << slam_log;
   EXPECT_NE(slam_log.find("slam: 90 frames"), std::string::npos) << slam_log;
   EXPECT_GT(ReadTumTrajectory(tmp + "/out/trajectory.txt").size(), 80u);
   EXPECT_EQ(CsvRows(tmp + "/out/frames.csv"), 90u);

@@ -90,7 +90,10 @@ int ReadComponentFiles(ArgParser& p, const std::string& name, PipelineOptions* o
   // The folder the recorder and the mapper write into, checked as run's --out before any DDS
   // work: never a dataset folder, writable.
   if (name == "recorder" || name == "mapper" || name == "pipeline") {
-    PrepareOutputDir("out", o.output_dir);
+    PrepareOutputDir("out", o.output_dir,
+                     name == "recorder" ? FolderOutputs::kTrajectories
+                     : name == "mapper" ? FolderOutputs::kMap
+                                        : FolderOutputs::kAll);
     // An earlier run's outputs are replaced, never a user's files of the same names.
     if (const std::string foreign = FindForeignFileInRunOutputs(o.output_dir); !foreign.empty())
       return p.UsageError(foreign);

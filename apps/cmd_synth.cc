@@ -3,14 +3,12 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
-#include <optional>
 #include <string>
 #include <vector>
 
 #include "apps/command.h"
 #include "core/base/echo.h"
 #include "core/base/error.h"
-#include "core/base/number_option.h"
 #include "tools/synth/sequence_folder.h"
 #include "tools/synth/synthetic_sequence.h"
 
@@ -76,29 +74,12 @@ keys). The same seed gives byte-identical files.)");
       !p.GetNumber("texels", 50, 1000, &options.texels_per_metre))
     return p.exit_code();
   options.seed = static_cast<uint64_t>(seed);
-  auto parse_list = [&](const std::string& option, size_t n, std::vector<double>* out) {
-    out->clear();
-    std::string text = p.Get(option);
-    size_t start = 0;
-    while (start <= text.size()) {
-      const size_t comma = text.find(',', start);
-      const std::optional<double> v = ParseFiniteNumber(
-          text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
-      if (!v) return false;
-      out->push_back(*v);
-      if (comma == std::string::npos) break;
-      start = comma + 1;
-    }
-    return out->size() == n;
-  };
-  std::vector<double> list;
-  if (!parse_list("room", 3, &list))
-    return p.UsageError("--room: expected X,Y,Z in metres, got '" + EchoValue(p.Get("room")) + "'");
-  options.room_size = Eigen::Vector3d(list[0], list[1], list[2]);
-  if (!parse_list("loop-path", 2, &list))
-    return p.UsageError("--loop-path: expected A,B in metres, got '" +
-                        EchoValue(p.Get("loop-path")) + "'");
-  options.loop_semi_axes = Eigen::Vector2d(list[0], list[1]);
+  std::vector<double> room, loop;
+  if (!p.GetNumberList("room", 3, "X,Y,Z in metres", &room) ||
+      !p.GetNumberList("loop-path", 2, "A,B in metres", &loop))
+    return p.exit_code();
+  options.room_size = Eigen::Vector3d(room[0], room[1], room[2]);
+  options.loop_semi_axes = Eigen::Vector2d(loop[0], loop[1]);
   options.loop_inward = p.Flag("loop-inward");
   if (p.Flag("noise")) {
     options.depth_noise = true;

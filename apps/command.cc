@@ -1,5 +1,7 @@
 #include "apps/command.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -12,6 +14,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <tuple>
 
@@ -73,7 +76,62 @@ void RemoveUnusedOutputDirs() {
   CreatedOutputDirs().clear();
 }
 
-std::filesystem::path PrepareOutputDir(const std::string& option, const std::string& value) {
+namespace {
+
+// The lock file of one kind of output of a folder: in a private folder of the user's (never in
+// the output folder: nothing is added to it), named by the folder's device and inode.
+std::string OutputLockPath(const struct stat& folder, const char* kind) {
+  const char* runtime = std::getenv("XDG_RUNTIME_DIR");
+  std::string base = runtime != nullptr && *runtime != '\0' ? runtime : "/tmp";
+  base += "/dygslam-locks-" + std::to_string(::getuid());
+  ::mkdir(base.c_str(), 0700);
+  return base + "/" + std::to_string(static_cast<unsigned long long>(folder.st_dev)) + "-" +
+         std::to_string(static_cast<unsigned long long>(folder.st_ino)) + "." + kind;
+}
+
+// One command writes one kind of output (trajectories, the map) into a folder at a time: an
+// exclusive lock per kind, dropped by the kernel when the process ends (SIGKILL included). A
+// second command with the same folder and kind (a recorder started by hand beside a run, two
+// runs) would rename its files over the other's, complete ones by partial ones: it is refused
+// before any work. A hand-assembled pipeline (recorder and mapper on one --out) holds one kind
+// each. The processes a command starts for its own run (`run --processes`) find the folder in
+// DYGSLAM_HELD_FOLDERS and write into it under their parent's locks.
+void LockOutputFolder(const std::string& name, const std::filesystem::path& dir,
+                      FolderOutputs outputs) {
+  struct stat st {};
+  if (::stat(dir.c_str(), &st) != 0) return;  // the first write names the problem
+  const std::string id = std::to_string(static_cast<unsigned long long>(st.st_dev)) + ":" +
+                         std::to_string(static_cast<unsigned long long>(st.st_ino));
+  const char* held_env = std::getenv("DYGSLAM_HELD_FOLDERS");
+  const std::string held = held_env ? held_env : "";
+  if (("," + held + ",").find("," + id + ",") != std::string::npos) return;
+  std::vector<const char*> kinds;
+  if (outputs != FolderOutputs::kMap) kinds.push_back("trajectories");
+  if (outputs != FolderOutputs::kTrajectories) kinds.push_back("map");
+  for (const char* kind : kinds) {
+    const std::string path = OutputLockPath(st, kind);
+    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0600);
+    if (fd < 0) continue;  // no place for locks: nothing to hold
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      const int error = errno;
+      ::close(fd);
+      if (error != EWOULDBLOCK) continue;
+      throw InvalidOptions(name + ": another dygslam command is writing its " +
+                           (std::string(kind) == "map" ? "map" : "trajectories") +
+                           " into this folder (a run, a recorder or a mapper); their outputs "
+                           "would replace each other: wait for it to end or choose another "
+                           "folder");
+    }
+    // Held (fd left open) until the process ends.
+  }
+  if (outputs == FolderOutputs::kAll)
+    ::setenv("DYGSLAM_HELD_FOLDERS", (held.empty() ? id : held + "," + id).c_str(), 1);
+}
+
+}  // namespace
+
+std::filesystem::path PrepareOutputDir(const std::string& option, const std::string& value,
+                                       FolderOutputs outputs) {
   namespace fs = std::filesystem;
   const std::string name = "--" + option + " '" + EchoValue(value) + "'";
   if (value.empty()) throw InputError("--" + option + ": empty folder name");
@@ -111,6 +169,7 @@ std::filesystem::path PrepareOutputDir(const std::string& option, const std::str
   std::fclose(f);
   fs::remove(probe, ec);
   PinOutputFolder(dir.string());  // a folder replaced while the command runs is not written into
+  LockOutputFolder(name, dir, outputs);
   return dir;
 }
 
@@ -236,6 +295,27 @@ bool ArgParser::GetNumber(const std::string& option, double min_value, double ma
     exit_code_ = UsageError(e.what());
     return false;
   }
+}
+
+bool ArgParser::GetNumberList(const std::string& option, size_t count, const std::string& format,
+                              std::vector<double>* values) {
+  values->clear();
+  const std::string text = Get(option);
+  for (size_t start = 0; start <= text.size();) {
+    const size_t comma = text.find(',', start);
+    const std::optional<double> v = ParseFiniteNumber(
+        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (!v) break;
+    values->push_back(*v);
+    if (comma == std::string::npos) {
+      if (values->size() == count) return true;
+      break;
+    }
+    start = comma + 1;
+  }
+  exit_code_ =
+      UsageError("--" + option + ": expected " + format + ", got '" + EchoValue(text) + "'");
+  return false;
 }
 
 bool ArgParser::GetFrameRange(const std::string& option, size_t num_entries, size_t* first,

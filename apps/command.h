@@ -92,6 +92,10 @@ class ArgParser {
   bool GetInt(const std::string& option, int64_t min_value, int64_t max_value, int64_t* value);
   bool GetInt(const std::string& option, int min_value, int max_value, int* value);
   bool GetNumber(const std::string& option, double min_value, double max_value, double* value);
+  // The option's value as `count` finite numbers separated by commas ("6,5,3"). Otherwise false,
+  // after the usage error "--NAME: expected FORMAT, got 'VALUE'".
+  bool GetNumberList(const std::string& option, size_t count, const std::string& format,
+                     std::vector<double>* values);
   // The option's FIRST:LAST range of rgb.txt entries (all `num_entries` when not given); a
   // LAST beyond them is cut, with a warning on stderr. A malformed or empty range: false after
   // the usage error.
@@ -126,7 +130,13 @@ std::string ConfigDir();
 // option when the value is empty, names something that is not a folder (/etc/passwd), or the
 // folder cannot be created or written (a probe file is created and removed, so a read-only folder
 // is found up front, not after the whole run). Creates the folder (and missing parents).
-std::filesystem::path PrepareOutputDir(const std::string& option, const std::string& value);
+// The outputs the command writes there are held for it until it ends (`outputs`: what it writes):
+// a second command writing the same kind of outputs into the folder (two runs, a recorder started
+// by hand beside a run) is refused with a usage error. The processes a command starts for its own
+// run write under its hold.
+enum class FolderOutputs { kAll, kTrajectories, kMap };
+std::filesystem::path PrepareOutputDir(const std::string& option, const std::string& value,
+                                       FolderOutputs outputs = FolderOutputs::kAll);
 // Removes the folders PrepareOutputDir created when they are still empty (a command that failed
 // before writing anything leaves no empty output folder behind). The dispatcher calls it when a
 // command exits non-zero.

@@ -19,8 +19,6 @@
 #include "core/base/error.h"
 #include "core/base/standard_output.h"
 #include "core/base/stop_signal.h"
-#include "core/config/config_reader.h"
-#include "core/config/settings.h"
 
 #ifndef DYGSLAM_VERSION
 #define DYGSLAM_VERSION "unknown"
@@ -57,17 +55,6 @@ void PrintHelp(std::ostream& out) {
          "              [--processes | --direct] [--no-map] [--detections FILE]\n"
          "  dygslam eval GROUNDTRUTH ESTIMATE [--json] [--plot FILE.png]\n"
          "  dygslam bench DATA_DIR [--runs N] [--quick] [--update-benchmarks BENCHMARKS.md]\n";
-}
-
-// An options Check() that failed outside a settings reader ("invalid option NAME: requires
-// COND"): the condition as users read it (core/config/config_reader.h), never the C++ text.
-std::string UserFacingCheck(const std::string& message) {
-  const std::string head = "invalid option ";
-  const size_t requires_at = message.find(": requires ");
-  if (message.rfind(head, 0) != 0 || requires_at == std::string::npos) return message;
-  const std::string name = message.substr(head.size(), requires_at - head.size());
-  return head + name + ": expected " +
-         UserCondition(message.substr(requires_at + 11), name, KnownSettingsKeys());
 }
 
 int Dispatch(const std::vector<std::string>& argv) {
@@ -123,8 +110,7 @@ int Dispatch(const std::vector<std::string>& argv) {
                 << " --help for details)\n";
       code = 2;
     } else {
-      std::cerr << "dygslam " << name << ": error: " << BoundedMessage(UserFacingCheck(message))
-                << "\n";
+      std::cerr << "dygslam " << name << ": error: " << BoundedMessage(message) << "\n";
     }
   } catch (const std::exception& e) {
     std::cerr << "dygslam " << name << ": internal error: " << BoundedMessage(e.what()) << "\n";

@@ -61,6 +61,24 @@ struct PairedFrame {
   bool detector_skipped = false;
 };
 
+// Counts the frames filtered without any person boxes although the run asked for them: a frame
+// due its own boxes that got none (not even carried ones), and a frame the cadence skips after
+// such a frame (it carries what the last detector frame had: nothing). A frame skipped after a
+// frame with boxes carries them.
+class BoxCoverage {
+ public:
+  void Add(const PairedFrame& paired) {
+    if (!paired.detector_skipped)
+      last_without_boxes_ = paired.detections_missing && !paired.detections_carried_forward;
+    if (last_without_boxes_) ++frames_without_boxes_;
+  }
+  size_t frames_without_boxes() const { return frames_without_boxes_; }
+
+ private:
+  bool last_without_boxes_ = false;
+  size_t frames_without_boxes_ = 0;
+};
+
 struct PairingStats {
   size_t frames = 0;
   size_t with_detections = 0;

@@ -26,6 +26,39 @@ std::vector<Detection> OneBox() {
   return {d};
 }
 
+// Every 3rd frame is the detector's: the frames the cadence skips after a frame that got no boxes
+// (not even carried ones) have nothing to carry and count too. Before, only the detector's frames
+// counted: a third of the frames that ran geometry-only.
+TEST(BoxCoverage, FramesSkippedAfterAFrameWithoutBoxesCountToo) {
+  const auto frame = [](bool skipped, bool missing, bool carried) {
+    PairedFrame p;
+    p.detector_skipped = skipped;
+    p.detections_missing = missing;
+    p.detections_carried_forward = carried;
+    return p;
+  };
+  BoxCoverage coverage;
+  for (int cycle = 0; cycle < 2; ++cycle) {  // boxes, then skipped frames carrying them
+    coverage.Add(frame(false, false, false));
+    coverage.Add(frame(true, false, false));
+    coverage.Add(frame(true, false, false));
+  }
+  EXPECT_EQ(coverage.frames_without_boxes(), 0u);
+  coverage.Add(frame(false, true, true));  // the detector late: boxes carried forward
+  coverage.Add(frame(true, false, false));
+  coverage.Add(frame(true, false, false));
+  EXPECT_EQ(coverage.frames_without_boxes(), 0u);
+  for (int cycle = 0; cycle < 4; ++cycle) {  // the detector lost: nothing to carry
+    coverage.Add(frame(false, true, false));
+    coverage.Add(frame(true, false, false));
+    coverage.Add(frame(true, false, false));
+  }
+  EXPECT_EQ(coverage.frames_without_boxes(), 12u);
+  coverage.Add(frame(false, false, false));  // detections again
+  coverage.Add(frame(true, false, false));
+  EXPECT_EQ(coverage.frames_without_boxes(), 12u);
+}
+
 TEST(FramePairing, PairsByStampInArrivalOrder) {
   PairingOptions o;
   FramePairer p(o);

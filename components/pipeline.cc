@@ -269,7 +269,7 @@ ComponentOutcome RunPipelineSlam(const PipelineOptions& options,
   // Frames due their own boxes that ran with none (the detector lost: paused, gone or more than
   // the detection wait behind, and no recent boxes to carry): filtered geometry-only, not as the
   // run asked. The poses are there; the run is not what was requested.
-  const size_t without_boxes = stats.pairing.missing_detections - stats.pairing.carried_forward;
+  const size_t without_boxes = stats.frames_without_boxes;
   if (without_boxes > 0 && !stats.input_cut_short)
     return {foreign, std::to_string(without_boxes) +
                          " frames ran without person boxes (geometry-only): the detector " +

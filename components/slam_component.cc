@@ -148,8 +148,9 @@ class SlamShell {
   bool detector_done_ = false;    // the detector announced COMPONENT_DONE (finished, not lost)
   bool detector_failed_ = false;  // the detector announced FAILED: no detections will come
   bool carrying_ = false;         // the previous frame ran with boxes carried forward (log once)
-  bool geometry_only_ = false;    // the previous frame ran without any boxes (log once)
-  bool waiting_ = false;          // after the first frame: no frame ready since wait_since_
+  BoxCoverage box_coverage_;
+  bool geometry_only_ = false;  // the previous frame ran without any boxes (log once)
+  bool waiting_ = false;        // after the first frame: no frame ready since wait_since_
   Clock::time_point wait_since_ = Clock::now();
   bool waited_with_frames_ = false;  // a frame was pending during that wait
   bool map_announced_ = false;
@@ -337,6 +338,7 @@ std::optional<PairedFrame> SlamShell::NextPaired(bool* end) {
 }
 
 void SlamShell::LogBoxes(const PairedFrame& paired) {
+  if (paired.detector_skipped) return;  // carries what the last detector frame had
   if (paired.detections_carried_forward) {
     if (!carrying_) {
       LOG_WARNING << "slam: no detections for frame " << paired.frame.stamp.ToString()
@@ -376,6 +378,8 @@ void SlamShell::Process(const PairedFrame& paired) {
   }
   const SlamOutput out = core_.Process(paired.frame, dets, paired.detector_skipped);
   ++stats_.frames_processed;
+  box_coverage_.Add(paired);
+  stats_.frames_without_boxes = box_coverage_.frames_without_boxes();
   if (out.result.detections_carried) ++stats_.frames_carrying_boxes;
   if (out.result.world_from_cam) ++stats_.frames_tracked;
   LogBoxes(paired);
@@ -425,8 +429,7 @@ void SlamShell::Finish(const std::string& cut_short) {
            << stats.keyframes_removed << " removed); detections: " << stats.pairing.with_detections
            << " paired, " << stats.pairing.missing_detections << " missing (frames without their "
            << "own boxes: " << stats.pairing.carried_forward << " with boxes carried forward, "
-           << stats.pairing.missing_detections - stats.pairing.carried_forward
-           << " geometry-only), " << stats.frames_carrying_boxes
+           << stats.frames_without_boxes << " geometry-only), " << stats.frames_carrying_boxes
            << " skipped by the detector cadence (boxes carried), "
            << stats.pairing.dropped_detections << " arrived late (" << stats.pairing.late_used
            << " carried forward)" << (stats.detector_lost ? " (detector lost)" : "") << "; busy "

@@ -44,6 +44,10 @@ struct SlamStats {
   size_t keyframe_messages_undelivered = 0;
   size_t bad_samples = 0;
   size_t frames_carrying_boxes = 0;  // detector skipped by the cadence: the System's carried boxes
+  // Frames filtered without any person boxes although the run asked for them: due their own boxes
+  // and none came or could be carried, or skipped by the cadence after such a frame (nothing to
+  // carry).
+  size_t frames_without_boxes = 0;
   bool detector_lost = false;
   bool detector_failed = false;  // it announced FAILED (a model it could not load)
   // Where slam waited between its first and its last frame (seconds): no frame had arrived

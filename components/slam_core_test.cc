@@ -12,6 +12,7 @@
 #include "core/config/settings.h"
 #include "core/dynamic/yolo_detector.h"
 #include "core/io/dataset.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 #include "tests/support/test_support.h"
 

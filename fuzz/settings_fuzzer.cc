@@ -7,6 +7,7 @@
 #include "core/base/error.h"
 #include "core/config/config_reader.h"
 #include "core/config/settings.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

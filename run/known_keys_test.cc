@@ -13,8 +13,9 @@
 
 #include "core/config/config_reader.h"
 #include "core/config/settings.h"
-#include "run/mapping_config.h"
+#include "mapping/octomap_settings.h"
 #include "run/settings_document.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 
 namespace dygslam {
@@ -57,11 +58,11 @@ TEST(KnownKeys, EveryKeyTheRunLayerReadsIsKnown) {
 // The settings document (`dygslam settings`, docs/settings.md) lists every known key once, with
 // the defaults of the options structs; only the camera intrinsics and distortion are required.
 TEST(KnownKeys, SettingsDocumentGivesEveryOptionalKeyItsDefault) {
-  const std::vector<SettingEntry> entries = SettingEntries();
+  const std::vector<SettingDoc> entries = SettingDocs();
   ASSERT_EQ(entries.size(), KnownSettingsKeys().size());
   std::vector<std::string> required;
   std::map<std::string, std::string> defaults;
-  for (const SettingEntry& e : entries) {
+  for (const SettingDoc& e : entries) {
     EXPECT_FALSE(e.default_value.empty()) << e.key;
     EXPECT_TRUE(defaults.emplace(e.key, e.default_value).second) << "listed twice: " << e.key;
     if (e.required) required.push_back(e.key);
@@ -81,7 +82,7 @@ TEST(KnownKeys, SettingsDocumentGivesEveryOptionalKeyItsDefault) {
   EXPECT_EQ(defaults["Tracking.max_frames_between_keyframes"], "Camera.fps");
   // The Markdown form has one row per key.
   const std::string markdown = SettingsMarkdown();
-  for (const SettingEntry& e : entries)
+  for (const SettingDoc& e : entries)
     EXPECT_NE(markdown.find("| `" + e.key + "` |"), std::string::npos) << e.key;
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/config/settings.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 #include "tests/support/settings_text.h"
 

@@ -1,5 +1,3 @@
-#include "run/mapping_config.h"
-
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -7,6 +5,8 @@
 #include <string>
 
 #include "core/config/settings.h"
+#include "mapping/octomap_settings.h"
+#include "run/settings_table.h"
 
 namespace dygslam {
 namespace {

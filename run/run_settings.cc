@@ -6,7 +6,8 @@
 
 #include "core/base/error.h"
 #include "core/dynamic/yolo_detector.h"
-#include "run/mapping_config.h"
+#include "mapping/octomap_settings.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 
 namespace dygslam {

@@ -11,6 +11,7 @@
 #include "core/base/error.h"
 #include "core/config/settings.h"
 #include "core/dynamic/yolo_detector.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 #include "tests/support/settings_text.h"
 

@@ -9,7 +9,6 @@
 
 #include "core/base/echo.h"
 #include "core/base/error.h"
-#include "run/settings_limits.h"
 
 #ifndef DYGSLAM_DEFAULT_VOCABULARY
 #define DYGSLAM_DEFAULT_VOCABULARY ""
@@ -17,22 +16,6 @@
 
 namespace dygslam {
 namespace {
-
-// One settings key of a section and the options field it sets when present.
-struct SettingsField {
-  const char* key;
-  std::variant<int*, float*, double*, bool*> field;
-};
-
-// A key spelled as its options field (the LoopClosing section).
-#define DYGSLAM_SAME_NAME_FIELD(options, name) \
-  SettingsField { #name, &(options).name }
-
-// Reads each present key into its field, in the order given (the first bad value is reported).
-void ReadFields(const ConfigReader& section, std::initializer_list<SettingsField> fields) {
-  for (const SettingsField& f : fields)
-    std::visit([&](auto* field) { section.ReadIfPresent(f.key, field); }, f.field);
-}
 
 // The class names of a names file (one per line, trimmed, blank lines skipped); empty when the
 // file is not a readable regular file (the detector reports that when it is created).
@@ -72,93 +55,57 @@ void CheckDynamicClasses(const ConfigReader& detector, const DetectorOptions& op
   }
 }
 
-// LoopClosing: place recognition and loop closing. vocabulary: a path relative to the settings
-// file, "none" (no place recognition: brute-force relocalization, no loops), or absent:
-// $DYGSLAM_VOCABULARY, else vocabulary.dygvoc beside the settings file, else the shipped
-// config/vocabulary.dygvoc of the source tree. A missing file fails when the system starts.
-void ReadLoopClosing(const Settings& settings, LoopClosingOptions* options) {
-  const ConfigReader loops = settings.reader.Section("LoopClosing");
-  LoopClosingOptions& lc = *options;
+// LoopClosing.vocabulary: a path relative to the settings file, "none" (no place recognition:
+// brute-force relocalization, no loops), or absent: $DYGSLAM_VOCABULARY, else vocabulary.dygvoc
+// beside the settings file, else the shipped config/vocabulary.dygvoc of the source tree.
+void ReadVocabulary(const ConfigReader& root, SystemOptions* options) {
+  LoopClosingOptions& lc = options->loop_closing;
+  const std::string settings_path = root.path();
   std::string vocabulary;
-  if (loops.ReadIfPresent("vocabulary", &vocabulary)) {
+  if (root.ReadIfPresent("LoopClosing.vocabulary", &vocabulary)) {
     if (vocabulary == "none") {
       lc.vocabulary.clear();
-    } else {
-      std::filesystem::path path(vocabulary);
-      if (path.is_relative() && !settings.path.empty())
-        path = std::filesystem::path(settings.path).parent_path() / path;
-      lc.vocabulary = path.lexically_normal().string();
-      std::error_code ec;
-      if (!std::filesystem::exists(lc.vocabulary, ec))
-        loops.Fail("vocabulary", "file not found: " + EchoValue(lc.vocabulary));
-      // A binary input: a FIFO nobody writes into would block the run forever.
-      if (!std::filesystem::is_regular_file(lc.vocabulary, ec))
-        loops.Fail("vocabulary", "not a regular file (a FIFO, a device or a folder): " +
-                                     EchoValue(lc.vocabulary));
+      return;
     }
+    std::filesystem::path path(vocabulary);
+    if (path.is_relative() && !settings_path.empty())
+      path = std::filesystem::path(settings_path).parent_path() / path;
+    lc.vocabulary = path.lexically_normal().string();
+    std::error_code ec;
+    if (!std::filesystem::exists(lc.vocabulary, ec))
+      root.Fail("LoopClosing.vocabulary", "file not found: " + EchoValue(lc.vocabulary));
+    // A binary input: a FIFO nobody writes into would block the run forever.
+    if (!std::filesystem::is_regular_file(lc.vocabulary, ec))
+      root.Fail("LoopClosing.vocabulary",
+                "not a regular file (a FIFO, a device or a folder): " + EchoValue(lc.vocabulary));
   } else if (const char* env = std::getenv("DYGSLAM_VOCABULARY"); env != nullptr && *env != '\0') {
     lc.vocabulary = env;
   } else {
     // Beside the settings file (the presets in config/, also where the Docker image installs
     // them), else the source tree's (generated sequences carry their own camera.yaml).
     const std::filesystem::path beside =
-        settings.path.empty()
+        settings_path.empty()
             ? std::filesystem::path()
-            : std::filesystem::path(settings.path).parent_path() / "vocabulary.dygvoc";
+            : std::filesystem::path(settings_path).parent_path() / "vocabulary.dygvoc";
     lc.vocabulary = !beside.empty() && std::filesystem::exists(beside)
                         ? beside.string()
                         : std::string(DYGSLAM_DEFAULT_VOCABULARY);
   }
-  ReadFields(loops,
-             {DYGSLAM_SAME_NAME_FIELD(lc, enabled), DYGSLAM_SAME_NAME_FIELD(lc, revisit_min_path_m),
-              DYGSLAM_SAME_NAME_FIELD(lc, max_correction_m),
-              DYGSLAM_SAME_NAME_FIELD(lc, global_bundle_adjustment)});
-  loops.CheckOptions(lc);
-  CheckSettingAtMost(loops, "revisit_min_path_m", lc.revisit_min_path_m, 1e5, "m");
 }
 
-// DynamicFilter: the paper's parameters (defaults in DynamicFilterOptions) and the switches of
-// our extensions.
-void ReadDynamicFilter(const ConfigReader& root, DynamicFilterOptions* options) {
-  const ConfigReader filter = root.Section("DynamicFilter");
-  DynamicFilterOptions& f = *options;
+void ReadFilterMode(const ConfigReader& root, SystemOptions* options) {
   std::string mode;
-  if (filter.ReadIfPresent("mode", &mode)) {
-    try {
-      f.mode = ParseFilterMode(mode);
-    } catch (const InvalidOptions& e) {
-      filter.Fail("mode", EchoValue(e.what(), 600));
-    }
+  if (!root.ReadIfPresent("DynamicFilter.mode", &mode)) return;
+  try {
+    options->filter.mode = ParseFilterMode(mode);
+  } catch (const InvalidOptions& e) {
+    root.Fail("DynamicFilter.mode", EchoValue(e.what(), 600));
   }
-  ReadFields(filter, {{"C1", &f.c1},
-                      {"alpha", &f.alpha},
-                      {"Q", &f.q},
-                      {"R", &f.r},
-                      {"P_init", &f.p_init},
-                      {"C2", &f.c2},
-                      {"delta", &f.delta},
-                      {"threshold", &f.threshold},
-                      {"box_margin", &f.box_margin},
-                      {"box_margin_fraction", &f.box_margin_fraction},
-                      {"fundamental_threshold", &f.fundamental_threshold},
-                      {"depth_residual", &f.depth_residual},
-                      {"world_anchors", &f.world_anchors},
-                      {"expand_outside", &f.expand_outside}});
-  filter.CheckOptions(f);
-  CheckSettingAtMost(filter, "C1", f.c1, 1000, "");
-  CheckSettingAtMost(filter, "R", f.r, 1e6, "");
-  CheckSettingAtMost(filter, "C2", f.c2, 1000, "");
-  CheckSettingAtMost(filter, "delta", f.delta, 16384, "px");
-  CheckSettingAtMost(filter, "box_margin", f.box_margin, 16384, "px");
-  CheckSettingAtMost(filter, "fundamental_threshold", f.fundamental_threshold, 1000, "px");
 }
 
-// Detector: a shipped model by name, or explicit Darknet files; its cadence.
-void ReadDetector(const ConfigReader& root, SystemOptions* system) {
-  SystemOptions& options = *system;
+// Detector.cfg, .weights, .names: explicit Darknet files, all three or none.
+void ReadModelFiles(const ConfigReader& root, SystemOptions* options) {
   const ConfigReader detector = root.Section("Detector");
-  std::string model = "yolo-fastest-1.1";
-  detector.ReadIfPresent("model", &model);
   // Model files without Detector.cfg were ignored without a word (the named or default model
   // played instead).
   for (const char* key : {"weights", "names"}) {
@@ -168,80 +115,193 @@ void ReadDetector(const ConfigReader& root, SystemOptions* system) {
                     "Detector.names together, or a Detector.model");
     }
   }
-  if (detector.Has("cfg")) {
-    options.detector.cfg_path = detector.Require<std::string>("cfg");
-    options.detector.weights_path = detector.Require<std::string>("weights");
-    options.detector.names_path = detector.Require<std::string>("names");
-  } else if (detector.Has("model")) {
-    // A model named in the file must exist: falling back to another one would also drop the
-    // input size, thresholds and classes given with it.
+  if (!detector.Has("cfg")) return;
+  options->detector.cfg_path = detector.Require<std::string>("cfg");
+  options->detector.weights_path = detector.Require<std::string>("weights");
+  options->detector.names_path = detector.Require<std::string>("names");
+}
+
+// Detector.model: a shipped model by name (its files, input size, thresholds and classes).
+void ReadModel(const ConfigReader& root, SystemOptions* options) {
+  const ConfigReader detector = root.Section("Detector");
+  if (detector.Has("cfg")) return;  // explicit files (ReadModelFiles)
+  std::string model = "yolo-fastest-1.1";
+  if (!detector.ReadIfPresent("model", &model)) {
     try {
-      options.detector = DetectorOptionsForModel(model);
-    } catch (const InputError& e) {
-      // The name is echoed bounded (a 50 MB value was echoed whole, twice).
-      std::string message = e.what();
-      if (!model.empty()) {
-        const std::string echoed = EchoValue(model);
-        for (size_t at = message.find(model); at != std::string::npos;
-             at = message.find(model, at + echoed.size()))
-          message.replace(at, model.size(), echoed);
-      }
-      detector.Fail("model", EchoValue(message, 1000));
-    }
-  } else {
-    try {
-      options.detector = DetectorOptionsForModel(model);
+      options->detector = DetectorOptionsForModel(model);
     } catch (const InputError&) {
       // The default model, resolved lazily: a run without detection (filter none/geometry)
       // needs no model files.
-      options.detector = DetectorOptions();
+      options->detector = DetectorOptions();
     }
+    return;
   }
-  ReadFields(detector, {{"input_width", &options.detector.input_width},
-                        {"input_height", &options.detector.input_height},
-                        {"confidence_threshold", &options.detector.confidence_threshold},
-                        {"nms_threshold", &options.detector.nms_threshold},
-                        {"num_threads", &options.detector.num_threads}});
-  // Detector cadence: run on every n-th frame, carry the boxes in between.
-  ReadFields(detector, {{"every_n_frames", &options.detection_every_n_frames},
-                        {"shift_carried_boxes", &options.box_propagation.shift_boxes}});
-  if (options.detection_every_n_frames < 1 || options.detection_every_n_frames > 1000)
-    detector.Fail("every_n_frames", "expected an integer in 1..1000 (1: every frame)");
+  // A model named in the file must exist: falling back to another one would also drop the
+  // input size, thresholds and classes given with it.
+  try {
+    options->detector = DetectorOptionsForModel(model);
+  } catch (const InputError& e) {
+    // The name is echoed bounded (a 50 MB value was echoed whole, twice).
+    std::string message = e.what();
+    if (!model.empty()) {
+      const std::string echoed = EchoValue(model);
+      for (size_t at = message.find(model); at != std::string::npos;
+           at = message.find(model, at + echoed.size()))
+        message.replace(at, model.size(), echoed);
+    }
+    detector.Fail("model", EchoValue(message, 1000));
+  }
+}
+
+void ReadDynamicClasses(const ConfigReader& root, SystemOptions* options) {
+  const ConfigReader detector = root.Section("Detector");
   std::vector<std::string> classes;
-  if (detector.ReadIfPresent("dynamic_classes", &classes)) {
-    options.detector.dynamic_classes = classes;
-    CheckDynamicClasses(detector, options.detector);
-  }
-  // The values of the file, checked here so that a bad one names its line (model files that are
-  // resolved later stand in as placeholders).
-  DetectorOptions check = options.detector;
-  if (check.cfg_path.empty()) check.cfg_path = check.weights_path = check.names_path = "default";
-  detector.CheckOptions(check);
+  if (!detector.ReadIfPresent("dynamic_classes", &classes)) return;
+  if (classes.empty()) detector.Fail("dynamic_classes", "expected at least one class name");
+  options->detector.dynamic_classes = classes;
+  CheckDynamicClasses(detector, options->detector);
+}
+
+std::string DefaultClasses() { return FormatSettingValue(DetectorOptions().dynamic_classes); }
+
+using Row = SettingRow<SystemOptions>;
+
+std::vector<Row> TrackingRows() {
+  return {
+      Row("Tracking.init_min_features", DYGSLAM_SETTING_FIELD(tracking.init_min_features),
+          SettingRange::AtLeast(1), "", "features with depth a frame needs to start the map"),
+      Row("Tracking.max_frames_between_keyframes",
+          DYGSLAM_SETTING_FIELD(tracking.max_frames_between_keyframes), SettingRange::AtLeast(1),
+          "", "a keyframe at the latest after this many frames")
+          .DefaultText("Camera.fps"),
+      Row("Tracking.dense_fallback", DYGSLAM_SETTING_FIELD(tracking.dense_fallback), {}, "",
+          "dense pose of frames features cannot hold (state fallback)"),
+      Row("Tracking.fallback_smoothing", DYGSLAM_SETTING_FIELD(tracking.fallback_smoothing), {}, "",
+          "a stretch of fallback poses is re-anchored when features return"),
+      Row("LocalMapping.cull_keyframes", DYGSLAM_SETTING_FIELD(local_mapping.cull_keyframes), {},
+          "", "redundant keyframes are removed"),
+  };
+}
+
+std::vector<Row> LoopClosingRows() {
+  return {
+      Row("LoopClosing.vocabulary", ReadVocabulary,
+          "$DYGSLAM_VOCABULARY, else vocabulary.dygvoc beside the settings file, else "
+          "config/vocabulary.dygvoc",
+          "the place-recognition vocabulary, relative to the settings file; none: no place "
+          "recognition (brute-force relocalization, no loops)"),
+      Row("LoopClosing.enabled", DYGSLAM_SETTING_FIELD(loop_closing.enabled), {}, "",
+          "detect and close loops"),
+      Row("LoopClosing.revisit_min_path_m", DYGSLAM_SETTING_FIELD(loop_closing.revisit_min_path_m),
+          SettingRange::AtMost(1e5), "m",
+          "a covisible old keyframe is a loop candidate after this much keyframe path; <= 0: "
+          "never"),
+      Row("LoopClosing.max_correction_m", DYGSLAM_SETTING_FIELD(loop_closing.max_correction_m),
+          SettingRange::Closed(0, 10000), "m",
+          "a loop may move the camera by at most this plus 0.1 m per metre of path since the "
+          "loop keyframe"),
+      Row("LoopClosing.global_bundle_adjustment",
+          DYGSLAM_SETTING_FIELD(loop_closing.global_bundle_adjustment), {}, "",
+          "a global bundle adjustment after each loop, in the background"),
+  };
+}
+
+std::vector<Row> DynamicFilterRows() {
+  return {
+      Row("DynamicFilter.mode", ReadFilterMode,
+          std::string(ToString(DynamicFilterOptions{}.mode)) + " (--filter)",
+          "none | boxes | geometry | paper | full (--filter overrides it)"),
+      Row("DynamicFilter.C1", DYGSLAM_SETTING_FIELD(filter.c1), SettingRange::AboveAtMost(0, 1000),
+          "", "paper eq. 4: scale of the epipolar probability"),
+      Row("DynamicFilter.alpha", DYGSLAM_SETTING_FIELD(filter.alpha),
+          SettingRange::Closed(-100, 100), "px", "paper eq. 4: epipolar distance offset"),
+      Row("DynamicFilter.Q", DYGSLAM_SETTING_FIELD(filter.q), SettingRange::Closed(0, 100), "",
+          "paper eq. 7: process noise of the Kalman filter"),
+      Row("DynamicFilter.R", DYGSLAM_SETTING_FIELD(filter.r), SettingRange::AboveAtMost(0, 1e6), "",
+          "paper eq. 8: measurement noise of the Kalman filter"),
+      Row("DynamicFilter.P_init", DYGSLAM_SETTING_FIELD(filter.p_init), SettingRange::Closed(0, 1),
+          "", "probability of a new point in a box"),
+      Row("DynamicFilter.C2", DYGSLAM_SETTING_FIELD(filter.c2), SettingRange::Closed(0, 1000), "",
+          "paper eq. 11: weight of the neighbours' probability"),
+      Row("DynamicFilter.delta", DYGSLAM_SETTING_FIELD(filter.delta),
+          SettingRange::AboveAtMost(0, 16384), "px", "paper eq. 12: neighbourhood radius"),
+      Row("DynamicFilter.threshold", DYGSLAM_SETTING_FIELD(filter.threshold),
+          SettingRange::Closed(0, 1), "", "points above this probability are dynamic"),
+      Row("DynamicFilter.box_margin", DYGSLAM_SETTING_FIELD(filter.box_margin),
+          SettingRange::Closed(0, 16384), "px", "added to each detection box"),
+      Row("DynamicFilter.box_margin_fraction", DYGSLAM_SETTING_FIELD(filter.box_margin_fraction),
+          SettingRange::Closed(0, 1), "", "plus this share of the box width"),
+      Row("DynamicFilter.fundamental_threshold",
+          DYGSLAM_SETTING_FIELD(filter.fundamental_threshold), SettingRange::AboveAtMost(0, 1000),
+          "px", "the fundamental matrix's inlier threshold (GC-RANSAC)"),
+      Row("DynamicFilter.depth_residual", DYGSLAM_SETTING_FIELD(filter.depth_residual), {}, "",
+          "geometry, full: PnP motion and 3-D anchor residual instead of the fundamental matrix"),
+      Row("DynamicFilter.world_anchors", DYGSLAM_SETTING_FIELD(filter.world_anchors), {}, "",
+          "anchors stay where their track started, PnP against them (false: chained)"),
+      Row("DynamicFilter.expand_outside", DYGSLAM_SETTING_FIELD(filter.expand_outside), {}, "",
+          "full: unmatched features outside the boxes get the expansion (eq. 11)"),
+  };
+}
+
+std::vector<Row> DetectorRows() {
+  return {
+      Row("Detector.model", ReadModel, "yolo-fastest-1.1",
+          "a model in DYGSLAM_MODELS_DIR, or Detector.cfg / weights / names"),
+      Row("Detector.cfg", ReadModelFiles, "the model's", "Darknet cfg file"),
+      Row(
+          "Detector.weights", [](const ConfigReader&, SystemOptions*) {}, "the model's",
+          "Darknet weights file (with Detector.cfg)"),
+      Row(
+          "Detector.names", [](const ConfigReader&, SystemOptions*) {}, "the model's",
+          "class names file, one per line (with Detector.cfg)"),
+      Row("Detector.input_width", DYGSLAM_SETTING_FIELD(detector.input_width),
+          SettingRange::Closed(32, 4096).MultipleOf(32), "px", "network input width"),
+      Row("Detector.input_height", DYGSLAM_SETTING_FIELD(detector.input_height),
+          SettingRange::Closed(32, 4096).MultipleOf(32).OrZero(), "px",
+          "network input height; 0: from the frame's aspect ratio"),
+      Row("Detector.confidence_threshold", DYGSLAM_SETTING_FIELD(detector.confidence_threshold),
+          SettingRange::AboveAtMost(0, 1), "", "boxes below this confidence are dropped"),
+      Row("Detector.nms_threshold", DYGSLAM_SETTING_FIELD(detector.nms_threshold),
+          SettingRange::AboveAtMost(0, 1), "", "overlap above which boxes are merged"),
+      Row("Detector.num_threads", DYGSLAM_SETTING_FIELD(detector.num_threads),
+          SettingRange::Closed(0, 256), "", "OpenCV threads (process-wide); 0: OpenCV's default"),
+      Row("Detector.every_n_frames", DYGSLAM_SETTING_FIELD(detection_every_n_frames),
+          SettingRange::Closed(1, 1000), "",
+          "the detector runs on every n-th frame; the frames between carry the last boxes"),
+      Row("Detector.shift_carried_boxes", DYGSLAM_SETTING_FIELD(box_propagation.shift_boxes), {},
+          "", "carried boxes move with their content (false: they stay where detected)"),
+      Row("Detector.dynamic_classes", ReadDynamicClasses, DefaultClasses(),
+          "the classes whose boxes are dynamic (names of the model's classes)"),
+  };
 }
 
 }  // namespace
+
+const SettingsTable<SystemOptions>& SystemSettingsTable() {
+  static const SettingsTable<SystemOptions> table = [] {
+    SettingsTable<SystemOptions> t;
+    for (auto rows : {TrackingRows(), LoopClosingRows(), DynamicFilterRows(), DetectorRows()})
+      t.rows.insert(t.rows.end(), rows.begin(), rows.end());
+    return t;
+  }();
+  return table;
+}
 
 SystemOptions SystemOptionsFromSettings(const Settings& settings) {
   SystemOptions options;
   options.camera = settings.camera;
   options.sensor = settings.sensor;
   options.orb = settings.orb;
-  const ConfigReader& root = settings.reader;
   // Keyframe spacing follows the frame rate unless set.
   options.tracking.max_frames_between_keyframes = static_cast<int>(settings.sensor.fps);
-  const ConfigReader tracking = root.Section("Tracking");
-  ReadFields(tracking,
-             {{"init_min_features", &options.tracking.init_min_features},
-              {"max_frames_between_keyframes", &options.tracking.max_frames_between_keyframes},
-              {"dense_fallback", &options.tracking.dense_fallback},
-              {"fallback_smoothing", &options.tracking.fallback_smoothing}});
-  tracking.CheckOptions(options.tracking);
-  const ConfigReader mapping = root.Section("LocalMapping");
-  ReadFields(mapping, {{"cull_keyframes", &options.local_mapping.cull_keyframes}});
-  mapping.CheckOptions(options.local_mapping);
-  ReadLoopClosing(settings, &options.loop_closing);
-  ReadDynamicFilter(root, &options.filter);
-  ReadDetector(root, &options);
+  SystemSettingsTable().Read(settings.reader, &options);
+  // The rows' ranges hold every single-key condition of the options' Check(); what is left is a
+  // check that the table and the options agree (tests/reliability: every value a row accepts
+  // passes Check()). Model files that are resolved later stand in as placeholders.
+  options.Check();
+  DetectorOptions check = options.detector;
+  if (check.cfg_path.empty()) check.cfg_path = check.weights_path = check.names_path = "default";
+  settings.reader.CheckOptions(check);
   return options;
 }
 

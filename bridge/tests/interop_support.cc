@@ -9,6 +9,7 @@
 #include "core/config/settings.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/trajectory_io.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 
 namespace dygslam::testing {

@@ -34,6 +34,7 @@
 #include "dygslam_msg/DetectionsPubSubTypes.h"
 #include "dygslam_msg/MapUpdatePubSubTypes.h"
 #include "dygslam_msg/TrajectoryPubSubTypes.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 #include "tests/support/test_support.h"
 

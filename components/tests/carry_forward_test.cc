@@ -9,9 +9,10 @@
 #include "components/frame_pairing.h"
 #include "components/slam_core.h"
 #include "core/config/settings.h"
-#include "run/system_config.h"
 #include "core/dynamic/yolo_detector.h"
 #include "core/io/dataset.h"
+#include "run/settings_table.h"
+#include "run/system_config.h"
 #include "tests/support/test_support.h"
 
 namespace dygslam {
@@ -93,9 +94,10 @@ TEST(CarryForward, DetectorStoppedMidRunBoxesStillFilter) {
   EXPECT_EQ(carried.geometry_only, 0);
   EXPECT_EQ(geometry.geometry_only, static_cast<int>(kLast - kStop));
   // The carried-forward boxes remove most of what the frames' own boxes remove. Measured
-  // with the epipolar labels: own boxes 8038, carried forward 7308 (91 %), geometry only 0; with the
-  // depth-based labels expansion outside the boxes, neighbour consensus): own 8453, carried 8273 (98 %),
-  // geometry only 8618 -- the geometry alone now also finds the walkers once the boxes are gone.
+  // with the epipolar labels: own boxes 8038, carried forward 7308 (91 %), geometry only 0; with
+  // the depth-based labels expansion outside the boxes, neighbour consensus): own 8453, carried
+  // 8273 (98 %), geometry only 8618 -- the geometry alone now also finds the walkers once the boxes
+  // are gone.
   EXPECT_GT(sum(carried.dynamic), 0.75 * sum(all.dynamic));
   EXPECT_GT(sum(geometry.dynamic), 0.5 * sum(all.dynamic));
 }

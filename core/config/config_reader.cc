@@ -17,8 +17,6 @@
 
 #include "core/base/echo.h"
 #include "core/base/input_file.h"
-#include "core/config/setting_defaults.h"
-#include "core/config/settings.h"
 
 namespace dygslam {
 
@@ -473,43 +471,8 @@ ConfigReader ConfigReader::Section(const std::string& name) const {
 
 namespace {
 thread_local KeyLookupRecorder* current_recorder = nullptr;
-thread_local SettingDefaultsRecorder* current_defaults = nullptr;
 
-// A default as a settings file would write it: shortest round-trip numbers, true / false, lists
-// in brackets.
-std::string FormatDefault(double v) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
-  return std::string(buf, r.ptr);
-}
-std::string FormatDefault(float v) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
-  return std::string(buf, r.ptr);
-}
-std::string FormatDefault(int v) { return std::to_string(v); }
-std::string FormatDefault(int64_t v) { return std::to_string(v); }
-std::string FormatDefault(bool v) { return v ? "true" : "false"; }
-std::string FormatDefault(const std::string& v) { return v; }
-template <typename T>
-std::string FormatDefault(const std::vector<T>& v) {
-  std::string text = "[";
-  for (size_t i = 0; i < v.size(); ++i) text += (i == 0 ? "" : ", ") + FormatDefault(v[i]);
-  return text + "]";
-}
 }  // namespace
-
-SettingDefaultsRecorder::SettingDefaultsRecorder() : previous_(current_defaults) {
-  current_defaults = this;
-}
-
-SettingDefaultsRecorder::~SettingDefaultsRecorder() { current_defaults = previous_; }
-
-bool SettingDefaultsRecorder::Active() { return current_defaults != nullptr; }
-
-void SettingDefaultsRecorder::Record(const std::string& full_key, const std::string& value) {
-  if (current_defaults) current_defaults->defaults_.emplace(full_key, value);
-}
 
 KeyLookupRecorder::KeyLookupRecorder() : previous_(current_recorder) { current_recorder = this; }
 
@@ -657,158 +620,7 @@ std::string LooseKey(const std::string& key) {
   return out;
 }
 
-std::string LastPart(const std::string& key) {
-  const size_t dot = key.rfind('.');
-  return dot == std::string::npos ? key : key.substr(dot + 1);
-}
-
-// `text` with every whole-word `from` replaced by `to`.
-std::string ReplaceWord(const std::string& text, const std::string& from, const std::string& to) {
-  if (from.empty()) return text;
-  const auto is_word = [](char c) {
-    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
-  };
-  std::string out;
-  size_t i = 0;
-  while (i < text.size()) {
-    if (text.compare(i, from.size(), from) == 0 && (i == 0 || !is_word(text[i - 1])) &&
-        (i + from.size() == text.size() || !is_word(text[i + from.size()]))) {
-      out += to;
-      i += from.size();
-    } else {
-      out += text[i++];
-    }
-  }
-  return out;
-}
-
-bool IsIdentifierStart(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
-bool IsIdentifierChar(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }
-
-// The identifiers of a C++ condition that name option fields: not `std::...`, not a method
-// (`.empty()`), not a function call, not true/false.
-std::vector<std::string> ConditionFields(const std::string& condition) {
-  std::vector<std::string> out;
-  for (size_t i = 0; i < condition.size();) {
-    if (!IsIdentifierStart(condition[i]) || (i > 0 && IsIdentifierChar(condition[i - 1]))) {
-      ++i;
-      continue;
-    }
-    size_t end = i;
-    while (end < condition.size() && IsIdentifierChar(condition[end])) ++end;
-    const std::string word = condition.substr(i, end - i);
-    const bool method = i > 0 && condition[i - 1] == '.';
-    const bool scoped = condition.compare(end, 2, "::") == 0 || (i >= 2 && condition[i - 1] == ':');
-    const bool call = end < condition.size() && condition[end] == '(';
-    if (!method && !scoped && !call && word != "true" && word != "false") out.push_back(word);
-    i = end;
-  }
-  return out;
-}
-
 }  // namespace
-
-// A Check() condition as a user reads it (never the C++ text): the field it is about and the
-// other fields it names become the settings keys ("num_features > 0 && num_features <= 100000"
-// for ORBextractor.nFeatures -> "nFeatures > 0 and nFeatures <= 100000"), std::isfinite(x) ->
-// "x finite", !x.empty() -> "x not empty"; alternatives that do not name the key are left out.
-std::string UserCondition(const std::string& condition, const std::string& key,
-                          const std::vector<std::string>& known_keys) {
-  const std::string key_last = LastPart(key);
-  const std::string section = key.size() > key_last.size()
-                                  ? key.substr(0, key.size() - key_last.size() - 1)
-                                  : std::string();
-  // The subject: the field named most often (ties: the one that spells like the key).
-  const std::vector<std::string> fields = ConditionFields(condition);
-  std::string subject;
-  size_t best = 0;
-  for (const std::string& f : fields) {
-    const size_t n = static_cast<size_t>(std::count(fields.begin(), fields.end(), f));
-    if (n > best || (n == best && LooseKey(f) == LooseKey(key_last))) {
-      best = n;
-      subject = f;
-    }
-  }
-  // Alternatives (a || b): keep the ones about the key.
-  std::vector<std::string> alternatives;
-  for (size_t start = 0;;) {
-    const size_t bar = condition.find("||", start);
-    std::string part = condition.substr(start, bar == std::string::npos ? bar : bar - start);
-    while (!part.empty() && part.front() == ' ') part.erase(0, 1);
-    while (!part.empty() && part.back() == ' ') part.pop_back();
-    alternatives.push_back(part);
-    if (bar == std::string::npos) break;
-    start = bar + 2;
-  }
-  std::string text;
-  for (const std::string& a : alternatives) {
-    if (alternatives.size() > 1 && !subject.empty()) {
-      const std::vector<std::string> in = ConditionFields(a);
-      if (std::find(in.begin(), in.end(), subject) == in.end()) continue;
-    }
-    text += (text.empty() ? "" : " || ") + a;
-  }
-  if (text.empty()) text = condition;
-  // Function forms.
-  const auto rewrite = [&](const std::string& open, const std::string& close,
-                           const std::string& before, const std::string& after) {
-    for (size_t at = text.find(open); at != std::string::npos; at = text.find(open, at)) {
-      const size_t end = text.find(close, at + open.size());
-      if (end == std::string::npos) break;
-      const std::string inner = text.substr(at + open.size(), end - at - open.size());
-      const std::string replacement = before + inner + after;
-      text.replace(at, end + close.size() - at, replacement);
-      at += replacement.size();
-    }
-  };
-  rewrite("std::isfinite(", ")", "", " finite");
-  rewrite("std::abs(", ")", "|", "|");
-  rewrite("!(", ")", "not (", ")");
-  // !x.empty() / x.empty() / x.size().
-  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
-           {".empty()", " empty"}, {".size()", " count"}}) {
-    for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at))
-      text.replace(at, from.size(), to);
-  }
-  for (size_t at = text.find('!'); at != std::string::npos; at = text.find('!', at + 1)) {
-    if (at + 1 < text.size() && text[at + 1] != '=') {
-      // "!x empty" -> "x not empty"; "!flag" -> "not flag".
-      size_t end = at + 1;
-      while (end < text.size() && IsIdentifierChar(text[end])) ++end;
-      if (text.compare(end, 6, " empty") == 0) {
-        text.replace(end, 6, " not empty");
-        text.erase(at, 1);
-      } else {
-        text.replace(at, 1, "not ");
-      }
-    }
-  }
-  // Fields -> keys: the subject is the key; another field is the known key of the same section
-  // (or any section) that spells like it.
-  std::vector<std::string> done;
-  for (const std::string& f : ConditionFields(text)) {
-    if (std::find(done.begin(), done.end(), f) != done.end()) continue;
-    done.push_back(f);
-    std::string to;
-    if (f == subject) {
-      to = key_last;
-    } else {
-      for (const std::string& k : known_keys) {
-        if (LooseKey(LastPart(k)) != LooseKey(f)) continue;
-        const bool same_section = k.size() > f.size() && k.compare(0, section.size(), section) == 0;
-        to = same_section ? LastPart(k) : k;
-        if (same_section) break;
-      }
-    }
-    if (!to.empty() && to != f) text = ReplaceWord(text, f, to);
-  }
-  for (const auto& [from, to] :
-       std::vector<std::pair<std::string, std::string>>{{"&&", "and"}, {"||", "or"}}) {
-    for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at))
-      text.replace(at, from.size(), to);
-  }
-  return text;
-}
 
 void ConfigReader::FailInvalidOptions(const InvalidOptions& e) const {
   // DYGSLAM_CHECK_OPTION: "invalid option <name>: requires <condition>". The option's name is the
@@ -848,20 +660,14 @@ void ConfigReader::FailInvalidOptions(const InvalidOptions& e) const {
       break;
     }
   }
-  const size_t requires_at = message.find("requires ");
   std::string value;
   try {
     const Hit h = ConfigLookup::Find(impl_->path, impl_->root, key);
     if (h.line > 0 && h.value.IsScalar()) value = " " + EchoValue(h.value.Scalar(), 60);
   } catch (const InputError&) {
   }
-  if (requires_at == std::string::npos)
-    throw InputError(impl_->path, line,
-                     "key '" + key + "': invalid value" + value + " (" + message + ")");
-  const std::string condition =
-      UserCondition(message.substr(requires_at + 9), key, KnownSettingsKeys());
   throw InputError(impl_->path, line,
-                   "key '" + key + "': invalid value" + value + " (expected " + condition + ")");
+                   "key '" + key + "': invalid value" + value + " (" + message + ")");
 }
 
 template <typename T>
@@ -869,11 +675,7 @@ bool ConfigReader::ReadIfPresent(const std::string& key, T* value) const {
   const std::string full = FullKey(key);
   KeyLookupRecorder::Record(full);
   const Hit h = ConfigLookup::Find(impl_->path, impl_->root, full);
-  if (h.line <= 0 || h.value.IsNull()) {
-    if (SettingDefaultsRecorder::Active())
-      SettingDefaultsRecorder::Record(full, FormatDefault(*value));
-    return false;
-  }
+  if (h.line <= 0 || h.value.IsNull()) return false;
   const auto fail = [&](const std::string& m) -> void {
     throw InputError(impl_->path, h.line, "key '" + EchoValue(full) + "': " + m);
   };

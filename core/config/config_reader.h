@@ -102,15 +102,6 @@ class ConfigReader {
   std::string prefix_;
 };
 
-// An options Check() condition (the C++ text after "requires ") as users read it, for `key` of
-// the settings file: fields become the file's keys (the checked field -> the key's last part,
-// other fields -> the known key that spells like them), && / || -> and / or, std::isfinite(x) ->
-// "x finite", !x.empty() -> "x not empty"; alternatives that do not name the key are left out.
-//   UserCondition("num_features > 0 && num_features <= 100000", "ORBextractor.nFeatures", keys)
-//     == "nFeatures > 0 and nFeatures <= 100000"
-std::string UserCondition(const std::string& condition, const std::string& key,
-                          const std::vector<std::string>& known_keys);
-
 // Testing aid: while a KeyLookupRecorder lives on a thread, every key that thread reads through a
 // ConfigReader (Has, Get, Require, ReadIfPresent; fully dotted) is recorded, present in the file or
 // not. Lets a test check that every key some module reads is in KnownSettingsKeys() (otherwise a

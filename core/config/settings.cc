@@ -71,12 +71,92 @@ void CheckPlausibleBaseline(const ConfigReader& camera, const PinholeCamera& c,
   }
 }
 
-Settings ReadSettings(ConfigReader reader, const SettingsReadOptions& read_options) {
+}  // namespace
+
+const SettingsTable<Settings>& CameraSettingsTable() {
+  static const SettingsTable<Settings> table = {
+      {
+          SettingRow<Settings>("Camera.fx", DYGSLAM_SETTING_FIELD(camera.fx),
+                               SettingRange::Above(0), "px", "focal length in x")
+              .Required(),
+          SettingRow<Settings>("Camera.fy", DYGSLAM_SETTING_FIELD(camera.fy),
+                               SettingRange::Above(0), "px", "focal length in y")
+              .Required(),
+          SettingRow<Settings>("Camera.cx", DYGSLAM_SETTING_FIELD(camera.cx), SettingRange::Any(),
+                               "px", "principal point x")
+              .Required(),
+          SettingRow<Settings>("Camera.cy", DYGSLAM_SETTING_FIELD(camera.cy), SettingRange::Any(),
+                               "px", "principal point y")
+              .Required(),
+          SettingRow<Settings>("Camera.k1", DYGSLAM_SETTING_FIELD(camera.k1), SettingRange::Any(),
+                               "", "radial distortion (OpenCV order k1 k2 p1 p2 k3)")
+              .Required(),
+          SettingRow<Settings>("Camera.k2", DYGSLAM_SETTING_FIELD(camera.k2), SettingRange::Any(),
+                               "", "radial distortion")
+              .Required(),
+          SettingRow<Settings>("Camera.p1", DYGSLAM_SETTING_FIELD(camera.p1), SettingRange::Any(),
+                               "", "tangential distortion")
+              .Required(),
+          SettingRow<Settings>("Camera.p2", DYGSLAM_SETTING_FIELD(camera.p2), SettingRange::Any(),
+                               "", "tangential distortion")
+              .Required(),
+          {"Camera.k3", DYGSLAM_SETTING_FIELD(camera.k3), SettingRange::Any(), "",
+           "radial distortion"},
+          {"Camera.width", DYGSLAM_SETTING_FIELD(camera.width), SettingRange::Closed(1, 16384),
+           "px", "image width; images of another size are rejected"},
+          {"Camera.height", DYGSLAM_SETTING_FIELD(camera.height), SettingRange::Closed(1, 16384),
+           "px", "image height; images of another size are rejected"},
+          {"Camera.fps", DYGSLAM_SETTING_FIELD(sensor.fps), SettingRange::AboveAtMost(0, 1000),
+           "Hz", "frame rate; RGB-D sensors run at 5 to 90 Hz"},
+          {"Camera.bf", DYGSLAM_SETTING_FIELD(sensor.bf), SettingRange::Above(0), "px",
+           "stereo baseline times Camera.fx (virtual stereo for RGB-D; TUM / Bonn: 40)"},
+          {"ThDepth", DYGSLAM_SETTING_FIELD(sensor.th_depth), SettingRange::AboveAtMost(0, 1000),
+           "", "points nearer than ThDepth x Camera.bf / Camera.fx are close (TUM / Bonn: 40)"},
+          {"DepthMapFactor", DYGSLAM_SETTING_FIELD(sensor.depth_map_factor),
+           SettingRange::Closed(1, 1e5), "",
+           "depth image units per metre: 1 for float depth in metres, 1000 for millimetres, "
+           "5000 for TUM / Bonn"},
+          {"ORBextractor.nFeatures", DYGSLAM_SETTING_FIELD(orb.num_features),
+           SettingRange::Closed(1, 100000), "", "features per image"},
+          {"ORBextractor.scaleFactor", DYGSLAM_SETTING_FIELD(orb.scale_factor),
+           SettingRange::Open(1, 4), "", "scale between pyramid levels"},
+          {"ORBextractor.nLevels", DYGSLAM_SETTING_FIELD(orb.num_levels),
+           SettingRange::Closed(1, 32), "", "pyramid levels"},
+          {"ORBextractor.iniThFAST", DYGSLAM_SETTING_FIELD(orb.ini_th_fast),
+           SettingRange::Closed(1, 254), "", "FAST threshold"},
+          {"ORBextractor.minThFAST", DYGSLAM_SETTING_FIELD(orb.min_th_fast),
+           SettingRange::Closed(1, 254), "",
+           "FAST threshold where the first finds too few corners"},
+      },
+      {{"ORBextractor.minThFAST", "at most ORBextractor.iniThFAST",
+        [](const Settings& s) { return s.orb.min_th_fast <= s.orb.ini_th_fast; }}}};
+  return table;
+}
+
+const std::vector<std::string>& IgnoredSettingsKeys() {
+  static const std::vector<std::string> kKeys = {"Camera.RGB", "Camera.type", "File.version",
+                                                 "Viewer.*"};
+  return kKeys;
+}
+
+Settings ReadCameraSettings(ConfigReader reader) {
   Settings s;
   s.path = reader.path();
-  for (const ConfigReader::UnknownKey& u : reader.UnknownKeys(KnownSettingsKeys())) {
+  CameraSettingsTable().Read(reader, &s);
+  const ConfigReader camera = reader.Section("Camera");
+  CheckPlausibleCamera(camera, s.camera);
+  if (camera.Has("bf")) CheckPlausibleBaseline(camera, s.camera, s.sensor);
+  s.reader = std::move(reader);
+  return s;
+}
+
+void CheckUnknownSettingsKeys(const std::vector<std::string>& known,
+                              const std::vector<std::pair<std::string, std::string>>& retired,
+                              const SettingsReadOptions& read_options, Settings* settings) {
+  const ConfigReader& reader = settings->reader;
+  for (const ConfigReader::UnknownKey& u : reader.UnknownKeys(known)) {
     std::string message = reader.UnknownKeyMessage(u);
-    for (const auto& [key, reason] : RetiredSettingsKeys()) {
+    for (const auto& [key, reason] : retired) {
       if (u.key == key) {
         message = InputError::Format(
             reader.path(), u.line,
@@ -86,182 +166,9 @@ Settings ReadSettings(ConfigReader reader, const SettingsReadOptions& read_optio
     if (read_options.unknown_keys == UnknownKeyPolicy::kError) {
       throw InputError(message + " [unknown settings keys are errors here]");
     }
-    s.warnings.push_back(message);
+    settings->warnings.push_back(message);
     if (read_options.print_warnings) std::fprintf(stderr, "warning: %s\n", message.c_str());
   }
-  const ConfigReader camera = reader.Section("Camera");
-  s.camera.fx = camera.Require<double>("fx");
-  s.camera.fy = camera.Require<double>("fy");
-  s.camera.cx = camera.Require<double>("cx");
-  s.camera.cy = camera.Require<double>("cy");
-  s.camera.k1 = camera.Require<double>("k1");
-  s.camera.k2 = camera.Require<double>("k2");
-  s.camera.p1 = camera.Require<double>("p1");
-  s.camera.p2 = camera.Require<double>("p2");
-  camera.ReadIfPresent("k3", &s.camera.k3);
-  camera.ReadIfPresent("width", &s.camera.width);
-  camera.ReadIfPresent("height", &s.camera.height);
-  camera.ReadIfPresent("fps", &s.sensor.fps);
-  camera.ReadIfPresent("bf", &s.sensor.bf);
-  reader.ReadIfPresent("ThDepth", &s.sensor.th_depth);
-  reader.ReadIfPresent("DepthMapFactor", &s.sensor.depth_map_factor);
-  const ConfigReader orb = reader.Section("ORBextractor");
-  orb.ReadIfPresent("nFeatures", &s.orb.num_features);
-  orb.ReadIfPresent("scaleFactor", &s.orb.scale_factor);
-  orb.ReadIfPresent("nLevels", &s.orb.num_levels);
-  orb.ReadIfPresent("iniThFAST", &s.orb.ini_th_fast);
-  orb.ReadIfPresent("minThFAST", &s.orb.min_th_fast);
-  reader.CheckOptions(s.camera);
-  CheckPlausibleCamera(camera, s.camera);
-  if (camera.Has("bf")) CheckPlausibleBaseline(camera, s.camera, s.sensor);
-  reader.CheckOptions(s.sensor);
-  // Finite and positive but absurd: a frame rate that makes the derived keyframe interval
-  // (Tracking.max_frames_between_keyframes = fps) overflow, a close-depth threshold beyond any
-  // sensor. Named by their own keys and lines, not by what they break later.
-  constexpr double kMaxFps = 1000.0, kMaxThDepth = 1000.0;
-  if (s.sensor.fps > kMaxFps) {
-    camera.Fail("fps", "implausible frame rate " + Short(s.sensor.fps) + " (expected at most " +
-                           Short(kMaxFps) + "; RGB-D sensors run at 5 to 90 Hz)");
-  }
-  if (s.sensor.th_depth > kMaxThDepth) {
-    reader.Fail("ThDepth", "implausible close-depth factor " + Short(s.sensor.th_depth) +
-                               " (close points are nearer than ThDepth x Camera.bf / Camera.fx = " +
-                               Short(s.sensor.close_depth(s.camera.fx)) + " m; expected at most " +
-                               Short(kMaxThDepth) + ", TUM / Bonn use 40: " +
-                               Short(40.0 * s.sensor.bf / s.camera.fx) + " m)");
-  }
-  // Depth image units per metre: 1 for float images in metres, 1000 for millimetres, 5000 for
-  // TUM / Bonn. Below 1 a unit would be longer than a metre (a 16-bit image would reach beyond
-  // 65 km): every point lands kilometres away and nothing downstream can tell.
-  constexpr double kMinDepthMapFactor = 1, kMaxDepthMapFactor = 1e5;
-  if (s.sensor.depth_map_factor < kMinDepthMapFactor ||
-      s.sensor.depth_map_factor > kMaxDepthMapFactor) {
-    reader.Fail("DepthMapFactor", "implausible depth scale " + Short(s.sensor.depth_map_factor) +
-                                      " (depth image units per metre; expected " +
-                                      Short(kMinDepthMapFactor) + " to " +
-                                      Short(kMaxDepthMapFactor) +
-                                      ": 1 for float depth in metres, 1000 for millimetres, "
-                                      "TUM / Bonn use 5000: 0.2 mm per unit)");
-  }
-  reader.CheckOptions(s.orb);
-  s.reader = std::move(reader);
-  return s;
-}
-
-}  // namespace
-
-const std::vector<std::pair<std::string, std::string>>& RetiredSettingsKeys() {
-  static const char* const kTrackingFixed =
-      "a fixed part of tracking (the value it had), not a setting of the camera or the run";
-  static const char* const kLocalMappingFixed =
-      "a fixed part of local mapping (the value it had), not a setting of the camera or the run";
-  static const char* const kLoopClosingFixed =
-      "a fixed part of loop detection and correction (the value it had); LoopClosing.enabled, "
-      "max_correction_m and global_bundle_adjustment remain";
-  static const char* const kDynamicFilterFixed =
-      "a fixed part of our filter's extensions (the value it had); the paper's parameters and the "
-      "switches of the extensions remain";
-  static const char* const kOctoMapFixed =
-      "a fixed part of the map builder (the value it had), not a setting of the map";
-  static const std::vector<std::pair<std::string, std::string>> kKeys = {
-      {"Tracking.handoff_wait_ms", "local mapping's results land at a fixed frame instead"},
-      {"Tracking.keyframe_wait_ms", "local mapping's results land at a fixed frame instead"},
-      {"Tracking.keyframe_weak_inliers", "measured no better; weak frames are re-anchored"},
-      {"Tracking.fallback_smoothing_dense_weight",
-       "measured no better; the correction is spread evenly over the stretch"},
-      {"LocalMapping.final_ba_iterations", "measured no better; loop closing runs a global BA"},
-      {"DynamicFilter.depth_residual_weight",
-       "measured worse: the depth noise outweighs the depth term"},
-      {"OctoMap.discretize", "measured no better; every ray is cast"},
-      {"OctoMap.voxel_filter_size",
-       "the voxel filter's cell is the map's resolution (OctoMap.resolution); "
-       "OctoMap.use_voxel_filter turns it off"},
-      {"LoopClosing.global_ba_min_correction_m", "a global BA follows every loop it corrects"},
-      {"LoopClosing.global_ba_min_correction_deg", "a global BA follows every loop it corrects"},
-      {"Tracking.motion_radius_px", kTrackingFixed},
-      {"Tracking.ref_ratio", kTrackingFixed},
-      {"Tracking.keyframe_counts_odometry_points", kTrackingFixed},
-      {"Tracking.keyframe_min_map_inliers", kTrackingFixed},
-      {"Tracking.localization_local_keyframes", kTrackingFixed},
-      {"Tracking.fallback_check_below_inliers", kTrackingFixed},
-      {"Tracking.fallback_min_inlier_fraction", kTrackingFixed},
-      {"Tracking.fallback_min_inliers", kTrackingFixed},
-      {"Tracking.fallback_override_fraction_gain", kTrackingFixed},
-      {"Tracking.fallback_smoothing_weak_inliers", kTrackingFixed},
-      {"LocalMapping.ba_lag_frames", kLocalMappingFixed},
-      {"LocalMapping.triangulation_neighbors", kLocalMappingFixed},
-      {"LocalMapping.redundancy_ratio", kLocalMappingFixed},
-      {"LoopClosing.min_keyframe_gap", kLoopClosingFixed},
-      {"LoopClosing.consistency", kLoopClosingFixed},
-      {"LoopClosing.min_bow_matches", kLoopClosingFixed},
-      {"LoopClosing.ransac_iterations", kLoopClosingFixed},
-      {"LoopClosing.ransac_threshold_px", kLoopClosingFixed},
-      {"LoopClosing.min_ransac_inliers", kLoopClosingFixed},
-      {"LoopClosing.min_inlier_ratio", kLoopClosingFixed},
-      {"LoopClosing.min_projection_matches", kLoopClosingFixed},
-      {"LoopClosing.max_drift_per_meter", kLoopClosingFixed},
-      {"LoopClosing.max_correction_deg", kLoopClosingFixed},
-      {"LoopClosing.max_drift_deg_per_meter", kLoopClosingFixed},
-      {"LoopClosing.fusion_radius_px", kLoopClosingFixed},
-      {"LoopClosing.essential_min_weight", kLoopClosingFixed},
-      {"LoopClosing.pose_graph_iterations", kLoopClosingFixed},
-      {"LoopClosing.pose_graph_min_correction_m", kLoopClosingFixed},
-      {"LoopClosing.pose_graph_min_correction_deg", kLoopClosingFixed},
-      {"LoopClosing.global_ba_iterations", kLoopClosingFixed},
-      {"DynamicFilter.search_radius", kDynamicFilterFixed},
-      {"DynamicFilter.max_hamming", kDynamicFilterFixed},
-      {"DynamicFilter.depth_residual_scale", kDynamicFilterFixed},
-      {"DynamicFilter.anchor_max_age", kDynamicFilterFixed},
-      {"DynamicFilter.outside_p_init", kDynamicFilterFixed},
-      {"DynamicFilter.box_depth_band", kDynamicFilterFixed},
-      {"DynamicFilter.consensus_radius", kDynamicFilterFixed},
-      {"DynamicFilter.consensus_depth_gap", kDynamicFilterFixed},
-      {"DynamicFilter.expansion_depth_gap", kDynamicFilterFixed},
-      {"OctoMap.lazy_eval", kOctoMapFixed},
-      {"OctoMap.rebuild_displacement", kOctoMapFixed},
-      {"OctoMap.dynamic_keypoint_radius_px", kOctoMapFixed},
-  };
-  return kKeys;
-}
-
-const std::vector<std::string>& KnownSettingsKeys() {
-  static const std::vector<std::string> kKeys = {
-      // ORB-SLAM2 (RGB-D): read.
-      "Camera.fx", "Camera.fy", "Camera.cx", "Camera.cy", "Camera.k1", "Camera.k2", "Camera.p1",
-      "Camera.p2", "Camera.k3", "Camera.width", "Camera.height", "Camera.fps", "Camera.bf",
-      "ThDepth", "DepthMapFactor", "ORBextractor.nFeatures", "ORBextractor.scaleFactor",
-      "ORBextractor.nLevels", "ORBextractor.iniThFAST", "ORBextractor.minThFAST",
-      // ORB-SLAM2 / ORB-SLAM3 keys accepted and not used.
-      "Camera.RGB", "Camera.type", "File.version", "Viewer.*",
-      // run/system_config.cc.
-      "Tracking.init_min_features", "Tracking.max_frames_between_keyframes",
-      "Tracking.fallback_smoothing", "Tracking.dense_fallback", "DynamicFilter.world_anchors",
-      "LocalMapping.cull_keyframes", "DynamicFilter.mode", "DynamicFilter.C1",
-      "DynamicFilter.alpha", "DynamicFilter.Q", "DynamicFilter.R", "DynamicFilter.P_init",
-      "DynamicFilter.C2", "DynamicFilter.delta", "DynamicFilter.threshold",
-      "DynamicFilter.box_margin", "DynamicFilter.box_margin_fraction",
-      "DynamicFilter.fundamental_threshold", "DynamicFilter.depth_residual",
-      "DynamicFilter.expand_outside", "Detector.model", "Detector.cfg", "Detector.weights",
-      "Detector.names", "Detector.input_width", "Detector.input_height",
-      "Detector.confidence_threshold", "Detector.nms_threshold", "Detector.num_threads",
-      "Detector.every_n_frames", "Detector.shift_carried_boxes", "Detector.dynamic_classes",
-      "LoopClosing.vocabulary", "LoopClosing.enabled", "LoopClosing.revisit_min_path_m",
-      "LoopClosing.max_correction_m", "LoopClosing.global_bundle_adjustment",
-      // run/mapping_config.cc.
-      "OctoMap.resolution", "OctoMap.max_range", "OctoMap.min_range", "OctoMap.prob_hit",
-      "OctoMap.prob_miss", "OctoMap.clamping_min", "OctoMap.clamping_max",
-      "OctoMap.occupancy_threshold", "OctoMap.pixel_stride", "OctoMap.use_voxel_filter",
-      "OctoMap.use_dynamic_mask", "OctoMap.dynamic_mask_dilation_px"};
-  return kKeys;
-}
-
-Settings LoadSettings(const std::string& path, const SettingsReadOptions& read_options) {
-  return ReadSettings(ConfigReader::FromFile(path), read_options);
-}
-
-Settings ParseSettings(const std::string& text, const std::string& name,
-                       const SettingsReadOptions& read_options) {
-  return ReadSettings(ConfigReader::FromString(text, name), read_options);
 }
 
 std::string DefaultSettingsPath(const std::string& dataset_dir, const std::string& config_dir) {

@@ -8,6 +8,7 @@
 
 #include "core/base/camera.h"
 #include "core/config/config_reader.h"
+#include "core/config/setting_table.h"
 #include "core/slam/feature/orb_extractor.h"
 
 namespace dygslam {
@@ -31,35 +32,29 @@ struct SettingsReadOptions {
   bool print_warnings = true;
 };
 
-// Every key dygslam reads (ORB-SLAM2's plus the module sections Tracking, LocalMapping,
-// DynamicFilter, Detector, OctoMap) and ORB-SLAM2 keys it accepts without using (Camera.RGB,
-// Viewer.*). A module that reads a new key adds it here.
-const std::vector<std::string>& KnownSettingsKeys();
-// Keys that were settings once, with why they are not: a file that still sets one gets that
-// reason (a warning, or an error where unknown keys are errors) instead of "unknown key".
-const std::vector<std::pair<std::string, std::string>>& RetiredSettingsKeys();
+// ORB-SLAM2's keys: Camera.* (fx, fy, cx, cy, k1, k2, p1, p2 required), ThDepth, DepthMapFactor,
+// ORBextractor.*, with their ranges and defaults.
+const SettingsTable<Settings>& CameraSettingsTable();
+// ORB-SLAM2 / ORB-SLAM3 keys accepted and not used (Camera.RGB, Viewer.*: every key below Viewer).
+const std::vector<std::string>& IgnoredSettingsKeys();
 
-// Reads ORB-SLAM2's keys:
-//   required: Camera.fx, Camera.fy, Camera.cx, Camera.cy, Camera.k1, Camera.k2, Camera.p1,
-//   Camera.p2 optional (default): Camera.k3 (0), Camera.width (640), Camera.height (480),
-//   Camera.fps (30),
-//     Camera.bf (40), ThDepth (40), DepthMapFactor (5000), ORBextractor.nFeatures (1000),
-//     ORBextractor.scaleFactor (1.2), ORBextractor.nLevels (8), ORBextractor.iniThFAST (20),
-//     ORBextractor.minThFAST (7)
-// Keys ORB-SLAM2 has but dygslam does not use (Camera.RGB, Viewer.*) are ignored.
-// Plausible ranges (InputError otherwise): focal lengths 0.05..100 times the larger image side,
-// principal point inside the image, |k1|, |k2|, |k3| <= 10, |p1|, |p2| <= 1, and when Camera.bf is
-// given a baseline bf / fx above 0 and at most 1 m.
-// Unknown keys: a warning (or, with UnknownKeyPolicy::kError, an InputError) naming file:line
-// and the closest known key. A section given as a list is an error.
-// Throws InputError naming the file, line and key (bad values, failed Check()).
-Settings LoadSettings(const std::string& path, const SettingsReadOptions& read_options = {});
+// Reads ORB-SLAM2's keys (CameraSettingsTable) from `reader` and checks them for plausibility:
+// focal lengths 0.05..100 times the larger image side, principal point inside the image,
+// |k1|, |k2|, |k3| <= 10, |p1|, |p2| <= 1, and when Camera.bf is given a baseline bf / fx of at
+// most 1 m. Keys of other sections are left to their readers; which keys are unknown only the run
+// layer, which knows every section, can tell (run/settings_table.h: LoadSettings).
+// Throws InputError naming the file, line and key.
+Settings ReadCameraSettings(ConfigReader reader);
+
+// The keys of settings->reader that are not in `known`: a warning each (in settings->warnings,
+// printed unless read_options says not to) naming file:line and the closest known key, or with
+// UnknownKeyPolicy::kError an InputError. A key of `retired` gets its reason instead.
+void CheckUnknownSettingsKeys(const std::vector<std::string>& known,
+                              const std::vector<std::pair<std::string, std::string>>& retired,
+                              const SettingsReadOptions& read_options, Settings* settings);
 
 // The settings file for a dataset folder: its own camera.yaml (generated sequences), else the
 // preset of `config_dir` by folder name (freiburg1/2/3 -> tum1/2/3.yaml, otherwise bonn.yaml).
 std::string DefaultSettingsPath(const std::string& dataset_dir, const std::string& config_dir);
-// Same from YAML text (`name` stands in for the file name in messages).
-Settings ParseSettings(const std::string& text, const std::string& name,
-                       const SettingsReadOptions& read_options = {UnknownKeyPolicy::kWarn, false});
 
 }  // namespace dygslam

@@ -29,7 +29,8 @@
 #include "core/io/dataset.h"
 #include "core/io/detections_io.h"
 #include "mapping/octomap_builder.h"
-#include "run/mapping_config.h"
+#include "mapping/octomap_settings.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 #include "tests/support/test_support.h"
 

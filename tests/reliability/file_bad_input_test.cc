@@ -16,6 +16,7 @@
 #include "core/config/settings.h"
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
+#include "run/settings_table.h"
 #include "tests/support/test_support.h"
 
 namespace dygslam {

@@ -14,11 +14,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <regex>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "core/io/file_util.h"
+#include "core/io/trajectory_io.h"
 #include "tests/support/cli_fixture.h"
 #include "tests/support/test_support.h"
 
@@ -120,6 +122,49 @@ TEST_F(OutputClashCli, RunRefusesAnOutputOntoAnInputOrAnotherOutput) {
               dir_ + "/old.map", {"--save-map '" + dir_ + "/old.map' is --load-map"});
   // No work was done: nothing in --out.
   EXPECT_TRUE(!fs::exists(out) || fs::is_empty(out));
+}
+
+// Two commands writing into one folder would rename their files over each other's (a recorder
+// started by hand beside a run replaced the run's complete trajectory by its partial one, exit
+// 0). The folder is held by the command that writes into it: a second one is refused before any
+// work, and the first one's outputs are whole.
+TEST_F(OutputClashCli, TwoCommandsNeverWriteIntoOneFolderAtOnce) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string data = SmallDataset(source, 90, "data", /*with_groundtruth=*/true);
+  const std::string out = dir_ + "/out";
+  // A paced run (3 s of frames) holds the folder while it goes.
+  const pid_t first =
+      testing::SpawnDygslam({"run", data, "--config", Config(), "--direct", "--filter", "none",
+                             "--quiet", "--rate", "1", "--out", out},
+                            dir_ + "/first.out", dir_ + "/first.err");
+  ASSERT_GT(first, 0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!fs::exists(out) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  for (const std::vector<std::string>& second :
+       {std::vector<std::string>{"run", data, "--config", Config(), "--direct", "--filter", "none",
+                                 "--quiet", "--frames", "0:10", "--out", out},
+        std::vector<std::string>{"map", data, "--config", Config(), "--trajectory",
+                                 data + "/groundtruth.txt", "--out", out}}) {
+    const auto r = Run(second);
+    ExpectError(r, 2, {"--out '" + out + "': another dygslam command is writing its"});
+  }
+  std::string diagnostics;
+  const int code = testing::WaitForExit(first, 120, &diagnostics);
+  const std::string summary = ReadAll(dir_ + "/first.out");
+  EXPECT_EQ(code, 0) << summary << ReadAll(dir_ + "/first.err") << diagnostics;
+  std::smatch done;
+  // At the camera's rate, a frame or two may be dropped while the other command starts.
+  ASSERT_TRUE(
+      std::regex_search(summary, done, std::regex(R"(integrity: (\d+) of 90 requested frames)")))
+      << summary;
+  EXPECT_GE(std::stoul(done[1]), 80u) << summary;
+  EXPECT_EQ(ReadTumTrajectory(out + "/trajectory.txt").size(), std::stoul(done[1]));
+  // The folder is free again once the command ended.
+  const auto r = Run({"run", data, "--config", Config(), "--direct", "--filter", "none", "--quiet",
+                      "--frames", "0:10", "--no-map", "--out", out});
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
 }
 
 TEST_F(OutputClashCli, EvalRefusesToWriteOverItsInputs) {

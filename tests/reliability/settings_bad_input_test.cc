@@ -10,7 +10,8 @@
 #include <string>
 
 #include "core/config/settings.h"
-#include "run/mapping_config.h"
+#include "mapping/octomap_settings.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 #include "tests/support/settings_text.h"
 

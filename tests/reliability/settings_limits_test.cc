@@ -16,7 +16,8 @@
 
 #include "core/base/error.h"
 #include "core/config/settings.h"
-#include "run/mapping_config.h"
+#include "mapping/octomap_settings.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 #include "tests/support/settings_text.h"
 
@@ -143,8 +144,8 @@ TEST(SettingsLimits, EverySettingsKeyRefusesAnAbsurdlyLargeValue) {
   std::string error;
   ReadAll(WithKey("DynamicFilter.fundamental_threshold", "99999999999999999999"), &error);
   EXPECT_TRUE(Contains(error,
-                       "key 'DynamicFilter.fundamental_threshold': implausible value 1e+20 "
-                       "(expected at most 1000 px)"))
+                       "key 'DynamicFilter.fundamental_threshold': value 1e+20 is out of range: "
+                       "expected > 0 and <= 1000 px"))
       << error;
   error.clear();
   ReadAll(WithKey("LoopClosing.revisit_min_path_m", "12.5") +

@@ -14,6 +14,7 @@
 #include "core/io/trajectory_io.h"
 #include "core/slam/tracking/static_depth_odometry.h"
 #include "core/system/system.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 #include "tests/support/test_support.h"
 #include "tools/synth/synthetic_scene.h"

@@ -6,11 +6,12 @@
 #include <gtest/gtest.h>
 
 #include "core/config/settings.h"
-#include "run/system_config.h"
 #include "core/eval/trajectory_eval.h"
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
+#include "run/settings_table.h"
+#include "run/system_config.h"
 #include "tests/support/test_support.h"
 
 namespace dygslam {

@@ -15,9 +15,10 @@
 #include <vector>
 
 #include "core/config/settings.h"
-#include "run/system_config.h"
 #include "core/slam/map/map_file.h"
 #include "core/system/system.h"
+#include "run/settings_table.h"
+#include "run/system_config.h"
 #include "tests/slam/synthetic_map.h"
 
 using namespace dygslam;

@@ -13,6 +13,7 @@
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
 #include "run/dataset_runner.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 #include "tests/support/test_support.h"
 

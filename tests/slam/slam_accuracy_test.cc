@@ -6,6 +6,7 @@
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
 #include "core/system/system.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 #include "tests/support/test_support.h"
 #include "tools/synth/synthetic_scene.h"
@@ -29,7 +30,8 @@ RunOutput RunSynthetic(const SyntheticOptions& synth, FilterMode mode, bool use_
   RunOutput out;
   for (int i = 0; i < scene.num_frames(); ++i) {
     const SyntheticFrame f = scene.RenderFrame(i);
-    const FrameResult r = system.FeedRgbdFrame(f.rgb, f.depth, f.stamp, cv::Mat(), use_boxes ? &f.boxes : nullptr);
+    const FrameResult r =
+        system.FeedRgbdFrame(f.rgb, f.depth, f.stamp, cv::Mat(), use_boxes ? &f.boxes : nullptr);
     if (r.state == TrackingState::kLost) ++out.lost;
   }
   system.Shutdown();
@@ -40,7 +42,8 @@ RunOutput RunSynthetic(const SyntheticOptions& synth, FilterMode mode, bool use_
 std::vector<StampedPose> GroundTruth(const SyntheticOptions& synth) {
   SyntheticScene scene(synth);
   std::vector<StampedPose> gt;
-  for (int i = 0; i < scene.num_frames(); ++i) gt.push_back(StampedPose{scene.FrameStamp(i), scene.WorldFromCam(i)});
+  for (int i = 0; i < scene.num_frames(); ++i)
+    gt.push_back(StampedPose{scene.FrameStamp(i), scene.WorldFromCam(i)});
   return gt;
 }
 
@@ -53,7 +56,8 @@ TEST(SlamAccuracy, GeneratedStaticSequenceWithin5mm) {
   EXPECT_EQ(run.lost, 0);
   ASSERT_EQ(static_cast<int>(run.trajectory.size()), synth.num_frames);
   const AteResult ate = ComputeAte(GroundTruth(synth), run.trajectory);
-  std::cout << "generated static sequence: ATE RMSE " << ate.error.rmse << " m over " << ate.num_pairs << " frames\n";
+  std::cout << "generated static sequence: ATE RMSE " << ate.error.rmse << " m over "
+            << ate.num_pairs << " frames\n";
   EXPECT_LE(ate.error.rmse, 0.005);
 }
 
@@ -67,7 +71,8 @@ TEST(SlamAccuracy, GeneratedDynamicSequenceFilterBeatsNoFilter) {
   const RunOutput full = RunSynthetic(synth, FilterMode::kFull, true);
   const double ate_none = ComputeAte(gt, none.trajectory).error.rmse;
   const double ate_full = ComputeAte(gt, full.trajectory).error.rmse;
-  std::cout << "generated dynamic sequence: ATE none " << ate_none << " m, full " << ate_full << " m\n";
+  std::cout << "generated dynamic sequence: ATE none " << ate_none << " m, full " << ate_full
+            << " m\n";
   EXPECT_LE(ate_full, 0.01);
   EXPECT_LE(ate_full, ate_none);
 }
@@ -86,7 +91,8 @@ TEST(SlamRelocalization, LostFramesHaveNoPoseAndTrackingRecovers) {
   options.filter.mode = FilterMode::kNone;
   options.deterministic = true;
   System system(options);
-  const cv::Mat blank_rgb(synth.camera.height, synth.camera.width, CV_8UC3, cv::Scalar(128, 128, 128));
+  const cv::Mat blank_rgb(synth.camera.height, synth.camera.width, CV_8UC3,
+                          cv::Scalar(128, 128, 128));
   const cv::Mat blank_depth(synth.camera.height, synth.camera.width, CV_16UC1, cv::Scalar(0));
   std::vector<int> fed;
   for (int i = 0; i < 60; ++i) fed.push_back(i);
@@ -96,7 +102,8 @@ TEST(SlamRelocalization, LostFramesHaveNoPoseAndTrackingRecovers) {
   for (size_t n = 0; n < fed.size(); ++n) {
     if (n == 60) {
       for (int b = 0; b < 5; ++b) {
-        const Timestamp t = Timestamp::FromNanoseconds(scene.FrameStamp(59).nanoseconds() + (++fake_ns) * 1000000);
+        const Timestamp t =
+            Timestamp::FromNanoseconds(scene.FrameStamp(59).nanoseconds() + (++fake_ns) * 1000000);
         const FrameResult r = system.FeedRgbdFrame(blank_rgb, blank_depth, t);
         EXPECT_EQ(r.state, TrackingState::kLost);
         EXPECT_FALSE(r.world_from_cam.has_value());
@@ -118,14 +125,15 @@ TEST(SlamRelocalization, LostFramesHaveNoPoseAndTrackingRecovers) {
   std::vector<StampedPose> gt;
   for (int i : fed) gt.push_back(StampedPose{scene.FrameStamp(i), scene.WorldFromCam(i)});
   const AteResult ate = ComputeAte(gt, system.Trajectory());
-  std::cout << "kidnapped sequence: " << relocalized << " relocalized, " << lost << " lost, ATE " << ate.error.rmse
-            << " m over " << ate.num_pairs << " poses\n";
+  std::cout << "kidnapped sequence: " << relocalized << " relocalized, " << lost << " lost, ATE "
+            << ate.error.rmse << " m over " << ate.num_pairs << " poses\n";
   EXPECT_GE(ate.num_pairs, fed.size() - 3);
   EXPECT_LE(ate.error.rmse, 0.01);
 }
 
 RunOutput RunBonn(const std::string& dir, size_t first, size_t last, FilterMode mode) {
-  const Settings settings = LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
+  const Settings settings =
+      LoadSettings(std::string(DYGSLAM_TEST_SOURCE_DIR) + "/config/bonn.yaml");
   SystemOptions options = SystemOptionsFromSettings(settings);
   options.filter.mode = mode;
   options.deterministic = true;
@@ -135,7 +143,8 @@ RunOutput RunBonn(const std::string& dir, size_t first, size_t last, FilterMode 
   for (size_t k = first; k < last; ++k) {
     const auto i = dataset.FrameForRgbEntry(k);
     if (!i) continue;
-    const FrameResult r = system.FeedRgbdFrame(dataset.LoadRgb(*i), dataset.LoadDepth(*i), dataset.frame(*i).rgb_stamp);
+    const FrameResult r = system.FeedRgbdFrame(dataset.LoadRgb(*i), dataset.LoadDepth(*i),
+                                               dataset.frame(*i).rgb_stamp);
     if (r.state == TrackingState::kLost) ++out.lost;
   }
   system.Shutdown();
@@ -159,13 +168,16 @@ TEST(SlamAccuracy, DeterministicModeIsRepeatable) {
   const RunOutput b = RunBonn(dir, 100, 160, FilterMode::kFull);
   // Frames 100..159 (people entering) are all tracked in deterministic runs (60 poses, measured
   // 2026-12-01); an empty or mostly-lost run must not pass as "repeatable".
-  std::cout << "bonn_crowd_part 100:160 full filter: " << a.trajectory.size() << " poses, " << a.lost << " lost\n";
+  std::cout << "bonn_crowd_part 100:160 full filter: " << a.trajectory.size() << " poses, "
+            << a.lost << " lost\n";
   ASSERT_GE(a.trajectory.size(), 55u);
   ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
   for (size_t i = 0; i < a.trajectory.size(); ++i) {
     EXPECT_EQ(a.trajectory[i].stamp, b.trajectory[i].stamp);
-    EXPECT_EQ(a.trajectory[i].world_from_cam.translation, b.trajectory[i].world_from_cam.translation);
-    EXPECT_EQ(a.trajectory[i].world_from_cam.rotation.coeffs(), b.trajectory[i].world_from_cam.rotation.coeffs());
+    EXPECT_EQ(a.trajectory[i].world_from_cam.translation,
+              b.trajectory[i].world_from_cam.translation);
+    EXPECT_EQ(a.trajectory[i].world_from_cam.rotation.coeffs(),
+              b.trajectory[i].world_from_cam.rotation.coeffs());
   }
 }
 
@@ -178,8 +190,9 @@ TEST(DynamicFilterAccuracy, BonnCrowdFullMethod) {
   const RunOutput full = RunBonn(dir, 0, 360, FilterMode::kFull);
   const double ate_none = ComputeAte(gt, none.trajectory).error.rmse;
   const AteResult ate_full = ComputeAte(gt, full.trajectory);
-  std::cout << "bonn_crowd_part 360 frames: ATE none " << ate_none << " m, full " << ate_full.error.rmse << " m ("
-            << ate_full.num_pairs << " tracked, " << full.lost << " lost)\n";
+  std::cout << "bonn_crowd_part 360 frames: ATE none " << ate_none << " m, full "
+            << ate_full.error.rmse << " m (" << ate_full.num_pairs << " tracked, " << full.lost
+            << " lost)\n";
   // Measured 0.0146 m (spread 0 run to run); limit: + 3 x the spread of this ATE under neutral
   // changes (+-0.0007 m).
   EXPECT_LE(ate_full.error.rmse, 0.0167);

@@ -14,6 +14,7 @@
 #include "core/io/dataset.h"
 #include "core/system/system.h"
 #include "run/dataset_runner.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 #include "tests/support/test_support.h"
 

@@ -11,6 +11,7 @@
 #include "core/config/settings.h"
 #include "core/io/dataset.h"
 #include "core/system/system.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 #include "tests/support/test_support.h"
 

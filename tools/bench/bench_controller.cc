@@ -26,6 +26,7 @@
 #include "core/io/file_util.h"
 #include "core/io/trajectory_io.h"
 #include "run/run_settings.h"
+#include "run/settings_table.h"
 #include "run/system_config.h"
 #include "tools/bench/bench_configurations.h"
 #include "tools/bench/bench_runner.h"

@@ -1,5 +1,6 @@
 // OctoMapOptions from the settings file's optional `OctoMap:` section (defaults in
-// mapping/octomap_builder.h). Keys are the option names:
+// mapping/octomap_builder.h; keys, ranges and docs in OctoMapSettingsTable). Keys are the option
+// names:
 //
 //   OctoMap:
 //     resolution: 0.05          # leaf size (m)
@@ -20,9 +21,12 @@
 #pragma once
 
 #include "core/config/config_reader.h"
+#include "core/config/setting_table.h"
 #include "mapping/octomap_builder.h"
 
 namespace dygslam {
+
+const SettingsTable<OctoMapOptions>& OctoMapSettingsTable();
 
 // Overwrites the fields of *options whose keys are present; checks the result.
 void ReadOptions(const ConfigReader& root, OctoMapOptions* options);

@@ -1,10 +1,12 @@
-#include "core/config/settings.h"
+#include "run/settings_table.h"
 
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <fstream>
 #include <string>
+
+#include "core/config/settings.h"
 
 namespace dygslam {
 namespace {

@@ -52,6 +52,7 @@ constexpr int kKilledRunDomain = 153;
 constexpr int kDetectorPausedDomain = 154;
 constexpr int kSuspendedDomain = 155;
 constexpr int kDetectorLostDomain = 157;
+constexpr int kShortStallDomain = 156;
 
 class RunIntegrity : public testing::CliFixture {
  protected:
@@ -643,7 +644,7 @@ TEST_F(RunIntegrity, APausedPlayerIsNoStallOfThePipeline) {
         << summary;
   }
   const RealtimeReport report = ReadRealtimeReport(out + "/realtime.txt");
-  EXPECT_LT(report.longest_gap_s, 3.0) << summary;
+  EXPECT_LT(report.longest_gap_s, kStallSeconds) << summary;
 }
 
 // --processes --rate 1 with slam paused (SIGSTOP) for 6 s: the frames the player sent meanwhile
@@ -662,6 +663,22 @@ TEST_F(RunIntegrity, AStallAtCameraRateIsNotTheCamerasPace) {
   EXPECT_TRUE(Contains(summary, "stalled: no result for")) << summary;
   const std::string json = ReadAll(out + "/eval.json");
   EXPECT_TRUE(Contains(json, "\"complete\": false, \"shortfall\": \"the stream was cut")) << json;
+}
+
+// The same with slam paused for 2 s (60 frames at 30 Hz): before, the frames lost meanwhile were
+// put on the camera's pace and the run exited 0 (a stall counted from 3 s).
+TEST_F(RunIntegrity, AShortStallAtCameraRateIsNotTheCamerasPaceEither) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string out = dir_ + "/out";
+  std::string diagnostics;
+  const int code =
+      RunWithComponentPaused(source, "slam", "0:300", kShortStallDomain, std::chrono::seconds(3),
+                             std::chrono::seconds(2), &diagnostics);
+  ASSERT_NE(code, -1);
+  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  EXPECT_EQ(code, 3) << summary << err << diagnostics;
+  EXPECT_TRUE(Contains(summary, "stalled: no result for")) << summary;
+  EXPECT_FALSE(Contains(summary, "(complete)")) << summary;
 }
 
 // A looped replay (--loop-minutes 0.25) whose player is stopped after 3 s: before, exit 0

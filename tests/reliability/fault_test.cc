@@ -109,12 +109,15 @@ TEST_F(Faults, MapperKilledAndRestartedGetsKeyframeHistoryBack) {
   EXPECT_EQ(Wait(recorder), 0) << ReadAll(tmp + "/recorder.log");
   // The restarted mapper is a late joiner: when slam's end of run does not reach it (late-joiner
   // discovery under load), it writes its map once slam has gone and exits 3 (cut short), saying
-  // so; else 0.
+  // so; when it met slam after more than the history's 64 messages were published (a loaded
+  // machine starts it seconds late), the older ones never reach it: it counts them and exits 3;
+  // else 0.
   const int mapper2_code = Wait(mapper2);
   const std::string mapper_log = ReadAll(tmp + "/mapper2.log");
-  EXPECT_TRUE(
-      mapper2_code == 0 ||
-      (mapper2_code == 3 && mapper_log.find("without announcing the end") != std::string::npos))
+  EXPECT_TRUE(mapper2_code == 0 ||
+              (mapper2_code == 3 &&
+               (mapper_log.find("without announcing the end") != std::string::npos ||
+                mapper_log.find("never arrived (they left slam's history") != std::string::npos)))
       << "exit " << mapper2_code << "\n"
       << mapper_log;
   const long in_map = Extract(mapper_log, R"((\d+) keyframes in the map)");
@@ -124,7 +127,7 @@ TEST_F(Faults, MapperKilledAndRestartedGetsKeyframeHistoryBack) {
   // history, bounded to the newest 64 messages) and those made after.
   EXPECT_GE(in_map, 1) << mapper_log;
   const long published = Extract(ReadAll(tmp + "/slam.log"), R"((\d+) keyframe messages)");
-  const long received = Extract(mapper_log, R"(mapper: (\d+) keyframe messages)");
+  const long received = Extract(mapper_log, R"(mapper: (\d+) keyframe messages \()");
   EXPECT_GE(received, std::min(published, 64L)) << mapper_log;  // 64: kKeyframeHistoryDepth
   EXPECT_LE(in_map, static_cast<long>(keyframes.size())) << mapper_log;
   ASSERT_TRUE(fs::exists(tmp + "/out/map.bt")) << "the restarted mapper wrote no map\n"

@@ -78,24 +78,33 @@ void RemoveUnusedOutputDirs() {
 
 namespace {
 
-// The lock file of one kind of output of a folder: in a private folder of the user's (never in
-// the output folder: nothing is added to it), named by the folder's device and inode.
+// The lock file of one kind of output of a folder, named by the folder's device and inode, in a
+// fixed folder every user shares (never in the output folder: nothing is added to it); "" when
+// that folder is not a plain folder.
 std::string OutputLockPath(const struct stat& folder, const char* kind) {
-  const char* runtime = std::getenv("XDG_RUNTIME_DIR");
-  std::string base = runtime != nullptr && *runtime != '\0' ? runtime : "/tmp";
-  base += "/dygslam-locks-" + std::to_string(::getuid());
-  ::mkdir(base.c_str(), 0700);
+  const std::string base = "/tmp/.dygslam-locks";
+  if (::mkdir(base.c_str(), 01777) == 0) ::chmod(base.c_str(), 01777);  // past the umask
+  struct stat st {};
+  if (::lstat(base.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) return "";
   return base + "/" + std::to_string(static_cast<unsigned long long>(folder.st_dev)) + "-" +
          std::to_string(static_cast<unsigned long long>(folder.st_ino)) + "." + kind;
 }
 
-// One command writes one kind of output (trajectories, the map) into a folder at a time: an
-// exclusive lock per kind, dropped by the kernel when the process ends (SIGKILL included). A
-// second command with the same folder and kind (a recorder started by hand beside a run, two
-// runs) would rename its files over the other's, complete ones by partial ones: it is refused
-// before any work. A hand-assembled pipeline (recorder and mapper on one --out) holds one kind
-// each. The processes a command starts for its own run (`run --processes`) find the folder in
-// DYGSLAM_HELD_FOLDERS and write into it under their parent's locks.
+[[noreturn]] void RefuseHeldFolder(const std::string& name, const std::string& what) {
+  throw InvalidOptions(name + ": another dygslam command is writing its " + what +
+                       " into this folder (a run, a recorder or a mapper); their outputs would "
+                       "replace each other: wait for it to end or choose another folder");
+}
+
+// One command writes one kind of output (trajectories, the map) into a folder at a time, held
+// until the process ends (the kernel drops the locks, SIGKILL included). A command writing every
+// kind (run, map, bench, bridge) locks the folder itself exclusively; a recorder or mapper
+// component locks it shared (a hand-assembled pipeline's recorder and mapper share one --out)
+// plus a lock of its kind. The folder's own lock holds for every user, environment and mount
+// namespace that sees the folder. A second writer is refused before any work: it would rename
+// its files over the other's, complete ones by partial ones. The processes a command starts for
+// its own run (`run --processes`) find the folder in DYGSLAM_HELD_FOLDERS and write under its
+// hold.
 void LockOutputFolder(const std::string& name, const std::filesystem::path& dir,
                       FolderOutputs outputs) {
   struct stat st {};
@@ -105,27 +114,29 @@ void LockOutputFolder(const std::string& name, const std::filesystem::path& dir,
   const char* held_env = std::getenv("DYGSLAM_HELD_FOLDERS");
   const std::string held = held_env ? held_env : "";
   if (("," + held + ",").find("," + id + ",") != std::string::npos) return;
-  std::vector<const char*> kinds;
-  if (outputs != FolderOutputs::kMap) kinds.push_back("trajectories");
-  if (outputs != FolderOutputs::kTrajectories) kinds.push_back("map");
-  for (const char* kind : kinds) {
-    const std::string path = OutputLockPath(st, kind);
-    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0600);
-    if (fd < 0) continue;  // no place for locks: nothing to hold
-    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
-      const int error = errno;
-      ::close(fd);
-      if (error != EWOULDBLOCK) continue;
-      throw InvalidOptions(name + ": another dygslam command is writing its " +
-                           (std::string(kind) == "map" ? "map" : "trajectories") +
-                           " into this folder (a run, a recorder or a mapper); their outputs "
-                           "would replace each other: wait for it to end or choose another "
-                           "folder");
-    }
-    // Held (fd left open) until the process ends.
+  const bool all = outputs == FolderOutputs::kAll;
+  // Held (the descriptors stay open) until the process ends.
+  const int folder_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (folder_fd >= 0 && ::flock(folder_fd, (all ? LOCK_EX : LOCK_SH) | LOCK_NB) != 0) {
+    const int error = errno;
+    ::close(folder_fd);
+    if (error == EWOULDBLOCK) RefuseHeldFolder(name, "outputs");
   }
-  if (outputs == FolderOutputs::kAll)
-    ::setenv("DYGSLAM_HELD_FOLDERS", (held.empty() ? id : held + "," + id).c_str(), 1);
+  if (!all) {
+    const char* kind = outputs == FolderOutputs::kMap ? "map" : "trajectories";
+    const std::string path = OutputLockPath(st, kind);
+    const int fd =
+        path.empty() ? -1 : ::open(path.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+    if (fd >= 0) {
+      ::fchmod(fd, 0644);  // others open it read-only to lock it (fails harmlessly if not ours)
+      if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+        const int error = errno;
+        ::close(fd);
+        if (error == EWOULDBLOCK) RefuseHeldFolder(name, kind);
+      }
+    }
+  }
+  if (all) ::setenv("DYGSLAM_HELD_FOLDERS", (held.empty() ? id : held + "," + id).c_str(), 1);
 }
 
 }  // namespace

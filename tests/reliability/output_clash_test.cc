@@ -147,8 +147,13 @@ TEST_F(OutputClashCli, TwoCommandsNeverWriteIntoOneFolderAtOnce) {
                                  "--quiet", "--frames", "0:10", "--out", out},
         std::vector<std::string>{"map", data, "--config", Config(), "--trajectory",
                                  data + "/groundtruth.txt", "--out", out}}) {
-    const auto r = Run(second);
-    ExpectError(r, 2, {"--out '" + out + "': another dygslam command is writing its"});
+    // Also from another environment (a login shell's XDG_RUNTIME_DIR beside a service's).
+    for (const bool other_environment : {false, true}) {
+      if (other_environment) ::setenv("XDG_RUNTIME_DIR", (dir_ + "/xdg").c_str(), 1);
+      const auto r = Run(second);
+      ::unsetenv("XDG_RUNTIME_DIR");
+      ExpectError(r, 2, {"--out '" + out + "': another dygslam command is writing its"});
+    }
   }
   std::string diagnostics;
   const int code = testing::WaitForExit(first, 120, &diagnostics);

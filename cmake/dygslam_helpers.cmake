@@ -7,13 +7,14 @@ function(dygslam_add_library name)
   set_target_properties(${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
 endfunction()
 
-# dygslam_add_test(MODULE NAME SRCS a_test.cc DEPS lib)
+# dygslam_add_test(MODULE NAME [RUN_SERIAL] SRCS a_test.cc DEPS lib)
+# RUN_SERIAL: no other test runs beside it (tests of the camera's pace).
 # Test names in ctest are "<module>/<Suite>.<Case>".
 function(dygslam_add_test)
   if(NOT DYGSLAM_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "MODULE;NAME;TIMEOUT" "SRCS;DEPS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "RUN_SERIAL" "MODULE;NAME;TIMEOUT" "SRCS;DEPS;LABELS" ${ARGN})
   set(target ${ARG_MODULE}_${ARG_NAME})
   add_executable(${target} ${ARG_SRCS})
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} dygslam_test_support GTest::gtest GTest::gtest_main)
@@ -27,5 +28,6 @@ function(dygslam_add_test)
     PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_MODULE};${ARG_LABELS}"
       # GTEST_SKIP exits 0: without this ctest would count a skipped test as passed.
       SKIP_REGULAR_EXPRESSION "\\[  SKIPPED \\]"
+      RUN_SERIAL ${ARG_RUN_SERIAL}
       ENVIRONMENT "DYGSLAM_SOURCE_DIR=${CMAKE_SOURCE_DIR}\\;DYGSLAM_BINARY_DIR=${CMAKE_BINARY_DIR}\\;DYGSLAM_DEFAULT_DATA_DIR=${DYGSLAM_DEFAULT_DATA_DIR}\\;DYGSLAM_DEFAULT_MODELS_DIR=${DYGSLAM_DEFAULT_MODELS_DIR}")
 endfunction()

@@ -24,6 +24,7 @@
 #include "components/dds/pubsub.h"
 #include "components/protocol.h"
 #include "core/base/stop_signal.h"
+#include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
 #include "dygslam_msg/StreamStatusPubSubTypes.h"
 #include "run/realtime_report.h"
@@ -327,32 +328,6 @@ TEST_F(RunIntegrity, ProcessesRunAtCameraRate) {
   EXPECT_TRUE(Contains(r.out, "real time: rate 1.00x: 30 frames")) << r.out;
   const std::string json = ReadAll(dir_ + "/out/eval.json");
   EXPECT_TRUE(Contains(json, "\"realtime\": {\"rate\": 1, \"frames\": 30,")) << json;
-}
-
-// `--direct --rate 1` with the whole process stopped (SIGSTOP) for 5 s and continued: the camera
-// of a paused replay is paused too, the replay goes on from the frame it was at. Before, the
-// frames of the pause were dropped as if the pipeline could not keep up (20 of 150 processed),
-// exit 0. Each mode now treats its own pause the same way (the DDS player did already).
-TEST_F(RunIntegrity, ADirectReplayStoppedAndContinuedGoesOnFromItsFrame) {
-  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
-  const std::string out = dir_ + "/out";
-  const pid_t pid =
-      Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet", "--frames",
-             "0:150", "--no-map", "--direct", "--rate", "1", "--out", out});
-  ASSERT_GT(pid, 0);
-  std::this_thread::sleep_for(std::chrono::seconds(2));
-  kill(pid, SIGSTOP);
-  std::this_thread::sleep_for(std::chrono::seconds(5));
-  kill(pid, SIGCONT);
-  std::string diagnostics;
-  const int code = testing::WaitForExit(pid, 120, &diagnostics);
-  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
-  EXPECT_EQ(code, 0) << summary << err << diagnostics;
-  EXPECT_TRUE(Contains(err, "stopped and continued; the replay goes on at the camera's rate"))
-      << err;
-  // Without the pause a loaded machine drops a few frames at the camera's rate; the pause adds
-  // none (150 frames at 30 Hz: 5 s, the pause as long as the replay).
-  EXPECT_GE(ReadTumTrajectory(out + "/trajectory.txt").size(), 105u) << summary << err;
 }
 
 // A frame source already playing on the run's partition (another robot's player, a second run):

@@ -138,6 +138,9 @@ int CheckStandardOutput(const std::string& command, int code) {
 }  // namespace dygslam::cli
 
 int main(int argc, char** argv) {
+  // Before any thread starts: a stop or a pause reaches the process even when its parent
+  // started it with those signals blocked.
+  dygslam::UnblockRunSignals();
   // A closed stdout / stderr reader (`dygslam run ... | head`) must not kill the process: writes
   // to the pipe fail with EPIPE and the run finishes with its outputs and exit code.
   std::signal(SIGPIPE, SIG_IGN);

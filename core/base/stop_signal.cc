@@ -23,9 +23,17 @@ struct sigaction g_old_int {
 
 }  // namespace
 
+void UnblockRunSignals() {
+  sigset_t set;
+  sigemptyset(&set);
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGCONT}) sigaddset(&set, sig);
+  pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
+}
+
 ScopedStopSignals::ScopedStopSignals() {
   std::lock_guard<std::mutex> lock(g_mutex);
   if (g_depth++ > 0) return;
+  UnblockRunSignals();
   g_received = 0;
   struct sigaction sa {};
   sa.sa_handler = OnStopSignal;
@@ -98,6 +106,7 @@ unsigned TimesContinued() {
     action.sa_handler = CountContinue;
     sigemptyset(&action.sa_mask);
     action.sa_flags = SA_RESTART;
+    UnblockRunSignals();
     return sigaction(SIGCONT, &action, nullptr) == 0;
   }();
   (void)installed;

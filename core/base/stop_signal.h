@@ -36,6 +36,13 @@ bool ProcessCatchesSignal(pid_t pid, int sig);
 // rate) tells its own pause from a slow consumer by it.
 unsigned TimesContinued();
 
+// Unblocks, in the calling thread, the signals a run acts on (SIGINT, SIGTERM, SIGHUP, SIGCONT).
+// The signal mask is inherited across fork and exec: a parent that starts dygslam with them
+// blocked (a supervisor, a test harness) would otherwise leave a stop request pending forever
+// and a pause unseen (the process continues, its SIGCONT handler never runs). Threads started
+// afterwards inherit the unblocked mask; call it first in main().
+void UnblockRunSignals();
+
 // A stop signal (SIGINT / SIGTERM / SIGHUP) ended a wait that has nothing to save, e.g. the read
 // of a settings pipe before any work: the command ends at once with exit code 128 + signal().
 class StopSignalError : public std::runtime_error {

@@ -41,6 +41,25 @@ TEST(StopSignals, NestedScopesShareTheFlagAndTheOutermostRestoresHandlers) {
   EXPECT_EQ(ScopedStopSignals::Received(), 0);
 }
 
+// A parent that blocked the run's signals (the mask survives exec) does not keep them from the
+// run: a blocked SIGCONT would continue a stopped process without its pause ever being counted.
+TEST(StopSignals, RunSignalsBlockedByTheParentAreUnblocked) {
+  std::thread([] {
+    const unsigned before = TimesContinued();  // the counter's handler installed
+    sigset_t blocked, now;
+    sigemptyset(&blocked);
+    for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGCONT, SIGUSR1}) sigaddset(&blocked, sig);
+    ASSERT_EQ(pthread_sigmask(SIG_BLOCK, &blocked, nullptr), 0);
+    UnblockRunSignals();
+    ASSERT_EQ(pthread_sigmask(SIG_BLOCK, nullptr, &now), 0);
+    for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGCONT})
+      EXPECT_EQ(sigismember(&now, sig), 0) << "signal " << sig << " still blocked";
+    EXPECT_EQ(sigismember(&now, SIGUSR1), 1) << "signals the run does not act on stay as given";
+    raise(SIGCONT);
+    EXPECT_EQ(TimesContinued(), before + 1) << "a continue reaches the counter";
+  }).join();
+}
+
 TEST(StopFlag, RequestWakesAWaiterAndStays) {
   StopFlag flag;
   EXPECT_FALSE(flag.requested());

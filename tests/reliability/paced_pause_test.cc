@@ -23,15 +23,24 @@ using testing::ReadAll;
 class PacedPause : public testing::CliFixture {
  protected:
   PacedPause() : CliFixture("paced_pause") {}
+  // Started as a supervisor or test harness may start it: with SIGCONT blocked (the mask is
+  // inherited across exec), which must not hide the pause from the replay.
   pid_t Spawn(const std::vector<std::string>& args) {
-    return testing::SpawnDygslam(args, dir_ + "/run.out", dir_ + "/run.err");
+    sigset_t cont, old;
+    sigemptyset(&cont);
+    sigaddset(&cont, SIGCONT);
+    pthread_sigmask(SIG_BLOCK, &cont, &old);
+    const pid_t pid = testing::SpawnDygslam(args, dir_ + "/run.out", dir_ + "/run.err");
+    pthread_sigmask(SIG_SETMASK, &old, nullptr);
+    return pid;
   }
 };
 
 // `--direct --rate 1` with the whole process stopped (SIGSTOP) for 5 s and continued: the camera
 // of a paused replay is paused too, the replay goes on from the frame it was at. Before, the
 // frames of the pause were dropped as if the pipeline could not keep up (20 of 150 processed),
-// exit 0. Each mode now treats its own pause the same way (the DDS player did already).
+// exit 0; so was it when the process was started with SIGCONT blocked (its handler never ran).
+// Each mode treats its own pause the same way.
 TEST_F(PacedPause, ADirectReplayStoppedAndContinuedGoesOnFromItsFrame) {
   DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
   const std::string out = dir_ + "/out";

@@ -16,6 +16,7 @@
 #include "core/base/error.h"
 #include "core/base/number_option.h"
 #include "core/base/stop_signal.h"
+#include "run/run_inputs.h"
 #include "tools/bench/bench_controller.h"
 
 namespace dygslam::cli {

@@ -27,6 +27,7 @@
 #include "core/slam/map/map_file.h"
 #include "core/system/system.h"
 #include "run/realtime_report.h"
+#include "run/run_settings.h"
 
 namespace dygslam::cli {
 namespace {
@@ -78,18 +79,6 @@ void RemoveUnusedOutputDirs() {
 
 namespace {
 
-// The lock file of one kind of output of a folder, named by the folder's device and inode, in a
-// fixed folder every user shares (never in the output folder: nothing is added to it); "" when
-// that folder is not a plain folder.
-std::string OutputLockPath(const struct stat& folder, const char* kind) {
-  const std::string base = "/tmp/.dygslam-locks";
-  if (::mkdir(base.c_str(), 01777) == 0) ::chmod(base.c_str(), 01777);  // past the umask
-  struct stat st {};
-  if (::lstat(base.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) return "";
-  return base + "/" + std::to_string(static_cast<unsigned long long>(folder.st_dev)) + "-" +
-         std::to_string(static_cast<unsigned long long>(folder.st_ino)) + "." + kind;
-}
-
 [[noreturn]] void RefuseHeldFolder(const std::string& name, const std::string& what) {
   throw InvalidOptions(name + ": another dygslam command is writing its " + what +
                        " into this folder (a run, a recorder or a mapper); their outputs would "
@@ -100,8 +89,8 @@ std::string OutputLockPath(const struct stat& folder, const char* kind) {
 // until the process ends (the kernel drops the locks, SIGKILL included). A command writing every
 // kind (run, map, bench, bridge) locks the folder itself exclusively; a recorder or mapper
 // component locks it shared (a hand-assembled pipeline's recorder and mapper share one --out)
-// plus a lock of its kind. The folder's own lock holds for every user, environment and mount
-// namespace that sees the folder. A second writer is refused before any work: it would rename
+// plus a lock of its kind (a lock file in the folder). Both hold for every user, environment and
+// mount namespace that sees the folder. A second writer is refused before any work: it would rename
 // its files over the other's, complete ones by partial ones. The processes a command starts for
 // its own run (`run --processes`) find the folder in DYGSLAM_HELD_FOLDERS and write under its
 // hold.
@@ -122,18 +111,21 @@ void LockOutputFolder(const std::string& name, const std::filesystem::path& dir,
     ::close(folder_fd);
     if (error == EWOULDBLOCK) RefuseHeldFolder(name, "outputs");
   }
-  if (!all) {
+  if (!all && folder_fd >= 0) {
+    // The lock of its kind is a file in the folder itself (the same file for every user, mount
+    // namespace and private /tmp that sees the folder), opened without following a link and
+    // never truncated; it stays, empty, beside the outputs.
     const char* kind = outputs == FolderOutputs::kMap ? "map" : "trajectories";
-    const std::string path = OutputLockPath(st, kind);
-    const int fd =
-        path.empty() ? -1 : ::open(path.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
-    if (fd >= 0) {
-      ::fchmod(fd, 0644);  // others open it read-only to lock it (fails harmlessly if not ours)
-      if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
-        const int error = errno;
-        ::close(fd);
-        if (error == EWOULDBLOCK) RefuseHeldFolder(name, kind);
-      }
+    const std::string file = std::string(".dygslam-lock.") + kind;
+    const int fd = ::openat(folder_fd, file.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC | O_NOFOLLOW,
+                            0644);
+    if (fd < 0)
+      throw InputError(name + ": cannot open the lock file " + file + " of its " + kind + ": " +
+                       std::strerror(errno) + " (remove it if it is not a plain file)");
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      const int error = errno;
+      ::close(fd);
+      if (error == EWOULDBLOCK) RefuseHeldFolder(name, kind);
     }
   }
   if (all) ::setenv("DYGSLAM_HELD_FOLDERS", (held.empty() ? id : held + "," + id).c_str(), 1);
@@ -172,13 +164,13 @@ std::filesystem::path PrepareOutputDir(const std::string& option, const std::str
   fs::create_directories(dir, ec);
   if (ec) throw InputError(name + ": cannot create the folder: " + ec.message());
   CreatedOutputDirs().insert(CreatedOutputDirs().end(), created.begin(), created.end());
-  const fs::path probe = dir / (".dygslam_write_probe." + std::to_string(::getpid()));
-  FILE* f = std::fopen(probe.c_str(), "wb");
-  if (f == nullptr) {
-    throw InputError(name + ": folder is not writable: " + std::strerror(errno));
-  }
-  std::fclose(f);
-  fs::remove(probe, ec);
+  // Writable: a probe file made new under a random name (O_EXCL: never a file or link that is
+  // there already), removed at once.
+  std::string probe = (dir / ".dygslam_write_probe.XXXXXX").string();
+  const int probe_fd = ::mkstemp(probe.data());
+  if (probe_fd < 0) throw InputError(name + ": folder is not writable: " + std::strerror(errno));
+  ::close(probe_fd);
+  ::unlink(probe.c_str());
   PinOutputFolder(dir.string());  // a folder replaced while the command runs is not written into
   LockOutputFolder(name, dir, outputs);
   return dir;
@@ -200,6 +192,36 @@ void AddDatasetRunFlags(ArgParser* p) {
              "unknown keys in the settings file are errors, not warnings (also "
              "DYGSLAM_STRICT_SETTINGS=1)");
   p->AddFlag("strict-paths", "image paths outside DATASET_DIR are errors, not warnings");
+}
+
+RunConfiguration LoadCommandSettings(const ArgParser& p, const std::string& settings_path) {
+  const std::string filter = p.Get("filter");
+  return LoadRunConfiguration({settings_path, CliSettingsReadOptions(p.Flag("strict-settings")),
+                               filter.empty() ? "full" : filter, p.Flag("deterministic")});
+}
+
+void AddDdsRunOptions(ArgParser* p, const std::string& partition_default) {
+  p->AddOption("domain", "N", "DDS domain id (default: $DYGSLAM_DOMAIN_ID or 0)", "-1");
+  p->AddOption("partition", "NAME",
+               "DDS partition of the pipeline topics (default: " + partition_default + ")");
+  const char* security_env = std::getenv("DYGSLAM_DDS_SECURITY_DIR");
+  p->AddOption("security", "DIR",
+               "DDS Security: make_dds_certs.sh's OUT_DIR (one identity folder per component) or "
+               "one identity folder (default: $DYGSLAM_DDS_SECURITY_DIR; none = off)",
+               security_env != nullptr ? security_env : "");
+}
+
+void AddMapFileOptions(ArgParser* p) {
+  p->AddOption("save-map", "FILE",
+               "write the SLAM map (keyframes, points, BoW) to FILE at the end, also when stopped");
+  p->AddOption("load-map", "FILE",
+               "start from the SLAM map in FILE (made with the same camera, ORB and vocabulary);\n"
+               "without --localization it is extended");
+  p->AddFlag("localization",
+             "with --load-map: track against the loaded map without adding keyframes or points");
+  p->AddOption("load-octomap", "FILE",
+               "continue this OctoMap (.ot, e.g. map.ot of a --save-map run): keyframes are\n"
+               "inserted on top; in --localization it is the map");
 }
 
 bool CheckPartitionOption(ArgParser* p) {
@@ -346,6 +368,31 @@ bool ArgParser::GetFrameRange(const std::string& option, size_t num_entries, siz
   return true;
 }
 
+bool ArgParser::GetOpenFrameRange(const std::string& option, size_t* first, size_t* last) {
+  try {
+    const FrameRangeText range = SplitFrameRange(Get(option));
+    *first = range.first.value_or(0);
+    *last = range.last.value_or(0);  // 0: to the end
+  } catch (const InvalidOptions& e) {
+    exit_code_ = UsageError(e.what());
+    return false;
+  }
+  if (*last != 0 && *last <= *first) {
+    exit_code_ = UsageError("--" + option + " '" + EchoValue(Get(option)) +
+                            "': empty range (LAST must be above FIRST)");
+    return false;
+  }
+  return true;
+}
+
+std::vector<std::string> ArgParser::GetList(const std::string& option) const {
+  std::vector<std::string> items;
+  std::stringstream list(Get(option));
+  for (std::string item; std::getline(list, item, ',');)
+    if (!item.empty()) items.push_back(item);
+  return items;
+}
+
 bool ArgParser::Parse(const std::vector<std::string>& args) {
   positional_values_.clear();
   option_values_.clear();
@@ -458,108 +505,6 @@ bool ArgParser::Flag(const std::string& flag) const { return Has(flag); }
 
 std::string ConfigDir() {
   return (std::filesystem::path(ScriptsDir()).parent_path() / "config").string();
-}
-
-std::vector<NamedPath> DatasetRunInputs(const ArgParser& p, const std::string& dataset_dir,
-                                        const std::string& settings_role,
-                                        const std::string& settings_path,
-                                        const SystemOptions& system,
-                                        const std::vector<std::string>& file_options) {
-  std::vector<NamedPath> inputs;
-  if (!dataset_dir.empty() && dataset_dir != "-") {
-    for (const char* name : {"rgb.txt", "depth.txt", "groundtruth.txt", "associations.txt"})
-      inputs.push_back({std::string("the dataset's ") + name,
-                        (std::filesystem::path(dataset_dir) / name).string()});
-  }
-  inputs.push_back({settings_role, settings_path});
-  for (const std::string& option : file_options)
-    if (p.Has(option) && !p.Get(option).empty()) inputs.push_back({"--" + option, p.Get(option)});
-  inputs.push_back({"the vocabulary (LoopClosing.vocabulary)", system.loop_closing.vocabulary});
-  inputs.push_back({"the detector's cfg", system.detector.cfg_path});
-  inputs.push_back({"the detector's weights", system.detector.weights_path});
-  inputs.push_back({"the detector's names", system.detector.names_path});
-  return inputs;
-}
-
-std::vector<NamedPath> DatasetRunOutputs(const ArgParser& p, const std::filesystem::path& out_dir) {
-  std::vector<NamedPath> outputs;
-  if (p.Has("save-map") && !p.Get("save-map").empty())
-    outputs.push_back({"--save-map", p.Get("save-map")});
-  for (const std::string& name : RunOutputNames())
-    outputs.push_back({"the output " + name, (out_dir / name).string()});
-  return outputs;
-}
-
-std::string FindDatasetRunOutputClash(const std::vector<NamedPath>& inputs, const ArgParser& p,
-                                      const std::filesystem::path& out_dir) {
-  return FindOutputClash(inputs, DatasetRunOutputs(p, out_dir));
-}
-
-std::string FindForeignFileAtTrajectoryOutput(const NamedPath& output) {
-  struct stat st {};
-  if (::stat(output.path.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || st.st_size == 0) return "";
-  if (IsTumTrajectoryFile(output.path)) return "";
-  return output.role + " '" + EchoValue(output.path) +
-         "' exists and is not a TUM trajectory: it is not replaced; remove it first or choose "
-         "another path";
-}
-
-std::string FindForeignFileInRunOutputs(const std::filesystem::path& out_dir) {
-  // The first bytes of each output ("" for the TUM trajectories, read whole).
-  const std::vector<std::pair<std::string, std::string>> kinds = {
-      {"trajectory.txt", ""},
-      {"trajectory_online.txt", ""},
-      {"keyframes.txt", ""},
-      {"groundtruth.txt", ""},
-      {"frames.csv", "stamp,"},
-      {"map.bt", "# Octomap OcTree binary file"},
-      {"map.ot", "# Octomap OcTree file"},
-      {kRealtimeReportFile, "rate "},
-      {"eval.json", "{\"mode\": "},  // RunSummaryJson's first key (run/run_summary.h)
-      // `dygslam map`'s pictures and reference map in the same folder.
-      {"map_top.png", "\x89PNG\r\n\x1a\n"},
-      {"map_slice.png", "\x89PNG\r\n\x1a\n"},
-      {"ghosts_top.png", "\x89PNG\r\n\x1a\n"},
-      {"reference.bt", "# Octomap OcTree binary file"}};
-  for (const auto& [name, signature] : kinds) {
-    const NamedPath output{"the output " + name, (out_dir / name).string()};
-    const std::string why =
-        signature.empty() ? FindForeignFileAtTrajectoryOutput(output)
-                          : FindForeignFileAtOutput(output, signature, "an earlier run's " + name);
-    if (!why.empty()) return why;
-  }
-  return "";
-}
-
-std::string FindForeignFileAtSaveMap(const ArgParser& p) {
-  if (!p.Has("save-map") || p.Get("save-map").empty()) return "";
-  return FindForeignFileAtOutput({"--save-map", p.Get("save-map")}, kMapFileSignature,
-                                 "a dygslam map file");
-}
-
-void WarnAboutDataset(const std::string& command, const RgbdDataset& dataset, size_t first,
-                      size_t last, double depth_map_factor, int width, int height,
-                      const std::vector<StampedPose>* groundtruth) {
-  const auto warn = [&](const std::string& text) {
-    std::fprintf(stderr, "dygslam %s: warning: %s\n", command.c_str(), text.c_str());
-  };
-  if (!dataset.listing_problem().empty()) warn(EchoValue(dataset.listing_problem(), 600));
-  // Depth that no RGB-D sensor measures on most pixels (every pixel saturated, DepthMapFactor off
-  // by orders of magnitude) would run to the end with a meaningless map and trajectory.
-  if (const std::string why =
-          ImplausibleDepth(SampleDepthRange(dataset, first, last, depth_map_factor, width, height),
-                           depth_map_factor);
-      !why.empty())
-    warn("implausible depth: " + why);
-  if (groundtruth != nullptr) {
-    if (const std::string note = GroundTruthCoverageNote(dataset, first, last, *groundtruth);
-        !note.empty())
-      warn(EchoValue(note, 600));
-    if (const std::string note =
-            ImplausibleGroundTruthNote(dataset.groundtruth_path(), *groundtruth);
-        !note.empty())
-      warn(EchoValue(note, 600));
-  }
 }
 
 }  // namespace dygslam::cli

@@ -33,7 +33,9 @@
 #include "core/config/settings.h"
 #include "core/io/dataset.h"
 #include "core/io/file_util.h"
+#include "run/run_files.h"
 #include "run/run_outputs.h"
+#include "run/run_settings.h"
 #include "run/run_summary.h"
 
 namespace dygslam {
@@ -100,6 +102,11 @@ class ArgParser {
   // LAST beyond them is cut, with a warning on stderr. A malformed or empty range: false after
   // the usage error.
   bool GetFrameRange(const std::string& option, size_t num_entries, size_t* first, size_t* last);
+  // The same before the dataset is read: LAST 0 when not given (to the end). False after the
+  // usage error for a malformed or empty range.
+  bool GetOpenFrameRange(const std::string& option, size_t* first, size_t* last);
+  // The option's comma-separated items, empty ones left out ("a,,b" -> a, b).
+  std::vector<std::string> GetList(const std::string& option) const;
   // An empty or blank option value is a usage error unless allowed here: `dygslam component`
   // allows it, as compose files pass optional settings as empty variables (`--load-octomap ""`:
   // none); the user-facing commands do not (`--config=` would only show up later as a nameless
@@ -154,45 +161,16 @@ void AddDatasetRunFlags(ArgParser* p);
 // ("--filter 'x': unknown filter (expected none | boxes | ...)"); false after printing it (the
 // command then exits 2).
 bool CheckFilterOption(ArgParser* p);
+// The settings of a command that runs the SLAM (LoadRunConfiguration): its --filter (default
+// full), --deterministic and --strict-settings, where the command has them.
+RunConfiguration LoadCommandSettings(const ArgParser& p, const std::string& settings_path);
+// --domain, --partition (`partition_default`: what it is when not given) and --security of the
+// DDS pipeline (run, component); --security's default is $DYGSLAM_DDS_SECURITY_DIR.
+void AddDdsRunOptions(ArgParser* p, const std::string& partition_default);
+// --save-map, --load-map, --localization and --load-octomap (run, component).
+void AddMapFileOptions(ArgParser* p);
 // --partition (run, component): a plain name; wildcards would join other runs' partitions. False
 // after printing the usage error.
 bool CheckPartitionOption(ArgParser* p);
-
-// The files of a SLAM run on a dataset folder, named as the user knows them, for FindOutputClash:
-// the dataset's lists, the settings file (`settings_role`: "--config" or "the settings file"), the
-// files given to the options `file_options` (--load-map, ...) and the model files the settings
-// name. `dataset_dir` "" or "-": no dataset.
-std::vector<NamedPath> DatasetRunInputs(const ArgParser& p, const std::string& dataset_dir,
-                                        const std::string& settings_role,
-                                        const std::string& settings_path,
-                                        const SystemOptions& system,
-                                        const std::vector<std::string>& file_options);
-// --save-map (when given) and every file of RunOutputNames() in `out_dir`.
-std::vector<NamedPath> DatasetRunOutputs(const ArgParser& p, const std::filesystem::path& out_dir);
-// The first output of a dataset run that is an input or another output (FindOutputClash), ""
-// when there is none.
-std::string FindDatasetRunOutputClash(const std::vector<NamedPath>& inputs, const ArgParser& p,
-                                      const std::filesystem::path& out_dir);
-// The first file in `out_dir` with the name of one of the outputs of `run`, `map` or a component
-// (RunOutputNames, map's pictures) that is of another kind than that output (a settings file
-// named map.bt, a text named map_top.png): why it is not replaced, "" when there is none. A
-// command replaces its own earlier outputs only.
-std::string FindForeignFileInRunOutputs(const std::filesystem::path& out_dir);
-// Why `path` (given as `role`) may not be written as a TUM trajectory: it exists and is not one
-// (nor empty). "" when it may.
-std::string FindForeignFileAtTrajectoryOutput(const NamedPath& output);
-
-// Why --save-map may not be written, "" when it may: it names an existing file that is not a map
-// file (a user's file given by mistake is never replaced).
-std::string FindForeignFileAtSaveMap(const ArgParser& p);
-
-// What a command says about a dataset before it runs on rgb entries [first, last), each as
-// "dygslam COMMAND: warning: ..." on stderr (the run goes on; each is something to check): images
-// in rgb/ or depth/ that the lists leave out, depth outside any sensor's range on most pixels, and
-// a ground truth (when given) that does not cover the frames. Throws what reading a depth image
-// throws.
-void WarnAboutDataset(const std::string& command, const RgbdDataset& dataset, size_t first,
-                      size_t last, double depth_map_factor, int width, int height,
-                      const std::vector<StampedPose>* groundtruth);
 
 }  // namespace dygslam::cli

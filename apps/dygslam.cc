@@ -104,8 +104,9 @@ int Dispatch(const std::vector<std::string>& argv) {
     std::cerr << "dygslam " << name << ": error: " << BoundedMessage(e.what()) << "\n";
   } catch (const InvalidOptions& e) {
     const std::string message = e.what();
-    if (message.rfind("--", 0) == 0) {
-      // A malformed or out-of-range option value ("--runs: expected ..."): a usage error.
+    if (message.rfind("--", 0) == 0 || dynamic_cast<const UsageError*>(&e) != nullptr) {
+      // A malformed or out-of-range option value ("--runs: expected ..."), or files of the
+      // command line that clash (UsageError): a usage error.
       std::cerr << "dygslam " << name << ": " << BoundedMessage(message) << "\n(dygslam " << name
                 << " --help for details)\n";
       code = 2;

@@ -27,6 +27,7 @@
 #include "components/recorder.h"
 #include "components/slam_component.h"
 #include "core/base/child_process.h"
+#include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/base/log.h"
 #include "core/base/stop_signal.h"
@@ -56,6 +57,23 @@ void PipelineOptions::Check() const {
   DYGSLAM_CHECK_OPTION(flush_timeout_s >= 0, "flush_timeout_s");
   DYGSLAM_CHECK_OPTION(loop_minutes >= 0 && std::isfinite(loop_minutes), "loop_minutes");
   network.Check();
+}
+
+void CheckComponentRequest(const std::string& name, const PipelineOptions& o,
+                           const std::string& settings_example) {
+  if (!std::set<std::string>{"player", "detector", "slam", "mapper", "recorder", "pipeline"}.count(
+          name))
+    throw UsageError("unknown component '" + EchoValue(name) +
+                     "' (expected player | detector | slam | mapper | recorder | pipeline; the "
+                     "transport benchmark is the tool dygslam_bench_transport)");
+  if (o.settings_path.empty())
+    throw UsageError("--config FILE is required: the settings YAML of the run (" +
+                     settings_example + ")");
+  if ((o.dataset_dir.empty() || o.dataset_dir == "-") && (name == "player" || name == "pipeline"))
+    throw UsageError("the " + name +
+                     " needs --dataset DIR: the dataset folder that holds rgb.txt and depth.txt "
+                     "(e.g. --dataset data/bonn_crowd_part)");
+  if (o.output_dir.empty()) throw UsageError("--out: empty folder name");
 }
 
 bool PipelineOptions::NeedsDetectorComponent() const {

@@ -75,6 +75,12 @@ struct PipelineOptions {
   bool NeedsDetectorComponent() const;
 };
 
+// What `dygslam component NAME` needs before any DDS work, named as its command line names it: a
+// known NAME, the settings file (`settings_example`: "e.g. PATH" of a preset), the dataset
+// (player, pipeline), an output folder. Throws UsageError.
+void CheckComponentRequest(const std::string& name, const PipelineOptions& options,
+                           const std::string& settings_example);
+
 // Arguments after "dygslam component <name>" that reproduce `options` in a child process.
 std::vector<std::string> ComponentArgs(const PipelineOptions& options);
 

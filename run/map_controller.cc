@@ -81,6 +81,14 @@ void MapControllerOptions::Check() const {
   octomap.Check();
 }
 
+std::vector<std::string> MapOutputNames(bool from_given_poses) {
+  std::vector<std::string> names = {"map.bt",         "map.ot",       "map_top.png",
+                                    "map_slice.png",  "reference.bt", "ghosts_top.png",
+                                    "ghost_cells.txt"};
+  if (!from_given_poses) names.insert(names.end(), {"trajectory.txt", "keyframes.txt"});
+  return names;
+}
+
 MapController::MapController(MapControllerOptions options, const RgbdDataset& dataset)
     : options_(std::move(options)),
       dataset_(dataset),

@@ -54,6 +54,10 @@ struct MapControllerOptions {
   void Check() const;
 };
 
+// The files `dygslam map` writes into its output folder (with the SLAM's trajectory and keyframes
+// unless it maps given poses).
+std::vector<std::string> MapOutputNames(bool from_given_poses);
+
 class MapController {
  public:
   // Checks the options, and that the given poses (if any) give a frame of the range a pose

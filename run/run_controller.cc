@@ -164,6 +164,18 @@ const char* ToString(RunMode mode) {
   return "?";
 }
 
+RunMode ChooseRunMode(const RunModeRequest& r) {
+  if (r.processes && r.direct) throw UsageError("--processes and --direct exclude each other");
+  if (r.security && (r.direct || r.detections))
+    throw UsageError("--security secures the DDS pipeline; --direct and --detections use no DDS");
+  if (r.detections && r.processes) throw UsageError("--detections works with --direct only");
+  if (r.loop && (r.direct || r.detections))
+    throw UsageError(std::string("--loop-minutes works with the DDS modes only (") +
+                     (r.direct ? "not --direct)" : "--detections runs direct)"));
+  if (r.direct || r.detections) return RunMode::kDirect;
+  return r.processes ? RunMode::kPipelineProcesses : RunMode::kPipeline;
+}
+
 void RunControllerOptions::Check() const {
   if (dataset_dir.empty()) throw InvalidOptions("RunControllerOptions.dataset_dir is empty");
   if (out.empty()) throw InvalidOptions("RunControllerOptions.out is empty");
@@ -202,8 +214,16 @@ RunController::RunController(RunControllerOptions options, const RgbdDataset& da
       pipeline_(std::move(pipeline)),
       outputs_(options_.out, RunOutputNames()) {
   options_.Check();
-  if (options_.mode != RunMode::kDirect && !pipeline_)
-    throw InvalidOptions("RunController: a pipeline mode needs a PipelineRunner");
+  // No runner: a build without the DDS components runs the library loop.
+  if (options_.mode == RunMode::kPipelineProcesses && !pipeline_)
+    throw InvalidOptions(
+        "--processes: this build has no DDS components (configure with -DDYGSLAM_BUILD_DDS=ON)");
+  if (options_.mode == RunMode::kPipeline && !pipeline_) {
+    std::fprintf(stderr,
+                 "[run] this build has no DDS components: running the direct library loop "
+                 "(--direct)\n");
+    options_.mode = RunMode::kDirect;
+  }
   for (size_t k = options_.first; k < options_.last; ++k) {
     if (!dataset_.FrameForRgbEntry(k)) ++without_depth_partner_;
   }

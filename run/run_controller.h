@@ -80,6 +80,8 @@ class RunController {
  public:
   // `dataset`: opened over options.dataset_dir; `ground_truth`: its ground truth (empty: none or
   // unreadable, said before). The outputs' versions are taken here: construct right before Run().
+  // Without `pipeline` (a build without the DDS components) the default mode runs direct, said
+  // on stderr, and kPipelineProcesses is an error.
   RunController(RunControllerOptions options, const RgbdDataset& dataset,
                 std::vector<StampedPose> ground_truth, PipelineRunner pipeline = {});
 
@@ -128,6 +130,18 @@ class RunController {
   size_t requested_ = 0, without_depth_partner_ = 0;
   RunSummary summary_;
 };
+
+// What the command line asks of the mode: --direct, --processes, a --detections file (runs
+// direct), --security (secures the DDS pipeline), --loop-minutes.
+struct RunModeRequest {
+  bool direct = false;
+  bool processes = false;
+  bool detections = false;
+  bool security = false;
+  bool loop = false;
+};
+// The mode asked for; throws UsageError when the request's parts exclude each other.
+RunMode ChooseRunMode(const RunModeRequest& request);
 
 // The mode's name in the summary ("direct (no DDS)", "DDS pipeline, one process", ...).
 const char* ToString(RunMode mode);

@@ -12,6 +12,7 @@
 #include "core/dynamic/yolo_detector.h"
 #include "core/io/detections_io.h"
 #include "core/io/trajectory_io.h"
+#include "core/slam/map/map_file.h"
 #include "mapping/octomap_builder.h"
 
 namespace dygslam {
@@ -116,11 +117,78 @@ void WarnUnmatchedDetections(const std::string& path, const DetectionsByStamp& d
                                       : "");
 }
 
+void WarnAboutDataset(const std::string& command, const RgbdDataset& dataset, size_t first,
+                      size_t last, double depth_map_factor, int width, int height,
+                      const std::vector<StampedPose>* groundtruth) {
+  const auto warn = [&](const std::string& text) {
+    std::fprintf(stderr, "dygslam %s: warning: %s\n", command.c_str(), text.c_str());
+  };
+  if (!dataset.listing_problem().empty()) warn(EchoValue(dataset.listing_problem(), 600));
+  // Depth that no RGB-D sensor measures on most pixels (every pixel saturated, DepthMapFactor off
+  // by orders of magnitude) would run to the end with a meaningless map and trajectory.
+  if (const std::string why =
+          ImplausibleDepth(SampleDepthRange(dataset, first, last, depth_map_factor, width, height),
+                           depth_map_factor);
+      !why.empty())
+    warn("implausible depth: " + why);
+  if (groundtruth != nullptr) {
+    if (const std::string note = GroundTruthCoverageNote(dataset, first, last, *groundtruth);
+        !note.empty())
+      warn(EchoValue(note, 600));
+    if (const std::string note =
+            ImplausibleGroundTruthNote(dataset.groundtruth_path(), *groundtruth);
+        !note.empty())
+      warn(EchoValue(note, 600));
+  }
+}
+
+std::vector<StampedPose> ReadGroundTruthAndWarn(const std::string& command,
+                                                const RunControllerOptions& options,
+                                                const RgbdDataset& dataset,
+                                                const std::string& detections_path) {
+  std::vector<StampedPose> groundtruth = ReadRunGroundTruth(dataset);
+  const SystemOptions& system = options.system;
+  if (options.use_detection_file)
+    WarnUnmatchedDetections(detections_path, options.detections, system.camera, dataset,
+                            options.first, options.last);
+  WarnAboutDataset(command, dataset, options.first, options.last, system.sensor.depth_map_factor,
+                   system.camera.width, system.camera.height,
+                   groundtruth.empty() ? nullptr : &groundtruth);
+  return groundtruth;
+}
+
 void CheckOctoMapToContinue(const std::string& option, const std::string& path) {
   try {
     ReadOctoMap(path);
   } catch (const InputError& e) {
     throw InputError(option + ": " + e.what());
+  }
+}
+
+void ReadRunInputFiles(const RunInputFiles& files, RunControllerOptions* options) {
+  RunControllerOptions& s = *options;
+  if (files.localization && files.load_map.empty())
+    throw UsageError("--localization needs --load-map FILE");
+  if (!files.save_map.empty()) {
+    s.save_map = files.save_map;
+    CheckMapFileWritable(s.save_map);
+  }
+  if (!files.load_octomap.empty()) {
+    if (!s.map) throw UsageError("--load-octomap and --no-map exclude each other");
+    s.load_octomap = files.load_octomap;
+    CheckOctoMapToContinue("--load-octomap", s.load_octomap);
+  }
+  if (!files.load_map.empty()) {
+    // Checked before any work: a bad map is an error naming the file, no output is written.
+    s.system.load_map = files.load_map;
+    s.system.localization = files.localization;
+    std::printf("map file: loaded %s (%s)%s\n", s.system.load_map.c_str(),
+                DescribeMapFile(CheckMapFile(s.system.load_map, s.system)).c_str(),
+                s.system.localization ? ", localization mode" : "");
+  }
+  if (!files.detections.empty()) {
+    s.detections = ReadRunDetections(files.detections, s.system);
+    s.use_detection_file = true;
   }
 }
 

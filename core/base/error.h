@@ -26,10 +26,18 @@ class InvalidOptions : public std::invalid_argument {
   explicit InvalidOptions(const std::string& message) : std::invalid_argument(message) {}
 };
 
-#define DYGSLAM_CHECK_OPTION(cond, name)                                                   \
-  do {                                                                                     \
-    if (!(cond)) throw ::dygslam::InvalidOptions(std::string("invalid option ") + (name) + \
-                                                 ": requires " #cond);                     \
+// A command line that cannot run as given (two of its files clash, options that exclude each
+// other): the command reports it as a usage error (exit 2), with its usage line.
+class UsageError : public InvalidOptions {
+ public:
+  explicit UsageError(const std::string& message) : InvalidOptions(message) {}
+};
+
+#define DYGSLAM_CHECK_OPTION(cond, name)                                        \
+  do {                                                                          \
+    if (!(cond))                                                                \
+      throw ::dygslam::InvalidOptions(std::string("invalid option ") + (name) + \
+                                      ": requires " #cond);                     \
   } while (0)
 
 }  // namespace dygslam

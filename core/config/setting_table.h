@@ -116,7 +116,7 @@ class SettingRow {
       }
     };
     format_ = [field](const Options& options) {
-      return FormatSettingValue(field(const_cast<Options&>(options)));
+      return FormatSettingValue(field(options));
     };
   }
   // A key with its own read function (it reads `key` from the root reader itself).

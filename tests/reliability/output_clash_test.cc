@@ -5,12 +5,15 @@
 // groundtruth.txt / rgb.txt / the --config file, `eval --save-aligned` / `--plot` onto the ground
 // truth and `synth` into an existing dataset replaced the user's file (exit 0), and `--save-map
 // OUT/trajectory.txt` said "saved" and then lost the map.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -170,6 +173,98 @@ TEST_F(OutputClashCli, TwoCommandsNeverWriteIntoOneFolderAtOnce) {
   const auto r = Run({"run", data, "--config", Config(), "--direct", "--filter", "none", "--quiet",
                       "--frames", "0:10", "--no-map", "--out", out});
   EXPECT_EQ(r.code, 0) << r.out << r.err;
+}
+
+// Hand-started components: a recorder (or mapper) holds its kind of output in its --out through a
+// lock file in the folder itself, so a second recorder is refused from any environment, private
+// /tmp or mount namespace that sees the folder. Before, the lock lived at a fixed path under /tmp:
+// a second recorder under a private /tmp (as systemd's PrivateTmp gives a service), or with that
+// path taken by another user's plain file, was accepted and replaced the first one's trajectory.
+TEST_F(OutputClashCli, AHandStartedRecorderHoldsItsFolderFromEveryNamespace) {
+  const std::string out = dir_ + "/out";
+  auto recorder = [&](const std::string& partition) {
+    return std::vector<std::string>{"component", "recorder",    "--config", Config(),   "--out",
+                                    out,         "--partition", partition,  "--domain", "161"};
+  };
+  const pid_t first = testing::SpawnDygslam(recorder("clash_a"), dir_ + "/a.out", dir_ + "/a.err");
+  ASSERT_GT(first, 0);
+  struct Stop {  // the first recorder ends with the test, whatever fails
+    pid_t pid;
+    ~Stop() {
+      ::kill(pid, SIGTERM);
+      std::string diagnostics;
+      testing::WaitForExit(pid, 60, &diagnostics);
+    }
+  } stop{first};
+  const std::string lock = out + "/.dygslam-lock.trajectories";
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!fs::exists(lock) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_TRUE(fs::exists(lock)) << ReadAll(dir_ + "/a.err");
+  // The lock is the folder's own file: whoever sees the folder finds it held.
+  const int fd = ::open(lock.c_str(), O_RDONLY | O_CLOEXEC);
+  ASSERT_GE(fd, 0);
+  EXPECT_NE(::flock(fd, LOCK_EX | LOCK_NB), 0) << "the first recorder does not hold its lock";
+  ::close(fd);
+  ExpectError(Run(recorder("clash_b")), 2,
+              {"--out '" + out + "': another dygslam command is writing its trajectories"});
+  // From a private /tmp (a mount namespace of its own; needs the privilege to make one).
+  if (::geteuid() == 0) {
+    std::vector<std::string> args = {"unshare",
+                                     "-m",
+                                     "--propagation",
+                                     "private",
+                                     "sh",
+                                     "-c",
+                                     "mount -t tmpfs none /tmp && exec \"$0\" \"$@\"",
+                                     testing::DygslamBinary()};
+    for (const std::string& a : recorder("clash_c")) args.push_back(a);
+    const std::string err = dir_ + "/ns.err";
+    std::string command;
+    for (const std::string& a : args) command += "'" + a + "' ";
+    const int status = std::system((command + "> /dev/null 2> '" + err + "'").c_str());
+    EXPECT_EQ(WEXITSTATUS(status), 2) << ReadAll(err);
+    EXPECT_TRUE(Contains(ReadAll(err), "another dygslam command is writing its trajectories"))
+        << ReadAll(err);
+  }
+}
+
+// The check that --out is writable makes a new file under a random name: a link planted under the
+// probe's name is never written through. Before, the probe was OUT/.dygslam_write_probe.<pid>
+// opened with O_TRUNC: links planted for every pid emptied any file the user could write (the
+// run's own ground truth, its --config), exit 0.
+TEST_F(OutputClashCli, TheWritableCheckNeverWritesThroughAPlantedLink) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string data = SmallDataset(source, 5, "data", /*with_groundtruth=*/true);
+  const std::string out = dir_ + "/out", victim = dir_ + "/victim.txt";
+  fs::create_directories(out);
+  std::ofstream(victim) << "the user's file\n";
+  // The child waits until the link for its own pid is planted, then becomes dygslam.
+  int gate[2];
+  ASSERT_EQ(::pipe(gate), 0);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    char c;
+    ::close(gate[1]);
+    if (::read(gate[0], &c, 1) != 1) std::_Exit(125);
+    if (!std::freopen((dir_ + "/run.out").c_str(), "w", stdout) ||
+        !std::freopen((dir_ + "/run.err").c_str(), "w", stderr))
+      std::_Exit(126);
+    const std::string binary = testing::DygslamBinary(), config = Config();
+    ::execl(binary.c_str(), binary.c_str(), "run", data.c_str(), "--config", config.c_str(),
+            "--direct", "--quiet", "--no-map", "--out", out.c_str(), static_cast<char*>(nullptr));
+    std::_Exit(127);
+  }
+  ASSERT_GT(pid, 0);
+  ::close(gate[0]);
+  fs::create_symlink(victim, out + "/.dygslam_write_probe." + std::to_string(pid));
+  ASSERT_EQ(::write(gate[1], "x", 1), 1);
+  ::close(gate[1]);
+  std::string diagnostics;
+  EXPECT_EQ(testing::WaitForExit(pid, 120, &diagnostics), 0)
+      << ReadAll(dir_ + "/run.err") << diagnostics;
+  EXPECT_EQ(ReadAll(victim), "the user's file\n");
+  EXPECT_TRUE(fs::is_symlink(out + "/.dygslam_write_probe." + std::to_string(pid)));
 }
 
 TEST_F(OutputClashCli, EvalRefusesToWriteOverItsInputs) {

@@ -43,14 +43,9 @@ const NameOption kNameOptions[] = {
     {"node-name", "NAME", "ROS 2 node name shown by `ros2 node list`", &B::node_name},
     {"node-namespace", "NS", "ROS 2 node namespace", &B::node_namespace}};
 
-int RunBridgeCommand(const std::vector<std::string>& args) {
-  ArgParser p(
-      "bridge", "[--preset realsense] [--run-slam --config FILE] [--domain N] [options]",
-      "ROS 2 bridge: subscribes to a ROS 2 camera (colour + aligned depth + CameraInfo) and\n"
-      "feeds the pipeline; republishes pose, path, odometry, TF, detections and the OctoMap\n"
-      "as ROS 2 topics (ROS 2 type names, QoS and topic conventions; no ROS 2 needed).\n"
-      "Use the ROS_DOMAIN_ID of the robot as --domain.");
-  ros2::RosBridgeOptions o;  // its defaults are the options' defaults
+// The options of `dygslam bridge`; those bound to a field of `o` are read by ReadBound().
+void DefineBridgeOptions(ArgParser* parser, ros2::RosBridgeOptions* o) {
+  ArgParser& p = *parser;
   p.AddOption("domain", "N", "DDS domain id = ROS_DOMAIN_ID (default DYGSLAM_DOMAIN_ID or 0)",
               "-1");
   p.AddOption("partition", "NAME",
@@ -59,39 +54,51 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
               "components (comma-separated) announced before the first frame is forwarded", "slam");
   p.AddOption("preset", "NAME",
               "camera topics: realsense | realsense-legacy | azure-kinect | kinect", "realsense");
-  p.AddOption("depth-unit", "M", "metres per 16UC1 depth count (0.001: millimetres, ROS)", "0.001");
-  p.AddOption("max-stamp-diff", "S", "colour/depth pairing tolerance (s)", "0.02");
-  p.AddOption("window", "N", "frames in flight to slam (back-pressure)", "2");
+  p.Bind("depth-unit", "M", "metres per 16UC1 depth count (0.001: millimetres, ROS)",
+         &o->depth_unit, 0, 1000);
+  p.Bind("max-stamp-diff", "S", "colour/depth pairing tolerance (s)", &o->max_stamp_difference_s, 0,
+         1000);
+  p.Bind("window", "N", "frames in flight to slam (back-pressure)", &o->window, 0,
+         dds::kFrameHistoryDepth - 1);
   p.AddOption("max-pending", "N",
               "synchronised frames waiting for slam before the oldest is dropped", "2");
-  p.AddOption("eos-idle", "S", "end the stream after S seconds without frames (0 = never)", "0");
+  p.Bind("eos-idle", "S", "end the stream after S seconds without frames (0 = never)",
+         &o->end_of_stream_idle_s, 0, 1e9);
   for (const NameOption& n : kNameOptions)
-    p.AddOption(n.option, n.meta, n.doc, n.from_preset ? "" : o.*n.field);
-  p.AddOption("path-every", "N", "publish the online path every N poses", "10");
+    p.AddOption(n.option, n.meta, n.doc, n.from_preset ? "" : o->*n.field);
+  p.Bind("path-every", "N", "publish the online path every N poses", &o->path_every, 0, 1000000);
   p.AddOption("ros-distro", "NAME", "ROS 2 of the peers: humble | jazzy (iron, kilted, rolling)",
               "jazzy");
-  p.AddFlag("no-node", "do not announce a ROS 2 node (ros_discovery_info)");
+  p.BindFlag("no-node", "do not announce a ROS 2 node (ros_discovery_info)", &o->announce_node,
+             false);
   p.AddFlag("ros-no-shm", "ROS 2 side over UDP only (containers without ipc: host)");
   p.AddFlag("ros-loopback", "ROS 2 side on the pipeline's participant (shm + 127.0.0.1 only)");
-  p.AddFlag("no-ros-axes", "map = SLAM world axes (optical: z forward) instead of REP 103");
-  p.AddFlag("no-tf", "do not publish /tf");
-  p.AddFlag("no-inbound", "outbound only (the frames come from elsewhere, e.g. the player)");
-  p.AddFlag("no-outbound", "inbound only");
+  p.BindFlag("no-ros-axes", "map = SLAM world axes (optical: z forward) instead of REP 103",
+             &o->ros_axes, false);
+  p.BindFlag("no-tf", "do not publish /tf", &o->publish_tf, false);
+  p.BindFlag("no-inbound", "outbound only (the frames come from elsewhere, e.g. the player)",
+             &o->inbound, false);
+  p.BindFlag("no-outbound", "inbound only", &o->outbound, false);
   p.AddFlag("run-slam", "also run the detector, slam, mapper and recorder components here");
   p.AddOption("config", "FILE", "--run-slam: settings YAML (intrinsics as in CameraInfo)");
   p.AddOption("filter", "MODE", "--run-slam: none | boxes | geometry | paper | full", "full");
   p.AddOption("out", "DIR", "--run-slam: output folder (trajectory, map.bt)", "out/bridge");
   p.AddFlag("no-mapper", "--run-slam: no mapper component");
+}
+
+int RunBridgeCommand(const std::vector<std::string>& args) {
+  ArgParser p("bridge", "[--preset realsense] [--run-slam --config FILE] [--domain N] [options]",
+              "ROS 2 bridge: a ROS 2 camera (colour + aligned depth + CameraInfo) in; pose, path,\n"
+              "odometry, TF, detections and the OctoMap out as ROS 2 topics (no ROS 2 needed).\n"
+              "Use the ROS_DOMAIN_ID of the robot as --domain.");
+  ros2::RosBridgeOptions o;  // its defaults are the options' defaults
+  DefineBridgeOptions(&p, &o);
   if (!p.Parse(args)) return p.exit_code();
 
   o.ApplyCameraPreset(p.Get("preset"));
   int max_pending = 0, domain = -1;
-  if (!p.GetNumber("depth-unit", 0, 1000, &o.depth_unit) ||
-      !p.GetNumber("max-stamp-diff", 0, 1000, &o.max_stamp_difference_s) ||
-      !p.GetInt("window", 0, dds::kFrameHistoryDepth - 1, &o.window) ||
-      !p.GetInt("max-pending", 1, 1000000, &max_pending) ||
-      !p.GetNumber("eos-idle", 0, 1e9, &o.end_of_stream_idle_s) ||
-      !p.GetInt("path-every", 0, 1000000, &o.path_every) || !p.GetInt("domain", -1, 232, &domain))
+  if (!p.ReadBound() || !p.GetInt("max-pending", 1, 1000000, &max_pending) ||
+      !p.GetInt("domain", -1, 232, &domain))
     return p.exit_code();
   // A depth unit of 0 would turn every depth into 0 m (no depth at all): a usage error naming the
   // option typed, like the other ranges above.
@@ -101,14 +108,9 @@ int RunBridgeCommand(const std::vector<std::string>& args) {
   o.max_pending_frames = static_cast<size_t>(max_pending);
   for (const NameOption& n : kNameOptions)
     if (!n.from_preset || p.Has(n.option)) o.*n.field = p.Get(n.option);
-  o.ros_axes = !p.Flag("no-ros-axes");
-  o.publish_tf = !p.Flag("no-tf");
-  o.inbound = !p.Flag("no-inbound");
-  o.outbound = !p.Flag("no-outbound");
   ros2::CheckNodeName(o.node_name, "--node-name");
   ros2::CheckNodeNamespace(o.node_namespace, "--node-namespace");
   o.ros_distro = ros2::ParseRosDistro(p.Get("ros-distro"), "--ros-distro");
-  o.announce_node = !p.Flag("no-node");
   o.wait_for_components = p.GetList("wait-for");
   const std::string partition = p.Get("partition");
   o.Check();

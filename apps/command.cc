@@ -117,8 +117,8 @@ void LockOutputFolder(const std::string& name, const std::filesystem::path& dir,
     // never truncated; it stays, empty, beside the outputs.
     const char* kind = outputs == FolderOutputs::kMap ? "map" : "trajectories";
     const std::string file = std::string(".dygslam-lock.") + kind;
-    const int fd = ::openat(folder_fd, file.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC | O_NOFOLLOW,
-                            0644);
+    const int fd =
+        ::openat(folder_fd, file.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
     if (fd < 0)
       throw InputError(name + ": cannot open the lock file " + file + " of its " + kind + ": " +
                        std::strerror(errno) + " (remove it if it is not a plain file)");
@@ -267,6 +267,44 @@ void ArgParser::AddOption(const std::string& name, const std::string& value_name
 
 void ArgParser::AddFlag(const std::string& name, const std::string& help) {
   options_.push_back({name, "", help, "", true});
+}
+
+void ArgParser::Bind(const std::string& name, const std::string& value_name,
+                     const std::string& help, std::string* field) {
+  AddOption(name, value_name, help, *field);
+  bound_.push_back([this, name, field] {
+    *field = Get(name);
+    return true;
+  });
+}
+
+void ArgParser::Bind(const std::string& name, const std::string& value_name,
+                     const std::string& help, double* field, double min_value, double max_value) {
+  std::ostringstream text;
+  text << *field;
+  AddOption(name, value_name, help, text.str());
+  bound_.push_back([=] { return GetNumber(name, min_value, max_value, field); });
+}
+
+void ArgParser::Bind(const std::string& name, const std::string& value_name,
+                     const std::string& help, int* field, int min_value, int max_value) {
+  AddOption(name, value_name, help, std::to_string(*field));
+  bound_.push_back([=] { return GetInt(name, min_value, max_value, field); });
+}
+
+void ArgParser::BindFlag(const std::string& name, const std::string& help, bool* field,
+                         bool when_given) {
+  AddFlag(name, help);
+  bound_.push_back([=] {
+    if (Flag(name)) *field = when_given;
+    return true;
+  });
+}
+
+bool ArgParser::ReadBound() {
+  for (const auto& read : bound_)
+    if (!read()) return false;
+  return true;
 }
 
 std::string ArgParser::Usage() const {

@@ -73,6 +73,21 @@ class ArgParser {
   void AddOption(const std::string& name, const std::string& value_name, const std::string& help,
                  const std::string& default_value = "");
   void AddFlag(const std::string& name, const std::string& help);
+  // An option bound to a field, read into it by ReadBound() after Parse() (a number checked as
+  // GetNumber / GetInt do); its default is the field's value when bound.
+  void Bind(const std::string& name, const std::string& value_name, const std::string& help,
+            std::string* field);
+  void Bind(const std::string& name, const std::string& value_name, const std::string& help,
+            double* field, double min_value, double max_value);
+  void Bind(const std::string& name, const std::string& value_name, const std::string& help,
+            int* field, int min_value, int max_value);
+  // A flag bound to a switch: given, it sets the field to `when_given` (--progress: true,
+  // --no-mapper: false).
+  void BindFlag(const std::string& name, const std::string& help, bool* field,
+                bool when_given = true);
+  // Every bound option into its field, in the order bound: false after the usage error of the
+  // first bad value (exit_code() 2).
+  bool ReadBound();
 
   // False on --help (usage printed to stdout, exit_code() 0) or on a usage error (message and
   // usage printed to stderr, exit_code() 2).
@@ -126,6 +141,7 @@ class ArgParser {
   std::map<std::string, std::string> option_values_;
   int exit_code_ = 0;
   bool allow_empty_values_ = false;
+  std::vector<std::function<bool()>> bound_;  // ReadBound's readers
 };
 
 // Directory of the scripts (scripts/): $DYGSLAM_SCRIPTS_DIR, else the source tree's

@@ -32,6 +32,7 @@
 #include "core/base/log.h"
 #include "core/base/stop_signal.h"
 #include "core/base/thread_setup.h"
+#include "core/dynamic/yolo_detector.h"
 #include "core/io/file_util.h"
 #include "dygslam_msg/StreamStatusPubSubTypes.h"
 #include "run/realtime_report.h"
@@ -74,6 +75,14 @@ void CheckComponentRequest(const std::string& name, const PipelineOptions& o,
                      " needs --dataset DIR: the dataset folder that holds rgb.txt and depth.txt "
                      "(e.g. --dataset data/bonn_crowd_part)");
   if (o.output_dir.empty()) throw UsageError("--out: empty folder name");
+}
+
+void CheckDetectorModelOption(const std::string& model) {
+  try {
+    DetectorOptionsForModel(model);
+  } catch (const InputError& e) {
+    throw InputError(std::string("--detector-model: ") + e.what());
+  }
 }
 
 bool PipelineOptions::NeedsDetectorComponent() const {

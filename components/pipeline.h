@@ -81,6 +81,10 @@ struct PipelineOptions {
 void CheckComponentRequest(const std::string& name, const PipelineOptions& options,
                            const std::string& settings_example);
 
+// `dygslam component detector --detector-model NAME` (without --detector-cfg): NAME is a known
+// model. Throws InputError naming the option.
+void CheckDetectorModelOption(const std::string& model);
+
 // Arguments after "dygslam component <name>" that reproduce `options` in a child process.
 std::vector<std::string> ComponentArgs(const PipelineOptions& options);
 

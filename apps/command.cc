@@ -117,11 +117,16 @@ void LockOutputFolder(const std::string& name, const std::filesystem::path& dir,
     // never truncated; it stays, empty, beside the outputs.
     const char* kind = outputs == FolderOutputs::kMap ? "map" : "trajectories";
     const std::string file = std::string(".dygslam-lock.") + kind;
-    const int fd =
-        ::openat(folder_fd, file.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
-    if (fd < 0)
+    // O_NONBLOCK: a FIFO planted under the name is opened at once (and refused), not waited on.
+    const int fd = ::openat(folder_fd, file.c_str(),
+                            O_RDONLY | O_CREAT | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK, 0644);
+    struct stat lock_st {};
+    if (fd < 0 || ::fstat(fd, &lock_st) != 0 || !S_ISREG(lock_st.st_mode)) {
+      const std::string why = fd < 0 ? std::strerror(errno) : "it is not a plain file";
+      if (fd >= 0) ::close(fd);
       throw InputError(name + ": cannot open the lock file " + file + " of its " + kind + ": " +
-                       std::strerror(errno) + " (remove it if it is not a plain file)");
+                       why + " (remove it if it is not a plain file)");
+    }
     if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
       const int error = errno;
       ::close(fd);

@@ -4,10 +4,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -59,27 +61,31 @@ bool Plot(const std::string& png, const std::string& script, const std::string& 
               << " not found (set DYGSLAM_SCRIPTS_DIR)\n";
     return false;
   }
-  const fs::path data =
-      fs::temp_directory_path() / ("dygslam_plot_" + std::to_string(::getpid()) + ".txt");
+  // The pairs and the drawing go into a folder of this process's own (mkdtemp: a new name, mode
+  // 0700), where no one else can plant a file or link; the picture is then written like every
+  // output (a temporary name renamed over FILE, into the folder pinned when eval started).
+  std::string private_dir = (fs::temp_directory_path() / "dygslam_plot_XXXXXX").string();
+  if (::mkdtemp(private_dir.data()) == nullptr)
+    throw InputError(png, 0,
+                     std::string("cannot make a folder for the plot: ") + std::strerror(errno));
+  const fs::path data = fs::path(private_dir) / "ate_pairs.txt";
+  const fs::path drawn = fs::path(private_dir) / "plot.png";
   WriteFileAtomically(data.string(), AtePairsText(ate));
-  // Drawn into a private file, then written like every output (a temporary name renamed over
-  // FILE, into the folder pinned when eval started).
-  const fs::path drawn =
-      fs::temp_directory_path() / ("dygslam_plot_" + std::to_string(::getpid()) + ".png");
   const std::string cmd = "python3 " + ShellQuote(script) + " --data " + ShellQuote(data.string()) +
                           " --out " + ShellQuote(drawn.string()) + " --title " + ShellQuote(title);
   const int status = std::system(cmd.c_str());
-  fs::remove(data, ec);
   const int code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+  std::string bytes;
   if (code == 0) {
     std::ifstream in(drawn, std::ios::binary);
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    fs::remove(drawn, ec);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  fs::remove_all(private_dir, ec);
+  if (code == 0) {
     if (bytes.empty()) throw InputError(png, 0, "plot failed: " + script + " wrote nothing");
     WriteFileAtomically(png, bytes);
     return true;
   }
-  fs::remove(drawn, ec);
   if (code == 3) {
     std::cerr << "dygslam eval: plot skipped: python3-matplotlib is not installed "
                  "(apt-get install python3-matplotlib)\n";

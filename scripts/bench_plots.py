@@ -13,7 +13,7 @@ import json
 import os
 import sys
 
-from plot_common import import_pyplot
+from plot_common import import_pyplot, save_figure
 
 # One colour per configuration, none shared (a configuration not listed gets one of the spare colours).
 COLORS = {"none": "tab:red", "boxes": "tab:orange", "geometry": "tab:purple", "full": "tab:blue",
@@ -46,9 +46,7 @@ def plane_axes(gt):
 def save(fig, path):
     out_dir = os.path.dirname(os.path.abspath(path))
     os.makedirs(out_dir, exist_ok=True)
-    tmp = os.path.join(out_dir, f".{os.path.basename(path)}.tmp.{os.getpid()}.png")
-    fig.savefig(tmp, dpi=90)
-    os.replace(tmp, path)
+    save_figure(fig, path, dpi=90)
 
 
 def draw(plt, sequence, series, out_png):

@@ -20,3 +20,26 @@ def import_pyplot(script_name):
             os.execv(system, [system] + sys.argv)
         print(script_name + ": python3-matplotlib is not installed", file=sys.stderr)
         return None
+
+
+def save_figure(fig, path, dpi):
+    """Writes the figure as PNG to PATH: drawn into a new file of a random name in PATH's folder
+    (made with O_EXCL: never a file or link that is there already), renamed over PATH when
+    complete."""
+    import tempfile
+    out_dir = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".tmp.", suffix=".png",
+                               dir=out_dir)
+    try:
+        umask = os.umask(0)
+        os.umask(umask)
+        os.fchmod(fd, 0o666 & ~umask)  # as a file the user makes (mkstemp's are 0600)
+        with os.fdopen(fd, "wb") as f:
+            fig.savefig(f, format="png", dpi=dpi)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise

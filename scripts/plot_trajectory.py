@@ -6,10 +6,9 @@ Called by `dygslam eval --plot FILE.png` with a data file of associated pairs:
 Exit codes: 0 written, 2 bad input, 3 matplotlib missing.
 """
 import argparse
-import os
 import sys
 
-from plot_common import import_pyplot
+from plot_common import import_pyplot, save_figure
 
 
 def main():
@@ -73,10 +72,7 @@ def main():
         fig.suptitle(args.title)
     fig.tight_layout()
 
-    out_dir = os.path.dirname(os.path.abspath(args.out))
-    tmp = os.path.join(out_dir, f".{os.path.basename(args.out)}.tmp.{os.getpid()}.png")
-    fig.savefig(tmp, dpi=100)
-    os.replace(tmp, args.out)
+    save_figure(fig, args.out, dpi=100)
     return 0
 
 

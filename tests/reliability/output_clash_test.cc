@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -127,54 +128,6 @@ TEST_F(OutputClashCli, RunRefusesAnOutputOntoAnInputOrAnotherOutput) {
   EXPECT_TRUE(!fs::exists(out) || fs::is_empty(out));
 }
 
-// Two commands writing into one folder would rename their files over each other's (a recorder
-// started by hand beside a run replaced the run's complete trajectory by its partial one, exit
-// 0). The folder is held by the command that writes into it: a second one is refused before any
-// work, and the first one's outputs are whole.
-TEST_F(OutputClashCli, TwoCommandsNeverWriteIntoOneFolderAtOnce) {
-  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
-  const std::string data = SmallDataset(source, 90, "data", /*with_groundtruth=*/true);
-  const std::string out = dir_ + "/out";
-  // A paced run (3 s of frames) holds the folder while it goes.
-  const pid_t first =
-      testing::SpawnDygslam({"run", data, "--config", Config(), "--direct", "--filter", "none",
-                             "--quiet", "--rate", "1", "--out", out},
-                            dir_ + "/first.out", dir_ + "/first.err");
-  ASSERT_GT(first, 0);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (!fs::exists(out) && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  for (const std::vector<std::string>& second :
-       {std::vector<std::string>{"run", data, "--config", Config(), "--direct", "--filter", "none",
-                                 "--quiet", "--frames", "0:10", "--out", out},
-        std::vector<std::string>{"map", data, "--config", Config(), "--trajectory",
-                                 data + "/groundtruth.txt", "--out", out}}) {
-    // Also from another environment (a login shell's XDG_RUNTIME_DIR beside a service's).
-    for (const bool other_environment : {false, true}) {
-      if (other_environment) ::setenv("XDG_RUNTIME_DIR", (dir_ + "/xdg").c_str(), 1);
-      const auto r = Run(second);
-      ::unsetenv("XDG_RUNTIME_DIR");
-      ExpectError(r, 2, {"--out '" + out + "': another dygslam command is writing its"});
-    }
-  }
-  std::string diagnostics;
-  const int code = testing::WaitForExit(first, 120, &diagnostics);
-  const std::string summary = ReadAll(dir_ + "/first.out");
-  EXPECT_EQ(code, 0) << summary << ReadAll(dir_ + "/first.err") << diagnostics;
-  std::smatch done;
-  // At the camera's rate, a frame or two may be dropped while the other command starts.
-  ASSERT_TRUE(
-      std::regex_search(summary, done, std::regex(R"(integrity: (\d+) of 90 requested frames)")))
-      << summary;
-  EXPECT_GE(std::stoul(done[1]), 80u) << summary;
-  EXPECT_EQ(ReadTumTrajectory(out + "/trajectory.txt").size(), std::stoul(done[1]));
-  // The folder is free again once the command ended.
-  const auto r = Run({"run", data, "--config", Config(), "--direct", "--filter", "none", "--quiet",
-                      "--frames", "0:10", "--no-map", "--out", out});
-  EXPECT_EQ(r.code, 0) << r.out << r.err;
-}
-
 // Hand-started components: a recorder (or mapper) holds its kind of output in its --out through a
 // lock file in the folder itself, so a second recorder is refused from any environment, private
 // /tmp or mount namespace that sees the folder. Before, the lock lived at a fixed path under /tmp:
@@ -265,6 +218,64 @@ TEST_F(OutputClashCli, TheWritableCheckNeverWritesThroughAPlantedLink) {
       << ReadAll(dir_ + "/run.err") << diagnostics;
   EXPECT_EQ(ReadAll(victim), "the user's file\n");
   EXPECT_TRUE(fs::is_symlink(out + "/.dygslam_write_probe." + std::to_string(pid)));
+}
+
+// A FIFO planted as a component's lock file is refused at once (exit 1, naming it). Before, the
+// recorder waited in open() without a word until it was signalled.
+TEST_F(OutputClashCli, AFifoAtALockFileIsRefusedAtOnce) {
+  const std::string out = dir_ + "/out";
+  fs::create_directories(out);
+  ASSERT_EQ(::mkfifo((out + "/.dygslam-lock.trajectories").c_str(), 0644), 0);
+  const auto r = RunWithin({"component", "recorder", "--config", Config(), "--out", out,
+                            "--partition", "fifo_lock", "--domain", "162"},
+                           30);
+  ExpectError(r, 1, {"lock file .dygslam-lock.trajectories", "not a plain file"});
+}
+
+// `eval --plot` draws into a folder of its own: links planted in the temporary folder under the
+// names it used before (dygslam_plot_<pid>.png, the script's .<name>.tmp.<pid>.png) are never
+// written through. Before, the plot script's temporary file followed such a link and replaced
+// the ground truth with a PNG, exit 0.
+TEST_F(OutputClashCli, EvalPlotNeverWritesThroughALinkInTheTemporaryFolder) {
+  const std::string gt = dir_ + "/gt.txt", est = dir_ + "/est.txt", tmp = dir_ + "/tmp";
+  WriteTrajectories(gt, est);
+  fs::create_directories(tmp);
+  const std::string before = ReadAll(gt);
+  int gate[2];
+  ASSERT_EQ(::pipe(gate), 0);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    char c;
+    ::close(gate[1]);
+    if (::read(gate[0], &c, 1) != 1) std::_Exit(125);
+    ::setenv("TMPDIR", tmp.c_str(), 1);
+    if (!std::freopen((dir_ + "/eval.out").c_str(), "w", stdout) ||
+        !std::freopen((dir_ + "/eval.err").c_str(), "w", stderr))
+      std::_Exit(126);
+    const std::string binary = testing::DygslamBinary(), plot = dir_ + "/plot.png";
+    ::execl(binary.c_str(), binary.c_str(), "eval", gt.c_str(), est.c_str(), "--plot", plot.c_str(),
+            static_cast<char*>(nullptr));
+    std::_Exit(127);
+  }
+  ASSERT_GT(pid, 0);
+  ::close(gate[0]);
+  const std::string p = std::to_string(pid);
+  fs::create_symlink(gt, tmp + "/dygslam_plot_" + p + ".png");
+  fs::create_symlink(gt, tmp + "/dygslam_plot_" + p + ".txt");
+  for (int i = 1; i <= 50; ++i)  // the script's process: a shell and python3 after this one
+    fs::create_symlink(
+        gt, tmp + "/.dygslam_plot_" + p + ".png.tmp." + std::to_string(pid + i) + ".png");
+  ASSERT_EQ(::write(gate[1], "x", 1), 1);
+  ::close(gate[1]);
+  std::string diagnostics;
+  EXPECT_EQ(testing::WaitForExit(pid, 120, &diagnostics), 0)
+      << ReadAll(dir_ + "/eval.err") << diagnostics;
+  EXPECT_TRUE(ReadAll(gt) == before) << "the ground truth was written through a link";
+  // The plot was drawn (python3-matplotlib is part of the setup), and nothing is left behind.
+  EXPECT_TRUE(ReadAll(dir_ + "/plot.png").rfind("\x89PNG", 0) == 0) << ReadAll(dir_ + "/eval.err");
+  size_t left = 0;
+  for (const auto& e : fs::directory_iterator(tmp)) left += fs::is_symlink(e.path()) ? 0 : 1;
+  EXPECT_EQ(left, 0u) << "files left in the temporary folder";
 }
 
 TEST_F(OutputClashCli, EvalRefusesToWriteOverItsInputs) {

@@ -1,11 +1,13 @@
-// A --direct replay at the camera's rate stopped (SIGSTOP) and continued as a whole. It runs alone
-// (RUN_SERIAL): what it checks is the replay's pace, which other tests on the same cores would
-// take away (seen: 6.5 frames/s, a stretch of 3.6 s without a frame under three runs on two
-// cores).
+// Replays at the camera's rate: stopped (SIGSTOP) and continued as a whole, and holding their
+// output folder against a second command while they go. They run alone (RUN_SERIAL): a replay's
+// pace is part of what they check, which other tests on the same cores would take away (seen:
+// 6.5 frames/s, a stretch of 3.6 s without a frame under three runs on two cores).
 #include <signal.h>
 
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
+#include <regex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -17,6 +19,7 @@
 
 namespace dygslam {
 namespace {
+namespace fs = std::filesystem;
 using testing::Contains;
 using testing::ReadAll;
 
@@ -74,6 +77,54 @@ TEST_F(PacedPause, ADirectReplayStoppedAndContinuedGoesOnFromItsFrame) {
   const RgbdDataset dataset = RgbdDataset::Open(source);
   EXPECT_LT(SecondsBetween(poses.back().stamp, dataset.StampOfRgbEntry(149)), 1.0)
       << summary << err;
+}
+
+// Two commands writing into one folder would rename their files over each other's (a recorder
+// started by hand beside a run replaced the run's complete trajectory by its partial one, exit
+// 0). The folder is held by the command that writes into it: a second one is refused before any
+// work, and the first one's outputs are whole.
+TEST_F(PacedPause, TwoCommandsNeverWriteIntoOneFolderAtOnce) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string data = SmallDataset(source, 90, "data", /*with_groundtruth=*/true);
+  const std::string out = dir_ + "/out";
+  // A paced run (3 s of frames) holds the folder while it goes.
+  const pid_t first =
+      testing::SpawnDygslam({"run", data, "--config", Config(), "--direct", "--filter", "none",
+                             "--quiet", "--rate", "1", "--out", out},
+                            dir_ + "/first.out", dir_ + "/first.err");
+  ASSERT_GT(first, 0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!fs::exists(out) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  for (const std::vector<std::string>& second :
+       {std::vector<std::string>{"run", data, "--config", Config(), "--direct", "--filter", "none",
+                                 "--quiet", "--frames", "0:10", "--out", out},
+        std::vector<std::string>{"map", data, "--config", Config(), "--trajectory",
+                                 data + "/groundtruth.txt", "--out", out}}) {
+    // Also from another environment (a login shell's XDG_RUNTIME_DIR beside a service's).
+    for (const bool other_environment : {false, true}) {
+      if (other_environment) ::setenv("XDG_RUNTIME_DIR", (dir_ + "/xdg").c_str(), 1);
+      const auto r = Run(second);
+      ::unsetenv("XDG_RUNTIME_DIR");
+      ExpectError(r, 2, {"--out '" + out + "': another dygslam command is writing its"});
+    }
+  }
+  std::string diagnostics;
+  const int code = testing::WaitForExit(first, 120, &diagnostics);
+  const std::string summary = ReadAll(dir_ + "/first.out");
+  EXPECT_EQ(code, 0) << summary << ReadAll(dir_ + "/first.err") << diagnostics;
+  std::smatch done;
+  // At the camera's rate, a frame or two may be dropped while the other command starts.
+  ASSERT_TRUE(
+      std::regex_search(summary, done, std::regex(R"(integrity: (\d+) of 90 requested frames)")))
+      << summary;
+  EXPECT_GE(std::stoul(done[1]), 80u) << summary;
+  EXPECT_EQ(ReadTumTrajectory(out + "/trajectory.txt").size(), std::stoul(done[1]));
+  // The folder is free again once the command ended.
+  const auto r = Run({"run", data, "--config", Config(), "--direct", "--filter", "none", "--quiet",
+                      "--frames", "0:10", "--no-map", "--out", out});
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
 }
 
 }  // namespace

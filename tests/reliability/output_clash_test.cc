@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <regex>
 #include <string>
@@ -82,6 +83,42 @@ void WriteTrajectories(const std::string& gt, const std::string& est) {
 class OutputClashCli : public testing::CliFixture {
  protected:
   OutputClashCli() : CliFixture("clash_cli") {}
+
+  // Starts dygslam with `args` (output in dir_/NAME.out, NAME.err; TMPDIR `tmpdir` unless "") in a
+  // child that waits until `plant(pid)` has run: what is planted under the child's own pid is
+  // there before it starts. Returns the child's pid (-1 after a failure).
+  pid_t SpawnAfter(const std::vector<std::string>& args, const std::string& name,
+                   const std::function<void(pid_t)>& plant, const std::string& tmpdir = "") {
+    int gate[2];
+    if (::pipe(gate) != 0) return -1;
+    std::vector<std::string> argv = {testing::DygslamBinary()};
+    argv.insert(argv.end(), args.begin(), args.end());
+    std::vector<char*> raw;
+    for (std::string& a : argv) raw.push_back(a.data());
+    raw.push_back(nullptr);
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      char c;
+      ::close(gate[1]);
+      if (::read(gate[0], &c, 1) != 1) std::_Exit(125);
+      if (!tmpdir.empty()) ::setenv("TMPDIR", tmpdir.c_str(), 1);
+      if (!std::freopen((dir_ + "/" + name + ".out").c_str(), "w", stdout) ||
+          !std::freopen((dir_ + "/" + name + ".err").c_str(), "w", stderr))
+        std::_Exit(126);
+      ::execv(raw[0], raw.data());
+      std::_Exit(127);
+    }
+    ::close(gate[0]);
+    try {
+      if (pid > 0) plant(pid);
+    } catch (...) {
+      ::close(gate[1]);  // the child reads the end and leaves
+      throw;
+    }
+    const bool opened = ::write(gate[1], "x", 1) == 1;
+    ::close(gate[1]);
+    return opened ? pid : -1;
+  }
 
   // Runs `args`, expects the clash (exit 2, both names) and `kept` unchanged.
   void ExpectClash(const std::vector<std::string>& args, const std::string& kept,
@@ -192,27 +229,12 @@ TEST_F(OutputClashCli, TheWritableCheckNeverWritesThroughAPlantedLink) {
   const std::string out = dir_ + "/out", victim = dir_ + "/victim.txt";
   fs::create_directories(out);
   std::ofstream(victim) << "the user's file\n";
-  // The child waits until the link for its own pid is planted, then becomes dygslam.
-  int gate[2];
-  ASSERT_EQ(::pipe(gate), 0);
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    char c;
-    ::close(gate[1]);
-    if (::read(gate[0], &c, 1) != 1) std::_Exit(125);
-    if (!std::freopen((dir_ + "/run.out").c_str(), "w", stdout) ||
-        !std::freopen((dir_ + "/run.err").c_str(), "w", stderr))
-      std::_Exit(126);
-    const std::string binary = testing::DygslamBinary(), config = Config();
-    ::execl(binary.c_str(), binary.c_str(), "run", data.c_str(), "--config", config.c_str(),
-            "--direct", "--quiet", "--no-map", "--out", out.c_str(), static_cast<char*>(nullptr));
-    std::_Exit(127);
-  }
+  const pid_t pid = SpawnAfter(
+      {"run", data, "--config", Config(), "--direct", "--quiet", "--no-map", "--out", out}, "run",
+      [&](pid_t child) {
+        fs::create_symlink(victim, out + "/.dygslam_write_probe." + std::to_string(child));
+      });
   ASSERT_GT(pid, 0);
-  ::close(gate[0]);
-  fs::create_symlink(victim, out + "/.dygslam_write_probe." + std::to_string(pid));
-  ASSERT_EQ(::write(gate[1], "x", 1), 1);
-  ::close(gate[1]);
   std::string diagnostics;
   EXPECT_EQ(testing::WaitForExit(pid, 120, &diagnostics), 0)
       << ReadAll(dir_ + "/run.err") << diagnostics;
@@ -241,32 +263,18 @@ TEST_F(OutputClashCli, EvalPlotNeverWritesThroughALinkInTheTemporaryFolder) {
   WriteTrajectories(gt, est);
   fs::create_directories(tmp);
   const std::string before = ReadAll(gt);
-  int gate[2];
-  ASSERT_EQ(::pipe(gate), 0);
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    char c;
-    ::close(gate[1]);
-    if (::read(gate[0], &c, 1) != 1) std::_Exit(125);
-    ::setenv("TMPDIR", tmp.c_str(), 1);
-    if (!std::freopen((dir_ + "/eval.out").c_str(), "w", stdout) ||
-        !std::freopen((dir_ + "/eval.err").c_str(), "w", stderr))
-      std::_Exit(126);
-    const std::string binary = testing::DygslamBinary(), plot = dir_ + "/plot.png";
-    ::execl(binary.c_str(), binary.c_str(), "eval", gt.c_str(), est.c_str(), "--plot", plot.c_str(),
-            static_cast<char*>(nullptr));
-    std::_Exit(127);
-  }
+  const pid_t pid = SpawnAfter(
+      {"eval", gt, est, "--plot", dir_ + "/plot.png"}, "eval",
+      [&](pid_t child) {
+        const std::string p = std::to_string(child);
+        fs::create_symlink(gt, tmp + "/dygslam_plot_" + p + ".png");
+        fs::create_symlink(gt, tmp + "/dygslam_plot_" + p + ".txt");
+        for (int i = 1; i <= 50; ++i)  // the script's process: a shell and python3 after this one
+          fs::create_symlink(
+              gt, tmp + "/.dygslam_plot_" + p + ".png.tmp." + std::to_string(child + i) + ".png");
+      },
+      tmp);
   ASSERT_GT(pid, 0);
-  ::close(gate[0]);
-  const std::string p = std::to_string(pid);
-  fs::create_symlink(gt, tmp + "/dygslam_plot_" + p + ".png");
-  fs::create_symlink(gt, tmp + "/dygslam_plot_" + p + ".txt");
-  for (int i = 1; i <= 50; ++i)  // the script's process: a shell and python3 after this one
-    fs::create_symlink(
-        gt, tmp + "/.dygslam_plot_" + p + ".png.tmp." + std::to_string(pid + i) + ".png");
-  ASSERT_EQ(::write(gate[1], "x", 1), 1);
-  ::close(gate[1]);
   std::string diagnostics;
   EXPECT_EQ(testing::WaitForExit(pid, 120, &diagnostics), 0)
       << ReadAll(dir_ + "/eval.err") << diagnostics;

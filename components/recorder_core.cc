@@ -71,7 +71,7 @@ FrameRow FrameRowFromPose(const msg::CameraPose& m) {
 
 void RecorderCore::AddPose(const msg::CameraPose& pose) {
   const Timestamp stamp = TimeFromMsg(pose.header().stamp(), "CameraPose.header.stamp");
-  std::string row = FramesCsvRow(FrameRowFromPose(pose));
+  FrameRow row = FrameRowFromPose(pose);
   if (pose.has_pose()) {
     StampedPose p;
     p.stamp = stamp;
@@ -80,7 +80,7 @@ void RecorderCore::AddPose(const msg::CameraPose& pose) {
     if (pose.is_keyframe()) online_keyframes_.push_back(p);
   }
   if (pose.tracking_state() == static_cast<uint8_t>(TrackingState::kLost)) ++num_lost_;
-  frame_rows_.emplace_back(stamp, std::move(row));
+  frame_rows_.push_back(row);
 }
 
 void RecorderCore::SetTrajectory(const msg::Trajectory& trajectory) {
@@ -135,33 +135,32 @@ std::string RecorderCore::Write() const {
     std::filesystem::create_directories(options_.output_dir, ignored);
   }
   const std::filesystem::path dir(options_.output_dir);
-  const std::string trajectory = (dir / "trajectory.txt").string();
-  if (frame_rows_.empty() && online_.empty() && (!final_frames_ || final_frames_->empty())) {
-    // No frame came (a run stopped or failed before its first, a bridge whose camera never
-    // sent): an earlier run's trajectories stay as they were instead of being replaced by empty
-    // files; where there is none, the empty (loadable) files are written.
-    std::error_code ec;
-    if (std::filesystem::exists(trajectory, ec)) {
-      LOG_INFO << "recorder: no frame received; the earlier trajectory.txt, keyframes.txt and "
-                  "frames.csv are left as they were";
-      if (!ground_truth_.empty()) WriteGroundTruthCopy(dir / "groundtruth.txt");
-      return "";
-    }
+  RunOutputs outputs(dir,
+                     {"trajectory.txt", "trajectory_online.txt", "keyframes.txt", "frames.csv"});
+  RunRecord record;
+  record.rows = frame_rows_;
+  std::stable_sort(record.rows->begin(), record.rows->end(),
+                   [](const FrameRow& a, const FrameRow& b) { return a.stamp < b.stamp; });
+  record.online = SortedUnique(online_);
+  record.trajectory = final_frames_ ? *final_frames_ : *record.online;
+  record.keyframes = final_keyframes_ ? *final_keyframes_ : SortedUnique(online_keyframes_);
+  const bool written = WriteRunRecord(outputs, record);
+  if (!ground_truth_.empty()) WriteGroundTruthCopy(dir / "groundtruth.txt");
+  if (!outputs.failures().empty()) {
+    // Every file that could be written is; the first that could not ends the recorder's run.
+    const auto& [name, reason] = outputs.failures().front();
+    throw std::runtime_error(name + " not written: " + reason);
+  }
+  if (!written) {
+    LOG_INFO << "recorder: no frame received; the earlier trajectory.txt, keyframes.txt and "
+                "frames.csv are left as they were";
+    return "";
+  }
+  if (!record.HasFrames()) {
     LOG_INFO << "recorder: no frame received; empty trajectory.txt, keyframes.txt and frames.csv "
                 "written";
   }
-  WriteTumTrajectory(trajectory, final_frames_ ? *final_frames_ : SortedUnique(online_));
-  WriteTumTrajectory((dir / "trajectory_online.txt").string(), SortedUnique(online_));
-  WriteTumTrajectory((dir / "keyframes.txt").string(),
-                     final_keyframes_ ? *final_keyframes_ : SortedUnique(online_keyframes_));
-  std::vector<std::pair<Timestamp, std::string>> rows = frame_rows_;
-  std::stable_sort(rows.begin(), rows.end(),
-                   [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::string csv = FramesCsvHeader();
-  for (const auto& row : rows) csv += row.second;
-  WriteFileAtomically((dir / "frames.csv").string(), csv);
-  if (!ground_truth_.empty()) WriteGroundTruthCopy(dir / "groundtruth.txt");
-  return trajectory;
+  return outputs.PathOf("trajectory.txt");
 }
 
 }  // namespace dygslam

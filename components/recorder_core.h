@@ -54,7 +54,7 @@ class RecorderCore {
   RecorderOptions options_;
   std::vector<StampedPose> online_;
   std::vector<StampedPose> online_keyframes_;
-  std::vector<std::pair<Timestamp, std::string>> frame_rows_;  // frames.csv rows by stamp
+  std::vector<FrameRow> frame_rows_;  // frames.csv rows, in the order they came
   size_t num_lost_ = 0;
   std::vector<StampedPose> ground_truth_;
   std::optional<std::vector<StampedPose>> final_frames_, final_keyframes_;

@@ -308,7 +308,14 @@ int MapController::Run() {
   mapper_.Flush();
   const double elapsed = std::chrono::duration<double>(Clock::now() - t0_).count();
   RecreateOutputDirIfRemoved("map", "out", options_.out);
-  if (system_) WriteSystemTrajectories(options_.out.string(), *system_);
+  if (system_) {
+    RunOutputs outputs(options_.out, {"trajectory.txt", "keyframes.txt"});
+    WriteRunRecord(outputs, RunRecordOfSystem(*system_));
+    if (!outputs.failures().empty()) {
+      const auto& [name, reason] = outputs.failures().front();
+      throw std::runtime_error(name + " not written: " + reason);
+    }
+  }
   // SLAM maps: level the map by the floor it found, so pictures and planners see it upright.
   if (system_ && first_camera_) LevelMap();
   const MapFigures figures = WriteMaps();

@@ -244,26 +244,14 @@ RunSummary RunController::BaseSummary() const {
 }
 
 void RunController::WriteDirectOutputs(const System& system, KeyframeMapper* mapper,
-                                       const std::string& csv,
-                                       const std::vector<StampedPose>& online, size_t processed) {
+                                       RunRecord record) {
   const RunControllerOptions& s = options_;
-  RunOutputs& outputs = outputs_;
   RecreateOutputDirIfRemoved("run", "out", s.out);
-  // A run that processed no frame (stopped or failed before the first) has no trajectory: an
-  // earlier run's files stay as they were (listed apart in the summary), not replaced by empty
-  // ones; where there is none, the empty (loadable) files are written.
-  std::error_code exists_error;
-  if (processed > 0 || !fs::exists(outputs.PathOf("trajectory.txt"), exists_error)) {
-    outputs.Write("frames.csv", [&] { WriteFileAtomically(outputs.PathOf("frames.csv"), csv); });
-    outputs.Write("trajectory.txt", [&] {
-      WriteTumTrajectory(outputs.PathOf("trajectory.txt"), system.Trajectory());
-    });
-    outputs.Write("keyframes.txt", [&] {
-      WriteTumTrajectory(outputs.PathOf("keyframes.txt"), system.KeyframeTrajectory());
-    });
-    outputs.Write("trajectory_online.txt",
-                  [&] { WriteTumTrajectory(outputs.PathOf("trajectory_online.txt"), online); });
-  }
+  const RunRecord refined = RunRecordOfSystem(system);
+  record.trajectory = refined.trajectory;
+  record.keyframes = refined.keyframes;
+  WriteRunRecord(outputs_, record);
+  RunOutputs& outputs = outputs_;
   // With --save-map, map.ot too (the OctoMap with probabilities, what --load-octomap continues).
   if (mapper) {
     outputs.Write("map.bt", [&] {  // a failure before the files (the mapper's) is map.bt's
@@ -312,8 +300,9 @@ RunController::Outcome RunController::RunDirect() {
   if (s.use_detection_file) run.detections = &s.detections;
   run.stop = [&stop] { return stop.requested(); };
   run.rate = s.rate;
-  std::string csv = FramesCsvHeader();
-  std::vector<StampedPose> online;  // the pose known when each frame was tracked
+  RunRecord record;
+  record.rows.emplace();
+  record.online.emplace();  // the pose known when each frame was tracked
   const auto t0 = std::chrono::steady_clock::now();
   const size_t total = s.last - s.first;
   size_t done = 0, lost = 0;  // for the progress line
@@ -325,9 +314,9 @@ RunController::Outcome RunController::RunDirect() {
     summary = RunDatasetFrames(dataset_, system, run, [&](size_t k, const FrameResult& r) {
       ++done;
       if (r.state == TrackingState::kLost) ++lost;
-      if (r.world_from_cam) online.push_back({r.stamp, *r.world_from_cam});
+      if (r.world_from_cam) record.online->push_back({r.stamp, *r.world_from_cam});
       ++outcome.states[ToString(r.state)];
-      csv += FramesCsvRow(FrameRowFromResult(r));
+      record.rows->push_back(FrameRowFromResult(r));
       if (s.progress && (done % 10 == 0 || k + 1 == s.last)) {
         const double elapsed =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -358,7 +347,7 @@ RunController::Outcome RunController::RunDirect() {
     });
   }
   PrintSystemStatistics(system);
-  WriteDirectOutputs(system, mapper.get(), csv, online, outcome.processed);
+  WriteDirectOutputs(system, mapper.get(), std::move(record));
   if (failure) {
     std::fprintf(stderr, "%s", outputs.FailureReport("run").c_str());
     std::fprintf(stderr,

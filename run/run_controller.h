@@ -105,8 +105,9 @@ class RunController {
   std::unique_ptr<KeyframeMapper> MakeMapper(System* system) const;
   void WriteDirectRealtimeReport(const DatasetRunSummary& summary);
   // The direct loop's outputs (each atomically; a failure is recorded, the others go on).
-  void WriteDirectOutputs(const System& system, KeyframeMapper* mapper, const std::string& csv,
-                          const std::vector<StampedPose>& online, size_t processed);
+  // `record`: the rows and online poses of the frames processed; the refined trajectories are
+  // taken from `system`.
+  void WriteDirectOutputs(const System& system, KeyframeMapper* mapper, RunRecord record);
   // A --load-map run that added no keyframe: map.bt from the loaded map's points.
   void WriteLoadedMapOctoMap();
   Outcome RunPipeline();

@@ -190,9 +190,35 @@ std::vector<FrameRow> ReadFramesCsv(const std::string& path) {
   return rows;
 }
 
-void WriteSystemTrajectories(const std::string& directory, const System& system) {
-  WriteTumTrajectory((fs::path(directory) / "trajectory.txt").string(), system.Trajectory());
-  WriteTumTrajectory((fs::path(directory) / "keyframes.txt").string(), system.KeyframeTrajectory());
+bool RunRecord::HasFrames() const {
+  return (rows && !rows->empty()) || !trajectory.empty() || (online && !online->empty());
+}
+
+RunRecord RunRecordOfSystem(const System& system) {
+  RunRecord record;
+  record.trajectory = system.Trajectory();
+  record.keyframes = system.KeyframeTrajectory();
+  return record;
+}
+
+bool WriteRunRecord(RunOutputs& outputs, const RunRecord& record) {
+  std::error_code exists_error;
+  if (!record.HasFrames() && fs::exists(outputs.PathOf("trajectory.txt"), exists_error))
+    return false;
+  if (record.rows) {
+    outputs.Write("frames.csv", [&] {
+      std::string csv = FramesCsvHeader();
+      for (const FrameRow& row : *record.rows) csv += FramesCsvRow(row);
+      WriteFileAtomically(outputs.PathOf("frames.csv"), csv);
+    });
+  }
+  const auto trajectory = [&](const std::string& name, const std::vector<StampedPose>& poses) {
+    outputs.Write(name, [&] { WriteTumTrajectory(outputs.PathOf(name), poses); });
+  };
+  trajectory("trajectory.txt", record.trajectory);
+  if (record.keyframes) trajectory("keyframes.txt", *record.keyframes);
+  if (record.online) trajectory("trajectory_online.txt", *record.online);
+  return true;
 }
 
 void WriteMapperBinary(RunOutputs& outputs, KeyframeMapper& mapper, bool with_full_map) {

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -91,8 +92,23 @@ std::string FramesCsvRow(const FrameRow& row);
 // unknown state, a malformed stamp or number.
 std::vector<FrameRow> ReadFramesCsv(const std::string& path);
 
-// DIR/trajectory.txt (every tracked frame, refined) and DIR/keyframes.txt; atomically.
-void WriteSystemTrajectories(const std::string& directory, const System& system);
+// What a run produced, held until its end: the one form in which every way of running (the
+// direct loop, the recorder component, the bench worker, `dygslam map`) hands its results to
+// WriteRunRecord, so the files have one layout and one writer. A part left unset is not written.
+struct RunRecord {
+  std::optional<std::vector<FrameRow>> rows;          // frames.csv, in frame order
+  std::vector<StampedPose> trajectory;                // trajectory.txt: final, refined
+  std::optional<std::vector<StampedPose>> online;     // trajectory_online.txt
+  std::optional<std::vector<StampedPose>> keyframes;  // keyframes.txt
+  bool HasFrames() const;                             // a row or a pose of a frame
+};
+// The final trajectory and the keyframes of a System.
+RunRecord RunRecordOfSystem(const System& system);
+// Writes the record's files through `outputs`, each atomically; a failed write is recorded under
+// its name and the others are still written. A record without a frame (a run stopped or failed
+// before its first) leaves an earlier run's trajectory.txt and the files beside it as they were,
+// and returns false; where there is none, the empty (loadable) files are written.
+bool WriteRunRecord(RunOutputs& outputs, const RunRecord& record);
 // Waits for the mapper's queue, then writes DIR/map.bt when the map has a keyframe or a loaded
 // base map (and DIR/map.ot, the OctoMap with probabilities, with `with_full_map`).
 // Each file through `outputs` (a failure is recorded under its own name).

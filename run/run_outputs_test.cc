@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/base/error.h"
+#include "core/io/trajectory_io.h"
 
 namespace dygslam {
 namespace {
@@ -147,6 +148,93 @@ TEST(RunOutputs, FramesCsvReadsByColumnNameAndNamesBadLines) {
   EXPECT_NE(error_of(headerless).find("not a frames.csv"), std::string::npos);
   for (const std::string& p : {old, state, short_row, number, headerless})
     std::filesystem::remove(p);
+}
+
+std::filesystem::path MakeRunFolder(const std::string& name) {
+  std::string pattern =
+      (std::filesystem::temp_directory_path() / ("run_record_" + name + "_XXXXXX"));
+  EXPECT_NE(::mkdtemp(pattern.data()), nullptr);
+  return pattern;
+}
+
+RunRecord TwoFrameRecord() {
+  RunRecord record;
+  FrameRow row;
+  row.state = TrackingState::kOk;
+  row.stamp = Timestamp::FromNanoseconds(1000000000);
+  record.rows = std::vector<FrameRow>{row};
+  row.stamp = Timestamp::FromNanoseconds(1033333333);
+  record.rows->push_back(row);
+  for (const FrameRow& r : *record.rows) {
+    StampedPose p;
+    p.stamp = r.stamp;
+    p.world_from_cam.translation = Eigen::Vector3d(0.1 * record.trajectory.size(), 0, 0);
+    record.trajectory.push_back(p);
+  }
+  record.online = record.trajectory;
+  record.keyframes = std::vector<StampedPose>{record.trajectory.front()};
+  return record;
+}
+
+// Every way of running hands its results over as one record: each part set is written, a part
+// left unset is not, and the files read back as they were given.
+TEST(RunRecord, WritesEachPartItHoldsAndReadsBack) {
+  const std::filesystem::path dir = MakeRunFolder("parts");
+  RunOutputs outputs(dir,
+                     {"trajectory.txt", "trajectory_online.txt", "keyframes.txt", "frames.csv"});
+  RunRecord record = TwoFrameRecord();
+  record.online.reset();
+  EXPECT_TRUE(WriteRunRecord(outputs, record));
+  EXPECT_TRUE(outputs.failures().empty());
+  EXPECT_EQ(ReadFramesCsv(outputs.PathOf("frames.csv")).size(), 2u);
+  const std::vector<StampedPose> trajectory = ReadTumTrajectory(outputs.PathOf("trajectory.txt"));
+  ASSERT_EQ(trajectory.size(), 2u);
+  EXPECT_NEAR(trajectory[1].world_from_cam.translation.x(), 0.1, 1e-9);
+  EXPECT_EQ(ReadTumTrajectory(outputs.PathOf("keyframes.txt")).size(), 1u);
+  EXPECT_FALSE(std::filesystem::exists(outputs.PathOf("trajectory_online.txt")));
+  EXPECT_EQ(outputs.FreshNames(),
+            (std::vector<std::string>{"trajectory.txt", "keyframes.txt", "frames.csv"}));
+  std::filesystem::remove_all(dir);
+}
+
+// A record without a frame (a run stopped before its first) keeps an earlier run's files; in an
+// empty folder it writes the empty, loadable files.
+TEST(RunRecord, ARecordWithoutAFrameKeepsAnEarlierRunsFiles) {
+  const std::filesystem::path dir = MakeRunFolder("empty");
+  {
+    RunOutputs outputs(dir, {"trajectory.txt", "frames.csv"});
+    EXPECT_TRUE(WriteRunRecord(outputs, TwoFrameRecord()));
+  }
+  RunRecord empty;
+  empty.rows.emplace();
+  RunOutputs again(dir, {"trajectory.txt", "frames.csv"});
+  EXPECT_FALSE(WriteRunRecord(again, empty));
+  EXPECT_EQ(ReadTumTrajectory(again.PathOf("trajectory.txt")).size(), 2u);
+  EXPECT_EQ(ReadFramesCsv(again.PathOf("frames.csv")).size(), 2u);
+  EXPECT_TRUE(again.FreshNames().empty());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  RunOutputs fresh(dir, {"trajectory.txt", "frames.csv"});
+  EXPECT_TRUE(WriteRunRecord(fresh, empty));
+  EXPECT_TRUE(ReadTumTrajectory(fresh.PathOf("trajectory.txt")).empty());
+  EXPECT_TRUE(ReadFramesCsv(fresh.PathOf("frames.csv")).empty());
+  std::filesystem::remove_all(dir);
+}
+
+// A part that cannot be written (a folder in its place) is recorded under its name; the parts
+// after it are still written.
+TEST(RunRecord, AFailedPartDoesNotStopTheOthers) {
+  const std::filesystem::path dir = MakeRunFolder("fail");
+  std::filesystem::create_directories(dir / "frames.csv" / "occupied");
+  RunOutputs outputs(dir,
+                     {"trajectory.txt", "trajectory_online.txt", "keyframes.txt", "frames.csv"});
+  EXPECT_TRUE(WriteRunRecord(outputs, TwoFrameRecord()));
+  ASSERT_EQ(outputs.failures().size(), 1u);
+  EXPECT_EQ(outputs.failures()[0].first, "frames.csv");
+  EXPECT_EQ(ReadTumTrajectory(outputs.PathOf("trajectory.txt")).size(), 2u);
+  EXPECT_EQ(ReadTumTrajectory(outputs.PathOf("trajectory_online.txt")).size(), 2u);
+  EXPECT_EQ(ReadTumTrajectory(outputs.PathOf("keyframes.txt")).size(), 1u);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

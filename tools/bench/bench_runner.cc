@@ -93,14 +93,20 @@ void WriteRunOutput(const std::string& directory, const RunOutput& output) {
   std::error_code ec;
   fs::create_directories(directory, ec);
   if (!fs::is_directory(directory)) throw InputError(directory, 0, "cannot create the run folder");
-  WriteTumTrajectory((fs::path(directory) / "trajectory.txt").string(), output.trajectory);
-  std::string csv = FramesCsvHeader();
-  for (const FrameRow& row : output.rows) csv += FramesCsvRow(row);
-  WriteFileAtomically((fs::path(directory) / "frames.csv").string(), csv);
+  RunOutputs outputs(directory, {"trajectory.txt", "frames.csv", "summary.txt"});
+  RunRecord record;
+  record.rows = output.rows;
+  record.trajectory = output.trajectory;
+  WriteRunRecord(outputs, record);
   std::ostringstream summary;
   summary << "frames " << output.frames << "\nlost " << output.lost << "\nloop_seconds "
           << output.loop_seconds << "\n";
-  WriteFileAtomically((fs::path(directory) / "summary.txt").string(), summary.str());
+  outputs.Write("summary.txt",
+                [&] { WriteFileAtomically(outputs.PathOf("summary.txt"), summary.str()); });
+  if (!outputs.failures().empty()) {
+    const auto& [name, reason] = outputs.failures().front();
+    throw InputError(outputs.PathOf(name), 0, "not written: " + reason);
+  }
 }
 
 StageMeans MeanStageTimes(const std::vector<StageTimes>& times) {

@@ -28,8 +28,7 @@ namespace {
 }
 
 // Paeth: each byte predicted by the neighbour (left a, up b, upper-left c) closest to a + b - c,
-// ties in the order a, b, c. (An SSE2 version, one pixel per step, measured no faster: the chain
-// through the left neighbour is the limit; the compiler interleaves the bpp chains here.)
+// ties in the order a, b, c. Any bytes per pixel; UnfilterPaethFixed is the fast path.
 [[maybe_unused]] void UnfilterPaethScalar(unsigned char* cur, const unsigned char* prev,
                                           size_t begin, size_t row_bytes, int bpp) {
   for (size_t i = begin; i < row_bytes; ++i) {
@@ -41,8 +40,47 @@ namespace {
   }
 }
 
+// Paeth for `Bpp` bytes per pixel: the left and upper-left neighbours of each channel stay in
+// registers from one pixel to the next (no load of the byte just stored); the choice is
+// branch-free.
+template <int Bpp>
+void UnfilterPaethFixed(unsigned char* cur, const unsigned char* prev, size_t row_bytes) {
+  int a[Bpp], c[Bpp];
+  for (int k = 0; k < Bpp; ++k) {  // first pixel: a = c = 0, the predictor is b
+    cur[k] = uint8_t(cur[k] + prev[k]);
+    a[k] = cur[k];
+    c[k] = prev[k];
+  }
+  for (size_t i = Bpp; i + Bpp <= row_bytes; i += Bpp) {
+    for (int k = 0; k < Bpp; ++k) {
+      const int b = prev[i + k];
+      const int pa = std::abs(b - c[k]), pb = std::abs(a[k] - c[k]);
+      const int pc = std::abs(a[k] + b - 2 * c[k]);
+      const int bc = pb <= pc ? b : c[k];
+      const int predictor = (pa <= pb && pa <= pc) ? a[k] : bc;
+      a[k] = uint8_t(cur[i + k] + predictor);
+      cur[i + k] = uint8_t(a[k]);
+      c[k] = b;
+    }
+  }
+}
+
 [[maybe_unused]] void UnfilterPaeth(unsigned char* cur, const unsigned char* prev, size_t row_bytes,
                                     int bpp) {
+  if (row_bytes % size_t(bpp) == 0) {
+    switch (bpp) {
+      case 1:
+        return UnfilterPaethFixed<1>(cur, prev, row_bytes);
+      case 2:
+        return UnfilterPaethFixed<2>(cur, prev, row_bytes);
+      case 3:
+        return UnfilterPaethFixed<3>(cur, prev, row_bytes);
+      case 4:
+        return UnfilterPaethFixed<4>(cur, prev, row_bytes);
+      default:
+        break;
+    }
+  }
   UnfilterPaethScalar(cur, prev, 0, row_bytes, bpp);
 }
 
@@ -157,7 +195,8 @@ void CopyRows(const std::vector<unsigned char>& raw, size_t row_bytes, int chann
 }  // namespace
 
 bool DecodePngFast(const unsigned char* data, size_t size, cv::Mat* image) {
-  PngChunks png;
+  thread_local PngChunks png;  // its IDAT buffer is kept from one image to the next
+  png.compressed.clear();
   if (!ReadChunks(data, size, &png)) return false;
   const uint32_t width = png.width, height = png.height;
   if (width == 0 || height == 0 || width > 16384 || height > 16384) return false;
@@ -175,7 +214,11 @@ bool DecodePngFast(const unsigned char* data, size_t size, cv::Mat* image) {
   // a header asking for more than the IDAT data could fill is refused before allocating (a
   // 100-byte file claiming 16384x16384 RGBA would cost 1 GB here; OpenCV then reports it).
   if (raw_size / 1032 > png.compressed.size() + 1024) return false;
-  std::vector<unsigned char> raw(raw_size);
+  // The inflated rows in a buffer kept by the thread: a fresh 1 MB buffer per image cost more in
+  // page faults and zero-filling than the unfiltering itself.
+  thread_local std::vector<unsigned char> raw;
+  if (raw.size() > (size_t(64) << 20) && raw.size() > 4 * raw_size) raw = {};  // one huge image
+  if (raw.size() < raw_size) raw.resize(raw_size);
 
   struct DecompressorDeleter {
     void operator()(libdeflate_decompressor* d) const { libdeflate_free_decompressor(d); }
@@ -185,7 +228,7 @@ bool DecodePngFast(const unsigned char* data, size_t size, cv::Mat* image) {
   if (!decompressor) return false;
   // The stream must fill the image exactly (NULL actual size: a shorter one is an error).
   if (libdeflate_zlib_decompress(decompressor.get(), png.compressed.data(), png.compressed.size(),
-                                 raw.data(), raw.size(), nullptr) != LIBDEFLATE_SUCCESS)
+                                 raw.data(), raw_size, nullptr) != LIBDEFLATE_SUCCESS)
     return false;
   if (!Unfilter(raw.data(), int(height), row_bytes, bpp)) return false;
 

@@ -38,7 +38,7 @@ struct PlayerOptions {
   size_t first_entry = 0;
   size_t last_entry = 0;
   // Back-pressure window in frames (0 = none: publish at `rate` regardless of the consumer).
-  int window = 2;
+  int window = 3;
   // Longest wait for an acknowledgement before a frame is sent anyway (seconds).
   double ack_timeout_s = 30.0;
   // Wait for at least one frame reader before the first frame (seconds).

@@ -514,6 +514,11 @@ ChildReport ReadChildReport(int fd) {
 // How long the others may go on with the frames a frame source sent before it was stopped on its
 // own (slam's final bundle adjustment included).
 constexpr std::chrono::seconds kSourceCutShortGrace(60);
+// After slam's end, how long a mapper still running alone is left before it is told to stop. A
+// mapper that received slam's end finishes its backlog on its own (a stop does not cut it short:
+// what it received is applied first); one that never matched slam (paused through slam's whole
+// life) would wait for it for ever.
+constexpr std::chrono::seconds kMapperAfterSlamGrace(10);
 
 // Starts `exe component KIND ARGS` as a child of this run (it dies with the run) with the write
 // end of a report pipe whose read end goes to *report_fd. Returns its pid.
@@ -565,6 +570,7 @@ class ComponentProcesses {
   int Supervise() {
     while (!children_.empty()) {
       StopAfterSourceCutShort();
+      StopMapperLeftAlone();
       int status = 0;
       const pid_t pid = waitpid(-1, &status, WNOHANG);
       if (pid > 0) {
@@ -594,11 +600,27 @@ class ComponentProcesses {
     source_cut_short_at_.reset();
   }
 
+  // slam has ended and only map stages remain: after kMapperAfterSlamGrace they are stopped
+  // (each writes the map it has and judges its own part; a mapper that missed slam's keyframes
+  // says so and makes the run incomplete).
+  void StopMapperLeftAlone() {
+    if (!slam_ended_at_ || forwarded_ || Clock::now() - *slam_ended_at_ <= kMapperAfterSlamGrace)
+      return;
+    for (const auto& [p, k] : children_) {
+      if (k != ComponentKind::kMapper) return;
+    }
+    LOG_WARNING << "slam ended " << kMapperAfterSlamGrace.count()
+                << " s ago and the mapper has not: stopping it (it writes the map it has)";
+    stop_->Request();
+    slam_ended_at_.reset();
+  }
+
   // A child ended: what it reported, why it ended, whether the others go on.
   void Reap(pid_t pid, int status) {
     const ComponentKind kind = children_[pid];
     const char* name = ToString(kind);
     children_.erase(pid);
+    if (kind == ComponentKind::kSlam) slam_ended_at_ = Clock::now();
     const ChildReport child = ReadChildReport(reports_[pid]);
     reports_.erase(pid);
     report_->ignored_samples += child.ignored_samples;
@@ -689,6 +711,7 @@ class ComponentProcesses {
   Clock::time_point stop_time_ = Clock::time_point::max();
   bool run_failed_ = false;
   std::optional<Clock::time_point> source_cut_short_at_;
+  std::optional<Clock::time_point> slam_ended_at_;
   std::set<pid_t> killed_by_runner_;  // did not stop within 30 s of the run's end
 };
 

@@ -54,6 +54,7 @@ constexpr int kDetectorPausedDomain = 154;
 constexpr int kSuspendedDomain = 155;
 constexpr int kDetectorLostDomain = 157;
 constexpr int kShortStallDomain = 156;
+constexpr int kMapperPausedFromStartDomain = 158;
 
 class RunIntegrity : public testing::CliFixture {
  protected:
@@ -434,6 +435,39 @@ TEST_F(RunIntegrity, AMapperPausedWhileSlamFinishesMakesTheRunIncomplete) {
   const std::string json = ReadAll(out + "/eval.json");
   EXPECT_TRUE(Contains(json, "\"components_cut_short\": [\"mapper (its input ended early)\"]"))
       << json;
+}
+
+// --processes: the mapper paused (SIGSTOP) from its start, before it found slam, until slam has
+// left. The player plays without its READY (after waiting for it); the mapper never saw slam
+// come or go. Before, it waited for slam for ever after it was continued, and so did the run. The
+// runner stops a mapper left alone after slam's end; the mapper says it missed slam's keyframes
+// (exit 3, named).
+TEST_F(RunIntegrity, AMapperPausedFromItsStartDoesNotHoldTheRunForEver) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  const std::string out = dir_ + "/out";
+  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet",
+                           "--frames", "0:60", "--processes", "--rate", "1", "--out", out,
+                           "--domain", std::to_string(kMapperPausedFromStartDomain)});
+  ASSERT_GT(pid, 0);
+  const pid_t mapper = RunningComponentPid("mapper", out);
+  ASSERT_GT(mapper, 0) << ReadAll(dir_ + "/run.err");
+  kill(mapper, SIGSTOP);
+  const auto paused = std::chrono::steady_clock::now();
+  // Continued once the recorder has written the trajectory (slam is done) and slam has left.
+  while (!fs::exists(out + "/trajectory.txt") &&
+         std::chrono::steady_clock::now() < paused + std::chrono::seconds(150))
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  std::this_thread::sleep_for(std::chrono::seconds(5));
+  kill(mapper, SIGCONT);
+  std::string diagnostics;
+  const int code = testing::WaitForExit(pid, 60, &diagnostics);
+  const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
+  EXPECT_EQ(code, 3) << summary << err << diagnostics;
+  EXPECT_TRUE(Contains(err, "mapper: slam was never found")) << err;
+  EXPECT_TRUE(Contains(err, "incomplete part: mapper (its input ended early)")) << err;
+  EXPECT_FALSE(Contains(summary, "(complete)")) << summary;
+  EXPECT_TRUE(Contains(ReadAll(out + "/eval.json"),
+                       "\"components_cut_short\": [\"mapper (its input ended early)\"]"));
 }
 
 // --processes: the detector paused (SIGSTOP) from early in the run to its end. slam carries its

@@ -228,17 +228,22 @@ MapperShell::Idle MapperShell::AtIdle(bool writer_gone, const StopFlagPtr& stop)
     return Idle::kEnd;
   }
   if (flush_deadline_ && (Clock::now() >= *flush_deadline_ || keyframes_.matched() == 0)) {
-    // Stopped with slam never found and its end never received: slam ran and left while this
-    // process did not run (paused or starved from its start), so it was neither seen coming nor
-    // going. A stop by the user before slam came is an interrupted run, which the runner says.
-    if (!slam_done_ && keyframes_.matched() == 0 && stats_.keyframes_received == 0) {
+    // Stopped with slam out of sight and its end never received: slam left while this process
+    // did not run. Paused: the keyframes slam sent meanwhile are lost (its leaving may not have
+    // been seen: the stop came first). Never found at all: paused or starved from its start.
+    // A stop by the user is an interrupted run, which the runner says.
+    const bool never_found = stats_.keyframes_received == 0;
+    if (!slam_done_ && keyframes_.matched() == 0 && (never_found || pause_.WasPaused())) {
       stats_.input_cut_short = true;
       if (pause_.WasPaused()) {
         LOG_WARNING << "mapper: this process was stopped (SIGSTOP) and continued, for about "
-                    << pause_.LongestSeconds() << " s";
+                    << pause_.LongestSeconds() << " s, and slam left meanwhile; the keyframes "
+                    << "it sent then are lost: writing the map without them";
+      } else {
+        LOG_WARNING << "mapper: slam was never found: the map lacks its keyframes (this process "
+                       "was paused or starved while slam ran, or the run stopped before slam "
+                       "came)";
       }
-      LOG_WARNING << "mapper: slam was never found: the map lacks its keyframes (this process "
-                     "was paused or starved while slam ran, or the run stopped before slam came)";
     }
     return Idle::kEnd;
   }

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <csignal>
@@ -16,6 +17,7 @@
 #include <map>
 #include <mutex>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include "components/dds/participant.h"
@@ -453,6 +455,22 @@ int RunSingleProcess(const PipelineOptions& options, const StopFlagPtr& stop, St
 // True when child PID runs the component (exec done: between fork and exec it still carries the
 // runner's handlers, and a signal it takes there is lost) and /proc/PID/status lists `sig` among
 // the signals it catches (SigCgt: its main() has installed the handler).
+// CPU time (user + system) that process `pid` has used, in seconds; negative when unreadable.
+double ProcessCpuSeconds(pid_t pid) {
+  const std::string stat = ReadProcessFile(pid, "stat");
+  const size_t paren = stat.rfind(')');
+  if (paren == std::string::npos) return -1;
+  std::istringstream fields(stat.substr(paren + 1));
+  std::string field;
+  // After the name: state (field 3) ... utime (14), stime (15).
+  long long ticks = 0;
+  for (int k = 3; k <= 15 && fields >> field; ++k) {
+    if (k >= 14) ticks += std::atoll(field.c_str());
+  }
+  const long per_second = sysconf(_SC_CLK_TCK);
+  return fields && per_second > 0 ? static_cast<double>(ticks) / per_second : -1;
+}
+
 bool ComponentCatchesSignal(pid_t pid, ComponentKind component, int sig) {
   const std::string cmdline = ReadProcessFile(pid, "cmdline");
   if (cmdline.find(std::string("component") + '\0' + ToString(component) + '\0') ==
@@ -514,10 +532,9 @@ ChildReport ReadChildReport(int fd) {
 // How long the others may go on with the frames a frame source sent before it was stopped on its
 // own (slam's final bundle adjustment included).
 constexpr std::chrono::seconds kSourceCutShortGrace(60);
-// After slam's end, how long a mapper still running alone is left before it is told to stop. A
-// mapper that received slam's end finishes its backlog on its own (a stop does not cut it short:
-// what it received is applied first); one that never matched slam (paused through slam's whole
-// life) would wait for it for ever.
+// After slam's end, a mapper still running alone that does no work (under 0.1 s of CPU in
+// kMapperAfterSlamGrace) is told to stop. A mapper working through its backlog is left to finish
+// it; one that never matched slam (paused through slam's whole life) would wait for ever.
 constexpr std::chrono::seconds kMapperAfterSlamGrace(10);
 
 // Starts `exe component KIND ARGS` as a child of this run (it dies with the run) with the write
@@ -600,17 +617,25 @@ class ComponentProcesses {
     source_cut_short_at_.reset();
   }
 
-  // slam has ended and only map stages remain: after kMapperAfterSlamGrace they are stopped
-  // (each writes the map it has and judges its own part; a mapper that missed slam's keyframes
-  // says so and makes the run incomplete).
+  // slam has ended and only map stages remain: one that did no work in the last
+  // kMapperAfterSlamGrace is stopped (it writes the map it has and judges its own part; a mapper
+  // that missed slam's keyframes says so and makes the run incomplete).
   void StopMapperLeftAlone() {
-    if (!slam_ended_at_ || forwarded_ || Clock::now() - *slam_ended_at_ <= kMapperAfterSlamGrace)
-      return;
+    if (!slam_ended_at_ || forwarded_) return;
     for (const auto& [p, k] : children_) {
       if (k != ComponentKind::kMapper) return;
     }
-    LOG_WARNING << "slam ended " << kMapperAfterSlamGrace.count()
-                << " s ago and the mapper has not: stopping it (it writes the map it has)";
+    const auto now = Clock::now();
+    if (now - *slam_ended_at_ <= kMapperAfterSlamGrace) return;
+    double cpu = 0;
+    for (const auto& [p, k] : children_) cpu += std::max(0.0, ProcessCpuSeconds(p));
+    if (!idle_check_ || cpu - idle_check_->second > 0.1) {
+      idle_check_ = std::make_pair(now, cpu);  // working: checked again a grace later
+      return;
+    }
+    if (now - idle_check_->first <= kMapperAfterSlamGrace) return;
+    LOG_WARNING << "slam ended and the mapper has done no work for "
+                << kMapperAfterSlamGrace.count() << " s: stopping it (it writes the map it has)";
     stop_->Request();
     slam_ended_at_.reset();
   }
@@ -712,6 +737,7 @@ class ComponentProcesses {
   bool run_failed_ = false;
   std::optional<Clock::time_point> source_cut_short_at_;
   std::optional<Clock::time_point> slam_ended_at_;
+  std::optional<std::pair<Clock::time_point, double>> idle_check_;  // when, mappers' CPU seconds
   std::set<pid_t> killed_by_runner_;  // did not stop within 30 s of the run's end
 };
 

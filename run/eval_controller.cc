@@ -71,10 +71,8 @@ bool Plot(const std::string& png, const std::string& script, const std::string& 
   const fs::path data = fs::path(private_dir) / "ate_pairs.txt";
   const fs::path drawn = fs::path(private_dir) / "plot.png";
   WriteFileAtomically(data.string(), AtePairsText(ate));
-  const std::string cmd = "python3 " + ShellQuote(script) + " --data " + ShellQuote(data.string()) +
-                          " --out " + ShellQuote(drawn.string()) + " --title " + ShellQuote(title);
-  const int status = std::system(cmd.c_str());
-  const int code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+  const int code = RunProgram(
+      {"python3", script, "--data", data.string(), "--out", drawn.string(), "--title", title});
   std::string bytes;
   if (code == 0) {
     std::ifstream in(drawn, std::ios::binary);

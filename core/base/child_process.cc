@@ -7,7 +7,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 
@@ -66,6 +68,34 @@ ChildExit WaitForChildProcess(pid_t pid, bool forward_stop_signals) {
   exit.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   exit.peak_rss_mib = usage.ru_maxrss / 1024.0;  // Linux: kilobytes
   return exit;
+}
+
+std::string FindProgram(const std::string& name) {
+  if (name.empty() || name.find('/') != std::string::npos) return name;
+  const char* path = std::getenv("PATH");
+  std::string dirs = path != nullptr ? path : "/usr/local/bin:/usr/bin:/bin";
+  size_t begin = 0;
+  while (begin <= dirs.size()) {
+    const size_t end = std::min(dirs.find(':', begin), dirs.size());
+    const std::string dir = end > begin ? dirs.substr(begin, end - begin) : ".";
+    const std::string candidate = dir + "/" + name;
+    if (::access(candidate.c_str(), X_OK) == 0) return candidate;
+    begin = end + 1;
+  }
+  return "";
+}
+
+int RunProgram(std::vector<std::string> argv) {
+  if (argv.empty()) return 127;
+  argv[0] = FindProgram(argv[0]);
+  if (argv[0].empty()) return 127;
+  ChildProcessOptions options;
+  options.argv = std::move(argv);
+  try {
+    return WaitForChildProcess(StartChildProcess(options), /*forward_stop_signals=*/true).exit_code;
+  } catch (const std::runtime_error&) {
+    return 127;
+  }
 }
 
 std::string ShellQuote(const std::string& s) {

@@ -34,6 +34,13 @@ struct ChildExit {
 // meanwhile (ScopedStopSignals) is passed on to the child once, so that it ends cleanly.
 ChildExit WaitForChildProcess(pid_t pid, bool forward_stop_signals);
 
+// The path of program `name` found on PATH (as a shell would find it), "" when there is none. A
+// name with a slash is returned as it is.
+std::string FindProgram(const std::string& name);
+// Runs `argv` (argv[0] found with FindProgram) to its end, no shell in between; its exit code
+// (128 + signal when a signal ended it), 127 when it cannot be found or started.
+int RunProgram(std::vector<std::string> argv);
+
 // The text of /proc/PID/`name` ("cmdline", "stat", "status"), "" when the process is gone: it may
 // end between the open and the read, which then fails with ESRCH (an exception when read through
 // std::istreambuf_iterator).

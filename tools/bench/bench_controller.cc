@@ -550,10 +550,7 @@ void BenchController::DrawPictures() {
   manifest << "]}\n";
   const std::string manifest_path = (work_dir / "plots.json").string();
   WriteFileAtomically(manifest_path, manifest.str());
-  const std::string cmd =
-      "python3 " + ShellQuote(options_.plots_script) + " --manifest " + ShellQuote(manifest_path);
-  const int status = std::system(cmd.c_str());
-  const int code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+  const int code = RunProgram({"python3", options_.plots_script, "--manifest", manifest_path});
   if (code != 0) {
     const std::string why = code == 3 ? "python3-matplotlib is not installed"
                                       : "bench_plots.py exit code " + std::to_string(code);

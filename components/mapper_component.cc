@@ -72,6 +72,8 @@ class MapperShell {
   void Publish();
   void Apply(Prepared& sample, bool flushing);
   Idle AtIdle(bool writer_gone, const StopFlagPtr& stop);
+  // The warning of a mapper paused while slam left (the keyframes sent meanwhile are lost).
+  void WarnPausedWhileSlamLeft() const;
   void Finish(const StopFlagPtr& stop);
 
   const MapperOptions options_;
@@ -183,6 +185,12 @@ void MapperShell::PrepareLoop() {
   }
 }
 
+void MapperShell::WarnPausedWhileSlamLeft() const {
+  LOG_WARNING << "mapper: this process was stopped (SIGSTOP) and continued, for about "
+              << pause_.LongestSeconds() << " s, and slam left meanwhile; the keyframes "
+              << "it sent then are lost: writing the map without them";
+}
+
 MapperShell::Idle MapperShell::AtIdle(bool writer_gone, const StopFlagPtr& stop) {
   // slam gone without DONE, or this process paused while it left (keyframes it sent then are
   // lost). A slam that said DONE and left while the map stage still worked through its backlog
@@ -195,9 +203,7 @@ MapperShell::Idle MapperShell::AtIdle(bool writer_gone, const StopFlagPtr& stop)
   if (writer_gone && (!done_said || pause_.WasPaused())) {
     stats_.input_cut_short = true;
     if (pause_.WasPaused()) {
-      LOG_WARNING << "mapper: this process was stopped (SIGSTOP) and continued, for about "
-                  << pause_.LongestSeconds() << " s, and slam left meanwhile; the keyframes "
-                  << "it sent then are lost: writing the map without them";
+      WarnPausedWhileSlamLeft();
     } else {
       LOG_WARNING << "mapper: slam's keyframe writer left " << options_.writer_gone_s
                   << " s ago without announcing the end of its run; writing the map";
@@ -236,9 +242,7 @@ MapperShell::Idle MapperShell::AtIdle(bool writer_gone, const StopFlagPtr& stop)
     if (!slam_done_ && keyframes_.matched() == 0 && (never_found || pause_.WasPaused())) {
       stats_.input_cut_short = true;
       if (pause_.WasPaused()) {
-        LOG_WARNING << "mapper: this process was stopped (SIGSTOP) and continued, for about "
-                    << pause_.LongestSeconds() << " s, and slam left meanwhile; the keyframes "
-                    << "it sent then are lost: writing the map without them";
+        WarnPausedWhileSlamLeft();
       } else {
         LOG_WARNING << "mapper: slam was never found: the map lacks its keyframes (this process "
                        "was paused or starved while slam ran, or the run stopped before slam "

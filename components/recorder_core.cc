@@ -146,11 +146,7 @@ std::string RecorderCore::Write() const {
   record.keyframes = final_keyframes_ ? *final_keyframes_ : SortedUnique(online_keyframes_);
   const bool written = WriteRunRecord(outputs, record);
   if (!ground_truth_.empty()) WriteGroundTruthCopy(dir / "groundtruth.txt");
-  if (!outputs.failures().empty()) {
-    // Every file that could be written is; the first that could not ends the recorder's run.
-    const auto& [name, reason] = outputs.failures().front();
-    throw std::runtime_error(name + " not written: " + reason);
-  }
+  outputs.ThrowIfAnyFailed();  // every other file is written first
   if (!written) {
     LOG_INFO << "recorder: no frame received; the earlier trajectory.txt, keyframes.txt and "
                 "frames.csv are left as they were";

@@ -311,10 +311,7 @@ int MapController::Run() {
   if (system_) {
     RunOutputs outputs(options_.out, {"trajectory.txt", "keyframes.txt"});
     WriteRunRecord(outputs, RunRecordOfSystem(*system_));
-    if (!outputs.failures().empty()) {
-      const auto& [name, reason] = outputs.failures().front();
-      throw std::runtime_error(name + " not written: " + reason);
-    }
+    outputs.ThrowIfAnyFailed();
   }
   // SLAM maps: level the map by the floor it found, so pictures and planners see it upright.
   if (system_ && first_camera_) LevelMap();

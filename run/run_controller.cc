@@ -247,9 +247,9 @@ void RunController::WriteDirectOutputs(const System& system, KeyframeMapper* map
                                        RunRecord record) {
   const RunControllerOptions& s = options_;
   RecreateOutputDirIfRemoved("run", "out", s.out);
-  const RunRecord refined = RunRecordOfSystem(system);
-  record.trajectory = refined.trajectory;
-  record.keyframes = refined.keyframes;
+  RunRecord refined = RunRecordOfSystem(system);
+  record.trajectory = std::move(refined.trajectory);
+  record.keyframes = std::move(refined.keyframes);
   WriteRunRecord(outputs_, record);
   RunOutputs& outputs = outputs_;
   // With --save-map, map.ot too (the OctoMap with probabilities, what --load-octomap continues).

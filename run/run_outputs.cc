@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <stdexcept>
 
 #include "core/base/echo.h"
 #include "core/base/error.h"
@@ -80,6 +81,12 @@ std::vector<std::string> RunOutputs::StaleNames() const {
   for (const std::string& name : names_)
     if (!Fresh(name) && FileVersionOf(PathOf(name)).exists) out.push_back(name);
   return out;
+}
+
+void RunOutputs::ThrowIfAnyFailed() const {
+  if (failures_.empty()) return;
+  const auto& [name, reason] = failures_.front();
+  throw std::runtime_error(name + " not written: " + reason);
 }
 
 std::string RunOutputs::FailureReport(const std::string& command) const {

@@ -64,6 +64,9 @@ class RunOutputs {
   std::vector<std::string> FreshNames() const;
   std::vector<std::string> StaleNames() const;
   const std::vector<std::pair<std::string, std::string>>& failures() const { return failures_; }
+  // Throws std::runtime_error "NAME not written: REASON" for the first failure, if any (for a
+  // writer whose caller stops at a failed output once every other is written).
+  void ThrowIfAnyFailed() const;
   // "dygslam COMMAND: error: NAME not written: REASON" lines for stderr ("" when none failed).
   std::string FailureReport(const std::string& command) const;
 

@@ -140,7 +140,7 @@ void PrintOutputs(const RunOutputs& outputs) {
   for (const std::string& name : RunOutputNames()) {
     if (outputs.Fresh(name)) {
       written += (written.empty() ? "" : ",") + std::string(name);
-    } else if (fs::exists(outputs.PathOf(name))) {
+    } else if (outputs.Stale(name)) {
       stale += (stale.empty() ? "" : ", ") + std::string(name);
     }
   }

@@ -2,6 +2,7 @@
 
 #include <octomap/OcTree.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -25,11 +26,33 @@
 namespace dygslam {
 namespace fs = std::filesystem;
 
+namespace {
+
+// The folder a file goes into (device and inode only: its times change with every file written).
+FileVersion FolderOf(const fs::path& file) {
+  const fs::path parent = file.parent_path();
+  const FileVersion v = FileVersionOf(parent.empty() ? std::string(".") : parent.string());
+  FileVersion folder;
+  folder.exists = v.exists;
+  folder.device = v.device;
+  folder.inode = v.inode;
+  return folder;
+}
+
+}  // namespace
+
 RunOutputs::RunOutputs(std::filesystem::path directory, std::vector<std::string> names)
     : directory_(std::move(directory)) {
+  // The file-system clock's now, as file times read (FileVersion::mtime_ns), a second early:
+  // file times are taken from a coarser clock than the one read here.
+  started_ns_ = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                    std::chrono::system_clock::now().time_since_epoch())
+                    .count() -
+                1000000000LL;
   for (const std::string& name : names) {
     names_.push_back(name);
     before_[name] = FileVersionOf((directory_ / name).string());
+    folder_before_[name] = FolderOf(directory_ / name);
   }
 }
 
@@ -38,6 +61,7 @@ void RunOutputs::AddFile(const std::string& path) {
   names_.push_back(path);
   paths_[path] = path;
   before_[path] = FileVersionOf(path);
+  folder_before_[path] = FolderOf(path);
 }
 
 std::string RunOutputs::PathOf(const std::string& name) const {
@@ -66,7 +90,25 @@ void RunOutputs::RecordFailure(const std::string& name, const std::string& reaso
 bool RunOutputs::Fresh(const std::string& name) const {
   const FileVersion now = FileVersionOf(PathOf(name));
   const auto it = before_.find(name);
-  return now.exists && (it == before_.end() || it->second != now);
+  if (!now.exists || (it != before_.end() && it->second == now)) return false;
+  if (InItsFolder(name)) return true;
+  // Another folder under the name now: made again after the first was removed (by this command
+  // or another process of the run), its files are this run's when written since it started; a
+  // link put in its place names somebody else's folder.
+  std::error_code ec;
+  const fs::path parent = fs::path(PathOf(name)).parent_path();
+  if (fs::is_symlink(parent.empty() ? fs::path(".") : parent, ec)) return false;
+  return now.mtime_ns >= started_ns_;
+}
+
+bool RunOutputs::Stale(const std::string& name) const {
+  return !Fresh(name) && InItsFolder(name) && FileVersionOf(PathOf(name)).exists;
+}
+
+bool RunOutputs::InItsFolder(const std::string& name) const {
+  const auto folder = folder_before_.find(name);
+  return folder == folder_before_.end() || !folder->second.exists ||
+         FolderOf(PathOf(name)) == folder->second;
 }
 
 std::vector<std::string> RunOutputs::FreshNames() const {
@@ -79,7 +121,7 @@ std::vector<std::string> RunOutputs::FreshNames() const {
 std::vector<std::string> RunOutputs::StaleNames() const {
   std::vector<std::string> out;
   for (const std::string& name : names_)
-    if (!Fresh(name) && FileVersionOf(PathOf(name)).exists) out.push_back(name);
+    if (Stale(name)) out.push_back(name);
   return out;
 }
 

@@ -58,8 +58,12 @@ class RunOutputs {
   // with its message and false is returned.
   bool Write(const std::string& name, const std::function<void()>& write);
   void RecordFailure(const std::string& name, const std::string& reason);
-  // `name` was written by this run: its file was replaced (or created) since construction.
+  // `name` was written by this run: its file was replaced (or created) since construction, in
+  // the folder it was to go into (a folder replaced while the run went, by a link to another
+  // folder say, holds files this run did not write).
   bool Fresh(const std::string& name) const;
+  // `name` is there, in its folder, and was not written by this run.
+  bool Stale(const std::string& name) const;
   // The tracked names written by this run / present but left from before it, in the order given.
   std::vector<std::string> FreshNames() const;
   std::vector<std::string> StaleNames() const;
@@ -73,8 +77,11 @@ class RunOutputs {
  private:
   std::filesystem::path directory_;
   std::vector<std::string> names_;
-  std::map<std::string, std::string> paths_;  // name -> path of the files of AddFile
+  std::map<std::string, std::string> paths_;        // name -> path of the files of AddFile
+  bool InItsFolder(const std::string& name) const;  // the folder is still the one it was
+  long long started_ns_ = 0;                        // construction, as a file time
   std::map<std::string, FileVersion> before_;
+  std::map<std::string, FileVersion> folder_before_;           // name -> its folder at construction
   std::vector<std::pair<std::string, std::string>> failures_;  // name, reason
 };
 

@@ -390,7 +390,7 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
   step.has_posterior.assign(n, 0);
   // Ours: the depth-residual test replaces F (see DynamicFilterOptions::depth_residual), in
   // geometry and full mode (the keyframe masks no longer depend on the in-box labels, so the
-  // ghost-voxel figure holds: BENCHMARKS.md, *Geometry that earns its place*).
+  // ghost-voxel figure holds: BENCHMARKS.md, *Map quality: ghost voxels*).
   step.test_outside = step.depth_mode && o.mode == FilterMode::kFull;
   // Prior of a new track in the dynamic region: p_init inside a box; without boxes (geometry
   // mode) the depth-residual test has no reason to presume a feature moving: outside_p_init.

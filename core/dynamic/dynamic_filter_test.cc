@@ -375,9 +375,10 @@ TEST(DynamicFilterSequence, FullModeRemovesMovingKeepsStatic) {
 // The depth-residual test (ours) on a static scene seen by a moving camera: the motion
 // from PnP-RANSAC matches the true motion, static anchors do not drift (nothing is flagged over
 // 12 frames); without depth the motion cannot be estimated and the filter abstains. Known limit
-// (BENCHMARKS.md, *Geometry that earns its place*): with this generator's person cluster moving
-// at 0.6 m/s (19 % of the matches), the frame-to-frame PnP takes the cluster in as inliers (the
-// translation / rotation trade-off explains its 1-2 px per frame) and the motion is biased.
+// (the world-fixed anchors, DynamicFilterOptions::world_anchors, are the answer): with this
+// generator's person cluster moving at 0.6 m/s (19 % of the matches), the frame-to-frame PnP takes
+// the cluster in as inliers (the translation / rotation trade-off explains its 1-2 px per frame)
+// and the motion is biased.
 TEST(DynamicFilterSequence, DepthResidualTracksTheCameraAndAbstainsWithoutDepth) {
   const Camera cam;
   const cv::Matx33d k(cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);

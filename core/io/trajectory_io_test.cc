@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -82,6 +83,16 @@ TEST(TrajectoryIo, ReadsTumStyleWithCommentsBlankLinesAndCrLf) {
   EXPECT_NEAR(poses[0].world_from_cam.rotation.w(), -0.3248, 1e-3);
 }
 
+// A number too close to zero for a double is finite: it reads as what it rounds to.
+TEST(TrajectoryIo, ANumberTooSmallForADoubleReadsAsItsRounding) {
+  const std::string path = (std::filesystem::path(::testing::TempDir()) / "tiny.txt").string();
+  std::ofstream(path) << "1.0 0 0 0 0 0 0 1\n2.0 1e-400 -1e-320 0 0 0 0 1\n";
+  const std::vector<StampedPose> poses = ReadTumTrajectory(path);
+  ASSERT_EQ(poses.size(), 2u);
+  EXPECT_EQ(poses[1].world_from_cam.translation.x(), 0.0);
+  EXPECT_LE(std::abs(poses[1].world_from_cam.translation.y()), 1e-300);
+}
+
 TEST(TrajectoryIo, BadInputNamesFileAndLine) {
   const std::string ok = "1.0 0 0 0 0 0 0 1\n";
   ExpectError(ok + "2.0 0 0 0 0 0 1\n", ":2: expected 8 columns");
@@ -91,6 +102,8 @@ TEST(TrajectoryIo, BadInputNamesFileAndLine) {
   ExpectError(ok + "2.0 0x10 0 0 0 0 0 1\n", ":2: column 2: not a number: '0x10'");
   ExpectError(ok + "2.0 0 0 nan 0 0 0 1\n", ":2: column 4: non-finite");
   ExpectError(ok + "2.0 0 0 inf 0 0 0 1\n", ":2: column 4: non-finite");
+  ExpectError(ok + "2.0 0 0 1e400 0 0 0 1\n", ":2: column 4: value out of range (beyond a double)");
+  ExpectError(ok + "2.0 0 0 -1e400 0 0 0 1\n", ":2: column 4: value out of range");
   ExpectError(ok + "2.0 0 0 0 0 0 0 2\n", ":2: quaternion is not unit length");
   ExpectError(ok + "2.0 0 -1e30 0 0 0 0 1\n",
               ":2: column 3: coordinate -1e+30 m is beyond 1e+07 m");

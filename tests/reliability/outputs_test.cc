@@ -50,6 +50,30 @@ TEST(RunOutputsFiles, TellThisRunsFilesFromThoseAnEarlierRunLeft) {
   EXPECT_TRUE(outputs.failures().empty());
 }
 
+// --out removed while the run went and a link to another folder (a dataset) put in its place: the
+// files that folder holds under output names were not written by this run, nor left by an
+// earlier one; the summary lists neither.
+TEST(RunOutputsFiles, AFolderReplacedByALinkHoldsNoFileOfThisRun) {
+  const fs::path root = testing::MakeTempDir("outputs_replaced");
+  const fs::path dir = root / "out", other = root / "dataset";
+  fs::create_directories(dir);
+  fs::create_directories(other);
+  WriteText(other / "groundtruth.txt", "the dataset's ground truth\n");
+  WriteText(other / "trajectory.txt", "another trajectory\n");
+  RunOutputs outputs(dir, {"trajectory.txt", "groundtruth.txt"});
+  fs::remove_all(dir);
+  fs::create_directory_symlink(other, dir);
+  EXPECT_TRUE(outputs.FreshNames().empty());
+  EXPECT_TRUE(outputs.StaleNames().empty());
+  // A folder made again under the name (the command does so for a removed --out): what is
+  // written into it now is this run's.
+  fs::remove(dir);
+  fs::create_directories(dir);
+  WriteFileAtomically((dir / "trajectory.txt").string(), "this run\n");
+  EXPECT_EQ(outputs.FreshNames(), (std::vector<std::string>{"trajectory.txt"}));
+  EXPECT_TRUE(outputs.StaleNames().empty());
+}
+
 TEST(RunOutputsFiles, AFailedWriteIsReportedAndTheOthersAreWritten) {
   const fs::path dir = testing::MakeTempDir("outputs_failure");
   WriteText(dir / "map.bt", "earlier map\n");

@@ -75,11 +75,12 @@ class RunOutputs {
   std::string FailureReport(const std::string& command) const;
 
  private:
+  bool InItsFolder(const std::string& name) const;  // the folder is still the one it was
+
   std::filesystem::path directory_;
   std::vector<std::string> names_;
-  std::map<std::string, std::string> paths_;        // name -> path of the files of AddFile
-  bool InItsFolder(const std::string& name) const;  // the folder is still the one it was
-  long long started_ns_ = 0;                        // construction, as a file time
+  std::map<std::string, std::string> paths_;  // name -> path of the files of AddFile
+  long long started_ns_ = 0;                  // construction, as a file time
   std::map<std::string, FileVersion> before_;
   std::map<std::string, FileVersion> folder_before_;           // name -> its folder at construction
   std::vector<std::pair<std::string, std::string>> failures_;  // name, reason

@@ -30,12 +30,11 @@ double ParseValue(const std::string& file, int line, int column, const std::stri
   // value with ERANGE for one too close to zero ("1e-400"): that one reads as what it rounds to.
   const bool overflow = errno == ERANGE && std::abs(v) == HUGE_VAL;
   if (!std::isfinite(v) || overflow) {
-    throw InputError(file, line,
-                     "column " + std::to_string(column) + ": " +
-                         (overflow && text.find_first_of("iInN") == std::string::npos
-                              ? "value out of range (beyond a double) '"
-                              : "non-finite value '") +
-                         Abbreviate(text) + "'");
+    throw InputError(
+        file, line,
+        "column " + std::to_string(column) + ": " +
+            (overflow ? "value out of range (beyond a double) '" : "non-finite value '") +
+            Abbreviate(text) + "'");
   }
   return v;
 }

@@ -205,16 +205,16 @@ TEST(Pipeline, SigintMidRunFlushesOutputs) {
       RunArgs(dataset, tmp + "/out", 115, "0:360", {"--processes", "--filter", "geometry"});
   const pid_t pid = Spawn(args, log, /*new_group=*/true);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  while (ReadAll(log).find("[run] frame 40/") == std::string::npos &&
+  while (ReadAll(log).find("[run] frame 60/") == std::string::npos &&
          std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
-  ASSERT_NE(ReadAll(log).find("[run] frame 40/"), std::string::npos) << ReadAll(log);
+  ASSERT_NE(ReadAll(log).find("[run] frame 60/"), std::string::npos) << ReadAll(log);
   kill(-pid, SIGINT);
   ASSERT_EQ(Wait(pid), 0) << ReadAll(log);
   const std::string out = tmp + "/out";
   const size_t rows = CsvRows(out + "/frames.csv");
-  EXPECT_GE(rows, 40u);
+  EXPECT_GE(rows, 60u);
   EXPECT_LT(rows, 360u);
   const auto trajectory = ReadTumTrajectory(out + "/trajectory.txt");
   EXPECT_GE(trajectory.size(), rows - 5) << "every tracked frame";

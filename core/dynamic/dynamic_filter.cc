@@ -400,8 +400,8 @@ FilterResult DynamicFilter::Process(const FilterInput& input) {
   step.cam_from_world_translation = prev_cam_from_world_translation_;
   if (step.depth_mode && !has_prev_) {
     const std::vector<int> no_matches(n, -1);
-    DepthResidual(input, step.geom, no_matches, &result, &step.depth_distances, &step.anchors,
-                  &step.cam_from_world_rotation, &step.cam_from_world_translation);
+    DepthResidual(input, step.geom, no_matches, &result, &step.depth_distances, &step.depth_planar,
+                  &step.anchors, &step.cam_from_world_rotation, &step.cam_from_world_translation);
   }
   if (has_prev_) {
     RecordMatches(step.matches, &result);

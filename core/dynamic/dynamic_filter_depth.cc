@@ -16,8 +16,8 @@ void DynamicFilter::ObserveWithDepth(FrameStep* step, FilterResult* result) cons
   const DynamicFilterOptions& o = options_;
   const int n = static_cast<int>(step->matches.size());
   result->motion_model_ok = DepthResidual(
-      step->input, step->geom, step->matches, result, &step->depth_distances, &step->anchors,
-      &step->cam_from_world_rotation, &step->cam_from_world_translation);
+      step->input, step->geom, step->matches, result, &step->depth_distances, &step->depth_planar,
+      &step->anchors, &step->cam_from_world_rotation, &step->cam_from_world_translation);
   for (int i = 0; i < n; ++i) {
     FeatureStatus& fs = result->features[i];
     const int j = step->matches[i];
@@ -30,9 +30,11 @@ void DynamicFilter::ObserveWithDepth(FrameStep* step, FilterResult* result) cons
     if (result->motion_model_ok && step->depth_distances[i] >= 0) {
       fs.has_observation = true;
       fs.epipolar_distance = step->depth_distances[i];
+      const double line_distance = step->depth_planar[i] && o.planar_residual_to_line
+                                       ? step->depth_distances[i] / kPlanarToLineResidual
+                                       : step->depth_distances[i];
       step->posterior[i] = KalmanUpdate(
-          prior_post,
-          GeometryProbability(step->depth_distances[i] / o.depth_residual_scale, o.c1, o.alpha),
+          prior_post, GeometryProbability(line_distance / o.depth_residual_scale, o.c1, o.alpha),
           o.q, o.r);
     } else {
       step->posterior[i] = KalmanPredict(prior_post, o.q);
@@ -127,14 +129,15 @@ bool DynamicFilter::SolveFrameMotion(const FilterInput& input, const std::vector
 
 bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv::Point2f>& geom,
                                   const std::vector<int>& matches, FilterResult* result,
-                                  std::vector<double>* distances, std::vector<State>* anchors,
-                                  cv::Matx33d* cam_from_world_rotation,
+                                  std::vector<double>* distances, std::vector<uint8_t>* planar,
+                                  std::vector<State>* anchors, cv::Matx33d* cam_from_world_rotation,
                                   cv::Vec3d* cam_from_world_translation) const {
   const DynamicFilterOptions& o = options_;
   const cv::Matx33d& k = *input.camera_matrix;
   const std::vector<float>& depths = *input.depths;
   const int n = static_cast<int>(geom.size());
   distances->assign(n, -1.0);
+  planar->assign(n, 0);
   anchors->assign(n, State{});
   const auto back_project = [&](const cv::Point2f& p, double z) { return BackProject(k, p, z); };
   result->used_depth_residual = true;
@@ -183,6 +186,7 @@ bool DynamicFilter::DepthResidual(const FilterInput& input, const std::vector<cv
         // In units of the keypoint's pyramid scale (ORB keypoints are `31 * scale` px wide):
         // keypoints of coarse levels are localised less precisely.
         (*distances)[i] = d / std::max(1.0, input.keypoints[i].size / 31.0);
+        (*planar)[i] = 1;
         result->features[i].track_age = prev.anchor_age + 1;
         if (prev.anchor_age + 1 < o.anchor_max_age) {
           a.has_anchor = true;

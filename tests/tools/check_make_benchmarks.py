@@ -22,6 +22,7 @@ SECTIONS = [
     "## Memory over a longer run",
     "## Loop closing on generated loops",
     "## Map reuse: save, then localize",
+    "## Where nobody is in view, and the start-frame spread",
     "## Map quality: ghost voxels",
     "## Published figures (context, not measured by us)",
 ]

@@ -495,8 +495,7 @@ class Bench:
             self.loop_dirs[name] = directory
             stamp = os.path.join(directory, ".synth_command")
             command = " ".join(synth_args)
-            if os.path.exists(os.path.join(directory, "rgb.txt")) and os.path.exists(stamp) \
-                    and open(stamp).read().strip() == command:
+            if synth_is_cached(directory, command):
                 continue
             shutil.rmtree(directory, ignore_errors=True)
             os.makedirs(self.cache, exist_ok=True)
@@ -565,10 +564,7 @@ class Bench:
         crowds, with and without the planar-to-line conversion of the anchor residual."""
         work = os.path.join(self.work, "sensitivity")
         os.makedirs(work, exist_ok=True)
-        planar_off = os.path.join(work, "planar_as_line.yaml")
-        with open(planar_off, "w") as f:
-            f.write(open(self.config).read().rstrip("\n") +
-                    "\nDynamicFilter.planar_residual_to_line: 0\n")
+        planar_off = write_planar_as_line(self.config, os.path.join(work, "planar_as_line.yaml"))
         variants = (("full", self.config, "full"), ("planar_off", planar_off, "full"))
 
         def one(name, data, groundtruth, config, filter_mode, extra):
@@ -605,13 +601,8 @@ class Bench:
             for name, config, mode in variants:
                 say(f"{cname}, {name}")
                 camera = os.path.join(directory, "camera.yaml")
-                if name == "planar_off":
-                    config = os.path.join(work, cname + "_planar_as_line.yaml")
-                    with open(config, "w") as f:
-                        f.write(open(camera).read().rstrip("\n") +
-                                "\nDynamicFilter.planar_residual_to_line: 0\n")
-                else:
-                    config = camera
+                config = camera if name == "full" else write_planar_as_line(
+                    camera, os.path.join(work, cname + "_planar_as_line.yaml"))
                 crowds[cname][name] = one(f"{cname}_{name}", directory, gt, config, mode,
                                           ["--detections", os.path.join(directory, "detections.txt")])
         self.results["sensitivity"] = {"empty": empty, "starts": starts, "crowds": crowds}
@@ -621,8 +612,7 @@ class Bench:
         directory = os.path.join(self.cache, name)
         stamp = os.path.join(directory, ".synth_command")
         command = " ".join(synth_args)
-        if not (os.path.exists(os.path.join(directory, "rgb.txt")) and os.path.exists(stamp)
-                and open(stamp).read().strip() == command):
+        if not synth_is_cached(directory, command):
             shutil.rmtree(directory, ignore_errors=True)
             os.makedirs(self.cache, exist_ok=True)
             say(f"rendering {name} (once; cached for later runs)")
@@ -1123,7 +1113,7 @@ class Bench:
                      "median (range) over the start entries; the error of the fallback and `ok` "
                      "frames is the RMSE over those frames of the whole-run alignment (frames.csv "
                      "state).\n")
-            L.append("| whole run, 8 start entries | final ATE (m) | online ATE (m) | `ok` frames: RMSE (m) | "
+            L.append(f"| whole run, {len(STARTS)} start entries | final ATE (m) | online ATE (m) | `ok` frames: RMSE (m) | "
                      "fallback frames: count, RMSE (m) | poses / frames |")
             L.append("|---|---|---|---|---|---|")
             for name in ("full", "planar_off"):
@@ -1213,6 +1203,20 @@ def associate(gt, est, max_dt=0.02):
         if best is not None and abs(gt[best][0] - e[0]) <= max_dt:
             pairs.append((e[0], gt[best][1:4], e[1:4]))
     return pairs
+
+
+def synth_is_cached(directory, command):
+    """The cache folder holds a sequence `dygslam synth` made with exactly these arguments."""
+    stamp = os.path.join(directory, ".synth_command")
+    return (os.path.exists(os.path.join(directory, "rgb.txt")) and os.path.exists(stamp)
+            and open(stamp).read().strip() == command)
+
+
+def write_planar_as_line(config, path):
+    """`config` with the anchor residual taken as a 1-D distance (the conversion's ablation)."""
+    with open(path, "w") as f:
+        f.write(open(config).read().rstrip("\n") + "\nDynamicFilter.planar_residual_to_line: 0\n")
+    return path
 
 
 def rmse_by_state(groundtruth, aligned, frames_csv):

@@ -537,6 +537,9 @@ constexpr std::chrono::seconds kSourceCutShortGrace(60);
 // it; one that never matched slam (paused through slam's whole life) would wait for ever.
 constexpr std::chrono::seconds kMapperAfterSlamGrace(10);
 
+// Between the starts of two secured component processes (see ComponentProcesses).
+constexpr std::chrono::milliseconds kSecureStartStagger(1500);
+
 // Starts `exe component KIND ARGS` as a child of this run (it dies with the run) with the write
 // end of a report pipe whose read end goes to *report_fd. Returns its pid.
 pid_t StartComponentProcess(const std::string& exe, ComponentKind kind,
@@ -575,7 +578,17 @@ class ComponentProcesses {
     const std::string exe = options.executable.empty() ? fs::read_symlink("/proc/self/exe").string()
                                                        : options.executable;
     const std::vector<std::string> args = ComponentArgs(options);
+    bool first = true;
     for (const ComponentKind kind : PipelineComponents(options)) {
+      // Secured components join one at a time: Fast DDS 2.9 can lose the match between two
+      // participants when a third one is discovered while their authentication is under way
+      // (a data race in its participant discovery), and the pair then never talks.
+      if (!options.security_dir.empty() && !first) {
+        const auto until = Clock::now() + kSecureStartStagger;
+        while (Clock::now() < until && !stop_->requested())
+          std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      }
+      first = false;
       int report_fd = -1;
       const pid_t pid = StartComponentProcess(exe, kind, args, &report_fd);
       reports_[pid] = report_fd;

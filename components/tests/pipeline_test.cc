@@ -353,7 +353,7 @@ TEST(Pipeline, SecureMultiProcessRunProcessesEveryFrame) {
       std::string(std::getenv("DYGSLAM_SOURCE_DIR")) + "/scripts/make_dds_certs.sh";
   ASSERT_EQ(std::system((script + " " + certs + " > " + tmp + "/certs.log 2>&1").c_str()), 0)
       << ReadAll(tmp + "/certs.log");
-  ASSERT_EQ(RunToEnd(RunArgs(dataset, tmp + "/out", 117, "0:40",
+  ASSERT_EQ(RunToEnd(RunArgs(dataset, tmp + "/out", 120, "0:40",
                              {"--processes", "--filter", "geometry", "--security", certs}),
                      tmp + "/run.log"),
             0)
@@ -361,7 +361,7 @@ TEST(Pipeline, SecureMultiProcessRunProcessesEveryFrame) {
   EXPECT_EQ(CsvRows(tmp + "/out/frames.csv"), 40u) << ReadAll(tmp + "/run.log");
 
   const std::string missing = tmp + "/no_such_certs";
-  EXPECT_NE(RunToEnd(RunArgs(dataset, tmp + "/bad", 118, "0:10",
+  EXPECT_NE(RunToEnd(RunArgs(dataset, tmp + "/bad", 121, "0:10",
                              {"--filter", "geometry", "--security", missing}),
                      tmp + "/bad.log"),
             0);
@@ -377,7 +377,7 @@ TEST(Pipeline, SecureMultiProcessRunProcessesEveryFrame) {
                             .c_str()),
             0);
   const auto t0 = std::chrono::steady_clock::now();
-  EXPECT_NE(RunToEnd(RunArgs(dataset, tmp + "/mixed", 119, "0:10",
+  EXPECT_NE(RunToEnd(RunArgs(dataset, tmp + "/mixed", 122, "0:10",
                              {"--processes", "--filter", "geometry", "--security", mixed}),
                      tmp + "/mixed.log"),
             0);

@@ -120,8 +120,15 @@ int WaitForExit(pid_t pid, double timeout_s, std::string* diagnostics) {
   }
   std::string text = "process " + std::to_string(pid) + " still running after " +
                      std::to_string(timeout_s) + " s (hang); its threads:\n";
-  const std::string cmd = "gdb -p " + std::to_string(pid) +
-                          " -batch -nx -ex 'thread apply all bt 25' 2>&1 | grep -E '^(#|Thread)'";
+  // The process's threads, then those of its children (a `run --processes` hangs in the
+  // component that waits, not in the supervisor).
+  const std::string p = std::to_string(pid);
+  const std::string cmd =
+      "stacks() { gdb -p $1 -batch -nx -ex 'thread apply all bt 25' 2>&1 | "
+      "grep -E '^(#|Thread)'; }; stacks " +
+      p + "; for c in $(pgrep -P " + p +
+      "); do echo; echo \"child $c: $(tr '\\0' ' ' < /proc/$c/cmdline | cut -c1-200)\"; "
+      "stacks $c; done";
   if (FILE* pipe = ::popen(cmd.c_str(), "r")) {
     char buffer[4096];
     while (std::fgets(buffer, sizeof buffer, pipe)) text += buffer;

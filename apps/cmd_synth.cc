@@ -49,6 +49,15 @@ void DefineSynthOptions(ArgParser* parser, SyntheticOptions* o) {
       "                the corner arcs: the surface in view is always the corner radius away)");
   p.Bind("texels", "T", "texture resolution (texels per metre, 50..1000; lower for big rooms)",
          &o->texels_per_metre, 50, 1000);
+  p.Bind("occluder", "C",
+         "a person walking with the camera close in front of it covers this share of the\n"
+         "                image (0.1..0.98; 0 = none) for --occluder-frames frames",
+         &o->occluder_coverage, 0, 0.98);
+  p.Bind("occluder-from", "FRAME", "the occluder starts sliding into view at this frame",
+         &o->occluder_start_frame, 0, 1000000);
+  p.Bind("occluder-frames", "N", "frames the occluder covers its full share (after sliding in)",
+         &o->occluder_frames, 1, 1000000);
+  p.AddFlag("occluder-undetected", "the occluder is never in detections.txt (a missed person)");
   p.AddFlag("quiet", "no progress line");
 }
 
@@ -79,6 +88,7 @@ int CheckSynthOptions(ArgParser& p, const SyntheticOptions& options) {
          "with --loop-inward, a radius at least 0.25 m below both halves of --loop-path"},
         {"min_depth/max_depth", "max-depth", "0 (no limit) or a depth > 0 (m)"},
         {"objects_start_frame", "objects-from", "a frame number >= 0"},
+        {"occluder_coverage", "occluder", "0, or a share of the image in 0.1..0.98"},
     };
     for (const Field& f : kFields) {
       if (message.rfind(std::string("invalid option ") + f.field, 0) == 0) {
@@ -119,6 +129,7 @@ keys). The same seed gives byte-identical files.)");
   options.room_size = Eigen::Vector3d(room[0], room[1], room[2]);
   options.loop_semi_axes = Eigen::Vector2d(loop[0], loop[1]);
   options.loop_inward = p.Flag("loop-inward");
+  options.occluder_undetected = p.Flag("occluder-undetected");
   if (p.Flag("noise")) {
     options.depth_noise = true;
     options.rgb_noise_sigma = 2.0;

@@ -62,6 +62,13 @@ COLOURS = {"none": "#d62728", "paper": "#8c564b", "boxes": "#ff7f0e", "geometry"
 # with its ground-truth person boxes (the detector does not find the textured boxes).
 CROWDS = [(f"crowd_s{seed}", ["--frames", "300", "--objects", "2", "--noise", "--seed", str(seed)])
           for seed in (1, 2, 3)]
+# A person filling the view (generated): a walker moving with the camera covers this share of the
+# image for STRETCH["frames"] frames (1 s) after sliding in over STRETCH["ramp"] frames, in a static
+# room; boxed (its ground-truth box in detections.txt) or never detected.
+STRETCH = {"frames": 30, "start": 60, "ramp": 6, "length": 150}
+COVERAGES = (0.6, 0.8, 0.95)
+STRETCH_SEEDS = (1, 2, 3)
+STRETCH_MODES = ("paper", "boxes", "geometry", "full")
 # Start entries of the start-frame spread: the same sequence started one frame later is a
 # neutral perturbation of a chaotic system.
 STARTS = list(range(8))
@@ -607,6 +614,94 @@ class Bench:
                                           ["--detections", os.path.join(directory, "detections.txt")])
         self.results["sensitivity"] = {"empty": empty, "starts": starts, "crowds": crowds}
 
+    # a person filling the view ---------------------------------------------------------------
+    def crowd_stretch(self):
+        """Generated sequences where a walker covers 60/80/95 % of the view for 1 s: per filter
+        mode, whole-run ATE and the drift across the stretch, against the same run without it."""
+        work = os.path.join(self.work, "stretch")
+        os.makedirs(work, exist_ok=True)
+        before = STRETCH["start"] - 1
+        after = STRETCH["start"] + 2 * STRETCH["ramp"] + STRETCH["frames"]
+        variants = [("none", None, False)] + [
+            (f"{variant}_{c}", c, variant == "undetected")
+            for c in COVERAGES for variant in ("boxed", "undetected")]
+        results = {"before": before, "after": after, "variants": [v[0] for v in variants]}
+        for seed in STRETCH_SEEDS:
+            for name, coverage, undetected in variants:
+                synth_args = ["--frames", str(STRETCH["length"]), "--objects", "0", "--noise",
+                              "--seed", str(seed)]
+                if coverage is not None:
+                    synth_args += ["--occluder", str(coverage), "--occluder-from",
+                                   str(STRETCH["start"]), "--occluder-frames", str(STRETCH["frames"])]
+                    if undetected:
+                        synth_args.append("--occluder-undetected")
+                directory = self.synth_cached(f"stretch_s{seed}_{name}", synth_args)
+                gt = os.path.join(directory, "groundtruth.txt")
+                for mode in STRETCH_MODES:
+                    key = f"s{seed}_{name}_{mode}"
+                    out = os.path.join(work, key)
+                    shutil.rmtree(out, ignore_errors=True)
+                    cmd = [self.dygslam, "run", directory, "--config",
+                           os.path.join(directory, "camera.yaml"), "--filter", mode, "--detections",
+                           os.path.join(directory, "detections.txt"), "--direct", "--no-map",
+                           "--out", out, "--quiet"]
+                    say(f"person filling the view: seed {seed}, {name}, {mode}")
+                    self.record_load()
+                    r = run(cmd, out + ".log")
+                    sc = score_run(self.dygslam, gt, out, r)
+                    sc["drift"] = relative_pose_error(gt, os.path.join(out, "trajectory.txt"),
+                                                      before, after)
+                    sc["cmd"] = cmd
+                    sc["synth"] = [self.dygslam, "synth", directory] + synth_args
+                    del sc["log"]
+                    results[key] = sc
+        self.results["stretch"] = results
+
+    def render_stretch(self, L):
+        """The section on a person filling the view (generated)."""
+        L.append("## A person filling the view (generated)\n")
+        st = self.results.get("stretch")
+        if not st:
+            L.append("Not measured (`--quick`).\n")
+            return
+        L.append(f"`dygslam synth --occluder C`: in a static textured room, a walker moving along "
+                 f"with the handheld camera, 0.9 m in front of it, slides in from the right over "
+                 f"{STRETCH['ramp']} frames, covers the share C of the image (full height) for "
+                 f"{STRETCH['frames']} frames (1 s) from entry {STRETCH['start'] + STRETCH['ramp']}, "
+                 f"and slides out; {STRETCH['length']} frames with depth and colour noise. Boxed: its "
+                 "ground-truth box is in detections.txt; undetected: never (a missed person). "
+                 f"Drift across the stretch: the error of the estimated motion from entry "
+                 f"{st['before']} (before the walker) to entry {st['after']} (after it), translation "
+                 "and rotation (the `none` rows: the same over the same frames without a walker). Figures: median "
+                 f"over seeds {', '.join(str(x) for x in STRETCH_SEEDS)} (range of poses / frames). "
+                 "The ratio compares the final ATE with the same seed and filter without the walker.\n")
+        L.append("| walker | filter | final ATE (m) | online ATE (m) | ATE / no walker | "
+                 "drift across the stretch (cm, deg) | poses / frames |")
+        L.append("|---|---|---|---|---|---|---|")
+        for name in st["variants"]:
+            label = "none"
+            if name != "none":
+                variant, c = name.split("_")
+                label = f"{variant}, covers {int(round(float(c) * 100))} %"
+            for mode in STRETCH_MODES:
+                runs = [st[f"s{seed}_{name}_{mode}"] for seed in STRETCH_SEEDS]
+                base = [st[f"s{seed}_none_{mode}"]["ate"] for seed in STRETCH_SEEDS]
+                ratios = [r["ate"] / b for r, b in zip(runs, base) if b and b == b]
+                drift_cm = [r["drift"][0] * 100 for r in runs if r["drift"]]
+                drift_deg = [r["drift"][1] for r in runs if r["drift"]]
+                drift = (f"{fmt(median(drift_cm), 2)}, {fmt(median(drift_deg), 2)}"
+                         if len(drift_cm) == len(runs) else "no pose at an end")
+                L.append(f"| {label} | `{mode}` | {fmt(median([r['ate'] for r in runs]))} | "
+                         f"{fmt(median([r['online_ate'] for r in runs]))} | "
+                         f"{fmt(median(ratios), 2) if ratios else '-'}x | {drift} | "
+                         f"{poses_text(runs)} |")
+        L.append("")
+        r = st[f"s{STRETCH_SEEDS[0]}_boxed_{COVERAGES[-1]}_full"]
+        L.append("```")
+        L.append(self.cmdline(r["synth"]))
+        L.append(self.cmdline(r["cmd"]))
+        L.append("```\n")
+
     def synth_cached(self, name, synth_args):
         """A `dygslam synth` sequence in the cache, rendered once per command."""
         directory = os.path.join(self.cache, name)
@@ -1038,6 +1133,7 @@ class Bench:
             L.append("Not measured.\n")
 
         self.render_sensitivity(L)
+        self.render_stretch(L)
 
         # Map quality.
         L.append("## Map quality: ghost voxels\n")
@@ -1203,6 +1299,56 @@ def associate(gt, est, max_dt=0.02):
         if best is not None and abs(gt[best][0] - e[0]) <= max_dt:
             pairs.append((e[0], gt[best][1:4], e[1:4]))
     return pairs
+
+
+def read_tum_poses(path):
+    """{stamp rounded to 0.1 ms: (x, y, z, qx, qy, qz, qw)} of a TUM trajectory."""
+    poses = {}
+    if not os.path.exists(path):
+        return poses
+    for line in open(path):
+        parts = line.split()
+        if len(parts) >= 8 and not line.startswith("#"):
+            poses[round(float(parts[0]), 4)] = tuple(float(v) for v in parts[1:8])
+    return poses
+
+
+def quat_mul(a, b):
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz)
+
+
+def quat_rotate(q, v):
+    x, y, z, _ = quat_mul(quat_mul(q, (v[0], v[1], v[2], 0.0)), (-q[0], -q[1], -q[2], q[3]))
+    return (x, y, z)
+
+
+def relative_motion(a, b):
+    """The pose of b in a's frame, both world_from_cam (x, y, z, qx, qy, qz, qw)."""
+    qa_inv = (-a[3], -a[4], -a[5], a[6])
+    t = quat_rotate(qa_inv, (b[0] - a[0], b[1] - a[1], b[2] - a[2]))
+    return t, quat_mul(qa_inv, b[3:7])
+
+
+def relative_pose_error(groundtruth, trajectory, first, last):
+    """(metres, degrees) between the estimated and the true motion from ground-truth entry
+    `first` to entry `last`; None when the trajectory has no pose at either."""
+    gt = read_tum_poses(groundtruth)
+    est = read_tum_poses(trajectory)
+    stamps = sorted(gt)
+    a, b = stamps[first], stamps[last]
+    if a not in est or b not in est:
+        return None
+    tg, qg = relative_motion(gt[a], gt[b])
+    te, qe = relative_motion(est[a], est[b])
+    # error = true^-1 * estimated
+    qg_inv = (-qg[0], -qg[1], -qg[2], qg[3])
+    dq = quat_mul(qg_inv, qe)
+    dt = quat_rotate(qg_inv, (te[0] - tg[0], te[1] - tg[1], te[2] - tg[2]))
+    angle = 2 * math.degrees(math.acos(min(1.0, abs(dq[3]))))
+    return (math.sqrt(sum(v * v for v in dt)), angle)
 
 
 def synth_is_cached(directory, command):
@@ -1420,6 +1566,7 @@ def bench_main():
                 bench.memory()
             bench.loops()
             bench.filter_sensitivity()
+            bench.crowd_stretch()
         bench.map_reuse()
         bench.map_quality()
         bench.draw()

@@ -23,6 +23,7 @@ SECTIONS = [
     "## Loop closing on generated loops",
     "## Map reuse: save, then localize",
     "## Where nobody is in view, and the start-frame spread",
+    "## A person filling the view (generated)",
     "## Map quality: ghost voxels",
     "## Published figures (context, not measured by us)",
 ]

@@ -111,6 +111,14 @@ void SyntheticOptions::Check() const {
           (near_object_distance >= path_amplitude + object_size.x() / 2 + 0.3 &&
            near_object_distance + object_size.x() + 0.02 <= NearLaneX(*this) - CameraBaseX(*this)),
       "near_object_distance (0, or clear of the camera path and of the first lane)");
+  DYGSLAM_CHECK_OPTION(
+      occluder_coverage == 0 || (occluder_coverage >= 0.1 && occluder_coverage <= 0.98),
+      "occluder_coverage (0, or 0.1 .. 0.98)");
+  DYGSLAM_CHECK_OPTION(
+      occluder_start_frame >= 0 && occluder_frames >= 1 && occluder_ramp_frames >= 0,
+      "occluder_start_frame/occluder_frames/occluder_ramp_frames");
+  DYGSLAM_CHECK_OPTION(occluder_distance >= 0.4 && occluder_distance <= 2.0,
+                       "occluder_distance (0.4 .. 2 m)");
   DYGSLAM_CHECK_OPTION(depth_noise_coefficient >= 0 && depth_noise_coefficient < 0.1,
                        "depth_noise_coefficient");
   DYGSLAM_CHECK_OPTION(rgb_noise_sigma >= 0 && rgb_noise_sigma <= 50, "rgb_noise_sigma");
@@ -159,6 +167,7 @@ SyntheticScene::SyntheticScene(const SyntheticOptions& options) : options_(optio
     object.speed = options_.object_speed * rng.Uniform(0.8, 1.2);
     object.phase = rng.Uniform();
     object.detected = i < k - options_.num_undetected_objects;
+    object.size = options_.object_size;
     objects_.push_back(object);
   }
   if (options_.near_object_distance > 0) {
@@ -168,6 +177,19 @@ SyntheticScene::SyntheticScene(const SyntheticOptions& options) : options_(optio
     object.lane_start = {x, -1.2, z};
     object.lane_end = {x, 1.2, z};
     object.speed = options_.object_speed * rng.Uniform(0.8, 1.2);
+    object.phase = rng.Uniform();
+    object.size = options_.object_size;
+    objects_.push_back(object);
+  }
+  if (options_.occluder_coverage > 0) {
+    // Wide and tall enough to cover the image from its left edge to beyond the right border at
+    // any coverage, with room for the sway; 0.3 m deep.
+    MovingObject object;
+    object.occluder = true;
+    object.detected = !options_.occluder_undetected;
+    const PinholeCamera& c = options_.camera;
+    const double d = options_.occluder_distance;
+    object.size = {1.6 * c.width / c.fx * d, 1.6 * c.height / c.fy * d, 0.3};
     object.phase = rng.Uniform();
     objects_.push_back(object);
   }
@@ -291,12 +313,52 @@ Rigid3d SyntheticScene::WorldFromCamAtTime(double t) const {
   return Rigid3d(rotation, position);
 }
 
+int SyntheticScene::occluder_index() const {
+  return options_.occluder_coverage > 0 ? num_moving_objects() - 1 : -1;
+}
+
+double SyntheticScene::OccluderCoverage(int frame) const {
+  if (options_.occluder_coverage <= 0) return 0;
+  const int ramp = options_.occluder_ramp_frames;
+  const int start = options_.occluder_start_frame, full = start + ramp;
+  const int leave = full + options_.occluder_frames, end = leave + ramp;
+  double s = 0;  // 0..1 of the full coverage
+  if (frame >= full && frame < leave) {
+    s = 1;
+  } else if (frame >= start && frame < full) {
+    s = double(frame - start + 1) / (ramp + 1);
+  } else if (frame >= leave && frame < end) {
+    s = double(end - frame) / (ramp + 1);
+  }
+  return s * s * (3 - 2 * s) * options_.occluder_coverage;  // smoothstep in and out
+}
+
 bool SyntheticScene::IsObjectPresent(int object, int frame) const {
-  return object >= 0 && object < num_moving_objects() && frame >= options_.objects_start_frame;
+  if (object < 0 || object >= num_moving_objects()) return false;
+  if (objects_[object].occluder) return OccluderCoverage(frame) > 0;
+  return frame >= options_.objects_start_frame;
+}
+
+OrientedBox SyntheticScene::OccluderBox(const MovingObject& m, int frame) const {
+  // In the camera frame: the left edge of the front face on image column (1 - coverage) * width,
+  // the box reaching beyond the right border; the walker's sway moves it a few centimetres.
+  const PinholeCamera& c = options_.camera;
+  const double t = FrameTime(frame), w = 2 * kPi;
+  const double sway_x = 0.02 * std::sin(w * (t / 1.1 + m.phase));
+  const double sway_z = 0.02 * std::sin(w * (t / 0.9 + m.phase));
+  const double d = options_.occluder_distance + sway_z;
+  const double edge_u = (1 - std::max(OccluderCoverage(frame), 0.0)) * c.width - 0.5;
+  const double edge_x = (edge_u - c.cx) / c.fx * d + sway_x;
+  const Eigen::Vector3d centre_cam(edge_x + m.size.x() / 2, 0.0, d + m.size.z() / 2);
+  OrientedBox box;
+  box.world_from_box = WorldFromCam(frame) * Rigid3d(Eigen::Quaterniond::Identity(), centre_cam);
+  box.half_extents = m.size / 2;
+  return box;
 }
 
 OrientedBox SyntheticScene::MovingObjectBox(int object, int frame) const {
   const MovingObject& m = objects_.at(object);
+  if (m.occluder) return OccluderBox(m, frame);
   const double length = (m.lane_end - m.lane_start).norm();
   const double t = FrameTime(frame) - FrameTime(options_.objects_start_frame);
   double along = 0, yaw = 0;
@@ -324,7 +386,7 @@ OrientedBox SyntheticScene::MovingObjectBox(int object, int frame) const {
   OrientedBox box;
   box.world_from_box = Rigid3d(yaw == 0 ? Eigen::Quaterniond::Identity() : Yaw(yaw),
                                m.lane_start + (m.lane_end - m.lane_start) * (along / length));
-  box.half_extents = options_.object_size / 2;
+  box.half_extents = m.size / 2;
   return box;
 }
 
@@ -339,7 +401,10 @@ bool SyntheticScene::IsInsideMovingObject(const Eigen::Vector3d& p_world, int fr
 }
 
 bool SyntheticScene::IsInSweptVolume(const Eigen::Vector3d& p_world, double margin) const {
-  for (int frame = options_.objects_start_frame; frame < options_.num_frames; ++frame) {
+  const int first = options_.occluder_coverage > 0
+                        ? std::min(options_.objects_start_frame, options_.occluder_start_frame)
+                        : options_.objects_start_frame;
+  for (int frame = first; frame < options_.num_frames; ++frame) {
     if (IsInsideMovingObject(p_world, frame, margin)) return true;
   }
   return false;

@@ -91,6 +91,18 @@ struct SyntheticOptions {
   // short lane this far (metres) in front of the camera path centre: it fills about half the
   // view when it passes. Needs path_amplitude + object_size.x / 2 + 0.3 <= this distance.
   double near_object_distance = 0.0;
+  // > 0: a mover that walks along with the camera close in front of it and covers this share of
+  // the image (columns from the right edge, the full height) for occluder_frames frames from
+  // occluder_start_frame, after sliding in from the right over occluder_ramp_frames (and out
+  // again after them): a person in a crowd who fills the view for a while. Its front is
+  // occluder_distance in front of the camera, swaying a few centimetres as it walks. It is the
+  // last moving object; reported in boxes unless occluder_undetected.
+  double occluder_coverage = 0.0;  // 0, or 0.1 .. 0.98
+  int occluder_start_frame = 0;
+  int occluder_frames = 30;
+  int occluder_ramp_frames = 6;
+  double occluder_distance = 0.9;  // metres
+  bool occluder_undetected = false;
 
   // Sensor model.
   bool depth_noise = false;
@@ -134,6 +146,10 @@ class SyntheticScene {
   const SyntheticOptions& options() const { return options_; }
   int num_frames() const { return options_.num_frames; }
   int num_moving_objects() const { return static_cast<int>(objects_.size()); }
+  // The occluder's object index, or -1 without one.
+  int occluder_index() const;
+  // The share of the image columns the occluder covers at `frame` by design (0 when absent).
+  double OccluderCoverage(int frame) const;
   // False for the objects of num_undetected_objects (never in boxes).
   bool IsObjectDetected(int object) const { return objects_.at(object).detected; }
 
@@ -170,9 +186,13 @@ class SyntheticScene {
   struct MovingObject {
     Eigen::Vector3d lane_start, lane_end;  // centre positions at the two turning points
     double speed = 1.0;
-    double phase = 0.0;    // fraction of a back-and-forth cycle at start
-    bool detected = true;  // listed in SyntheticFrame::boxes when visible
+    double phase = 0.0;     // fraction of a back-and-forth cycle at start
+    bool detected = true;   // listed in SyntheticFrame::boxes when visible
+    bool occluder = false;  // moves with the camera (see SyntheticOptions::occluder_coverage)
+    Eigen::Vector3d size = Eigen::Vector3d::Zero();  // box extents (x, y, z)
   };
+  // The occluder's box at `frame`, given the camera pose there.
+  OrientedBox OccluderBox(const MovingObject& m, int frame) const;
   struct Surface {
     OrientedBox box;
     bool inside = false;  // seen from inside (the room)

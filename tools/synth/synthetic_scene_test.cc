@@ -493,5 +493,54 @@ TEST(SyntheticScene, NearMoverFillsAboutHalfTheView) {
   EXPECT_GT(max_share, 0.4);
 }
 
+// The crowd stretch: a person walking with the camera covers the asked share of the view for the
+// asked frames (after sliding in), close in front of it, and is boxed unless undetected.
+TEST(SyntheticScene, OccluderCoversItsShareOfTheViewForItsStretch) {
+  for (const bool undetected : {false, true}) {
+    SyntheticOptions options = SmallOptions(1, 5);
+    options.num_frames = 40;
+    options.occluder_coverage = 0.8;
+    options.occluder_start_frame = 10;
+    options.occluder_frames = 12;
+    options.occluder_ramp_frames = 4;
+    options.occluder_undetected = undetected;
+    const SyntheticScene scene(options);
+    ASSERT_EQ(scene.num_moving_objects(), 2);
+    const int occluder = scene.occluder_index();
+    ASSERT_EQ(occluder, 1);
+    EXPECT_EQ(scene.IsObjectDetected(occluder), !undetected);
+    for (int f = 0; f < options.num_frames; f += 3) {
+      const SyntheticFrame frame = scene.RenderFrame(f);
+      const cv::Mat on_occluder = frame.object_labels == occluder + 1;
+      const double share = cv::countNonZero(on_occluder) / double(on_occluder.total());
+      const bool boxed =
+          std::count(frame.box_object_ids.begin(), frame.box_object_ids.end(), occluder) > 0;
+      SCOPED_TRACE("frame " + std::to_string(f));
+      if (f < 10 || f >= 10 + 4 + 12 + 4) {  // before it slides in, after it has left
+        EXPECT_EQ(share, 0);
+        EXPECT_FALSE(scene.IsObjectPresent(occluder, f));
+      } else if (f >= 14 && f < 26) {  // the full stretch: the share, give or take the sway
+        EXPECT_NEAR(share, 0.8, 0.05);
+        EXPECT_NEAR(scene.OccluderCoverage(f), 0.8, 1e-12);
+        double lo = 0, hi = 0;
+        cv::Mat depth;
+        frame.depth.convertTo(depth, CV_64F, 1.0 / options.sensor.depth_map_factor);
+        cv::minMaxLoc(depth, &lo, &hi, nullptr, nullptr, on_occluder);
+        EXPECT_GT(lo, options.occluder_distance - 0.03);  // its front, swaying a few cm
+        EXPECT_LT(lo, options.occluder_distance + 0.03);
+        EXPECT_EQ(boxed, !undetected);
+      }
+      // The mask marks it as moving whether or not it is boxed.
+      EXPECT_EQ(cv::countNonZero(on_occluder & ~frame.dynamic_mask), 0);
+    }
+  }
+  SyntheticOptions bad = SmallOptions();
+  bad.occluder_coverage = 0.99;
+  EXPECT_THROW(bad.Check(), InvalidOptions);
+  bad.occluder_coverage = 0.5;
+  bad.occluder_distance = 0.2;
+  EXPECT_THROW(bad.Check(), InvalidOptions);
+}
+
 }  // namespace
 }  // namespace dygslam

@@ -578,17 +578,11 @@ class ComponentProcesses {
     const std::string exe = options.executable.empty() ? fs::read_symlink("/proc/self/exe").string()
                                                        : options.executable;
     const std::vector<std::string> args = ComponentArgs(options);
-    bool first = true;
     for (const ComponentKind kind : PipelineComponents(options)) {
       // Secured components join one at a time: Fast DDS 2.9 can lose the match between two
       // participants when a third one is discovered while their authentication is under way
       // (a data race in its participant discovery), and the pair then never talks.
-      if (!options.security_dir.empty() && !first) {
-        const auto until = Clock::now() + kSecureStartStagger;
-        while (Clock::now() < until && !stop_->requested())
-          std::this_thread::sleep_for(std::chrono::milliseconds(20));
-      }
-      first = false;
+      if (!options.security_dir.empty() && !children_.empty()) stop_->WaitFor(kSecureStartStagger);
       int report_fd = -1;
       const pid_t pid = StartComponentProcess(exe, kind, args, &report_fd);
       reports_[pid] = report_fd;

@@ -1280,7 +1280,7 @@ def read_tum(path):
     for line in open(path):
         parts = line.split()
         if len(parts) >= 8 and not line.startswith("#"):
-            rows.append([float(v) for v in parts[:4]])
+            rows.append([float(v) for v in parts[:8]])  # t, x, y, z, qx, qy, qz, qw
     return rows
 
 
@@ -1303,14 +1303,9 @@ def associate(gt, est, max_dt=0.02):
 
 def read_tum_poses(path):
     """{stamp rounded to 0.1 ms: (x, y, z, qx, qy, qz, qw)} of a TUM trajectory."""
-    poses = {}
     if not os.path.exists(path):
-        return poses
-    for line in open(path):
-        parts = line.split()
-        if len(parts) >= 8 and not line.startswith("#"):
-            poses[round(float(parts[0]), 4)] = tuple(float(v) for v in parts[1:8])
-    return poses
+        return {}
+    return {round(row[0], 4): tuple(row[1:8]) for row in read_tum(path)}
 
 
 def quat_mul(a, b):

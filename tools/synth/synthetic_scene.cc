@@ -347,7 +347,7 @@ OrientedBox SyntheticScene::OccluderBox(const MovingObject& m, int frame) const 
   const double sway_x = 0.02 * std::sin(w * (t / 1.1 + m.phase));
   const double sway_z = 0.02 * std::sin(w * (t / 0.9 + m.phase));
   const double d = options_.occluder_distance + sway_z;
-  const double edge_u = (1 - std::max(OccluderCoverage(frame), 0.0)) * c.width - 0.5;
+  const double edge_u = (1 - OccluderCoverage(frame)) * c.width - 0.5;
   const double edge_x = (edge_u - c.cx) / c.fx * d + sway_x;
   const Eigen::Vector3d centre_cam(edge_x + m.size.x() / 2, 0.0, d + m.size.z() / 2);
   OrientedBox box;

@@ -252,6 +252,7 @@ ComponentOutcome RunPipelinePlayer(const PipelineOptions& options,
     report.latency_median_ms = stats.latency_median_ms;
     report.latency_p99_ms = stats.latency_p99_ms;
     report.longest_gap_s = stats.longest_gap_s;
+    report.latencies = stats.latencies;
     WriteRealtimeReport((fs::path(options.output_dir) / kRealtimeReportFile).string(), report);
   }
   if (stats.refused) throw FrameSourceRefused();

@@ -230,6 +230,7 @@ class PlayerShell {
   // participant publishing poses into the partition proves nothing about them.
   std::set<WriterGuid> slam_pose_writers_;
   LatencyReservoir latency_ms_;
+  std::vector<ResultLatency> latencies_;
   const double late_after_ms_;
   size_t late_ = 0;
   std::optional<Clock::time_point> first_sent_, last_pose_;
@@ -297,6 +298,8 @@ void PlayerShell::OnPose(const msg::CameraPose& pose, const WriterGuid& writer) 
       if (continued == continued_at_last_pose_) {
         const double ms = std::chrono::duration<double, std::milli>(now - it->second).count();
         latency_ms_.Add(ms);
+        if (options_.rate > 0 && latencies_.size() < kMaxLatencyRows)
+          latencies_.push_back({stamp, ms});
         if (late_after_ms_ > 0 && ms > late_after_ms_) ++late_;
         // The wait for a result while a frame was out: from the last result or from when the
         // oldest frame still out was sent, whichever is later (a player that sent nothing for
@@ -587,6 +590,7 @@ void PlayerShell::Summarize() {
     stats_.latency_p95_ms = latency_ms_.Quantile(0.95);
     stats_.latency_p99_ms = latency_ms_.Quantile(0.99);
     stats_.late = late_;
+    stats_.latencies = latencies_;
     if (first_sent_ && last_pose_ && latency_ms_.count() > 1) {
       stats_.poses_per_second = (latency_ms_.count() - 1) /
                                 std::chrono::duration<double>(*last_pose_ - *first_sent_).count();

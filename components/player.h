@@ -108,6 +108,8 @@ struct PlayerStats {
   // Paced runs (rate > 0): poses that came more than kLateFramePeriods frame periods (at the
   // played rate) after their frame was published.
   size_t late = 0;
+  // Each pose's frame stamp and latency in the order the poses came (at most kMaxLatencyRows).
+  std::vector<ResultLatency> latencies;
   // Paced runs: the longest time without a pose while frames were published (a stall).
   double longest_gap_s = 0;
   // The consumers took another frame source's frames (it started first on the partition) and

@@ -226,8 +226,8 @@ DatasetRunSummary RunDatasetFrames(const RgbdDataset& dataset, System& system,
     ++summary.processed;
     if (paced) {
       const auto now = Clock::now();
-      summary.latency_ms.push_back(
-          std::chrono::duration<double, std::milli>(now - arrived).count());
+      summary.latencies.push_back(
+          {frame->stamp, std::chrono::duration<double, std::milli>(now - arrived).count()});
     }
     if (r.state == TrackingState::kLost) ++summary.lost;
     if (on_frame) on_frame(frame->entry, r);

@@ -31,6 +31,7 @@
 #include "core/base/types.h"
 #include "core/io/dataset.h"
 #include "core/system/system.h"
+#include "run/realtime_report.h"
 
 namespace dygslam {
 
@@ -64,9 +65,9 @@ struct DatasetRunSummary {
   bool interrupted = false;  // `stop` ended the run before last_entry
   double seconds = 0;        // wall time of the loop
   // rate > 0: frames replaced by a newer one before the System took them, and per processed frame
-  // the time from its arrival to its result (ms).
+  // its stamp and the time from its arrival to its result.
   size_t dropped = 0;
-  std::vector<double> latency_ms;
+  std::vector<ResultLatency> latencies;
 };
 
 // Called after each fed frame with its rgb.txt entry and the System's result.

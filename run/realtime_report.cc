@@ -1,6 +1,7 @@
 #include "run/realtime_report.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -27,13 +28,18 @@ std::string RealtimeReport::Summary() const {
   return text;
 }
 
-RealtimeReport MakeRealtimeReport(double rate, size_t frames, const std::vector<double>& latency_ms,
+RealtimeReport MakeRealtimeReport(double rate, size_t frames,
+                                  const std::vector<ResultLatency>& latencies,
                                   double late_after_ms) {
   RealtimeReport r;
   r.rate = rate;
   r.frames = frames;
-  r.results = latency_ms.size();
-  std::vector<double> sorted = latency_ms;
+  r.results = latencies.size();
+  r.latencies.assign(latencies.begin(),
+                     latencies.begin() + std::min(latencies.size(), kMaxLatencyRows));
+  std::vector<double> sorted;
+  sorted.reserve(latencies.size());
+  for (const ResultLatency& l : latencies) sorted.push_back(l.ms);
   std::sort(sorted.begin(), sorted.end());
   auto quantile = [&](double q) {
     if (sorted.empty()) return 0.0;
@@ -53,6 +59,11 @@ void WriteRealtimeReport(const std::string& path, const RealtimeReport& r) {
   out << "rate " << r.rate << "\nframes " << r.frames << "\nresults " << r.results << "\nlate "
       << r.late << "\nlatency_median_ms " << r.latency_median_ms << "\nlatency_p99_ms "
       << r.latency_p99_ms << "\nlongest_gap_s " << r.longest_gap_s << "\n";
+  char line[96];
+  for (const ResultLatency& l : r.latencies) {
+    std::snprintf(line, sizeof(line), "latency %s %.3f\n", l.stamp.ToString().c_str(), l.ms);
+    out << line;
+  }
   WriteFileAtomically(path, out.str());
 }
 
@@ -65,6 +76,18 @@ RealtimeReport ReadRealtimeReport(const std::string& path) {
     if (line.empty()) continue;
     std::istringstream fields(line);
     std::string key;
+    if (line.rfind("latency ", 0) == 0) {
+      std::string stamp_text;
+      double ms = -1;
+      std::string rest;
+      fields >> key >> stamp_text >> ms;
+      const std::optional<Timestamp> stamp = Timestamp::Parse(stamp_text);
+      if (!stamp || !fields || !std::isfinite(ms) || ms < 0 || (fields >> rest))
+        throw InputError(path + ":" + std::to_string(n) +
+                         ": expected 'latency <stamp> <milliseconds>', got '" + line + "'");
+      r.latencies.push_back({*stamp, ms});
+      continue;
+    }
     double value = 0;
     if (!(fields >> key >> value) || value < 0)
       throw InputError(path + ":" + std::to_string(n) + ": expected 'key value', got '" + line +

@@ -280,7 +280,7 @@ void RunController::WriteDirectRealtimeReport(const DatasetRunSummary& summary) 
   outputs_.Write(kRealtimeReportFile, [&] {
     WriteRealtimeReport(outputs_.PathOf(kRealtimeReportFile),
                         MakeRealtimeReport(s.rate, summary.processed + summary.dropped,
-                                           summary.latency_ms, late_after_ms));
+                                           summary.latencies, late_after_ms));
   });
 }
 

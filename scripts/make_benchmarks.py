@@ -30,6 +30,7 @@ one. Without it the DDS sections say "not measured" and why.
   BENCH_QUICK=1 scripts/make_benchmarks.py     (1 run, no memory and loop sections)
 """
 import argparse
+import csv
 import datetime
 import json
 import math
@@ -424,14 +425,18 @@ class Bench:
                     r = run(cmd, out + ".log")
                     s = score_run(self.dygslam, self.groundtruth, out, r)
                     # What the paced run measured (OUT/realtime.txt: key value lines).
-                    report = {}
+                    report, rows = {}, []
                     path = os.path.join(out, "realtime.txt")
                     if os.path.exists(path):
                         for line in open(path):
                             parts = line.split()
                             if len(parts) == 2:
                                 report[parts[0]] = float(parts[1])
+                            elif len(parts) == 3 and parts[0] == "latency":
+                                rows.append((float(parts[1]), float(parts[2])))
                     s["realtime"] = report
+                    s["latency_rows"] = rows
+                    s["frame_states"] = read_frame_states(os.path.join(out, "frames.csv"))
                     say(f"  ATE {fmt(s['ate'])} m (online {fmt(s['online_ate'])}), "
                         f"{int(report.get('frames', 0) - report.get('results', 0))} dropped, "
                         f"{int(report.get('late', 0))} late, latency median "
@@ -827,6 +832,32 @@ class Bench:
             ax.grid(alpha=0.3)
             save(fig, "memory_rss.png")
 
+        rate = [r for r in self.results.get("rate") or [] if r.get("latency_rows")]
+        if rate:
+            fig, ax = plt.subplots(figsize=(10, 4))
+            states = rate[0]["frame_states"]
+            index = {stamp: k for k, stamp in enumerate(sorted(states))}
+            # The frames the dense fallback tracked and the keyframes, from the first run's
+            # frames.csv (the trajectory is the same in every run).
+            for stamp, (state, keyframe) in states.items():
+                if state == "fallback":
+                    ax.axvspan(index[stamp] - 0.5, index[stamp] + 0.5, color="#f4c7c3", lw=0)
+                elif keyframe:
+                    ax.axvspan(index[stamp] - 0.5, index[stamp] + 0.5, color="#d9e7f7", lw=0)
+            for k, r in enumerate(rate):
+                pts = sorted((index[round(t, 6)], ms) for t, ms in r["latency_rows"]
+                             if round(t, 6) in index)
+                ax.plot([p for p, _ in pts], [ms for _, ms in pts], lw=1,
+                        label=f"run {k + 1}" if k < 5 else None)
+            ax.axhline(100, color="grey", ls="--", lw=1, label="late: 3 frame periods")
+            ax.set_xlabel("frame (blue: keyframe, red: dense fallback)")
+            ax.set_ylabel("frame to pose (ms)")
+            ax.set_yscale("log")
+            ax.set_title("`dygslam run --rate 1`: latency of each frame")
+            ax.legend(loc="upper left", fontsize=8)
+            ax.grid(alpha=0.3)
+            save(fig, "realtime_latency.png")
+
         loops = self.results.get("loops") or {}
         if loops:
             fig, axes = plt.subplots(1, len(loops), figsize=(6 * len(loops), 5), squeeze=False)
@@ -963,6 +994,11 @@ class Bench:
                          f"{int_range(dropped)} | {int_range([int(v) for v in rt('late') if math.isfinite(v)])} | "
                          f"{med_range(rt('latency_median_ms'), 1)} | {med_range(rt('latency_p99_ms'), 1)} |")
                 L.append("")
+                if "realtime_latency.png" in self.figures:
+                    L.append("Each frame's latency (`latency` rows of `OUT/realtime.txt`), over the "
+                             "frames' states in `OUT/frames.csv`:\n")
+                    L.append(f"![frame-to-pose latency of each frame, --rate 1]"
+                             f"({fig('realtime_latency.png')})\n")
             else:
                 L.append("`--rate 1` (the dataset played at the camera's rate): not measured: "
                          "`dygslam run` has no `--rate` option in this build.\n")
@@ -1274,6 +1310,16 @@ class Bench:
 
 
 # --- trajectories and drawing ----------------------------------------------------------------
+
+def read_frame_states(path):
+    """frames.csv of a run -> {stamp (rounded to the microsecond): (state, is keyframe)}."""
+    states = {}
+    if os.path.exists(path):
+        with open(path) as f:
+            for row in csv.DictReader(f):
+                states[round(float(row["stamp"]), 6)] = (row["state"], row["keyframe"] == "1")
+    return states
+
 
 def read_tum(path):
     rows = []

@@ -329,6 +329,23 @@ TEST_F(RunIntegrity, ProcessesRunAtCameraRate) {
   EXPECT_TRUE(Contains(r.out, "real time: rate 1.00x: 30 frames")) << r.out;
   const std::string json = ReadAll(dir_ + "/out/eval.json");
   EXPECT_TRUE(Contains(json, "\"realtime\": {\"rate\": 1, \"frames\": 30,")) << json;
+  // The player (its own process) wrote each result's latency: frames of the run, in order, and
+  // the median the summary gives is theirs.
+  const RealtimeReport report = ReadRealtimeReport(dir_ + "/out/realtime.txt");
+  ASSERT_FALSE(report.latencies.empty());
+  EXPECT_LE(report.latencies.size(), report.results);
+  const RgbdDataset dataset = RgbdDataset::Open(source);
+  std::vector<double> ms;
+  for (size_t i = 0; i < report.latencies.size(); ++i) {
+    const ResultLatency& l = report.latencies[i];
+    EXPECT_GT(l.ms, 0.0) << i;
+    if (i > 0) EXPECT_LT(report.latencies[i - 1].stamp, l.stamp) << i;
+    EXPECT_GE(l.stamp, dataset.frame(0).rgb_stamp) << i;
+    EXPECT_LE(l.stamp, dataset.frame(29).rgb_stamp) << i;
+    ms.push_back(l.ms);
+  }
+  std::sort(ms.begin(), ms.end());
+  EXPECT_NEAR(ms[ms.size() / 2], report.latency_median_ms, 0.01);
 }
 
 // A frame source already playing on the run's partition (another robot's player, a second run):

@@ -207,7 +207,7 @@ class PlayerShell {
   DatasetPlayer player_;
   PlayerStats stats_;
   const Clock::time_point begin_;
-  Clock::time_point start_;  // of the replay's schedule; moved on when the player was stopped
+  Clock::time_point start_;  // of the replay's schedule (the first frame); moved on when stopped
   // A stop of the player itself (SIGSTOP, Ctrl-Z) is not the pipeline's: the times measured
   // across it (latency, the wait for a result) are left out, and the replay resumes at the
   // camera's rate rather than sending the frames it fell behind in one burst.
@@ -458,7 +458,12 @@ void PlayerShell::PlayFrames(const StopFlagPtr& stop) {
     RgbdFrameData frame = player_.Frame(n % frames_per_loop);
     frame.seq = n;
     frame.stamp = Timestamp::FromNanoseconds(frame.stamp.nanoseconds() + loop * replay_shift_ns);
-    if (n == 0) first_stamp_ = frame.stamp;
+    if (n == 0) {
+      // The camera starts with the first frame: the schedule from now, not from the start-up
+      // (the wait for the components), which sent the first frames in a burst to catch up.
+      first_stamp_ = frame.stamp;
+      start_ = Clock::now();
+    }
     if (options_.rate > 0 && !WaitUntilDue(n, frame, stop)) break;
     if (options_.window > 0 && n >= static_cast<size_t>(options_.window)) WaitForWindow(n, stop);
     if (stop->requested()) break;

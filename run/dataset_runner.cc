@@ -127,17 +127,19 @@ class FrameLoader {
 };
 
 // When each frame of a paced replay arrives, as from a camera: its stamp's offset from the first
-// frame's, over the rate, after the replay's start. The start moves later by the time this
-// process was stopped (SIGSTOP, Ctrl-Z): the camera of a paused replay is paused too, so its
-// frames are not the pipeline's drops.
+// frame's, over the rate, after the first frame arrived (the camera starts with it, once it is
+// loaded). The start moves later by the time this process was stopped (SIGSTOP, Ctrl-Z): the
+// camera of a paused replay is paused too, so its frames are not the pipeline's drops.
 class ReplayClock {
  public:
   using Clock = std::chrono::steady_clock;
-  ReplayClock(double rate, Clock::time_point start)
-      : rate_(rate), start_(start), continued_seen_(TimesContinued()) {}
+  explicit ReplayClock(double rate) : rate_(rate), continued_seen_(TimesContinued()) {}
 
   Clock::time_point Arrival(Timestamp stamp) {
-    if (!first_stamp_) first_stamp_ = stamp;
+    if (!first_stamp_) {
+      first_stamp_ = stamp;
+      start_ = Clock::now();
+    }
     const double s = SecondsBetween(*first_stamp_, stamp) / rate_;
     return start_ + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
   }
@@ -177,7 +179,7 @@ DatasetRunSummary RunDatasetFrames(const RgbdDataset& dataset, System& system,
   using Clock = std::chrono::steady_clock;
   DatasetRunSummary summary;
   const auto t0 = Clock::now();
-  ReplayClock camera(options.rate, t0);
+  ReplayClock camera(options.rate);
   auto arrival = [&](const LoadedFrame& f) { return camera.Arrival(f.stamp); };
   FrameLoader loader(dataset, options);
   std::optional<Timestamp> prefetched;  // the stamp whose detection was started ahead

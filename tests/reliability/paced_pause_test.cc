@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <regex>
 #include <string>
@@ -14,6 +15,7 @@
 
 #include "core/io/dataset.h"
 #include "core/io/trajectory_io.h"
+#include "run/realtime_report.h"
 #include "tests/support/cli_fixture.h"
 #include "tests/support/test_support.h"
 
@@ -83,6 +85,35 @@ TEST_F(PacedPause, ADirectReplayStoppedAndContinuedGoesOnFromItsFrame) {
 // started by hand beside a run replaced the run's complete trajectory by its partial one, exit
 // 0). The folder is held by the command that writes into it: a second one is refused before any
 // work, and the first one's outputs are whole.
+// `run --processes --rate 1`: the camera starts with the first frame the player sends, once the
+// components are up. Before, the schedule counted from the player's start-up, and the start of the
+// components (a second or more as processes) was made up by sending the first frames in a burst:
+// the first results came hundreds of milliseconds late.
+TEST_F(PacedPause, TheCameraStartsWithTheFirstFrame) {
+  DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
+  constexpr int kDomain = 164;
+  const std::string out = dir_ + "/out";
+  const auto r = Run({"run", source, "--config", Config(), "--filter", "none", "--frames", "0:60",
+                      "--no-map", "--processes", "--rate", "1", "--quiet", "--out", out, "--domain",
+                      std::to_string(kDomain)});
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const RealtimeReport report = ReadRealtimeReport(out + "/realtime.txt");
+  ASSERT_GE(report.latencies.size(), 10u) << r.out;
+  std::vector<double> first;
+  std::printf("latency of the first 10 results (ms):");
+  for (size_t i = 0; i < 10; ++i) {
+    first.push_back(report.latencies[i].ms);
+    std::printf(" %.1f", first.back());
+  }
+  std::printf("\n");
+  std::sort(first.begin(), first.end());
+  // Measured: a median of 9.5-10.4 ms over 4 runs (the first three frames 20-75 ms while the
+  // components warm up); 106 ms with the schedule counted from the start-up. Asserted: below one
+  // and a half frame periods at 30 Hz (50 ms).
+  EXPECT_LT(first[first.size() / 2], 50.0)
+      << "median latency of the first 10 results; sorted: " << first[0] << " ... " << first.back();
+}
+
 TEST_F(PacedPause, TwoCommandsNeverWriteIntoOneFolderAtOnce) {
   DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
   const std::string data = SmallDataset(source, 90, "data", /*with_groundtruth=*/true);

@@ -62,8 +62,11 @@ TEST(LoopClosingBonn, NoLoopAcceptedAndTrajectoryUnchanged) {
         static_cast<long long>(v.frame_id), static_cast<long long>(v.loop_frame_id), v.inliers,
         v.bow_pairs, v.projected, v.correction_m, v.correction_deg, v.allowed_m, v.allowed_deg,
         v.path_m, v.verdict);
-  // The checks were exercised: the index did propose consistent candidates on this sequence.
-  EXPECT_GT(s.candidates_detected, 0);
+  // Every keyframe went through loop detection. (The index proposes no consistent candidate on
+  // this sequence since keyframes are no longer made on every frame with people close: 45
+  // keyframes, 0 candidates; with 51 it proposed some, all rejected. The verification steps are
+  // exercised on the generated loops: tests/slam/loop_closing_test.cc, loop_correction_test.cc.)
+  EXPECT_GE(s.keyframes_checked, 40);
   EXPECT_EQ(s.loops_closed, 0);
   ASSERT_EQ(on.trajectory.size(), off.trajectory.size());
   for (size_t i = 0; i < on.trajectory.size(); ++i) {

@@ -81,10 +81,6 @@ TEST_F(PacedPause, ADirectReplayStoppedAndContinuedGoesOnFromItsFrame) {
       << summary << err;
 }
 
-// Two commands writing into one folder would rename their files over each other's (a recorder
-// started by hand beside a run replaced the run's complete trajectory by its partial one, exit
-// 0). The folder is held by the command that writes into it: a second one is refused before any
-// work, and the first one's outputs are whole.
 // `run --processes --rate 1`: the camera starts with the first frame the player sends, once the
 // components are up. Before, the schedule counted from the player's start-up, and the start of the
 // components (a second or more as processes) was made up by sending the first frames in a burst:
@@ -114,6 +110,10 @@ TEST_F(PacedPause, TheCameraStartsWithTheFirstFrame) {
       << "median latency of the first 10 results; sorted: " << first[0] << " ... " << first.back();
 }
 
+// Two commands writing into one folder would rename their files over each other's (a recorder
+// started by hand beside a run replaced the run's complete trajectory by its partial one, exit
+// 0). The folder is held by the command that writes into it: a second one is refused before any
+// work, and the first one's outputs are whole.
 TEST_F(PacedPause, TwoCommandsNeverWriteIntoOneFolderAtOnce) {
   DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
   const std::string data = SmallDataset(source, 90, "data", /*with_groundtruth=*/true);

@@ -215,6 +215,12 @@ TEST_F(Faults, RecorderAndPlayerSayWhenSlamIsStoppedBeforeTheEnd) {
   const size_t poses = ReadTumTrajectory(tmp + "/out/trajectory.txt").size();
   EXPECT_GT(poses, 10u);
   EXPECT_LT(poses, 300u);
+  // The player stops sending once slam said it stopped: the rest would go to nobody. Before, it
+  // waited 30 s for each frame's acknowledgement when it had not yet seen slam's pose writer
+  // matched, and then sent all 300 frames.
+  const long published = Extract(ReadAll(tmp + "/player.log"), R"(published (\d+) frames)");
+  EXPECT_GT(published, 0) << ReadAll(tmp + "/player.log");
+  EXPECT_LT(published, 300) << ReadAll(tmp + "/player.log");
 }
 
 // Components started by hand, the recorder stopped (SIGTERM) and the mapper killed (SIGKILL)

@@ -429,12 +429,12 @@ void PlayerShell::WaitForWindow(size_t n, const StopFlagPtr& stop) {
   const auto deadline =
       Clock::now() + std::chrono::milliseconds(static_cast<int64_t>(options_.ack_timeout_s * 1000));
   std::unique_lock<std::mutex> lock(mutex_);
-  // slam that announced its end (stopped, failed) acknowledges nothing more.
-  while (acked_ < need && !stop->requested() && Clock::now() < deadline && !SlamGone() &&
-         !refused_ && !slam_done_) {
-    cv_.wait_for(lock, std::chrono::milliseconds(20));
-  }
-  if (acked_ < need && !stop->requested() && !SlamGone() && !refused_ && !slam_done_) {
+  // No acknowledgement will come: stopped, refused, slam gone or done (stopped, failed).
+  const auto waiting = [&] {
+    return acked_ < need && !stop->requested() && !SlamGone() && !refused_ && !slam_done_;
+  };
+  while (waiting() && Clock::now() < deadline) cv_.wait_for(lock, std::chrono::milliseconds(20));
+  if (waiting()) {
     ++stats_.ack_timeouts;
     LOG_WARNING << "player: no acknowledgement of frame " << need << " after "
                 << options_.ack_timeout_s << " s; sending frame " << n;
@@ -474,9 +474,10 @@ void PlayerShell::PlayFrames(const StopFlagPtr& stop) {
         ReportRefused(n);
         break;
       }
-      // slam ended before the end of the stream (stopped by a signal, failed): the rest of the
-      // frames would go to nobody. EndStream says why.
-      if (slam_done_ && !slam_cut_short_.empty()) break;
+      // slam ended before the end of the stream (stopped by a signal, failed; OnStatus gives
+      // every DONE before the end of stream a reason): the rest of the frames would go to
+      // nobody. EndStream says why.
+      if (slam_done_) break;
       // The watch sees slam's pose writer while it is there, so that its leaving (killed, no
       // DONE) is noticed also when no frame ever waited for an acknowledgement.
       SlamGone();

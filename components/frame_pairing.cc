@@ -1,5 +1,7 @@
 #include "components/frame_pairing.h"
 
+#include <algorithm>
+
 #include "core/base/error.h"
 #include "core/base/log.h"
 
@@ -23,6 +25,19 @@ FramePairer::FramePairer(const PairingOptions& options) : options_(options) { op
 
 void FramePairer::AddFrame(RgbdFrameData frame, Clock::time_point now) {
   frames_.push_back({std::move(frame), now});
+  while (options_.max_pending_frames > 0 && frames_.size() > options_.max_pending_frames) {
+    if (stats_.dropped_frames == 0) {
+      LOG_WARNING << "slam: frames arrive faster than they are tracked; the oldest waiting "
+                     "frame is dropped when more than "
+                  << options_.max_pending_frames << " wait (counted)";
+    }
+    // As if released: its detections, when they come, are late (the boxes carried forward).
+    last_released_stamp_ =
+        std::max(last_released_stamp_, frames_.front().frame.stamp.nanoseconds());
+    detections_.erase(detections_.begin(), detections_.upper_bound(last_released_stamp_));
+    frames_.pop_front();
+    ++stats_.dropped_frames;
+  }
 }
 
 void FramePairer::AddDetections(Timestamp stamp, std::vector<Detection> detections) {

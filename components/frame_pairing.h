@@ -21,6 +21,12 @@
 //   waiting and without counting a miss (PairedFrame::detector_skipped): the System carries the
 //   boxes of the last detector frame to them. Deterministic mode stays deterministic: which
 //   frames get no detections follows from seq alone.
+// - at most `max_pending_frames` frames wait: a newer frame that arrives when that many wait
+//   pushes the oldest out (counted as dropped; its detections, if they come, are late). A camera
+//   does not wait for the pipeline: a slam slower than the camera drops frames, as a camera
+//   driver's bounded queue does, instead of falling further behind (latency growing without
+//   bound). A player with a back-pressure window (fewer frames in flight than this bound) is
+//   never cut.
 #pragma once
 
 #include <chrono>
@@ -46,6 +52,9 @@ struct PairingOptions {
   std::chrono::milliseconds carry_forward_max_age{1000};  // stamp difference, frame to boxes
   // The detector runs on the frames with seq % detection_every_n_frames == 0 only.
   int detection_every_n_frames = 1;
+  // Frames waiting at most; the oldest is dropped when a newer one would exceed it (0: no bound;
+  // the slam component holds as many as the frame topic's history).
+  size_t max_pending_frames = 0;
   void Check() const;
 };
 
@@ -88,6 +97,7 @@ struct PairingStats {
   size_t late_used = 0;           // late detections that became the boxes carried forward
   size_t lost_episodes = 0;       // times the detector was declared lost
   size_t skipped_by_cadence = 0;  // frames the detector does not run on (every_n_frames)
+  size_t dropped_frames = 0;      // pushed out by newer frames (max_pending_frames)
 };
 
 class FramePairer {

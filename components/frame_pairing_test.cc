@@ -314,5 +314,38 @@ TEST(FramePairing, CadenceSkippedFramesAreNotMisses) {
   EXPECT_EQ(p.stats().lost_episodes, 0u);
 }
 
+// A camera does not wait: frames that arrive while more than max_pending_frames wait push the
+// oldest out (counted), so the frame tracked next is at most that many frames old. Before, every
+// frame waited: a slam slower than the camera fell further behind (latency growing to seconds,
+// nothing dropped). The dropped frame's detections, coming later, are late: the boxes carried
+// forward, not paired with a newer frame.
+TEST(FramePairing, MoreFramesThanTheBoundPushTheOldestOut) {
+  PairingOptions o;
+  o.max_pending_frames = 3;
+  FramePairer p(o);
+  const auto t0 = Clock::now();
+  p.AddDetections(Frame(0).stamp, OneBox());
+  for (int i = 0; i < 5; ++i) p.AddFrame(Frame(i), t0);
+  EXPECT_EQ(p.pending_frames(), 3u);
+  EXPECT_EQ(p.stats().dropped_frames, 2u);
+  p.AddDetections(Frame(1).stamp, OneBox());  // its frame was dropped: late
+  EXPECT_EQ(p.stats().dropped_detections, 1u);
+  p.AddDetections(Frame(2).stamp, {});
+  auto f = p.Next(t0);
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->frame.seq, 2u);  // the oldest of the newest three
+  ASSERT_TRUE(f->detections);
+  EXPECT_TRUE(f->detections->empty());
+  // A frame at the bound is kept: a player with a window of 3 is never cut.
+  FramePairer windowed(o);
+  for (int i = 0; i < 3; ++i) windowed.AddFrame(Frame(i), t0);
+  EXPECT_EQ(windowed.pending_frames(), 3u);
+  EXPECT_EQ(windowed.stats().dropped_frames, 0u);
+  o.max_pending_frames = 0;  // no bound
+  FramePairer unbounded(o);
+  for (int i = 0; i < 100; ++i) unbounded.AddFrame(Frame(i), t0);
+  EXPECT_EQ(unbounded.pending_frames(), 100u);
+}
+
 }  // namespace
 }  // namespace dygslam

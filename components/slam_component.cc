@@ -49,6 +49,9 @@ PairingOptions PairingOptionsFor(const SlamComponentOptions& options) {
   p.lost_after_misses = options.detector_lost_after_misses;
   p.carry_forward_max_frames = options.carry_forward_max_frames;
   p.detection_every_n_frames = options.system.detection_every_n_frames;
+  // slam holds no more frames than the frame topic's history: a windowed player (window <
+  // kFrameHistoryDepth) is never cut; a camera's frames that slam cannot take in time are dropped.
+  p.max_pending_frames = static_cast<size_t>(dds::kFrameHistoryDepth);
   return p;
 }
 
@@ -432,7 +435,8 @@ void SlamShell::Finish(const std::string& cut_short) {
            << stats.frames_without_boxes << " geometry-only), " << stats.frames_carrying_boxes
            << " skipped by the detector cadence (boxes carried), "
            << stats.pairing.dropped_detections << " arrived late (" << stats.pairing.late_used
-           << " carried forward)" << (stats.detector_lost ? " (detector lost)" : "") << "; busy "
+           << " carried forward)" << (stats.detector_lost ? " (detector lost)" : "") << "; "
+           << stats.pairing.dropped_frames << " frames dropped (arrived faster than tracked); busy "
            << stats.busy_s << " s, waited " << stats.wait_for_frames_s << " s for frames, "
            << stats.wait_for_detections_s << " s for detections";
   if (stats.foreign_frames + stats.foreign_detections > 0) {

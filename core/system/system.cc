@@ -34,9 +34,14 @@ std::shared_ptr<const DenseView> MakeDenseView(const cv::Mat& gray, const cv::Ma
   bool any_dynamic = !detections.empty();
   for (uint8_t d : dynamic) any_dynamic = any_dynamic || d;
   if (any_dynamic) {
-    cv::Mat dynamic_mask =
-        ComputeDynamicMask(gray.size(), depth_m, detections, keypoints, dynamic, options);
-    cv::bitwise_not(dynamic_mask, view->static_mask);
+    // Made when the frame is first aligned (few are): from copies of what it needs.
+    view->make_static_mask = [size = gray.size(), depth_m, detections, keypoints, dynamic,
+                              options] {
+      cv::Mat static_mask;
+      cv::bitwise_not(ComputeDynamicMask(size, depth_m, detections, keypoints, dynamic, options),
+                      static_mask);
+      return static_mask;
+    };
   }
   return view;
 }

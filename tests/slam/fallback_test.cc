@@ -122,6 +122,34 @@ TEST(StaticDepthOdometry, VerificationRejectsAWrongPose) {
   EXPECT_LT(bad.inlier_fraction(), odometry.options().min_inlier_fraction);
 }
 
+// A static mask made on first use (what the System gives every frame, since most frames are
+// never aligned) is made once and counts as the same mask given up front: same agreement.
+TEST(StaticDepthOdometry, AStaticMaskMadeOnFirstUseIsTheMaskGivenUpFront) {
+  const SyntheticOptions o = CrowdedScene();
+  SyntheticScene scene(o);
+  StaticDepthOdometry odometry(o.camera, StaticDepthOdometryOptions());
+  const SyntheticFrame ref = scene.RenderFrame(10);
+  const SyntheticFrame cur = scene.RenderFrame(11);
+  const DenseView rv = ViewOf(ref, o.sensor, true), eager = ViewOf(cur, o.sensor, true);
+  DenseView lazy = ViewOf(cur, o.sensor, false);
+  int made = 0;
+  lazy.make_static_mask = [&made, mask = eager.static_mask] {
+    ++made;
+    return mask;
+  };
+  EXPECT_EQ(made, 0);
+  const Rigid3d truth = cur.world_from_cam.Inverse() * ref.world_from_cam;
+  const DepthAgreement a = odometry.Agreement(rv, eager, truth);
+  const DepthAgreement b = odometry.Agreement(rv, lazy, truth);
+  EXPECT_EQ(made, 1);
+  EXPECT_EQ(a.samples, b.samples);
+  EXPECT_EQ(a.inliers, b.inliers);
+  EXPECT_LT(b.samples, odometry.Agreement(rv, ViewOf(cur, o.sensor, false), truth).samples)
+      << "the mask left nothing out";
+  odometry.Agreement(lazy, rv, truth);
+  EXPECT_EQ(made, 1);
+}
+
 // config/bonn.yaml with the full filter in deterministic mode: the real-data runs below.
 SystemOptions BonnFullDeterministicOptions() {
   SystemOptions options = SystemOptionsFromSettings(

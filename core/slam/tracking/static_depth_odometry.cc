@@ -107,8 +107,8 @@ void StaticDepthOdometry::CheckView(const DenseView& view, const char* which) co
   if (view.depth.empty() || view.depth.type() != CV_32FC1 || view.depth.size() != size)
     throw InputError(std::string("static depth odometry: ") + which +
                      " depth must be CV_32FC1 metres of Camera.width x Camera.height");
-  if (!view.static_mask.empty() &&
-      (view.static_mask.type() != CV_8UC1 || view.static_mask.size() != size))
+  const cv::Mat& mask = view.StaticMask();
+  if (!mask.empty() && (mask.type() != CV_8UC1 || mask.size() != size))
     throw InputError(std::string("static depth odometry: ") + which +
                      " static mask must be CV_8UC1 of Camera.width x Camera.height");
 }
@@ -123,10 +123,11 @@ DepthAgreement StaticDepthOdometry::Agreement(const DenseView& reference, const 
   DepthAgreement a;
   double sum_sq = 0;
   const int step = options_.verify_step_px;
+  const cv::Mat& current_mask = current.StaticMask();
+  const cv::Mat& reference_mask = reference.StaticMask();
   for (int v = 0; v < camera_.height; v += step) {
     const float* depth_row = current.depth.ptr<float>(v);
-    const uint8_t* mask_row =
-        current.static_mask.empty() ? nullptr : current.static_mask.ptr<uint8_t>(v);
+    const uint8_t* mask_row = current_mask.empty() ? nullptr : current_mask.ptr<uint8_t>(v);
     for (int u = 0; u < camera_.width; u += step) {
       const float d = depth_row[u];
       if (!(d > options_.min_depth && d < options_.max_depth)) continue;
@@ -138,7 +139,7 @@ DepthAgreement StaticDepthOdometry::Agreement(const DenseView& reference, const 
       const double pv = camera_.fy * p.y() / p.z() + camera_.cy;
       const int iu = static_cast<int>(std::lround(pu)), iv = static_cast<int>(std::lround(pv));
       if (iu < 0 || iv < 0 || iu >= camera_.width || iv >= camera_.height) continue;
-      if (!reference.static_mask.empty() && !reference.static_mask.at<uint8_t>(iv, iu)) continue;
+      if (!reference_mask.empty() && !reference_mask.at<uint8_t>(iv, iu)) continue;
       const float dr = reference.depth.at<float>(iv, iu);
       if (!(dr > options_.min_depth && dr < options_.max_depth)) continue;
       ++a.correspondences;
@@ -165,10 +166,10 @@ StaticDepthEstimate StaticDepthOdometry::Estimate(const DenseView& reference,
   auto odometry_frame = [&align_size](const DenseView& view) {
     if (view.odometry_frame) return view.odometry_frame;
     cv::Mat gray = view.gray, depth = view.depth, mask;
-    if (view.static_mask.empty()) {
+    if (view.StaticMask().empty()) {
       mask = cv::Mat(view.depth.size(), CV_8UC1, cv::Scalar(255));
     } else {
-      mask = view.static_mask.clone();
+      mask = view.StaticMask().clone();
     }
     // Pixels without depth are not usable either (OpenCV also tests the range, but a NaN-free
     // mask keeps its normal computation away from holes).

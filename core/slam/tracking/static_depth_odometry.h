@@ -18,6 +18,7 @@
 //   if (e.verified) cam_from_world = e.cur_from_ref * ref_from_world;
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -34,15 +35,31 @@ struct OdometryFrame;
 namespace dygslam {
 
 // What the dense estimator needs of a frame. Built by the System for every frame (the images are
-// shared, not copied).
+// shared, not copied). Used on the tracking thread only.
 struct DenseView {
   cv::Mat gray;         // CV_8UC1
   cv::Mat depth;        // CV_32FC1 metres, 0 = no measurement
   cv::Mat static_mask;  // CV_8UC1, nonzero = static pixel usable for alignment; empty = all
+  // When set, the static mask is made by this on its first use instead (StaticMask()): most
+  // frames are never aligned, and the mask (boxes refined by depth, disks around dynamic
+  // features, dilation) costs about a millisecond per frame.
+  std::function<cv::Mat()> make_static_mask;
+  // static_mask, or the one make_static_mask makes (once).
+  const cv::Mat& StaticMask() const {
+    if (make_static_mask && !static_mask_made_) {
+      made_static_mask_ = make_static_mask();
+      static_mask_made_ = true;
+    }
+    return make_static_mask ? made_static_mask_ : static_mask;
+  }
   // The aligner's pyramids of this view, made on its first alignment and reused when the view is
   // aligned again (a frame aligned as the current one is the next frame's reference): the images
   // above must not change once the view has been used.
   mutable std::shared_ptr<cv::rgbd::OdometryFrame> odometry_frame;
+
+ private:
+  mutable cv::Mat made_static_mask_;
+  mutable bool static_mask_made_ = false;
 };
 
 // How the static pixels are aligned (cv::rgbd odometries).

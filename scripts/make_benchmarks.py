@@ -1044,7 +1044,9 @@ class Bench:
             L.append("The frames decoded into memory first (a camera driver hands over raw images), "
                      "then fed to the System (full method, shipped settings) as fast as it takes them; "
                      "CPU of the process over all threads from the first frame to the end of local "
-                     "mapping, without start-up. PNG decoding is measured alone.\n")
+                     "mapping, without start-up (models, vocabulary). PNG decoding is measured alone, "
+                     "one frame at a time as the run's loader decodes (each frame released before the "
+                     "next; the frames the feed holds are decoded in a second pass, not measured).\n")
             L.append("| System CPU ms / frame | PNG decoding CPU ms / frame | sum | feed frames/s | final ATE (m) | poses / frames |")
             L.append("|---|---|---|---|---|---|")
             L.append(f"| {med_range([r['system_ms'] for r in decoded], 1)} | "

@@ -25,7 +25,19 @@ FramePairer::FramePairer(const PairingOptions& options) : options_(options) { op
 
 void FramePairer::AddFrame(RgbdFrameData frame, Clock::time_point now) {
   frames_.push_back({std::move(frame), now});
-  while (options_.max_pending_frames > 0 && frames_.size() > options_.max_pending_frames) {
+  DropFramesOverTheBound();
+}
+
+bool FramePairer::WaitsForDetections(const Pending& pending) const {
+  return ExpectsDetections(pending.frame) && !detector_lost_ &&
+         detections_.count(pending.frame.stamp.nanoseconds()) == 0;
+}
+
+void FramePairer::DropFramesOverTheBound() {
+  // A front frame that waits for its detections holds the frames behind it: that wait has its own
+  // bound (max_wait, then the detector counts as lost), so the frames are not dropped for it.
+  while (options_.max_pending_frames > 0 && frames_.size() > options_.max_pending_frames &&
+         !WaitsForDetections(frames_.front())) {
     if (stats_.dropped_frames == 0) {
       LOG_WARNING << "slam: frames arrive faster than they are tracked; the oldest waiting "
                      "frame is dropped when more than "
@@ -77,6 +89,7 @@ std::optional<FramePairer::Clock::time_point> FramePairer::NextDeadline() const 
 }
 
 std::optional<PairedFrame> FramePairer::Next(Clock::time_point now) {
+  DropFramesOverTheBound();  // frames that waited behind a front frame's detections
   if (frames_.empty()) return std::nullopt;
   Pending& front = frames_.front();
   const int64_t stamp = front.frame.stamp.nanoseconds();

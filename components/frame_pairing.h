@@ -26,7 +26,9 @@
 //   does not wait for the pipeline: a slam slower than the camera drops frames, as a camera
 //   driver's bounded queue does, instead of falling further behind (latency growing without
 //   bound). A player with a back-pressure window (fewer frames in flight than this bound) is
-//   never cut.
+//   never cut. The frames behind an oldest frame that waits for its detections are kept while it
+//   waits (that wait is bounded by max_wait and the detector-lost rule); the excess goes when it
+//   has been released.
 #pragma once
 
 #include <chrono>
@@ -127,6 +129,11 @@ class FramePairer {
   };
   // Detections are expected for this frame (filter needs them and the cadence runs the detector).
   bool ExpectsDetections(const RgbdFrameData& frame) const;
+  // The frame would wait for its detections now (expected, not there, detector not lost).
+  bool WaitsForDetections(const Pending& pending) const;
+  // max_pending_frames: the oldest frames go (counted) while more wait, unless the oldest waits
+  // for its detections.
+  void DropFramesOverTheBound();
   PairingOptions options_;
   std::deque<Pending> frames_;
   std::map<int64_t, std::vector<Detection>> detections_;  // by stamp (ns)

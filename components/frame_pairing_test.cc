@@ -317,25 +317,19 @@ TEST(FramePairing, CadenceSkippedFramesAreNotMisses) {
 // A camera does not wait: frames that arrive while more than max_pending_frames wait push the
 // oldest out (counted), so the frame tracked next is at most that many frames old. Before, every
 // frame waited: a slam slower than the camera fell further behind (latency growing to seconds,
-// nothing dropped). The dropped frame's detections, coming later, are late: the boxes carried
-// forward, not paired with a newer frame.
+// nothing dropped).
 TEST(FramePairing, MoreFramesThanTheBoundPushTheOldestOut) {
   PairingOptions o;
   o.max_pending_frames = 3;
-  FramePairer p(o);
+  o.needs_detections = false;  // each frame is ready as it arrives
   const auto t0 = Clock::now();
-  p.AddDetections(Frame(0).stamp, OneBox());
+  FramePairer p(o);
   for (int i = 0; i < 5; ++i) p.AddFrame(Frame(i), t0);
   EXPECT_EQ(p.pending_frames(), 3u);
   EXPECT_EQ(p.stats().dropped_frames, 2u);
-  p.AddDetections(Frame(1).stamp, OneBox());  // its frame was dropped: late
-  EXPECT_EQ(p.stats().dropped_detections, 1u);
-  p.AddDetections(Frame(2).stamp, {});
   auto f = p.Next(t0);
   ASSERT_TRUE(f);
   EXPECT_EQ(f->frame.seq, 2u);  // the oldest of the newest three
-  ASSERT_TRUE(f->detections);
-  EXPECT_TRUE(f->detections->empty());
   // A frame at the bound is kept: a player with a window of 3 is never cut.
   FramePairer windowed(o);
   for (int i = 0; i < 3; ++i) windowed.AddFrame(Frame(i), t0);
@@ -345,6 +339,36 @@ TEST(FramePairing, MoreFramesThanTheBoundPushTheOldestOut) {
   FramePairer unbounded(o);
   for (int i = 0; i < 100; ++i) unbounded.AddFrame(Frame(i), t0);
   EXPECT_EQ(unbounded.pending_frames(), 100u);
+}
+
+// The oldest frame waiting for its detections holds the frames behind it: that wait has its own
+// bound (max_wait, then the detector counts as lost). A detector paused for seconds must make
+// the frames run without boxes (counted, the run incomplete), not vanish as dropped. The excess
+// goes once the oldest is ready; a dropped frame's detections that come later are late (carried
+// forward), never paired with a newer frame.
+TEST(FramePairing, FramesBehindAFrameWaitingForItsDetectionsAreKept) {
+  PairingOptions o;
+  o.max_pending_frames = 3;
+  o.max_wait = 100ms;
+  const auto t0 = Clock::now();
+  FramePairer p(o);
+  p.AddDetections(Frame(0).stamp, OneBox());
+  for (int i = 0; i < 6; ++i) p.AddFrame(Frame(i), t0);
+  // Frame 0 had its boxes (ready): over the bound, it went. Frame 1 waits: all stay.
+  EXPECT_EQ(p.stats().dropped_frames, 1u);
+  EXPECT_EQ(p.pending_frames(), 5u);
+  EXPECT_FALSE(p.Next(t0 + 50ms));
+  p.AddDetections(Frame(1).stamp, OneBox());  // frame 1 ready: over the bound, it goes
+  EXPECT_FALSE(p.Next(t0 + 50ms));            // frame 2 waits for its boxes
+  EXPECT_EQ(p.stats().dropped_frames, 2u);
+  EXPECT_EQ(p.pending_frames(), 4u);
+  auto f = p.Next(t0 + 100ms);  // its wait is over: it goes on without its own boxes
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->frame.seq, 2u);
+  EXPECT_TRUE(f->detections_missing);
+  EXPECT_EQ(p.stats().missing_detections, 1u);
+  p.AddDetections(Frame(1).stamp, {});  // the dropped frame's boxes once more: late
+  EXPECT_EQ(p.stats().dropped_detections, 1u);
 }
 
 }  // namespace

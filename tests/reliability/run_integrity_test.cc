@@ -631,12 +631,27 @@ void RunIntegrity::ExpectOutputFolderReplacedMidRunIsNeverWrittenThrough(
   EXPECT_FALSE(fs::exists(data + "/map.bt"));
   EXPECT_TRUE(Contains(err, "the output folder " + out + " was replaced while the command ran"))
       << err;
-  EXPECT_GE(ReadTumTrajectory(moved + "/trajectory.txt").size(), 80u) << summary << err;
   EXPECT_TRUE(fs::exists(moved + "/map.bt")) << err;
   EXPECT_TRUE(Contains(ReadAll(moved + "/realtime.txt"), "rate 1\n")) << err;
   EXPECT_EQ(code, 0) << summary << err << diagnostics;
-  EXPECT_TRUE(Contains(summary, "integrity: 90 of 90 requested frames processed (complete)"))
+  // Every frame is in the moved folder's trajectory or counted as dropped: a loaded machine may
+  // not take every frame at the camera's rate (seen in a parallel suite: 9 of 90 dropped), and
+  // those are the only frames allowed to be missing.
+  std::smatch dropped;
+  ASSERT_TRUE(std::regex_search(summary, dropped, std::regex(R"(90 frames, (\d+) dropped)")))
       << summary;
+  const size_t poses = ReadTumTrajectory(moved + "/trajectory.txt").size();
+  EXPECT_EQ(poses + std::stoul(dropped[1]), 90u) << summary << err;
+  EXPECT_GE(poses, 45u) << summary << err;
+  if (std::stoul(dropped[1]) == 0) {
+    EXPECT_TRUE(Contains(summary, "integrity: 90 of 90 requested frames processed (complete)"))
+        << summary;
+  } else {
+    EXPECT_TRUE(Contains(summary, "integrity: " + std::to_string(poses) +
+                                      " of 90 requested frames processed, " + dropped[1].str() +
+                                      " missing, 0 not this run's: dropped: "))
+        << summary;
+  }
   EXPECT_TRUE(Contains(summary, "outputs: " + moved + "/{trajectory.txt")) << summary;
   EXPECT_TRUE(Contains(summary, ",realtime.txt,")) << summary;
 }

@@ -84,6 +84,10 @@ pid_t SpawnDygslam(const std::vector<std::string>& args, const std::string& out,
   argv.push_back(nullptr);
   const pid_t pid = fork();
   if (pid == 0) {
+    // Its own process group, as a shell with job control starts a command: a test that stops one
+    // of its processes (SIGSTOP) then never leaves a stopped job in the suite's group, which the
+    // kernel answers with SIGHUP and SIGCONT to the whole group when an exit orphans it.
+    setpgid(0, 0);
     if (!std::freopen(out.c_str(), "w", stdout) || !std::freopen(err.c_str(), "w", stderr))
       std::_Exit(126);
     execv(argv[0], argv.data());

@@ -324,7 +324,12 @@ TEST_F(Faults, DetectorKilledAndRestartedIsUsedAgain) {
   const long paired = Extract(slam_log, R"(detections: (\d+) paired)");
   const long missing = Extract(slam_log, R"((\d+) missing)");
   const long detector2_frames = Extract(det_log, R"(detector: (\d+) frames)");
-  EXPECT_NE(slam_log.find("slam: 300 frames"), std::string::npos) << slam_log;
+  // Every frame reached slam: tracked, or dropped because a loaded machine could not track it
+  // at the camera's pace (slam keeps a bounded queue, as a camera driver does).
+  const long processed = Extract(slam_log, R"(slam: (\d+) frames \()");
+  const long dropped = Extract(slam_log, R"((\d+) frames dropped \(arrived faster than tracked\))");
+  EXPECT_EQ(processed + dropped, 300) << slam_log;
+  EXPECT_LE(dropped, 15) << slam_log;
   EXPECT_GT(missing, 0) << "no geometry-only frames while the detector was down\n" << slam_log;
   ASSERT_GT(detector2_frames, 20) << det_log;
   // slam reports both transitions, and detections of the restarted detector were paired again

@@ -329,6 +329,8 @@ TEST_F(Faults, DetectorKilledAndRestartedIsUsedAgain) {
   const long processed = Extract(slam_log, R"(slam: (\d+) frames \()");
   const long dropped = Extract(slam_log, R"((\d+) frames dropped \(arrived faster than tracked\))");
   EXPECT_EQ(processed + dropped, 300) << slam_log;
+  // At half the camera's rate no frame was dropped in any run seen; 5 % allowed for a loaded
+  // machine (the check below on the trajectory, > 280 poses, holds with it).
   EXPECT_LE(dropped, 15) << slam_log;
   EXPECT_GT(missing, 0) << "no geometry-only frames while the detector was down\n" << slam_log;
   ASSERT_GT(detector2_frames, 20) << det_log;

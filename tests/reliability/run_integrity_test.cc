@@ -642,7 +642,8 @@ void RunIntegrity::ExpectOutputFolderReplacedMidRunIsNeverWrittenThrough(
       << summary;
   const size_t poses = ReadTumTrajectory(moved + "/trajectory.txt").size();
   EXPECT_EQ(poses + std::stoul(dropped[1]), 90u) << summary << err;
-  EXPECT_GE(poses, 45u) << summary << err;
+  // Worst seen: 81 of 90 with a pose (9 dropped). Floor: 80 %, twice the worst drop.
+  EXPECT_GE(poses, 72u) << summary << err;
   if (std::stoul(dropped[1]) == 0) {
     EXPECT_TRUE(Contains(summary, "integrity: 90 of 90 requested frames processed (complete)"))
         << summary;

@@ -56,6 +56,22 @@ SyntheticOptions CrowdedScene() {
   return o;
 }
 
+// Two neighbouring frames of the crowded scene (entries 10 and 11) and the true motion between
+// them: the pair the verification tests align.
+struct CrowdedPair {
+  SyntheticOptions options = CrowdedScene();
+  SyntheticFrame ref, cur;
+  Rigid3d cur_from_ref;
+};
+CrowdedPair MakeCrowdedPair() {
+  CrowdedPair pair;
+  SyntheticScene scene(pair.options);
+  pair.ref = scene.RenderFrame(10);
+  pair.cur = scene.RenderFrame(11);
+  pair.cur_from_ref = pair.cur.world_from_cam.Inverse() * pair.ref.world_from_cam;
+  return pair;
+}
+
 TEST(StaticDepthOdometry, RecoversGeneratedMotionWithPersonMaskedOut) {
   const SyntheticOptions o = CrowdedScene();
   SyntheticScene scene(o);
@@ -103,13 +119,11 @@ TEST(StaticDepthOdometry, RecoversGeneratedMotionWithPersonMaskedOut) {
 }
 
 TEST(StaticDepthOdometry, VerificationRejectsAWrongPose) {
-  const SyntheticOptions o = CrowdedScene();
-  SyntheticScene scene(o);
+  const CrowdedPair pair = MakeCrowdedPair();
+  const SyntheticOptions& o = pair.options;
   StaticDepthOdometry odometry(o.camera, StaticDepthOdometryOptions());
-  const SyntheticFrame ref = scene.RenderFrame(10);
-  const SyntheticFrame cur = scene.RenderFrame(11);
-  const DenseView rv = ViewOf(ref, o.sensor, true), cv_ = ViewOf(cur, o.sensor, true);
-  const Rigid3d truth = cur.world_from_cam.Inverse() * ref.world_from_cam;
+  const DenseView rv = ViewOf(pair.ref, o.sensor, true), cv_ = ViewOf(pair.cur, o.sensor, true);
+  const Rigid3d& truth = pair.cur_from_ref;
   const DepthAgreement good = odometry.Agreement(rv, cv_, truth);
   // 8 cm forward and 4 degrees of yaw off.
   const Rigid3d off(
@@ -125,12 +139,11 @@ TEST(StaticDepthOdometry, VerificationRejectsAWrongPose) {
 // A static mask made on first use (what the System gives every frame, since most frames are
 // never aligned) is made once and counts as the same mask given up front: same agreement.
 TEST(StaticDepthOdometry, AStaticMaskMadeOnFirstUseIsTheMaskGivenUpFront) {
-  const SyntheticOptions o = CrowdedScene();
-  SyntheticScene scene(o);
+  const CrowdedPair pair = MakeCrowdedPair();
+  const SyntheticOptions& o = pair.options;
   StaticDepthOdometry odometry(o.camera, StaticDepthOdometryOptions());
-  const SyntheticFrame ref = scene.RenderFrame(10);
-  const SyntheticFrame cur = scene.RenderFrame(11);
-  const DenseView rv = ViewOf(ref, o.sensor, true), eager = ViewOf(cur, o.sensor, true);
+  const SyntheticFrame& cur = pair.cur;
+  const DenseView rv = ViewOf(pair.ref, o.sensor, true), eager = ViewOf(cur, o.sensor, true);
   DenseView lazy = ViewOf(cur, o.sensor, false);
   int made = 0;
   lazy.make_static_mask = [&made, mask = eager.static_mask] {
@@ -138,7 +151,7 @@ TEST(StaticDepthOdometry, AStaticMaskMadeOnFirstUseIsTheMaskGivenUpFront) {
     return mask;
   };
   EXPECT_EQ(made, 0);
-  const Rigid3d truth = cur.world_from_cam.Inverse() * ref.world_from_cam;
+  const Rigid3d& truth = pair.cur_from_ref;
   const DepthAgreement a = odometry.Agreement(rv, eager, truth);
   const DepthAgreement b = odometry.Agreement(rv, lazy, truth);
   EXPECT_EQ(made, 1);

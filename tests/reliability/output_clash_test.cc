@@ -187,8 +187,10 @@ TEST_F(OutputClashCli, AHandStartedRecorderHoldsItsFolderFromEveryNamespace) {
     }
   } stop{first};
   const std::string lock = out + "/.dygslam-lock.trajectories";
+  // The recorder creates the file and then locks it: wait for the lock itself (seen in
+  // /proc/locks, which takes no lock of its own), not only for the file.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (!fs::exists(lock) && std::chrono::steady_clock::now() < deadline)
+  while (!testing::ExclusiveFlockHeld(lock) && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   ASSERT_TRUE(fs::exists(lock)) << ReadAll(dir_ + "/a.err");
   // The lock is the folder's own file: whoever sees the folder finds it held.

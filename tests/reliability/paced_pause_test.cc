@@ -125,9 +125,10 @@ TEST_F(PacedPause, TwoCommandsNeverWriteIntoOneFolderAtOnce) {
                             dir_ + "/first.out", dir_ + "/first.err");
   ASSERT_GT(first, 0);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (!fs::exists(out) && std::chrono::steady_clock::now() < deadline)
+  // The first run holds the folder once its lock is taken (the folder exists a moment before).
+  while (!testing::ExclusiveFlockHeld(out) && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  ASSERT_TRUE(testing::ExclusiveFlockHeld(out)) << ReadAll(dir_ + "/first.err");
   for (const std::vector<std::string>& second :
        {std::vector<std::string>{"run", data, "--config", Config(), "--direct", "--filter", "none",
                                  "--quiet", "--frames", "0:10", "--out", out},

@@ -1,6 +1,7 @@
 #include "tests/support/test_support.h"
 
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -142,6 +143,22 @@ int WaitForExit(pid_t pid, double timeout_s, std::string* diagnostics) {
   waitpid(pid, &status, 0);
   if (diagnostics) *diagnostics += text;
   return -1;
+}
+
+bool ExclusiveFlockHeld(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return false;
+  // Lines such as "1: FLOCK  ADVISORY  WRITE 1234 08:01:5678 0 EOF" (the file as device:inode);
+  // a waiter's line has "->" and is not a hold.
+  std::ifstream locks("/proc/locks");
+  const std::string inode = ":" + std::to_string(static_cast<unsigned long long>(st.st_ino)) + " ";
+  for (std::string line; std::getline(locks, line);) {
+    if (line.find("->") != std::string::npos) continue;
+    if (line.find("FLOCK") != std::string::npos && line.find("WRITE") != std::string::npos &&
+        line.find(inode) != std::string::npos)
+      return true;
+  }
+  return false;
 }
 
 }  // namespace dygslam::testing

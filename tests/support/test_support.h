@@ -49,6 +49,10 @@ pid_t SpawnDygslam(const std::vector<std::string>& args, const std::string& out,
 // installed) are appended to `*diagnostics`, it is killed and reaped, and -1 is returned, so a test
 // reports which process hung and where instead of running into ctest's timeout with no output.
 int WaitForExit(pid_t pid, double timeout_s, std::string* diagnostics);
+// Whether some process holds an exclusive flock on `path` (a file or a folder), read from
+// /proc/locks, which takes no lock of its own: a test can wait for a command to hold its output
+// folder without racing it for the lock.
+bool ExclusiveFlockHeld(const std::string& path);
 
 }  // namespace dygslam::testing
 

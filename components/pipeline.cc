@@ -531,8 +531,10 @@ ChildReport ReadChildReport(int fd) {
 }
 
 // How long the others may go on with the frames a frame source sent before it was stopped on its
-// own (slam's final bundle adjustment included).
+// own (slam's final bundle adjustment included), at most...
 constexpr std::chrono::seconds kSourceCutShortGrace(60);
+// ... and once they do no work (together under 0.1 s of CPU in this time): nothing more comes.
+constexpr std::chrono::seconds kSourceCutShortIdle(3);
 // After slam's end, a mapper still running alone that does no work (under 0.1 s of CPU in
 // kMapperAfterSlamGrace) is told to stop. A mapper working through its backlog is left to finish
 // it; one that never matched slam (paused through slam's whole life) would wait for ever.
@@ -613,14 +615,29 @@ class ComponentProcesses {
   using Clock = std::chrono::steady_clock;
 
   // A frame source stopped on its own before its peers had matched it: they never see its end of
-  // stream and would wait for ever. The run is incomplete anyway; after a grace period for the
-  // frames it sent, the others are stopped (they write what they have).
+  // stream and would wait for ever. The run is incomplete anyway; once the others have done no
+  // work for kSourceCutShortIdle (the frames it sent are processed), or after
+  // kSourceCutShortGrace at most, they are stopped (they write what they have).
   void StopAfterSourceCutShort() {
-    if (!source_cut_short_at_ || forwarded_ ||
-        Clock::now() - *source_cut_short_at_ <= kSourceCutShortGrace)
+    if (!source_cut_short_at_ || forwarded_) return;
+    const auto now = Clock::now();
+    double cpu = 0;
+    for (const auto& [p, k] : children_) cpu += std::max(0.0, ProcessCpuSeconds(p));
+    const bool idle = source_idle_check_ && cpu - source_idle_check_->second <= 0.1 &&
+                      now - source_idle_check_->first > kSourceCutShortIdle;
+    const bool over = now - *source_cut_short_at_ > kSourceCutShortGrace;
+    if (!idle && !over) {
+      if (!source_idle_check_ || cpu - source_idle_check_->second > 0.1)
+        source_idle_check_ = std::make_pair(now, cpu);  // working: checked again later
       return;
-    LOG_WARNING << "the frame source was stopped on its own " << kSourceCutShortGrace.count()
-                << " s ago and the run has not ended: stopping the other components";
+    }
+    if (idle) {
+      LOG_WARNING << "the frame source was stopped on its own and the other components have done "
+                  << "no work for " << kSourceCutShortIdle.count() << " s: stopping them";
+    } else {
+      LOG_WARNING << "the frame source was stopped on its own " << kSourceCutShortGrace.count()
+                  << " s ago and the run has not ended: stopping the other components";
+    }
     stop_->Request();
     source_cut_short_at_.reset();
   }
@@ -746,6 +763,8 @@ class ComponentProcesses {
   std::optional<Clock::time_point> source_cut_short_at_;
   std::optional<Clock::time_point> slam_ended_at_;
   std::optional<std::pair<Clock::time_point, double>> idle_check_;  // when, mappers' CPU seconds
+  // when, the other components' CPU seconds (after a frame source was stopped on its own)
+  std::optional<std::pair<Clock::time_point, double>> source_idle_check_;
   std::set<pid_t> killed_by_runner_;  // did not stop within 30 s of the run's end
 };
 

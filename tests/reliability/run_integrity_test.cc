@@ -96,6 +96,16 @@ pid_t ComponentPid(const std::string& name, const std::string& marker) {
   return 0;
 }
 
+// Whether process `pid` holds a descriptor of `folder` (a command pins its output folder so).
+bool HoldsFolder(pid_t pid, const fs::path& folder) {
+  std::error_code ec;
+  for (const auto& fd : fs::directory_iterator("/proc/" + std::to_string(pid) + "/fd", ec)) {
+    std::error_code link_ec;
+    if (fs::read_symlink(fd.path(), link_ec) == folder) return true;
+  }
+  return false;
+}
+
 // The pid of the run's `component NAME` once it catches SIGTERM (its main() runs), waiting at most
 // 60 s; 0 when it did not come.
 pid_t RunningComponentPid(const std::string& name, const std::string& marker) {
@@ -439,7 +449,8 @@ TEST_F(RunIntegrity, AComponentStoppedOnItsOwnIsNotACompleteRun) {
       << summary;
   EXPECT_FALSE(Contains(summary, "(complete)")) << summary;
   const std::string json = ReadAll(out + "/eval.json");
-  EXPECT_TRUE(Contains(json, "\"components_cut_short\": [\"mapper (signal 15)\"]")) << json;
+  // First the signal; a mapper stopped before it found slam also says that its input ended early.
+  EXPECT_TRUE(Contains(json, "\"components_cut_short\": [\"mapper (signal 15)\"")) << json;
   EXPECT_TRUE(Contains(json, "\"complete\": false")) << json;
   EXPECT_TRUE(Contains(json, "\"exit_code\": 3}")) << json;
 }
@@ -568,14 +579,17 @@ TEST_F(RunIntegrity, FramesRunWithoutTheirBoxesMakeTheRunIncomplete) {
   const int code = testing::WaitForExit(pid, 150, &diagnostics);
   const std::string summary = ReadAll(dir_ + "/run.out"), err = ReadAll(dir_ + "/run.err");
   EXPECT_EQ(code, 3) << summary << err << diagnostics;
-  // Every frame the pipeline took has its pose; the others were dropped at the camera's rate
-  // (a loaded machine may drop a few) and are counted as such: none is missing unexplained.
+  // Every frame the pipeline took is tracked (its pose in the trajectory) or counted lost; the
+  // others were dropped at the camera's rate (a loaded machine drops many: seen 111 of 360, and
+  // 1 of the 249 taken lost over the gaps) and are counted as such: none is missing unexplained.
   const std::string json = ReadAll(out + "/eval.json");
-  std::smatch processed, dropped;
+  std::smatch processed, with_pose, dropped;
   ASSERT_TRUE(std::regex_search(json, processed, std::regex(R"("processed": (\d+),)"))) << json;
+  ASSERT_TRUE(std::regex_search(json, with_pose, std::regex(R"("with_pose": (\d+),)"))) << json;
   ASSERT_TRUE(std::regex_search(summary, dropped, std::regex(R"(360 frames, (\d+) dropped)")))
       << summary;
-  EXPECT_EQ(ReadTumTrajectory(out + "/trajectory.txt").size(), std::stoul(processed[1])) << err;
+  EXPECT_EQ(ReadTumTrajectory(out + "/trajectory.txt").size(), std::stoul(with_pose[1])) << err;
+  EXPECT_LE(std::stoul(processed[1]) - std::stoul(with_pose[1]), 3u) << json;  // 1 %
   EXPECT_EQ(std::stoul(processed[1]) + std::stoul(dropped[1]), 360u) << summary;
   EXPECT_TRUE(Contains(err, "detections are arriving again")) << err;
   EXPECT_TRUE(Contains(err,
@@ -619,7 +633,28 @@ void RunIntegrity::ExpectOutputFolderReplacedMidRunIsNeverWrittenThrough(
   while (!Contains(ReadAll(dir + "/run.err"), "DDS partition") &&
          std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  std::this_thread::sleep_for(std::chrono::seconds(2));  // 3 s of frames at 30 Hz
+  // Mid-run: every process of the run has checked its files (a component catches SIGTERM once it
+  // has) and those that write into the folder have pinned it. A component that starts after the
+  // folder was replaced sees the replacement and refuses it before it writes anything.
+  if (std::find(extra.begin(), extra.end(), "--processes") != extra.end()) {
+    std::error_code ec;
+    fs::path folder;
+    for (const std::string component : {"recorder", "mapper", "slam", "player"}) {
+      const auto ready = [&](pid_t p) {
+        return p != 0 && ProcessCatchesSignal(p, SIGTERM) &&
+               (component == "slam" || HoldsFolder(p, folder));
+      };
+      pid_t component_pid = 0;
+      while (!ready(component_pid) && std::chrono::steady_clock::now() < deadline) {
+        folder = fs::canonical(out, ec);  // the run makes it
+        component_pid = ComponentPid(component, out);
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      }
+      ASSERT_TRUE(ready(component_pid)) << component << " did not start or pin " << out << "\n"
+                                        << ReadAll(dir + "/run.err");
+    }
+  }
+  std::this_thread::sleep_for(std::chrono::seconds(1));  // of 3 s of frames at 30 Hz
   fs::rename(out, moved);
   fs::create_directory_symlink(data, out);
   std::string diagnostics;

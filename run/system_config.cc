@@ -180,6 +180,10 @@ std::vector<Row> TrackingRows() {
           "a stretch of fallback poses is re-anchored when features return"),
       Row("LocalMapping.cull_keyframes", DYGSLAM_SETTING_FIELD(local_mapping.cull_keyframes), {},
           "", "redundant keyframes are removed"),
+      Row("LocalMapping.pose_prior",
+          DYGSLAM_SETTING_FIELD(local_mapping.optimizer.local_ba_pose_prior), {}, "",
+          "the local BA holds each keyframe near its pose (1 cm, 0.2 deg) where its points do "
+          "not fix it"),
   };
 }
 

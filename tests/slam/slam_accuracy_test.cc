@@ -19,13 +19,15 @@ struct RunOutput {
   int lost = 0;
 };
 
-RunOutput RunSynthetic(const SyntheticOptions& synth, FilterMode mode, bool use_boxes) {
+RunOutput RunSynthetic(const SyntheticOptions& synth, FilterMode mode, bool use_boxes,
+                       bool local_ba_pose_prior = true) {
   SyntheticScene scene(synth);
   SystemOptions options;
   options.camera = synth.camera;
   options.sensor = synth.sensor;
   options.filter.mode = mode;
   options.deterministic = true;
+  options.local_mapping.optimizer.local_ba_pose_prior = local_ba_pose_prior;
   System system(options);
   RunOutput out;
   for (int i = 0; i < scene.num_frames(); ++i) {
@@ -75,6 +77,36 @@ TEST(SlamAccuracy, GeneratedDynamicSequenceFilterBeatsNoFilter) {
             << " m\n";
   EXPECT_LE(ate_full, 0.01);
   EXPECT_LE(ate_full, ate_none);
+}
+
+// A walker 0.9 m in front of the camera covers 80 % of the view (a box given) for 1 s: the static
+// features left lie in a strip at one depth, where yaw and sideways translation explain the same
+// image motion. The local BA's pose prior keeps the keyframes of the stretch where tracking put
+// them; without it one BA slid a keyframe by 18 cm. Measured (this seed): ATE 4.9x the
+// run without the walker with the prior, 12.8x without it.
+TEST(SlamAccuracy, GeneratedWalkerCoveringMostOfTheViewKeepsTheKeyframesInPlace) {
+  SyntheticOptions synth;
+  synth.num_frames = 150;
+  synth.num_moving_objects = 0;
+  synth.depth_noise = true;
+  synth.rgb_noise_sigma = 2.0;
+  synth.seed = 1;
+  const auto gt = GroundTruth(synth);
+  const double ate_alone =
+      ComputeAte(gt, RunSynthetic(synth, FilterMode::kFull, true).trajectory).error.rmse;
+  synth.occluder_coverage = 0.8;
+  synth.occluder_start_frame = 60;
+  synth.occluder_frames = 30;
+  const RunOutput with_prior = RunSynthetic(synth, FilterMode::kFull, true);
+  const RunOutput without_prior = RunSynthetic(synth, FilterMode::kFull, true, false);
+  const AteResult ate = ComputeAte(gt, with_prior.trajectory);
+  const double ate_without_prior = ComputeAte(gt, without_prior.trajectory).error.rmse;
+  std::cout << "walker covering 80 %: ATE " << ate.error.rmse << " m (" << ate.num_pairs
+            << " frames with a pose), without the local BA prior " << ate_without_prior
+            << " m, without the walker " << ate_alone << " m\n";
+  EXPECT_EQ(ate.num_pairs, static_cast<size_t>(synth.num_frames));
+  EXPECT_LE(ate.error.rmse, 7.0 * ate_alone);
+  EXPECT_GT(ate_without_prior, 7.0 * ate_alone);
 }
 
 // Blank frames (no texture, no depth) are reported lost without a pose; after a jump along the

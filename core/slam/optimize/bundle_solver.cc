@@ -1,6 +1,7 @@
 #include "core/slam/optimize/bundle_solver.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -76,6 +77,59 @@ class Problem {
     for (int i : active_) by_point_[next[residuals[i].point]++] = i;
   }
 
+  // A prior on each variable pose at its value in `s`, in the directions its observations leave
+  // (nearly) free: the camera's block of the reduced camera system at `s` (points eliminated, the
+  // other cameras held), whitened by the prior's standard deviations; its eigen-directions whose
+  // information is below the prior's get the prior (BundleSolverOptions::prior_sigma_*).
+  void SetPrior(const State& s, const Linearization& lin, double sigma_translation,
+                double sigma_rotation) {
+    if (sigma_translation <= 0 || sigma_rotation <= 0) return;
+    Vector6d sigma;
+    sigma << Eigen::Vector3d::Constant(sigma_translation),
+        Eigen::Vector3d::Constant(sigma_rotation);
+    const std::vector<Matrix6d> blocks = CameraBlocks(lin);
+    prior_.clear();
+    prior_information_.assign(num_cameras_, Matrix6d::Zero());
+    for (size_t k = 0; k < s.rotation.size(); ++k) {
+      prior_.emplace_back(s.rotation[k], s.translation[k]);
+      const int c = camera_of_pose_[k];
+      if (c < 0) continue;
+      const Matrix6d whitened = sigma.asDiagonal() * blocks[c] * sigma.asDiagonal();
+      const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(whitened);
+      Matrix6d weak = Matrix6d::Zero();
+      for (int d = 0; d < 6; ++d) {
+        if (eigen.eigenvalues()(d) < 1.0)
+          weak += eigen.eigenvectors().col(d) * eigen.eigenvectors().col(d).transpose();
+      }
+      const Vector6d inverse_sigma = sigma.cwiseInverse();
+      prior_information_[c] = inverse_sigma.asDiagonal() * weak * inverse_sigma.asDiagonal();
+    }
+  }
+
+  // Each camera's block of the undamped reduced camera system (the points eliminated).
+  std::vector<Matrix6d> CameraBlocks(const Linearization& lin) const {
+    std::vector<Matrix6d> blocks(lin.h_cc.begin(), lin.h_cc.end());
+    for (size_t p = 0; p < lin.h_pp.size(); ++p) {
+      if (!lin.point_seen[p]) continue;
+      // Pseudo-inverse: a point seen along one ray leaves its depth free, and takes the whole
+      // information of that observation.
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(lin.h_pp[p]);
+      const Eigen::Vector3d values = eigen.eigenvalues();
+      if (!(values(2) > 0)) continue;
+      Eigen::Vector3d inverse_values;
+      for (int d = 0; d < 3; ++d)
+        inverse_values(d) = values(d) > 1e-9 * values(2) ? 1.0 / values(d) : 0.0;
+      const Eigen::Matrix3d inverse =
+          eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
+      for (int a = point_begin_[p]; a < point_begin_[p + 1]; ++a) {
+        const int i = by_point_[a];
+        const int c = camera_of(residuals_[i]);
+        if (c >= 0) blocks[c].noalias() -= lin.h_cp[i] * inverse * lin.h_cp[i].transpose();
+      }
+    }
+    return blocks;
+  }
+
   int num_cameras() const { return num_cameras_; }
   int camera_of(const BundleResidual& r) const { return camera_of_pose_[r.pose]; }
 
@@ -89,6 +143,17 @@ class Problem {
       const BundleResidual& r = residuals_[i];
       cost += r.stereo ? Accumulate<3>(i, r, rotations[r.pose], s, lin)
                        : Accumulate<2>(i, r, rotations[r.pose], s, lin);
+    }
+    for (size_t k = 0; k < prior_.size(); ++k) {
+      const int c = camera_of_pose_[k];
+      if (c < 0) continue;
+      const Vector6d e = PosePriorError(Rigid3d(s.rotation[k], s.translation[k]), prior_[k]);
+      const Vector6d information_e = prior_information_[c] * e;
+      cost += 0.5 * e.dot(information_e);
+      if (lin) {
+        lin->h_cc[c] += prior_information_[c];
+        lin->g_c[c] += information_e;
+      }
     }
     return cost;
   }
@@ -245,6 +310,8 @@ class Problem {
   double delta_mono_, delta_stereo_;
   std::vector<int> camera_of_pose_;
   int num_cameras_ = 0;
+  std::vector<Matrix6d> prior_information_;  // per camera
+  std::vector<Rigid3d> prior_;               // per pose; empty: no prior
   std::vector<int> active_;
   std::vector<int> point_begin_, by_point_;
 };
@@ -253,6 +320,8 @@ class Problem {
 
 void BundleSolverOptions::Check() const {
   CheckFields("BundleSolverOptions", "BundleSolverOptions.max_iterations", 0);
+  DYGSLAM_CHECK_OPTION(prior_sigma_translation >= 0, "BundleSolverOptions.prior_sigma_translation");
+  DYGSLAM_CHECK_OPTION(prior_sigma_rotation >= 0, "BundleSolverOptions.prior_sigma_rotation");
 }
 
 BundleSolverSummary SolveBundleProblem(const std::vector<BundleResidual>& residuals,
@@ -265,8 +334,8 @@ BundleSolverSummary SolveBundleProblem(const std::vector<BundleResidual>& residu
                                        const std::atomic<bool>* abort) {
   if (fixed.size() != poses->size())
     throw std::invalid_argument("SolveBundleProblem: one fixed flag per pose");
-  const Problem problem(residuals, active, model, huber_delta_mono, huber_delta_stereo, fixed,
-                        points->size());
+  Problem problem(residuals, active, model, huber_delta_mono, huber_delta_stereo, fixed,
+                  points->size());
   State state;
   for (const auto& params : *poses) {
     const Rigid3d pose = PoseFromParameters(params.data());
@@ -274,10 +343,13 @@ BundleSolverSummary SolveBundleProblem(const std::vector<BundleResidual>& residu
     state.translation.push_back(pose.translation);
   }
   state.points = *points;
-
   BundleSolverSummary summary;
   Linearization lin;
   double cost = problem.Evaluate(state, &lin);
+  if (options.prior_sigma_translation > 0 && options.prior_sigma_rotation > 0) {
+    problem.SetPrior(state, lin, options.prior_sigma_translation, options.prior_sigma_rotation);
+    cost = problem.Evaluate(state, &lin);
+  }
   summary.initial_cost = summary.final_cost = cost;
   double radius = options.initial_trust_radius, decrease_factor = 2.0;
   std::vector<Vector6d> dc;

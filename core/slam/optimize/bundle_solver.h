@@ -1,7 +1,7 @@
 // A dedicated solver for the local bundle adjustment: Levenberg-Marquardt over keyframe poses
 // (SE3) and map points with the points eliminated by a Schur complement, on the residuals of
-// core/slam/optimize/cost_functions.h (monocular 2 rows, RGB-D "stereo" 3 rows) with an optional Huber
-// kernel applied as iteratively reweighted least squares.
+// core/slam/optimize/cost_functions.h (monocular 2 rows, RGB-D "stereo" 3 rows) with an optional
+// Huber kernel applied as iteratively reweighted least squares.
 //
 // Why not Ceres for the local window: a local BA is ~20 poses, ~2,000 points and ~6,500
 // observations, solved after every keyframe. Ceres spent most of its time on building the problem
@@ -30,6 +30,14 @@
 namespace dygslam {
 
 struct BundleSolverOptions : TrustRegionOptions {
+  // A prior on every variable pose at its value when the solve starts (PosePriorError in
+  // core/slam/optimize/cost_functions.h) in the directions its observations leave nearly free:
+  // the eigen-directions of the pose's block of the reduced camera system (points eliminated, the
+  // other poses held) at the start, whitened by these standard deviations of translation (metres)
+  // and rotation (radians), whose information is below the prior's. Directions the points fix
+  // get no prior. 0: none.
+  double prior_sigma_translation = 0;
+  double prior_sigma_rotation = 0;
   void Check() const;
 };
 using BundleSolverSummary = TrustRegionSummary;
@@ -43,10 +51,10 @@ struct BundleResidual {
   bool stereo = false;
 };
 
-// Poses are cam_from_world as [tx ty tz qx qy qz qw] (core/slam/optimize/cost_functions.h); the ones whose
-// `fixed` flag is set stay where they are. Only residuals whose `active` flag is set count (active
-// may be nullptr: all). `huber_delta_*` <= 0: no kernel. `abort` (may be nullptr) stops between
-// iterations with the best point so far.
+// Poses are cam_from_world as [tx ty tz qx qy qz qw] (core/slam/optimize/cost_functions.h); the
+// ones whose `fixed` flag is set stay where they are. Only residuals whose `active` flag is set
+// count (active may be nullptr: all). `huber_delta_*` <= 0: no kernel. `abort` (may be nullptr)
+// stops between iterations with the best point so far.
 BundleSolverSummary SolveBundleProblem(const std::vector<BundleResidual>& residuals,
                                        const uint8_t* active, const ProjectionModel& model,
                                        double huber_delta_mono, double huber_delta_stereo,

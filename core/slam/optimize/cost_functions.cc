@@ -17,15 +17,16 @@ Projected Project(const Eigen::Vector3d& p, const ProjectionModel& m) {
   const double u = m.fx * p.x() * inv_z + m.cx;
   out.uvr << u, m.fy * p.y() * inv_z + m.cy, u - m.bf * inv_z;
   out.d_uvr_d_p << m.fx * inv_z, 0, -m.fx * p.x() * inv_z2,  //
-      0, m.fy * inv_z, -m.fy * p.y() * inv_z2,                //
+      0, m.fy * inv_z, -m.fy * p.y() * inv_z2,               //
       m.fx * inv_z, 0, -m.fx * p.x() * inv_z2 + m.bf * inv_z2;
   return out;
 }
 
 template <int kRows>
-bool EvaluatePose(const double* pose, const Eigen::Vector3d& point, const Eigen::Matrix<double, kRows, 1>& obs,
-                  double sqrt_info, const ProjectionModel& model, double* residuals,
-                  double* jacobian_pose, double* jacobian_point) {
+bool EvaluatePose(const double* pose, const Eigen::Vector3d& point,
+                  const Eigen::Matrix<double, kRows, 1>& obs, double sqrt_info,
+                  const ProjectionModel& model, double* residuals, double* jacobian_pose,
+                  double* jacobian_point) {
   const Eigen::Map<const Eigen::Vector3d> t(pose);
   const Eigen::Map<const Eigen::Quaterniond> q(pose + 3);
   const Eigen::Matrix3d rotation = q.toRotationMatrix();
@@ -40,7 +41,8 @@ bool EvaluatePose(const double* pose, const Eigen::Vector3d& point, const Eigen:
   const Projected proj = Project(p, model);
   Eigen::Map<Eigen::Matrix<double, kRows, 1>> r(residuals);
   r = (obs - proj.uvr.template head<kRows>()) * sqrt_info;
-  const Eigen::Matrix<double, kRows, 3> d_r_d_p = -sqrt_info * proj.d_uvr_d_p.template topRows<kRows>();
+  const Eigen::Matrix<double, kRows, 3> d_r_d_p =
+      -sqrt_info * proj.d_uvr_d_p.template topRows<kRows>();
   if (jacobian_pose) {
     Eigen::Map<Eigen::Matrix<double, kRows, 7, Eigen::RowMajor>> j(jacobian_pose);
     j.template leftCols<3>() = d_r_d_p;
@@ -69,6 +71,15 @@ Eigen::Quaterniond ExpSO3(const Eigen::Vector3d& omega) {
     return q.normalized();
   }
   return Eigen::Quaterniond(Eigen::AngleAxisd(theta, omega / theta));
+}
+
+Eigen::Matrix<double, 6, 1> PosePriorError(const Rigid3d& cam_from_world, const Rigid3d& prior) {
+  const Eigen::Quaterniond relative = cam_from_world.rotation * prior.rotation.conjugate();
+  const Eigen::AngleAxisd angle_axis(relative.normalized());  // angle in [0, pi]
+  Eigen::Matrix<double, 6, 1> e;
+  e.head<3>() = cam_from_world.translation - relative * prior.translation;
+  e.tail<3>() = angle_axis.angle() * angle_axis.axis();
+  return e;
 }
 
 void PoseToParameters(const Rigid3d& cam_from_world, double* params7) {

@@ -73,6 +73,12 @@ class BundleReprojectionCost : public ceres::SizedCostFunction<kRows, 7, 3> {
 using MonoBACost = BundleReprojectionCost<2>;
 using StereoBACost = BundleReprojectionCost<3>;
 
+// A prior on a pose (cam_from_world) at `prior`: the error of T T0^-1 in the tangent of the left
+// update, e = [t - dR t0, log(dR)] with dR = R R0^-1 (metres, radians). Its Jacobian with respect
+// to the tangent is taken as the identity: exact at T = T0, first order near it (a prior holds a
+// pose near its value).
+Eigen::Matrix<double, 6, 1> PosePriorError(const Rigid3d& cam_from_world, const Rigid3d& prior);
+
 // Instantiated once, in cost_functions.cc.
 extern template class PoseReprojectionCost<2>;
 extern template class PoseReprojectionCost<3>;

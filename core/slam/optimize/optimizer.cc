@@ -184,7 +184,9 @@ BundleProblem PrepareBundle(const Map& map, const std::vector<std::shared_ptr<Ke
 }
 
 BundleProblem PrepareLocalBundle(const Map& map, const std::shared_ptr<KeyFrame>& kf) {
-  return PrepareBundle(map, LocalWindow(map, kf));
+  BundleProblem problem = PrepareBundle(map, LocalWindow(map, kf));
+  problem.local_window = true;
+  return problem;
 }
 
 namespace {
@@ -193,7 +195,11 @@ namespace {
 // bundle_solver.h) on the problem indexed once.
 class DedicatedBundleSolve {
  public:
-  explicit DedicatedBundleSolve(BundleProblem* bundle) : bundle_(*bundle) {
+  DedicatedBundleSolve(BundleProblem* bundle, double prior_sigma_translation,
+                       double prior_sigma_rotation)
+      : bundle_(*bundle),
+        prior_sigma_translation_(prior_sigma_translation),
+        prior_sigma_rotation_(prior_sigma_rotation) {
     std::map<int64_t, int> pose_index, point_index;
     for (const auto& [id, pose] : bundle_.poses) {
       pose_index[id] = static_cast<int>(pose_ids_.size());
@@ -218,6 +224,8 @@ class DedicatedBundleSolve {
     for (size_t k = 0; k < active.size(); ++k) active[k] = bundle_.outlier[k] ? 0 : 1;
     BundleSolverOptions solver_options;
     solver_options.max_iterations = iterations;
+    solver_options.prior_sigma_translation = prior_sigma_translation_;
+    solver_options.prior_sigma_rotation = prior_sigma_rotation_;
     SolveBundleProblem(residuals_, active.data(), bundle_.model, delta_mono, delta_stereo,
                        solver_options, pose_fixed_, &pose_values_, &point_values_, abort);
     for (size_t k = 0; k < pose_ids_.size(); ++k) bundle_.poses[pose_ids_[k]] = pose_values_[k];
@@ -226,6 +234,7 @@ class DedicatedBundleSolve {
 
  private:
   BundleProblem& bundle_;
+  double prior_sigma_translation_, prior_sigma_rotation_;
   std::vector<int64_t> pose_ids_, point_ids_;
   std::vector<std::array<double, 7>> pose_values_;
   std::vector<uint8_t> pose_fixed_;
@@ -249,6 +258,7 @@ class CeresBundleSolve {
       }
     }
   }
+
   void Solve(int iterations, bool robust, const std::atomic<bool>* abort) {
     ceres::Problem::Options problem_options;
     problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -328,9 +338,14 @@ void SolveBundle(BundleProblem& bundle, const OptimizerOptions& options, int ite
       solve(iterations_second, false);
     }
   };
-  // Local windows: the dedicated solver; larger problems: Ceres.
+  const bool prior = bundle.local_window && options.local_ba_pose_prior;
+  const double prior_translation = prior ? options.local_ba_prior_sigma_translation : 0.0;
+  const double prior_rotation =
+      prior ? options.local_ba_prior_sigma_rotation_deg * M_PI / 180.0 : 0.0;
+  // Local windows: the dedicated solver (with the pose prior of a local window); larger problems:
+  // Ceres (a local window of more than kDedicatedSolverMaxPoses keyframes has no prior).
   if (bundle.poses.size() - bundle.fixed.size() <= kDedicatedSolverMaxPoses) {
-    DedicatedBundleSolve dedicated(&bundle);
+    DedicatedBundleSolve dedicated(&bundle, prior_translation, prior_rotation);
     two_passes([&](int iterations, bool robust) {
       dedicated.Solve(iterations, robust ? delta_mono : 0.0, robust ? delta_stereo : 0.0, abort);
     });
@@ -372,13 +387,13 @@ bool ApplyBundle(Map& map, const BundleProblem& bundle) {
 namespace {
 
 // Copy in under the map lock, solve without it, write back under it.
-void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyFrame>>()>& select,
+void AdjustBundle(Map& map, const std::function<BundleProblem()>& prepare,
                   const OptimizerOptions& options, int iterations_first, int iterations_second,
                   const std::atomic<bool>* abort) {
   BundleProblem bundle;
   {
     std::lock_guard<std::mutex> lock(map.mutex());
-    bundle = PrepareBundle(map, select());
+    bundle = prepare();
   }
   if (bundle.observations.empty()) return;
   SolveBundle(bundle, options, iterations_first, iterations_second, abort);
@@ -391,19 +406,19 @@ void AdjustBundle(Map& map, const std::function<std::vector<std::shared_ptr<KeyF
 void LocalBundleAdjustment(Map& map, const std::shared_ptr<KeyFrame>& kf,
                            const OptimizerOptions& options, const std::atomic<bool>* abort) {
   AdjustBundle(
-      map, [&map, &kf]() { return LocalWindow(map, kf); }, options, options.ba_iterations_first,
-      options.ba_iterations_second, abort);
+      map, [&map, &kf]() { return PrepareLocalBundle(map, kf); }, options,
+      options.ba_iterations_first, options.ba_iterations_second, abort);
 }
 
 void GlobalBundleAdjustment(Map& map, const OptimizerOptions& options, int iterations_first,
                             int iterations_second) {
-  auto select = [&map]() {
+  auto prepare = [&map]() {
     std::vector<std::shared_ptr<KeyFrame>> all;
     for (const auto& [id, k] : map.keyframes())
       if (!k->bad) all.push_back(k);
-    return all;
+    return PrepareBundle(map, all);
   };
-  AdjustBundle(map, select, options, iterations_first, iterations_second, nullptr);
+  AdjustBundle(map, prepare, options, iterations_first, iterations_second, nullptr);
 }
 
 }  // namespace dygslam

@@ -23,17 +23,32 @@ struct OptimizerOptions {
   double chi2_stereo = 7.815;  // 95 % with 3 dof
   int ba_iterations_first = 5;
   int ba_iterations_second = 10;
+  // Local BA: a prior on each keyframe pose it moves, at the pose it had, in the directions its
+  // points leave nearly free (BundleSolverOptions::prior_sigma_*: where their information is below
+  // that of these standard deviations); settings key LocalMapping.pose_prior. When a person covers
+  // most of the view the static points left lie in a narrow strip at one depth, where yaw and
+  // sideways translation explain the same image motion; without the prior one solve slid such a
+  // keyframe 18 cm along that direction and the frames after it followed. Directions the points
+  // fix get no prior, so ordinary corrections are not held back. Loop correction and global BA
+  // have no prior. Measured with and without on the benchmark sequences (BENCHMARKS.md).
+  bool local_ba_pose_prior = true;
+  double local_ba_prior_sigma_translation = 0.01;  // metres
+  double local_ba_prior_sigma_rotation_deg = 0.2;  // degrees
   void Check() const {
     DYGSLAM_CHECK_OPTION(pose_rounds >= 1, "Optimizer.pose_rounds");
     DYGSLAM_CHECK_OPTION(pose_iterations >= 1, "Optimizer.pose_iterations");
+    DYGSLAM_CHECK_OPTION(local_ba_prior_sigma_translation >= 0,
+                         "Optimizer.local_ba_prior_sigma_translation");
+    DYGSLAM_CHECK_OPTION(local_ba_prior_sigma_rotation_deg >= 0,
+                         "Optimizer.local_ba_prior_sigma_rotation_deg");
   }
 };
 
 // Optimises frame.cam_from_world against its matched map points (frame.map_points); sets
 // frame.outlier. Map point positions are read by the caller's thread: hold the map lock.
 // Returns the number of inliers. ORB-SLAM2's scheme: pose_rounds rounds of <= pose_iterations
-// Levenberg-Marquardt iterations (core/slam/optimize/pose_solver.h), Huber kernel in all but the last,
-// every observation re-classified by its chi2 after each round.
+// Levenberg-Marquardt iterations (core/slam/optimize/pose_solver.h), Huber kernel in all but the
+// last, every observation re-classified by its chi2 after each round.
 int OptimizePose(Frame& frame, const OptimizerOptions& options);
 
 // A bundle adjustment in three steps, so that the solve can run on another thread while the map
@@ -54,7 +69,8 @@ struct BundleProblem {
   std::vector<BundleObservation> observations;
   std::vector<uint8_t> outlier;  // per observation, after SolveBundle
   ProjectionModel model;
-  int64_t epoch = 0;  // the map's correction epoch when copied in
+  int64_t epoch = 0;          // the map's correction epoch when copied in
+  bool local_window = false;  // PrepareLocalBundle: the local BA's pose prior applies
   bool solved = false;
   bool empty() const { return observations.empty(); }
 };
@@ -63,8 +79,8 @@ struct BundleProblem {
 BundleProblem PrepareBundle(const Map& map, const std::vector<std::shared_ptr<KeyFrame>>& local);
 // The local window of `kf`: it and its covisible keyframes. Hold the map lock.
 BundleProblem PrepareLocalBundle(const Map& map, const std::shared_ptr<KeyFrame>& kf);
-// Two rounds (robust, then without the outliers), as ORB-SLAM2's RGB-D local BA. `abort` (may be
-// null) stops the solve early.
+// Two rounds (robust, then without the outliers), as ORB-SLAM2's RGB-D local BA, with the pose
+// prior of OptimizerOptions on a local window. `abort` (may be null) stops the solve early.
 void SolveBundle(BundleProblem& problem, const OptimizerOptions& options, int iterations_first,
                  int iterations_second, const std::atomic<bool>* abort = nullptr);
 // Drops outlier observations and writes poses and points back; false (nothing written) when the

@@ -662,6 +662,107 @@ class Bench:
                     results[key] = sc
         self.results["stretch"] = results
 
+    # the local BA's pose prior ----------------------------------------------------------------
+    def pose_prior(self):
+        """The runs of the sections above once more with the local BA's pose prior off: bonn from
+        the 8 start entries, the generated crowds, the walker filling the view (full filter) and
+        the loops (one run each; loop closing on, no filter, as in the loop table)."""
+        work = os.path.join(self.work, "pose_prior")
+        os.makedirs(work, exist_ok=True)
+
+        def one(name, data, groundtruth, config, extra):
+            out = os.path.join(work, name)
+            shutil.rmtree(out, ignore_errors=True)
+            cmd = [self.dygslam, "run", data, "--config", config, "--direct", "--no-map", "--out",
+                   out, "--quiet"] + extra
+            say(f"without the pose prior: {name}")
+            self.record_load()
+            r = run(cmd, out + ".log")
+            s = score_run(self.dygslam, groundtruth, out, r)
+            s["cmd"] = cmd
+            del s["log"]
+            return s
+
+        off = {}
+        bonn_off = write_without_pose_prior(self.config, os.path.join(work, "bonn_without.yaml"))
+        off["bonn"] = [one(f"bonn_start{k}", self.data, self.groundtruth, bonn_off,
+                           ["--filter", "full", "--frames", f"{k}:"]) for k in STARTS]
+        for cname, _ in CROWDS:
+            directory = os.path.join(self.cache, cname)
+            config = write_without_pose_prior(os.path.join(directory, "camera.yaml"),
+                                              os.path.join(work, cname + "_without.yaml"))
+            off[cname] = one(cname, directory, os.path.join(directory, "groundtruth.txt"), config,
+                             ["--filter", "full", "--detections",
+                              os.path.join(directory, "detections.txt")])
+        for seed in STRETCH_SEEDS:
+            for name in ["none"] + [f"boxed_{c}" for c in COVERAGES]:
+                directory = os.path.join(self.cache, f"stretch_s{seed}_{name}")
+                config = write_without_pose_prior(os.path.join(directory, "camera.yaml"),
+                                                  os.path.join(work, f"s{seed}_{name}.yaml"))
+                off[f"s{seed}_{name}"] = one(
+                    f"stretch_s{seed}_{name}", directory, os.path.join(directory, "groundtruth.txt"),
+                    config, ["--filter", "full", "--detections",
+                             os.path.join(directory, "detections.txt")])
+        for name, _, _ in LOOPS:
+            directory = self.loop_dirs[name]
+            config = write_without_pose_prior(os.path.join(directory, "camera.yaml"),
+                                              os.path.join(work, name + "_without.yaml"))
+            off[name] = one(name, directory, os.path.join(directory, "groundtruth.txt"), config,
+                            ["--filter", "none"])
+        self.results["pose_prior"] = off
+
+    def render_pose_prior(self, L):
+        """The section comparing the runs with and without the local BA's pose prior."""
+        L.append("## The local bundle adjustment's pose prior\n")
+        off = self.results.get("pose_prior")
+        R = self.results
+        if not off or not R.get("sensitivity") or not R.get("stretch") or not R.get("loops"):
+            L.append("Not measured (`--quick`).\n")
+            return
+        L.append("The local BA holds each keyframe near its pose in the directions its points leave "
+                 "nearly free (`LocalMapping.pose_prior`, on by default; how it works: "
+                 "docs/how_it_works.md). The same runs as in the sections above, without it: "
+                 "bonn_crowd_part from the 8 start entries (median, range), the generated crowds, "
+                 "the walker filling the view (full filter; median over the seeds, the ratio to "
+                 "the run without the walker per seed) and the loops (loop closing on, no filter; "
+                 "with the prior: the median of the loop table's runs, without: one run).\n")
+        L.append("| sequence | final ATE with (m) | final ATE without (m) | online ATE with (m) | "
+                 "online ATE without (m) | poses / frames with, without |")
+        L.append("|---|---|---|---|---|---|")
+
+        def row(label, on, without, ratio_on=None, ratio_off=None):
+            on, without = list(on), list(without)
+            extra_on = f" ({fmt(median(ratio_on), 2)}x)" if ratio_on else ""
+            extra_off = f" ({fmt(median(ratio_off), 2)}x)" if ratio_off else ""
+            L.append(f"| {label} | {med_range([r['ate'] for r in on])}{extra_on} | "
+                     f"{med_range([r['ate'] for r in without])}{extra_off} | "
+                     f"{med_range([r['online_ate'] for r in on])} | "
+                     f"{med_range([r['online_ate'] for r in without])} | "
+                     f"{poses_text(on)}, {poses_text(without)} |")
+
+        row("bonn_crowd_part, 8 start entries", R["sensitivity"]["starts"]["full"], off["bonn"])
+        for cname, _ in CROWDS:
+            row(f"generated crowd {cname}", [R["sensitivity"]["crowds"][cname]["full"]],
+                [off[cname]])
+        st = R["stretch"]
+        for name in [f"boxed_{c}" for c in COVERAGES] + ["none"]:
+            on = [st[f"s{seed}_{name}_full"] for seed in STRETCH_SEEDS]
+            without = [off[f"s{seed}_{name}"] for seed in STRETCH_SEEDS]
+            label = ("walker: none" if name == "none" else
+                     f"walker boxed, covers {int(round(float(name.split('_')[1]) * 100))} %")
+            ratio_on = [r["ate"] / st[f"s{seed}_none_full"]["ate"]
+                        for seed, r in zip(STRETCH_SEEDS, on) if st[f"s{seed}_none_full"]["ate"]]
+            ratio_off = [r["ate"] / off[f"s{seed}_none"]["ate"]
+                         for seed, r in zip(STRETCH_SEEDS, without) if off[f"s{seed}_none"]["ate"]]
+            row(label, on, without, ratio_on if name != "none" else None,
+                ratio_off if name != "none" else None)
+        for name, title, _ in LOOPS:
+            row(title, R["loops"][name]["on"], [off[name]])
+        L.append("")
+        L.append("```")
+        L.append(self.cmdline(off["bonn"][0]["cmd"]))
+        L.append("```\n")
+
     def render_stretch(self, L):
         """The section on a person filling the view (generated)."""
         L.append("## A person filling the view (generated)\n")
@@ -1172,6 +1273,7 @@ class Bench:
 
         self.render_sensitivity(L)
         self.render_stretch(L)
+        self.render_pose_prior(L)
 
         # Map quality.
         L.append("## Map quality: ghost voxels\n")
@@ -1408,6 +1510,13 @@ def write_planar_as_line(config, path):
     return path
 
 
+def write_without_pose_prior(config, path):
+    """`config` with the local BA's pose prior off (its ablation)."""
+    with open(path, "w") as f:
+        f.write(open(config).read().rstrip("\n") + "\nLocalMapping.pose_prior: 0\n")
+    return path
+
+
 def rmse_by_state(groundtruth, aligned, frames_csv):
     """RMSE of the aligned final poses per tracking state of frames.csv ({state: (n, rmse)})."""
     if not os.path.exists(aligned):
@@ -1610,6 +1719,7 @@ def bench_main():
             bench.loops()
             bench.filter_sensitivity()
             bench.crowd_stretch()
+            bench.pose_prior()
         bench.map_reuse()
         bench.map_quality()
         bench.draw()

@@ -463,14 +463,21 @@ TEST_F(RunIntegrity, AComponentStoppedOnItsOwnIsNotACompleteRun) {
 TEST_F(RunIntegrity, AMapperPausedWhileSlamFinishesMakesTheRunIncomplete) {
   DYGSLAM_REQUIRE_DATASET(source, "bonn_crowd_part");
   const std::string out = dir_ + "/out";
-  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--quiet",
-                           "--frames", "0:150", "--processes", "--rate", "1", "--out", out,
-                           "--domain", std::to_string(kPausedDomain)});
+  // Not --quiet: the recorder's progress line says when poses come.
+  const pid_t pid = Spawn({"run", source, "--config", Config(), "--filter", "none", "--frames",
+                           "0:150", "--processes", "--rate", "1", "--out", out, "--domain",
+                           std::to_string(kPausedDomain)});
   ASSERT_GT(pid, 0);
   const pid_t mapper = RunningComponentPid("mapper", out);
   ASSERT_GT(mapper, 0) << ReadAll(dir_ + "/run.err");
-  // Once the frames flow (the mapper has matched slam and announced READY; 5 s of frames at 30 Hz).
-  std::this_thread::sleep_for(std::chrono::seconds(2));
+  // Once the frames flow (the player plays once the mapper has matched slam and announced READY:
+  // an event, not a time, a loaded machine starts slowly), 1 s into the 5 s of frames at 30 Hz.
+  const auto flowing = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!Contains(ReadAll(dir_ + "/run.err"), "[run] frame ") &&
+         std::chrono::steady_clock::now() < flowing)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_TRUE(Contains(ReadAll(dir_ + "/run.err"), "[run] frame ")) << ReadAll(dir_ + "/run.err");
+  std::this_thread::sleep_for(std::chrono::seconds(1));
   // Paused until slam has sent its last frame's pose (the recorder has written the trajectory)
   // and longer than the lease (slam has then left).
   kill(mapper, SIGSTOP);

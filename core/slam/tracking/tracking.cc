@@ -75,8 +75,8 @@ void Tracker::TrackNext(Frame& frame, TrackResult* result) {
 void Tracker::AcceptFeaturePose(Frame& frame, const std::optional<Rigid3d>& predicted,
                                 bool relocalized, TrackResult* result) {
   lost_ = false;
-  if (options_.dense_fallback && options_.fallback_smoothing && !records_.empty() &&
-      records_.back().state == TrackingState::kFallback)
+  const bool returning = !records_.empty() && records_.back().state == TrackingState::kFallback;
+  if (options_.dense_fallback && options_.fallback_smoothing && returning)
     SmoothFallbackStretch(frame, predicted);
   result->state = relocalized ? TrackingState::kRelocalized : TrackingState::kOk;
   result->cam_from_world = frame.cam_from_world;
@@ -89,7 +89,12 @@ void Tracker::AcceptFeaturePose(Frame& frame, const std::optional<Rigid3d>& pred
   for (size_t i = 0; i < frame.size(); ++i) {
     if (frame.outlier[i]) frame.map_points[i] = nullptr;
   }
-  if (!localization_ && NeedNewKeyFrame(frame)) result->new_keyframe = CreateKeyFrame(frame);
+  // The first feature pose after a fallback stretch held by few inliers can be centimetres off
+  // (bonn_crowd_part entry 206: 86 inliers, 5 cm): it makes no keyframe, so no later frame and
+  // no new point hangs on it; the next frames (features back, or the fallback) decide.
+  const bool weak_return = returning && last_inliers_ < options_.fallback_smoothing_weak_inliers;
+  if (!localization_ && !weak_return && NeedNewKeyFrame(frame))
+    result->new_keyframe = CreateKeyFrame(frame);
   if (result->new_keyframe) RememberDenseKeyFrame(result->new_keyframe, frame);
   result->map_points = frame.map_points;
   records_.push_back({frame.stamp, reference_kf_->id,

@@ -64,7 +64,9 @@ struct TrackingOptions {
   // returning frame against the last fallback frame says where that frame should have been, and
   // the stretch (plus the weakly held feature frames just before it) is moved by that correction.
   bool fallback_smoothing = true;
-  int fallback_smoothing_weak_inliers = 150;  // feature frames below this before a stretch join it
+  // Feature frames below this before a stretch join it; the first feature frame after a stretch
+  // below this makes no keyframe.
+  int fallback_smoothing_weak_inliers = 150;
   double fallback_smoothing_max_translation = 0.15;  // metres: larger corrections are not applied
   double fallback_smoothing_max_rotation_deg = 10.0;
   void Check() const {

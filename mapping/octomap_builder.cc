@@ -16,6 +16,7 @@
 #include "core/base/echo.h"
 #include "core/base/error.h"
 #include "core/io/file_util.h"
+#include "mapping/scan_inserter.h"
 
 namespace dygslam {
 namespace {
@@ -97,7 +98,7 @@ void OctoMapOptions::Check() const {
 }
 
 OctoMapBuilder::OctoMapBuilder(const PinholeCamera& camera, const OctoMapOptions& options)
-    : camera_(camera), options_(options) {
+    : camera_(camera), options_(options), inserter_(std::make_unique<ScanInserter>()) {
   camera_.Check();
   options_.Check();
   ResetTree();
@@ -212,8 +213,7 @@ void OctoMapBuilder::InsertIntoTree(const StoredKeyframe& keyframe) {
     cloud.push_back(w.x(), w.y(), w.z());
   }
   const octomap::point3d origin(translation.x(), translation.y(), translation.z());
-  tree_->insertPointCloud(cloud, origin, options_.max_range, options_.lazy_eval,
-                          /*discretize=*/false);
+  inserter_->Insert(*tree_, cloud, origin, options_.max_range, options_.lazy_eval);
   if (options_.lazy_eval) inner_dirty_ = true;
   ++num_insertions_;
 }

@@ -12,9 +12,9 @@
 // back-projected with the pinhole model (depth is the z coordinate; the depth image is assumed
 // registered and undistorted, as in TUM/Bonn), and reduced by a voxel grid (centroid per cell) in
 // the camera frame. The cloud is transformed by world_from_cam and inserted with
-// octomap::OcTree::insertPointCloud from the camera centre, so the cells along each beam are
-// updated as free and the end cell as occupied; beams longer than max_range clear space up to
-// max_range only.
+// the updates of octomap::OcTree::insertPointCloud from the camera centre (ScanInserter,
+// scan_inserter.h), so the cells along each beam are updated as free and the end cell as occupied;
+// beams longer than max_range clear space up to max_range only.
 //
 // Pose corrections: the builder keeps each keyframe's downsampled static cloud (camera frame,
 // a few thousand points) and its pose. The OcTree is a cache derived from them. When
@@ -56,6 +56,8 @@ class OcTree;
 }
 
 namespace dygslam {
+
+class ScanInserter;
 
 struct OctoMapOptions {
   // Leaf size in metres.
@@ -215,7 +217,8 @@ class OctoMapBuilder {
   PinholeCamera camera_;
   OctoMapOptions options_;
   std::unique_ptr<octomap::OcTree> tree_;
-  std::unique_ptr<octomap::OcTree> base_;  // SetBaseMap: what every (re)build starts from
+  std::unique_ptr<octomap::OcTree> base_;   // SetBaseMap: what every (re)build starts from
+  std::unique_ptr<ScanInserter> inserter_;  // reused grid of the scan's cells
   std::map<int64_t, StoredKeyframe> keyframes_;
   uint64_t next_sequence_ = 0;
   bool rebuild_pending_ = false;

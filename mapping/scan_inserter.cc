@@ -14,9 +14,9 @@ void ScanInserter::Insert(octomap::OcTree& tree, const octomap::Pointcloud& scan
   }
   // As insertPointCloud: the free cells that are not also occupied, then the occupied ones.
   for (const octomap::OcTreeKey& key : free_) {
-    if (marks_[Index(key)] == kFree) tree.updateNode(key, false, lazy_eval);
+    if (marks_[Index(key)] == kFree) UpdateCell(tree, key, false, lazy_eval);
   }
-  for (const octomap::OcTreeKey& key : occupied_) tree.updateNode(key, true, lazy_eval);
+  for (const octomap::OcTreeKey& key : occupied_) UpdateCell(tree, key, true, lazy_eval);
   ClearMarks();
   ++grid_scans_;
 }
@@ -67,6 +67,43 @@ bool ScanInserter::Collect(const octomap::OcTree& tree, const octomap::Pointclou
     }
   }
   return true;
+}
+
+void ScanInserter::UpdateCell(octomap::OcTree& tree, const octomap::OcTreeKey& key, bool occupied,
+                              bool lazy_eval) {
+  octomap::OcTreeNode* node = tree.getRoot();
+  if (!lazy_eval || node == nullptr || tree.isChangeDetectionEnabled()) {
+    tree.updateNode(key, occupied, lazy_eval);
+    return;
+  }
+  // OcTree::updateNode in one descent instead of two. It first searches the key's deepest node
+  // and leaves a cell alone whose value is already clamped in the update's direction; then it
+  // descends again, expanding pruned nodes and creating missing ones, and updates the leaf.
+  const float update = occupied ? tree.getProbHitLog() : tree.getProbMissLog();
+  auto clamped = [&](const octomap::OcTreeNode* leaf) {
+    return (update >= 0 && leaf->getLogOdds() >= tree.getClampingThresMaxLog()) ||
+           (update <= 0 && leaf->getLogOdds() <= tree.getClampingThresMinLog());
+  };
+  const int depth = static_cast<int>(tree.getTreeDepth());
+  bool searched = false;      // the search's node was found (and was not clamped)
+  bool just_created = false;  // `node` was created by this update
+  for (int level = 0; level < depth; ++level) {
+    const unsigned int child = octomap::computeChildIdx(key, depth - 1 - level);
+    if (!tree.nodeChildExists(node, child)) {
+      if (!tree.nodeHasChildren(node) && !just_created) {
+        // A leaf above full depth (pruned): the search ends here, then it is expanded.
+        if (!searched && clamped(node)) return;
+        tree.expandNode(node);
+      } else {
+        tree.createNodeChild(node, child);
+        just_created = true;
+      }
+      searched = true;  // the search ended at this level (a pruned leaf, or not found)
+    }
+    node = tree.getNodeChild(node, child);
+  }
+  if (!searched && clamped(node)) return;
+  tree.updateNodeLogOdds(node, update);
 }
 
 int64_t ScanInserter::Index(const octomap::OcTreeKey& key) const {

@@ -7,10 +7,11 @@
 // rehashing and freeing those sets is about half of the insertion's CPU. Here a ray cell is marked
 // in a byte grid that covers the sensor's range (max_range / resolution cells each way; 4.5 MB
 // for 4 m at 5 cm) and kept in a list the first time it is seen; the grid is cleared through the
-// lists. Each cell gets one update per scan as in OctoMap (occupied wins over free), so the tree
-// is the same as insertPointCloud's, node for node. A range too large for the grid (more than
-// 128 cells each way), a bounding box set on the tree or a cell outside the grid fall back to
-// insertPointCloud itself.
+// lists. Each cell gets one update per scan as in OctoMap (occupied wins over free), and the update
+// descends the tree once where OcTree::updateNode descends twice (a search for its early exit on a
+// clamped cell, then the update), so the tree is the same as insertPointCloud's, node for node. A
+// range too large for the grid (more than 128 cells each way), a bounding box set on the tree or a
+// cell outside the grid fall back to insertPointCloud itself.
 #pragma once
 
 #include <octomap/OcTree.h>
@@ -38,6 +39,9 @@ class ScanInserter {
   enum Mark : uint8_t { kUnseen = 0, kFree = 1, kOccupied = 2 };
   bool Collect(const octomap::OcTree& tree, const octomap::Pointcloud& scan,
                const octomap::point3d& origin, double max_range);
+  // tree.updateNode(key, occupied, lazy_eval), with one descent of the tree instead of two.
+  static void UpdateCell(octomap::OcTree& tree, const octomap::OcTreeKey& key, bool occupied,
+                         bool lazy_eval);
   // Index of `key` in the grid centred on center_, or -1 outside it.
   int64_t Index(const octomap::OcTreeKey& key) const;
   void ClearMarks();

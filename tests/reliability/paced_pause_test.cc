@@ -53,11 +53,8 @@ TEST_F(PacedPause, ADirectReplayStoppedAndContinuedGoesOnFromItsFrame) {
                            "0:150", "--no-map", "--direct", "--rate", "1", "--out", out});
   ASSERT_GT(pid, 0);
   // Stopped once the replay goes (an event, not a time: a loaded machine starts slowly).
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (!Contains(ReadAll(dir_ + "/run.err"), "[run] frame ") &&
-         std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  ASSERT_TRUE(Contains(ReadAll(dir_ + "/run.err"), "[run] frame ")) << ReadAll(dir_ + "/run.err");
+  ASSERT_TRUE(testing::WaitForText(dir_ + "/run.err", "[run] frame "))
+      << ReadAll(dir_ + "/run.err");
   kill(pid, SIGSTOP);
   std::this_thread::sleep_for(std::chrono::seconds(5));
   kill(pid, SIGCONT);

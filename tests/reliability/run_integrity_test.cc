@@ -472,11 +472,8 @@ TEST_F(RunIntegrity, AMapperPausedWhileSlamFinishesMakesTheRunIncomplete) {
   ASSERT_GT(mapper, 0) << ReadAll(dir_ + "/run.err");
   // Once the frames flow (the player plays once the mapper has matched slam and announced READY:
   // an event, not a time, a loaded machine starts slowly), 1 s into the 5 s of frames at 30 Hz.
-  const auto flowing = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (!Contains(ReadAll(dir_ + "/run.err"), "[run] frame ") &&
-         std::chrono::steady_clock::now() < flowing)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  ASSERT_TRUE(Contains(ReadAll(dir_ + "/run.err"), "[run] frame ")) << ReadAll(dir_ + "/run.err");
+  ASSERT_TRUE(testing::WaitForText(dir_ + "/run.err", "[run] frame "))
+      << ReadAll(dir_ + "/run.err");
   std::this_thread::sleep_for(std::chrono::seconds(1));
   // Paused until slam has sent its last frame's pose (the recorder has written the trajectory)
   // and longer than the lease (slam has then left).
@@ -639,9 +636,7 @@ void RunIntegrity::ExpectOutputFolderReplacedMidRunIsNeverWrittenThrough(
   const pid_t pid = testing::SpawnDygslam(args, dir + "/run.out", dir + "/run.err");
   ASSERT_GT(pid, 0);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (!Contains(ReadAll(dir + "/run.err"), "DDS partition") &&
-         std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  testing::WaitForText(dir + "/run.err", "DDS partition");
   // Mid-run: every process of the run has checked its files (a component catches SIGTERM once it
   // has) and those that write into the folder have pinned it. A component that starts after the
   // folder was replaced sees the replacement and refuses it before it writes anything.

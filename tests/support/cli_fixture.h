@@ -6,9 +6,11 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/io/dataset.h"
@@ -18,6 +20,18 @@ namespace dygslam::testing {
 
 inline bool Contains(const std::string& text, const std::string& needle) {
   return text.find(needle) != std::string::npos;
+}
+
+// Waits until `file` (a spawned run's stderr) contains `needle`, at most `timeout`: an event, not
+// a time, since a loaded machine starts slowly. Whether it does.
+inline bool WaitForText(const std::string& file, const std::string& needle,
+                        std::chrono::seconds timeout = std::chrono::seconds(60)) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!Contains(ReadAll(file), needle)) {
+    if (std::chrono::steady_clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
 }
 
 class CliFixture : public ::testing::Test {

@@ -118,6 +118,51 @@ TEST(StaticDepthOdometry, RecoversGeneratedMotionWithPersonMaskedOut) {
   EXPECT_LT(sum_t, 0.5 * sum_seed_t);
 }
 
+// A person fills 95 % of the view: the static pixels are a strip at the image's edge. The plain
+// alignment slides along the directions the strip leaves free; the estimate with the motion prior
+// takes those from the prior and the rest from the pixels.
+TEST(StaticDepthOdometry, ConstrainedEstimateHoldsANarrowStrip) {
+  SyntheticOptions o;
+  o.num_frames = 150;
+  o.num_moving_objects = 0;
+  o.seed = 1;
+  o.depth_noise = true;
+  o.occluder_coverage = 0.95;
+  o.occluder_start_frame = 60;
+  SyntheticScene scene(o);
+  StaticDepthOdometry odometry(o.camera, StaticDepthOdometryOptions());
+  double sum_t = 0, sum_r = 0, sum_seed_t = 0, sum_seed_r = 0, sum_plain_t = 0;
+  int pairs = 0, verified = 0;
+  for (int k = 72; k < 90; k += 2) {
+    const SyntheticFrame ref = scene.RenderFrame(k);
+    const SyntheticFrame cur = scene.RenderFrame(k + 1);
+    const Rigid3d truth = cur.world_from_cam.Inverse() * ref.world_from_cam;
+    const Rigid3d prev_step =
+        ref.world_from_cam.Inverse() * scene.RenderFrame(k - 1).world_from_cam;
+    const StaticDepthEstimate e = odometry.EstimateWithPrior(
+        ViewOf(ref, o.sensor, true), ViewOf(cur, o.sensor, true), prev_step);
+    const PoseError err = ErrorOf(e.cur_from_ref, truth);
+    const PoseError seed_err = ErrorOf(prev_step, truth);
+    const StaticDepthEstimate plain =
+        odometry.Estimate(ViewOf(ref, o.sensor, true), ViewOf(cur, o.sensor, true), prev_step);
+    sum_plain_t += ErrorOf(plain.cur_from_ref, truth).translation_m;
+    std::cout << k << ": " << err.translation_m * 1000 << " mm " << err.rotation_deg
+              << " deg (seed " << seed_err.translation_m * 1000 << " mm " << seed_err.rotation_deg
+              << " deg) " << e.agreement.inliers << " inliers\n";
+    sum_t += err.translation_m;
+    sum_r += err.rotation_deg;
+    sum_seed_t += seed_err.translation_m;
+    sum_seed_r += seed_err.rotation_deg;
+    verified += e.verified;
+    ++pairs;
+  }
+  std::cout << "strip: mean " << sum_t / pairs * 1000 << " mm, " << sum_r / pairs
+            << " deg; plain alignment " << sum_plain_t / pairs * 1000 << " mm\n";
+  EXPECT_EQ(verified, pairs);
+  EXPECT_LT(sum_t / pairs, 0.003);
+  EXPECT_LT(sum_t, 0.5 * sum_plain_t);
+}
+
 TEST(StaticDepthOdometry, VerificationRejectsAWrongPose) {
   const CrowdedPair pair = MakeCrowdedPair();
   const SyntheticOptions& o = pair.options;

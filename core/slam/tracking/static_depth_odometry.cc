@@ -33,6 +33,17 @@ void StaticDepthOdometryOptions::Check() const {
                        "StaticDepthOdometry.max_translation_from_seed");
   DYGSLAM_CHECK_OPTION(max_rotation_from_seed_deg > 0,
                        "StaticDepthOdometry.max_rotation_from_seed_deg");
+  DYGSLAM_CHECK_OPTION(prior_sigma_translation > 0 && std::isfinite(prior_sigma_translation),
+                       "StaticDepthOdometry.prior_sigma_translation");
+  DYGSLAM_CHECK_OPTION(prior_sigma_rotation_deg > 0 && std::isfinite(prior_sigma_rotation_deg),
+                       "StaticDepthOdometry.prior_sigma_rotation_deg");
+  DYGSLAM_CHECK_OPTION(point_sigma > 0 && std::isfinite(point_sigma),
+                       "StaticDepthOdometry.point_sigma");
+  DYGSLAM_CHECK_OPTION(intensity_sigma >= 0 && std::isfinite(intensity_sigma),
+                       "StaticDepthOdometry.intensity_sigma");
+  DYGSLAM_CHECK_OPTION(constrained_step_px >= 1, "StaticDepthOdometry.constrained_step_px");
+  DYGSLAM_CHECK_OPTION(constrained_iterations >= 1, "StaticDepthOdometry.constrained_iterations");
+  DYGSLAM_CHECK_OPTION(constrained_min_inliers >= 1, "StaticDepthOdometry.constrained_min_inliers");
 }
 
 StaticDepthOdometry::StaticDepthOdometry(const PinholeCamera& camera,
@@ -210,6 +221,170 @@ StaticDepthEstimate StaticDepthOdometry::Estimate(const DenseView& reference,
         RotationAngle(jump.rotation) * 180.0 / M_PI <= options_.max_rotation_from_seed_deg;
     e.agreement = Agreement(reference, current, e.cur_from_ref);
     e.verified = near_seed && e.agreement.inliers >= options_.min_inliers &&
+                 e.agreement.inlier_fraction() >= options_.min_inlier_fraction;
+  }
+  e.time_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return e;
+}
+
+namespace {
+
+// Bilinear intensity of an 8-bit image at (x, y); false outside [0, w-1) x [0, h-1).
+bool Bilinear(const cv::Mat& gray, double x, double y, double* value) {
+  if (!(x >= 0 && y >= 0 && x < gray.cols - 1 && y < gray.rows - 1)) return false;
+  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+  const double ax = x - x0, ay = y - y0;
+  const uint8_t* r0 = gray.ptr<uint8_t>(y0) + x0;
+  const uint8_t* r1 = gray.ptr<uint8_t>(y0 + 1) + x0;
+  *value = (1 - ay) * ((1 - ax) * r0[0] + ax * r0[1]) + ay * ((1 - ax) * r1[0] + ax * r1[1]);
+  return true;
+}
+
+// exp of a twist (rotation vector w, translation v), applied on the left: a small motion.
+Rigid3d ExpTwist(const Eigen::Vector3d& w, const Eigen::Vector3d& v) {
+  const double angle = w.norm();
+  const Eigen::Quaterniond q = angle > 1e-12
+                                   ? Eigen::Quaterniond(Eigen::AngleAxisd(angle, w / angle))
+                                   : Eigen::Quaterniond::Identity();
+  return Rigid3d(q, v);
+}
+
+}  // namespace
+
+StaticDepthEstimate StaticDepthOdometry::EstimateWithPrior(const DenseView& reference,
+                                                           const DenseView& current,
+                                                           const Rigid3d& cur_from_ref_seed) const {
+  CheckView(reference, "reference");
+  CheckView(current, "current");
+  const auto t0 = std::chrono::steady_clock::now();
+  const cv::Mat& current_mask = current.StaticMask();
+  const cv::Mat& reference_mask = reference.StaticMask();
+  auto valid_depth = [this](float d) { return d > options_.min_depth && d < options_.max_depth; };
+  // Reference points with their normals, taken where a current point projects (the normal from the
+  // neighbours `k` pixels away on both sides; none across a depth edge).
+  const int k = 2;
+  auto reference_point = [&](int u, int v, Eigen::Vector3d* q, Eigen::Vector3d* n) {
+    if (u < k || v < k || u + k >= camera_.width || v + k >= camera_.height) return false;
+    if (!reference_mask.empty() && !reference_mask.at<uint8_t>(v, u)) return false;
+    const float d = reference.depth.at<float>(v, u);
+    const float dl = reference.depth.at<float>(v, u - k), dr = reference.depth.at<float>(v, u + k);
+    const float du = reference.depth.at<float>(v - k, u), dd = reference.depth.at<float>(v + k, u);
+    if (!valid_depth(d) || !valid_depth(dl) || !valid_depth(dr) || !valid_depth(du) ||
+        !valid_depth(dd))
+      return false;
+    const float edge = static_cast<float>(options_.max_depth_diff);
+    if (std::abs(dl - dr) > edge || std::abs(du - dd) > edge) return false;
+    *q = camera_.Unproject(u, v, d);
+    const Eigen::Vector3d tx = camera_.Unproject(u + k, v, dr) - camera_.Unproject(u - k, v, dl);
+    const Eigen::Vector3d ty = camera_.Unproject(u, v + k, dd) - camera_.Unproject(u, v - k, du);
+    Eigen::Vector3d normal = tx.cross(ty);
+    const double norm = normal.norm();
+    if (!(norm > 0)) return false;
+    normal /= norm;
+    if (normal.dot(*q) > 0) normal = -normal;
+    *n = normal;
+    return true;
+  };
+  // The current frame's static points (sampled once).
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> intensities;
+  const int step = options_.constrained_step_px;
+  for (int v = 0; v < camera_.height; v += step) {
+    const float* depth_row = current.depth.ptr<float>(v);
+    const uint8_t* gray_row = current.gray.ptr<uint8_t>(v);
+    const uint8_t* mask_row = current_mask.empty() ? nullptr : current_mask.ptr<uint8_t>(v);
+    for (int u = 0; u < camera_.width; u += step) {
+      if (!valid_depth(depth_row[u]) || (mask_row && !mask_row[u])) continue;
+      points.push_back(camera_.Unproject(u, v, depth_row[u]));
+      intensities.push_back(gray_row[u]);
+    }
+  }
+  const bool photometric = options_.intensity_sigma > 0;
+  const double wi = photometric ? 1.0 / (options_.intensity_sigma * options_.intensity_sigma) : 0;
+  const double huber_i = 2.0 * options_.intensity_sigma;
+  StaticDepthEstimate e;
+  const Rigid3d seed = cur_from_ref_seed.Inverse();  // ref_from_cur
+  Rigid3d ref_from_cur = seed;
+  const double wr = 1.0 / std::pow(options_.prior_sigma_rotation_deg * M_PI / 180.0, 2);
+  const double wt = 1.0 / std::pow(options_.prior_sigma_translation, 2);
+  const double wp = 1.0 / (options_.point_sigma * options_.point_sigma);
+  const double huber = 2.0 * options_.point_sigma;
+  bool solved = false;
+  for (int it = 0; it < options_.constrained_iterations; ++it) {
+    Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+    const Eigen::Matrix3d r = ref_from_cur.RotationMatrix();
+    const Eigen::Vector3d t = ref_from_cur.translation;
+    int used = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      const Eigen::Vector3d x = r * points[i] + t;  // in the reference camera
+      if (x.z() <= options_.min_depth) continue;
+      const double pu = camera_.fx * x.x() / x.z() + camera_.cx;
+      const double pv = camera_.fy * x.y() / x.z() + camera_.cy;
+      if (photometric) {
+        // Intensity residual where the point lands on reference static pixels.
+        const int ru = static_cast<int>(std::lround(pu)), rv = static_cast<int>(std::lround(pv));
+        double i0, il, ir, iu_, id;
+        if (ru >= 0 && rv >= 0 && ru < camera_.width && rv < camera_.height &&
+            (reference_mask.empty() || reference_mask.at<uint8_t>(rv, ru)) &&
+            Bilinear(reference.gray, pu, pv, &i0) && Bilinear(reference.gray, pu - 1, pv, &il) &&
+            Bilinear(reference.gray, pu + 1, pv, &ir) &&
+            Bilinear(reference.gray, pu, pv - 1, &iu_) &&
+            Bilinear(reference.gray, pu, pv + 1, &id)) {
+          const double gx = 0.5 * (ir - il), gy = 0.5 * (id - iu_);
+          const double iz = 1.0 / x.z();
+          // d intensity / d x (through the projection).
+          const Eigen::Vector3d a(gx * camera_.fx * iz, gy * camera_.fy * iz,
+                                  -(gx * camera_.fx * x.x() + gy * camera_.fy * x.y()) * iz * iz);
+          const double res = i0 - intensities[i];
+          Eigen::Matrix<double, 6, 1> j;
+          j << x.cross(a), a;
+          const double w = wi * (std::abs(res) <= huber_i ? 1.0 : huber_i / std::abs(res));
+          h += w * j * j.transpose();
+          b -= w * j * res;
+        }
+      }
+      const int iu = static_cast<int>(std::lround(pu));
+      const int iv = static_cast<int>(std::lround(pv));
+      Eigen::Vector3d q, n;
+      if (!reference_point(iu, iv, &q, &n)) continue;
+      if (std::abs(x.z() - q.z()) > options_.max_depth_diff) continue;
+      const double res = n.dot(x - q);
+      // Left perturbation of ref_from_cur by (w, v): d x = -[x]x w + v.
+      Eigen::Matrix<double, 6, 1> j;
+      j << x.cross(n), n;
+      const double w = wp * (std::abs(res) <= huber ? 1.0 : huber / std::abs(res));
+      h += w * j * j.transpose();
+      b -= w * j * res;
+      ++used;
+    }
+    if (used < 6) break;
+    // The prior: ref_from_cur = exp(e) * seed, e ~ N(0, diag(sigma_r^2 x3, sigma_t^2 x3)).
+    const Rigid3d diff = ref_from_cur * seed.Inverse();
+    const Eigen::AngleAxisd aa(diff.rotation);
+    Eigen::Matrix<double, 6, 1> prior_residual;
+    prior_residual << aa.angle() * aa.axis(), diff.translation;
+    for (int i = 0; i < 6; ++i) {
+      const double wi = i < 3 ? wr : wt;
+      h(i, i) += wi;
+      b(i) -= wi * prior_residual(i);
+    }
+    const Eigen::Matrix<double, 6, 1> delta = h.ldlt().solve(b);
+    if (!delta.allFinite()) break;
+    ref_from_cur = ExpTwist(delta.head<3>(), delta.tail<3>()) * ref_from_cur;
+    solved = true;
+    if (delta.head<3>().norm() < 1e-6 && delta.tail<3>().norm() < 1e-5) break;
+  }
+  if (solved) {
+    e.converged = true;
+    e.cur_from_ref = ref_from_cur.Inverse();
+    const Rigid3d jump = e.cur_from_ref * cur_from_ref_seed.Inverse();
+    const bool near_seed =
+        jump.translation.norm() <= options_.max_translation_from_seed &&
+        RotationAngle(jump.rotation) * 180.0 / M_PI <= options_.max_rotation_from_seed_deg;
+    e.agreement = Agreement(reference, current, e.cur_from_ref);
+    e.verified = near_seed && e.agreement.inliers >= options_.constrained_min_inliers &&
                  e.agreement.inlier_fraction() >= options_.min_inlier_fraction;
   }
   e.time_ms =

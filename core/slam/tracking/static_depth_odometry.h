@@ -91,6 +91,18 @@ struct StaticDepthOdometryOptions {
   int min_inliers = 800;                  // sampled pixels that agree
   double max_translation_from_seed = 0.10;  // metres: more than a hand-held camera moves in 33 ms
   double max_rotation_from_seed_deg = 8.0;
+  // The constrained estimate (EstimateWithPrior): where the static pixels are too few or too
+  // narrow a strip for the alignment above (it slides along the directions they leave free), a
+  // point-to-plane alignment with the motion model as a prior, each weighted by its uncertainty.
+  double prior_sigma_translation = 0.003;  // metres per frame the motion model may be off
+  double prior_sigma_rotation_deg = 1.0;   // degrees per frame
+  double point_sigma = 0.01;               // metres, point-to-plane residual of a sampled pixel
+  double intensity_sigma = 10.0;           // grey levels, intensity residual of a sampled pixel
+                                           // (0: depth only)
+  int constrained_step_px = 2;             // every n-th pixel in x and y
+  int constrained_iterations = 15;
+  int constrained_min_inliers = 150;  // verification of the constrained estimate (sampled as
+                                      // the verification above, every verify_step_px)
   void Check() const;
 };
 
@@ -124,6 +136,12 @@ class StaticDepthOdometry {
   // Aligns `current` onto `reference`. Throws InputError when the views do not match the camera.
   StaticDepthEstimate Estimate(const DenseView& reference, const DenseView& current,
                                const Rigid3d& cur_from_ref_seed) const;
+  // Aligns `current` onto `reference` by Gauss-Newton on point-to-plane residuals of the static
+  // pixels plus a prior pulling the pose towards the seed (one frame of motion-model error:
+  // prior_sigma_*): the pixels decide the directions they constrain, the motion model the rest.
+  // Verified as Estimate, with constrained_min_inliers instead of min_inliers.
+  StaticDepthEstimate EstimateWithPrior(const DenseView& reference, const DenseView& current,
+                                        const Rigid3d& cur_from_ref_seed) const;
   // The verification measure alone (also used by tests).
   DepthAgreement Agreement(const DenseView& reference, const DenseView& current,
                            const Rigid3d& cur_from_ref) const;

@@ -65,6 +65,8 @@ void Tracker::TrackNext(Frame& frame, TrackResult* result) {
   } else {
     lost_ = true;
     velocity_.reset();
+    held_velocity_.reset();
+    held_poses_.clear();
     result->state = TrackingState::kLost;
     records_.push_back({frame.stamp, -1, Rigid3d(), TrackingState::kLost});
     frame.has_pose = false;
@@ -85,6 +87,22 @@ void Tracker::AcceptFeaturePose(Frame& frame, const std::optional<Rigid3d>& pred
       last_frame_.has_pose
           ? std::optional<Rigid3d>(frame.cam_from_world * last_frame_.cam_from_world.Inverse())
           : std::nullopt;
+  if (last_inliers_ >= options_.fallback_smoothing_weak_inliers) {
+    // The mean motion per frame over the last frames held by enough inliers (at most 10 frames
+    // apart).
+    held_poses_.emplace_back(frame.id, frame.cam_from_world);
+    while (held_poses_.size() > 1 &&
+           (held_poses_.size() > 10 || frame.id - held_poses_.front().first > 10))
+      held_poses_.pop_front();
+    if (held_poses_.size() > 1) {
+      const double n = double(frame.id - held_poses_.front().first);
+      const Rigid3d total = frame.cam_from_world * held_poses_.front().second.Inverse();
+      held_velocity_ = Rigid3d(Eigen::Quaterniond::Identity().slerp(1.0 / n, total.rotation),
+                               total.translation / n);
+    } else {
+      held_velocity_ = velocity_;
+    }
+  }
   // Points matched as outliers are dropped before the frame becomes "last".
   for (size_t i = 0; i < frame.size(); ++i) {
     if (frame.outlier[i]) frame.map_points[i] = nullptr;

@@ -2,6 +2,7 @@
 // relocalization. One Tracker per camera stream; called from one thread.
 #pragma once
 
+#include <deque>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -57,6 +58,9 @@ struct TrackingOptions {
   bool dense_fallback = true;
   StaticDepthOdometryOptions fallback;
   int fallback_check_below_inliers = 150;  // feature poses with fewer inliers are cross-checked
+  // Sampled static pixels (StaticDepthOdometryOptions::verify_step_px) below which a frame's dense
+  // pose comes from the estimate constrained by the motion prior, not the plain alignment.
+  int fallback_narrow_view_samples = 1600;
   double fallback_override_fraction_gain = 0.02;  // dense agreement must be this much higher
   double fallback_override_rmse_ratio = 1.5;      // ... or higher with this ratio of residuals
   // When features take over again after a stretch of fallback frames, the stretch is re-anchored
@@ -183,9 +187,11 @@ class Tracker {
     DepthAgreement agreement;
   };
   // The verified dense pose of a frame (against the last frame, else the newest keyframe;
-  // keyframe_only: against the newest keyframe).
+  // keyframe_only: against the newest keyframe). with_prior: when neither verifies, the estimate
+  // against the last frame constrained by the motion model (StaticDepthOdometry::
+  // EstimateWithPrior), for static pixels too few or too narrow for the plain alignment.
   std::optional<DenseResult> DenseEstimate(const Frame& frame, const Rigid3d& predicted,
-                                           bool keyframe_only);
+                                           bool keyframe_only, bool with_prior = false);
   // Sets up a frame whose cam_from_world is a dense pose (drops feature associations that
   // disagree with it); true.
   bool AcceptDensePose(Frame& frame);
@@ -208,6 +214,13 @@ class Tracker {
   bool localization_ = false;
   Frame last_frame_;
   std::optional<Rigid3d> velocity_;  // cam_from_world(t) * world_from_cam(t-1)
+  // velocity_ of the last frame whose feature pose rested on enough inliers
+  // (>= fallback_smoothing_weak_inliers): the motion prior of the constrained dense estimate, so
+  // that a stretch does not carry on the motion of the weakly held frames at its start.
+  std::optional<Rigid3d> held_velocity_;
+  // The last frames held that way (id, cam_from_world): held_velocity_ is their mean motion per
+  // frame, so that one frame's error does not become the stretch's motion.
+  std::deque<std::pair<int64_t, Rigid3d>> held_poses_;
   std::shared_ptr<KeyFrame> reference_kf_;
   std::shared_ptr<KeyFrame> last_kf_;
   int64_t last_kf_frame_id_ = -1;

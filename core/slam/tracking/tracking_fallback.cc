@@ -5,8 +5,10 @@
 // cross-checked the same way: when the dense pose explains the static depth clearly better
 // (agreement higher by fallback_override_fraction_gain), it replaces the feature pose. Only a
 // verified estimate becomes the frame's pose (state `fallback`); such frames never create
-// keyframes or map points. A frame without a dense view, without a previous pose, or whose
-// estimate fails the verification stays `lost`.
+// keyframes or map points. Where the static view is narrow (a strip beside a person filling the
+// view) or the plain alignment fails, the estimate constrained by the motion model decides
+// (StaticDepthOdometry::EstimateWithPrior). A frame without a dense view, without a previous
+// pose, or whose estimate fails the verification stays `lost`.
 #include <cmath>
 
 #include "core/base/log.h"
@@ -28,7 +30,7 @@ void Tracker::PrepareDenseFallback(const PinholeCamera& camera) {
 
 std::optional<Tracker::DenseResult> Tracker::DenseEstimate(const Frame& frame,
                                                            const Rigid3d& predicted,
-                                                           bool keyframe_only) {
+                                                           bool keyframe_only, bool with_prior) {
   if (!frame.dense) return std::nullopt;
   if (!static_depth_odometry_) {
     static_depth_odometry_ =
@@ -53,6 +55,25 @@ std::optional<Tracker::DenseResult> Tracker::DenseEstimate(const Frame& frame,
               << e.agreement.inliers << "/" << e.agreement.correspondences << " agree ("
               << e.agreement.samples << " samples), rmse " << e.agreement.rmse << " m, "
               << e.time_ms << " ms";
+    // A narrow static view (a strip beside a person filling the view) verifies estimates that
+    // slid along the directions it leaves free: the constrained estimate decides there.
+    if (e.verified && with_prior && e.agreement.samples < options_.fallback_narrow_view_samples)
+      break;
+    if (e.verified)
+      return DenseResult{e.cur_from_ref * ref.cam_from_world, ref.cam_from_world, ref.view,
+                         e.agreement};
+  }
+  if (with_prior && !references.empty() && references.front().view == last_frame_.dense.get()) {
+    const Reference& ref = references.front();
+    const Rigid3d prior = held_velocity_ ? *held_velocity_ * last_frame_.cam_from_world : predicted;
+    const Rigid3d seed = prior * ref.cam_from_world.Inverse();
+    const StaticDepthEstimate e =
+        static_depth_odometry_->EstimateWithPrior(*ref.view, *frame.dense, seed);
+    LOG_DEBUG << "tracking: frame " << frame.id
+              << " dense estimate with the motion prior against the last frame: verified "
+              << e.verified << ", " << e.agreement.inliers << "/" << e.agreement.correspondences
+              << " agree (" << e.agreement.samples << " samples), rmse " << e.agreement.rmse
+              << " m, " << e.time_ms << " ms";
     if (e.verified)
       return DenseResult{e.cur_from_ref * ref.cam_from_world, ref.cam_from_world, ref.view,
                          e.agreement};
@@ -94,7 +115,7 @@ bool Tracker::DenseOverridesFeaturePose(Frame& frame, const std::optional<Rigid3
 
 bool Tracker::TrackWithStaticDepth(Frame& frame, const std::optional<Rigid3d>& predicted) {
   if (!predicted || !frame.dense || !reference_kf_) return false;
-  const std::optional<DenseResult> dense = DenseEstimate(frame, *predicted, false);
+  const std::optional<DenseResult> dense = DenseEstimate(frame, *predicted, false, true);
   if (!dense) return false;
   frame.cam_from_world = dense->cam_from_world;
   return AcceptDensePose(frame);
@@ -141,8 +162,9 @@ bool Tracker::SmoothFallbackStretch(const Frame& frame, const std::optional<Rigi
   if (!static_depth_odometry_) return false;
   // Where the last fallback frame should have been, given this frame's feature pose.
   const Rigid3d seed = *predicted * last_frame_.cam_from_world.Inverse();  // cur_from_last
-  const StaticDepthEstimate e =
-      static_depth_odometry_->Estimate(*last_frame_.dense, *frame.dense, seed);
+  StaticDepthEstimate e = static_depth_odometry_->Estimate(*last_frame_.dense, *frame.dense, seed);
+  if (!e.verified)
+    e = static_depth_odometry_->EstimateWithPrior(*last_frame_.dense, *frame.dense, seed);
   if (!e.verified) {
     LOG_DEBUG << "tracking: frame " << frame.id
               << " fallback stretch not re-anchored (dense estimate not verified)";

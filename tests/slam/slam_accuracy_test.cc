@@ -109,6 +109,33 @@ TEST(SlamAccuracy, GeneratedWalkerCoveringMostOfTheViewKeepsTheKeyframesInPlace)
   EXPECT_GT(ate_without_prior, 7.0 * ate_alone);
 }
 
+// A walker covering 95 % of the view for 1 s leaves a strip of static pixels a few dozen pixels
+// wide: every frame gets a pose from the dense chain constrained by the motion model, including
+// the frames where the walker enters and leaves the view (few feature inliers, a strip of static
+// pixels seen in both frames), and the stretch is re-anchored on the first strong feature pose.
+// Measured (this seed): ATE 2.2x the run without the walker (0.0086 m against 0.0040 m); 4.8x
+// when the narrow view is judged by the current frame's static pixels alone and a weak feature
+// pose ends the stretch.
+TEST(SlamAccuracy, GeneratedWalkerFillingTheViewIsTrackedThroughTheStretch) {
+  SyntheticOptions synth;
+  synth.num_frames = 150;
+  synth.num_moving_objects = 0;
+  synth.depth_noise = true;
+  synth.rgb_noise_sigma = 2.0;
+  synth.seed = 1;
+  const auto gt = GroundTruth(synth);
+  const double ate_alone =
+      ComputeAte(gt, RunSynthetic(synth, FilterMode::kFull, true).trajectory).error.rmse;
+  synth.occluder_coverage = 0.95;
+  synth.occluder_start_frame = 60;
+  synth.occluder_frames = 30;
+  const AteResult ate = ComputeAte(gt, RunSynthetic(synth, FilterMode::kFull, true).trajectory);
+  std::cout << "walker covering 95 %: ATE " << ate.error.rmse << " m (" << ate.num_pairs
+            << " frames with a pose), without the walker " << ate_alone << " m\n";
+  EXPECT_EQ(ate.num_pairs, static_cast<size_t>(synth.num_frames));
+  EXPECT_LE(ate.error.rmse, 3.0 * ate_alone);
+}
+
 // Blank frames (no texture, no depth) are reported lost without a pose; after a jump along the
 // path the tracker relocalizes against the map instead of inventing a pose.
 TEST(SlamRelocalization, LostFramesHaveNoPoseAndTrackingRecovers) {

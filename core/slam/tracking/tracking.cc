@@ -54,8 +54,16 @@ void Tracker::TrackNext(Frame& frame, TrackResult* result) {
   }
   if (ok) ok = TrackLocalMap(frame);
   // A pose held by few features is checked against the dense estimate (tracking_fallback.cc).
-  const bool dense_override =
-      ok && options_.dense_fallback && DenseOverridesFeaturePose(frame, predicted);
+  // Right after a fallback frame, a pose held by few features (< fallback_smoothing_weak_inliers)
+  // where the static view is still a strip beside the person leaving it can be centimetres off:
+  // there the dense chain continues (estimate constrained by the motion model), and the stretch
+  // is re-anchored on the next feature pose (SmoothFallbackStretch).
+  const bool returning = !records_.empty() && records_.back().state == TrackingState::kFallback;
+  const bool dense_continues = ok && options_.dense_fallback && returning &&
+                               last_inliers_ < options_.fallback_smoothing_weak_inliers &&
+                               TrackWithStaticDepth(frame, predicted, true);
+  const bool dense_override = dense_continues || (ok && options_.dense_fallback &&
+                                                  DenseOverridesFeaturePose(frame, predicted));
   if (ok && !dense_override) {
     AcceptFeaturePose(frame, predicted, relocalized, result);
   } else if (dense_override ||

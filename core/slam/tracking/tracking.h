@@ -58,8 +58,9 @@ struct TrackingOptions {
   bool dense_fallback = true;
   StaticDepthOdometryOptions fallback;
   int fallback_check_below_inliers = 150;  // feature poses with fewer inliers are cross-checked
-  // Sampled static pixels (StaticDepthOdometryOptions::verify_step_px) below which a frame's dense
-  // pose comes from the estimate constrained by the motion prior, not the plain alignment.
+  // Sampled static pixels seen in both frames (StaticDepthOdometryOptions::verify_step_px) below
+  // which a frame's dense pose comes from the estimate constrained by the motion prior, not the
+  // plain alignment.
   int fallback_narrow_view_samples = 1600;
   double fallback_override_fraction_gain = 0.02;  // dense agreement must be this much higher
   double fallback_override_rmse_ratio = 1.5;      // ... or higher with this ratio of residuals
@@ -175,7 +176,10 @@ class Tracker {
   bool NeedNewKeyFrame(const Frame& frame);
   std::shared_ptr<KeyFrame> CreateKeyFrame(Frame& frame);
   // tracking_fallback.cc: the dense estimate of a frame feature tracking could not hold.
-  bool TrackWithStaticDepth(Frame& frame, const std::optional<Rigid3d>& predicted);
+  // narrow_only: true only for a pose from the estimate constrained by the motion model (a narrow
+  // static view); the frame keeps its feature pose otherwise.
+  bool TrackWithStaticDepth(Frame& frame, const std::optional<Rigid3d>& predicted,
+                            bool narrow_only = false);
   // A feature pose with fewer than options_.fallback_check_below_inliers inliers is compared with
   // the dense estimate; true (pose replaced by the dense one) when the dense one explains the
   // static depth clearly better.
@@ -185,11 +189,15 @@ class Tracker {
     Rigid3d ref_from_world;
     const DenseView* ref_view = nullptr;
     DepthAgreement agreement;
+    bool constrained = false;  // from StaticDepthOdometry::EstimateWithPrior (a narrow view)
   };
   // The verified dense pose of a frame (against the last frame, else the newest keyframe;
   // keyframe_only: against the newest keyframe). with_prior: when neither verifies, the estimate
   // against the last frame constrained by the motion model (StaticDepthOdometry::
   // EstimateWithPrior), for static pixels too few or too narrow for the plain alignment.
+  // Too few static pixels seen in both frames for the plain alignment to constrain every
+  // direction (TrackingOptions::fallback_narrow_view_samples).
+  bool NarrowView(const DepthAgreement& agreement) const;
   std::optional<DenseResult> DenseEstimate(const Frame& frame, const Rigid3d& predicted,
                                            bool keyframe_only, bool with_prior = false);
   // Sets up a frame whose cam_from_world is a dense pose (drops feature associations that

@@ -6,8 +6,10 @@
 // (agreement higher by fallback_override_fraction_gain), it replaces the feature pose. Only a
 // verified estimate becomes the frame's pose (state `fallback`); such frames never create
 // keyframes or map points. Where the static view is narrow (a strip beside a person filling the
-// view) or the plain alignment fails, the estimate constrained by the motion model decides
-// (StaticDepthOdometry::EstimateWithPrior). A frame without a dense view, without a previous
+// view: few static pixels seen in both frames) or the plain alignment fails, the estimate
+// constrained by the motion model decides (StaticDepthOdometry::EstimateWithPrior); so does the
+// re-anchoring of a stretch. A feature pose held by few inliers right after a fallback frame
+// continues the dense chain. A frame without a dense view, without a previous
 // pose, or whose estimate fails the verification stays `lost`.
 #include <cmath>
 
@@ -57,8 +59,7 @@ std::optional<Tracker::DenseResult> Tracker::DenseEstimate(const Frame& frame,
               << e.time_ms << " ms";
     // A narrow static view (a strip beside a person filling the view) verifies estimates that
     // slid along the directions it leaves free: the constrained estimate decides there.
-    if (e.verified && with_prior && e.agreement.samples < options_.fallback_narrow_view_samples)
-      break;
+    if (e.verified && with_prior && NarrowView(e.agreement)) break;
     if (e.verified)
       return DenseResult{e.cur_from_ref * ref.cam_from_world, ref.cam_from_world, ref.view,
                          e.agreement};
@@ -76,9 +77,15 @@ std::optional<Tracker::DenseResult> Tracker::DenseEstimate(const Frame& frame,
               << " m, " << e.time_ms << " ms";
     if (e.verified)
       return DenseResult{e.cur_from_ref * ref.cam_from_world, ref.cam_from_world, ref.view,
-                         e.agreement};
+                         e.agreement, true};
   }
   return std::nullopt;
+}
+
+bool Tracker::NarrowView(const DepthAgreement& agreement) const {
+  // The static pixels seen in both frames count: a person entering or leaving the view leaves a
+  // strip of them even where one of the two frames shows more.
+  return agreement.correspondences < options_.fallback_narrow_view_samples;
 }
 
 bool Tracker::DenseOverridesFeaturePose(Frame& frame, const std::optional<Rigid3d>& predicted) {
@@ -113,10 +120,11 @@ bool Tracker::DenseOverridesFeaturePose(Frame& frame, const std::optional<Rigid3
   return AcceptDensePose(frame);
 }
 
-bool Tracker::TrackWithStaticDepth(Frame& frame, const std::optional<Rigid3d>& predicted) {
+bool Tracker::TrackWithStaticDepth(Frame& frame, const std::optional<Rigid3d>& predicted,
+                                   bool narrow_only) {
   if (!predicted || !frame.dense || !reference_kf_) return false;
   const std::optional<DenseResult> dense = DenseEstimate(frame, *predicted, false, true);
-  if (!dense) return false;
+  if (!dense || (narrow_only && !dense->constrained)) return false;
   frame.cam_from_world = dense->cam_from_world;
   return AcceptDensePose(frame);
 }
@@ -163,7 +171,7 @@ bool Tracker::SmoothFallbackStretch(const Frame& frame, const std::optional<Rigi
   // Where the last fallback frame should have been, given this frame's feature pose.
   const Rigid3d seed = *predicted * last_frame_.cam_from_world.Inverse();  // cur_from_last
   StaticDepthEstimate e = static_depth_odometry_->Estimate(*last_frame_.dense, *frame.dense, seed);
-  if (!e.verified)
+  if (!e.verified || NarrowView(e.agreement))
     e = static_depth_odometry_->EstimateWithPrior(*last_frame_.dense, *frame.dense, seed);
   if (!e.verified) {
     LOG_DEBUG << "tracking: frame " << frame.id

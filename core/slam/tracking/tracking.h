@@ -191,13 +191,13 @@ class Tracker {
     DepthAgreement agreement;
     bool constrained = false;  // from StaticDepthOdometry::EstimateWithPrior (a narrow view)
   };
-  // The verified dense pose of a frame (against the last frame, else the newest keyframe;
-  // keyframe_only: against the newest keyframe). with_prior: when neither verifies, the estimate
-  // against the last frame constrained by the motion model (StaticDepthOdometry::
-  // EstimateWithPrior), for static pixels too few or too narrow for the plain alignment.
   // Too few static pixels seen in both frames for the plain alignment to constrain every
   // direction (TrackingOptions::fallback_narrow_view_samples).
   bool NarrowView(const DepthAgreement& agreement) const;
+  // The verified dense pose of a frame (against the last frame, else the newest keyframe;
+  // keyframe_only: against the newest keyframe). with_prior: when neither verifies, or the view is
+  // narrow (NarrowView), the estimate against the last frame constrained by the motion model
+  // (StaticDepthOdometry::EstimateWithPrior).
   std::optional<DenseResult> DenseEstimate(const Frame& frame, const Rigid3d& predicted,
                                            bool keyframe_only, bool with_prior = false);
   // Sets up a frame whose cam_from_world is a dense pose (drops feature associations that

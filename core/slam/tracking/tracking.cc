@@ -58,8 +58,7 @@ void Tracker::TrackNext(Frame& frame, TrackResult* result) {
   // where the static view is still a strip beside the person leaving it can be centimetres off:
   // there the dense chain continues (estimate constrained by the motion model), and the stretch
   // is re-anchored on the next feature pose (SmoothFallbackStretch).
-  const bool returning = !records_.empty() && records_.back().state == TrackingState::kFallback;
-  const bool dense_continues = ok && options_.dense_fallback && returning &&
+  const bool dense_continues = ok && options_.dense_fallback && LastWasFallback() &&
                                last_inliers_ < options_.fallback_smoothing_weak_inliers &&
                                TrackWithStaticDepth(frame, predicted, true);
   const bool dense_override = dense_continues || (ok && options_.dense_fallback &&
@@ -85,7 +84,7 @@ void Tracker::TrackNext(Frame& frame, TrackResult* result) {
 void Tracker::AcceptFeaturePose(Frame& frame, const std::optional<Rigid3d>& predicted,
                                 bool relocalized, TrackResult* result) {
   lost_ = false;
-  const bool returning = !records_.empty() && records_.back().state == TrackingState::kFallback;
+  const bool returning = LastWasFallback();
   if (options_.dense_fallback && options_.fallback_smoothing && returning)
     SmoothFallbackStretch(frame, predicted);
   result->state = relocalized ? TrackingState::kRelocalized : TrackingState::kOk;
@@ -127,6 +126,10 @@ void Tracker::AcceptFeaturePose(Frame& frame, const std::optional<Rigid3d>& pred
                       frame.cam_from_world * reference_kf_->cam_from_world.Inverse(), result->state,
                       last_inliers_});
   last_frame_ = frame;
+}
+
+bool Tracker::LastWasFallback() const {
+  return !records_.empty() && records_.back().state == TrackingState::kFallback;
 }
 
 void Tracker::AcceptDensePose(Frame& frame, TrackResult* result) {

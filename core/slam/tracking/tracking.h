@@ -172,6 +172,8 @@ class Tracker {
                          TrackResult* result);
   // The frame's dense pose accepted (verified): no keyframe, no map points from it.
   void AcceptDensePose(Frame& frame, TrackResult* result);
+  // The newest record is a fallback frame (the frame being tracked follows one).
+  bool LastWasFallback() const;
   void UpdateLocalMap(Frame& frame);
   bool NeedNewKeyFrame(const Frame& frame);
   std::shared_ptr<KeyFrame> CreateKeyFrame(Frame& frame);

@@ -94,9 +94,7 @@ bool Tracker::DenseOverridesFeaturePose(Frame& frame, const std::optional<Rigid3
   // Against the last frame when features held its pose, else against the newest keyframe (its
   // pose rests on the map): comparing with a dense (fallback) last frame would favour continuing
   // the dense chain over features that have found the map again.
-  const bool last_was_dense =
-      !records_.empty() && records_.back().state == TrackingState::kFallback;
-  const std::optional<DenseResult> dense = DenseEstimate(frame, *predicted, last_was_dense);
+  const std::optional<DenseResult> dense = DenseEstimate(frame, *predicted, LastWasFallback());
   if (!dense) return false;
   const DepthAgreement& dense_agreement = dense->agreement;
   // The feature pose measured the same way, against the same reference.

@@ -64,9 +64,16 @@ class MapperShell {
  private:
   // What the apply loop does when no prepared keyframe came.
   enum class Idle { kWait, kEnd };
+  // Why the apply loop returned: the map is complete (or cut short), or slam said it is done.
+  enum class Loop { kEnded, kSlamDone };
 
   void OnStatus(const ComponentStatus& s, const WriterGuid& from);
   void PrepareLoop();
+  // A thread running PrepareLoop; `background`: at lowered priority.
+  std::thread StartPreparing(bool background);
+  // Applies prepared keyframes until the map is complete or, with `until_slam_done`, until slam
+  // has said that its run is done.
+  Loop ApplyLoop(const StopFlagPtr& stop, bool until_slam_done);
   // The next admitted keyframe message (gate passed, in writer order), or none within ~50 ms.
   std::optional<msg::Keyframe> NextAdmitted();
   void Publish();
@@ -83,6 +90,7 @@ class MapperShell {
   std::atomic<size_t> in_preparation_{0};  // taken by the prepare thread, not yet in prepared_
   std::atomic<size_t> bad_samples_{0};
   std::atomic<bool> prepare_stop_{false};
+  std::optional<PinholeCamera> cloud_camera_;  // the map's camera: the first new keyframe's
   BlockingQueue<std::pair<msg::Keyframe, WriterGuid>> queue_;
   std::mutex mutex_;
   bool slam_done_ = false;  // guarded by mutex_
@@ -99,6 +107,7 @@ class MapperShell {
   WriterGoneWatch slam_gone_;
   std::optional<Clock::time_point> flush_deadline_;
   PauseWatch pause_;
+  ReadyAnnouncer announcer_{ComponentKind::kMapper};
   // The endpoints last: their listeners use the state above.
   dds::Writer<msg::MapUpdatePubSubType> updates_;
   dds::Writer<msg::StreamStatusPubSubType> status_;
@@ -159,9 +168,6 @@ std::optional<msg::Keyframe> MapperShell::NextAdmitted() {
 }
 
 void MapperShell::PrepareLoop() {
-  SetCurrentThreadName("map prepare");
-  LowerCurrentThreadPriority();               // the map has no deadline: tracking goes first
-  std::optional<PinholeCamera> cloud_camera;  // the map's camera: the first new keyframe's
   while (!prepare_stop_) {
     std::optional<msg::Keyframe> sample = NextAdmitted();
     if (!sample) continue;
@@ -170,8 +176,8 @@ void MapperShell::PrepareLoop() {
       Prepared p;
       p.keyframe = KeyframeFromMsg(*sample, &p.camera);
       if (ChangeOf(p.keyframe) == KeyframeChange::kNew && !p.keyframe.depth.empty()) {
-        if (!cloud_camera) cloud_camera = p.camera;
-        p.cloud = ExtractStaticCloud(p.keyframe, *cloud_camera, options_.octomap);
+        if (!cloud_camera_) cloud_camera_ = p.camera;
+        p.cloud = ExtractStaticCloud(p.keyframe, *cloud_camera_, options_.octomap);
         p.keyframe.rgb.release();
         p.keyframe.depth.release();
         p.keyframe.dynamic_mask.release();
@@ -313,30 +319,60 @@ void MapperShell::Finish(const StopFlagPtr& stop) {
            << (full_written ? " and " + options_.full_map_path : "");
 }
 
-MapperStats MapperShell::Run(const StopFlagPtr& stop) {
-  std::thread prepare_thread([this] { PrepareLoop(); });
-  ReadyAnnouncer announcer(ComponentKind::kMapper);
-  // The map stage has no deadline: on a busy machine it takes the CPU time that the player,
-  // the detector and slam leave, instead of delaying the poses (with the mapper at the same
-  // priority, keyframe bursts in a crowd made poses late at the camera's rate).
-  LowerCurrentThreadPriority();
+MapperShell::Loop MapperShell::ApplyLoop(const StopFlagPtr& stop, bool until_slam_done) {
   while (true) {
     pause_.Tick();
     started_.Poll(status_);
-    announcer.Poll(status_, keyframes_.matched() > 0);
+    announcer_.Poll(status_, keyframes_.matched() > 0);
     if (stop->requested() && !flush_deadline_) {
       // Stopping: slam publishes its last corrections as it stops; take them if it is there.
       flush_deadline_ = Clock::now() + std::chrono::milliseconds(
                                            static_cast<int64_t>(options_.flush_timeout_s * 1000));
       if (keyframes_.matched() == 0) *flush_deadline_ = Clock::now();
     }
+    if (until_slam_done) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (slam_done_) return Loop::kSlamDone;
+    }
     const bool writer_gone = slam_gone_.Update(keyframes_.matched() > 0);
     std::optional<Prepared> sample = prepared_.Pop(std::chrono::milliseconds(50));
     if (!sample) {
-      if (AtIdle(writer_gone, stop) == Idle::kEnd) break;
+      if (AtIdle(writer_gone, stop) == Idle::kEnd) return Loop::kEnded;
       continue;
     }
     Apply(*sample, flush_deadline_.has_value());
+  }
+}
+
+std::thread MapperShell::StartPreparing(bool background) {
+  prepare_stop_ = false;
+  return std::thread([this, background] {
+    SetCurrentThreadName("map prepare");
+    if (background) LowerCurrentThreadPriority();
+    PrepareLoop();
+  });
+}
+
+MapperStats MapperShell::Run(const StopFlagPtr& stop) {
+  // While slam runs, the map stage has no deadline: on a busy machine it takes the CPU time that
+  // the player, the detector and slam leave, instead of delaying the poses (with the mapper at
+  // the same priority, keyframe bursts in a crowd made poses late at the camera's rate). Once
+  // slam's run is done nothing of the pipeline needs the CPU any more and the rest (the backlog,
+  // the final map) is what the user waits for: it is finished at the process's own priority
+  // (a lowered thread cannot raise itself again, so fresh threads of this one take over).
+  std::thread prepare_thread = StartPreparing(/*background=*/true);
+  Loop ended = Loop::kEnded;
+  std::thread background([&] {
+    SetCurrentThreadName("map");
+    LowerCurrentThreadPriority();
+    ended = ApplyLoop(stop, /*until_slam_done=*/true);
+  });
+  background.join();
+  if (ended == Loop::kSlamDone) {
+    prepare_stop_ = true;
+    prepare_thread.join();
+    prepare_thread = StartPreparing(/*background=*/false);
+    ApplyLoop(stop, /*until_slam_done=*/false);
   }
   prepare_stop_ = true;
   prepare_thread.join();

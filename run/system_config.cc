@@ -178,6 +178,10 @@ std::vector<Row> TrackingRows() {
           "dense pose of frames features cannot hold (state fallback)"),
       Row("Tracking.fallback_smoothing", DYGSLAM_SETTING_FIELD(tracking.fallback_smoothing), {}, "",
           "a stretch of fallback poses is re-anchored when features return"),
+      Row("Tracking.motion_prior", DYGSLAM_SETTING_FIELD(tracking.optimizer.pose_motion_prior), {},
+          "",
+          "a frame's pose is held near the motion model's prediction (1 cm, 3 deg) where its "
+          "matches do not fix it"),
       Row("LocalMapping.cull_keyframes", DYGSLAM_SETTING_FIELD(local_mapping.cull_keyframes), {},
           "", "redundant keyframes are removed"),
       Row("LocalMapping.pose_prior",

@@ -668,20 +668,24 @@ class Bench:
                     results[key] = sc
         self.results["stretch"] = results
 
-    # the local BA's pose prior ----------------------------------------------------------------
-    def pose_prior(self):
-        """The runs of the sections above once more with the local BA's pose prior off: bonn from
-        the 8 start entries, the generated crowds, the walker filling the view (full filter) and
-        the loops (one run each; loop closing on, no filter, as in the loop table)."""
-        work = os.path.join(self.work, "pose_prior")
+    # the pose priors (local BA, tracking) -----------------------------------------------------
+    def pose_prior(self, which):
+        """The runs of the sections above once more with one pose prior off (PRIORS[which]): bonn
+        from the 8 start entries, the generated crowds, the walker filling the view (full filter)
+        and the loops (one run each; loop closing on, no filter, as in the loop table)."""
+        work = os.path.join(self.work, which)
         os.makedirs(work, exist_ok=True)
+        key = PRIORS[which]["key"]
+
+        def write_without_pose_prior(config, path):
+            return write_without(config, path, key)
 
         def one(name, data, groundtruth, config, extra):
             out = os.path.join(work, name)
             shutil.rmtree(out, ignore_errors=True)
             cmd = [self.dygslam, "run", data, "--config", config, "--direct", "--no-map", "--out",
                    out, "--quiet"] + extra
-            say(f"without the pose prior: {name}")
+            say(f"without {key}: {name}")
             self.record_load()
             r = run(cmd, out + ".log")
             s = score_run(self.dygslam, groundtruth, out, r)
@@ -715,18 +719,18 @@ class Bench:
                                               os.path.join(work, name + "_without.yaml"))
             off[name] = one(name, directory, os.path.join(directory, "groundtruth.txt"), config,
                             ["--filter", "none"])
-        self.results["pose_prior"] = off
+        self.results[which] = off
 
-    def render_pose_prior(self, L):
-        """The section comparing the runs with and without the local BA's pose prior."""
-        L.append("## The local bundle adjustment's pose prior\n")
-        off = self.results.get("pose_prior")
+    def render_pose_prior(self, L, which):
+        """The section comparing the runs with and without one pose prior (PRIORS[which])."""
+        prior = PRIORS[which]
+        L.append(f"## {prior['title']}\n")
+        off = self.results.get(which)
         R = self.results
         if not off or not R.get("sensitivity") or not R.get("stretch") or not R.get("loops"):
             L.append("Not measured (`--quick`).\n")
             return
-        L.append("The local BA holds each keyframe near its pose in the directions its points leave "
-                 "nearly free (`LocalMapping.pose_prior`, on by default; how it works: "
+        L.append(f"{prior['what']} (`{prior['key']}`, on by default; how it works: "
                  "docs/how_it_works.md). The same runs as in the sections above, without it: "
                  "bonn_crowd_part from the 8 start entries (median, range), the generated crowds, "
                  "the walker filling the view (full filter; median over the seeds, the ratio to "
@@ -1279,7 +1283,8 @@ class Bench:
 
         self.render_sensitivity(L)
         self.render_stretch(L)
-        self.render_pose_prior(L)
+        for which in PRIORS:
+            self.render_pose_prior(L, which)
 
         # Map quality.
         L.append("## Map quality: ghost voxels\n")
@@ -1516,10 +1521,27 @@ def write_planar_as_line(config, path):
     return path
 
 
-def write_without_pose_prior(config, path):
-    """`config` with the local BA's pose prior off (its ablation)."""
+# The pose priors measured on and off (their ablations).
+PRIORS = {
+    "pose_prior": {
+        "key": "LocalMapping.pose_prior",
+        "title": "The local bundle adjustment's pose prior",
+        "what": "The local BA holds each keyframe near its pose in the directions its points leave "
+                "nearly free",
+    },
+    "motion_prior": {
+        "key": "Tracking.motion_prior",
+        "title": "Tracking's motion prior",
+        "what": "Tracking holds each frame's pose near the motion model's prediction in the "
+                "directions its matches leave nearly free",
+    },
+}
+
+
+def write_without(config, path, key):
+    """`config` with the boolean settings key `key` off."""
     with open(path, "w") as f:
-        f.write(open(config).read().rstrip("\n") + "\nLocalMapping.pose_prior: 0\n")
+        f.write(open(config).read().rstrip("\n") + f"\n{key}: 0\n")
     return path
 
 
@@ -1725,7 +1747,8 @@ def bench_main():
             bench.loops()
             bench.filter_sensitivity()
             bench.crowd_stretch()
-            bench.pose_prior()
+            for which in PRIORS:
+                bench.pose_prior(which)
         bench.map_reuse()
         bench.map_quality()
         bench.draw()

@@ -2,11 +2,11 @@
 // keypoint, descriptors, a grid for area queries, and the map-point associations being built.
 #pragma once
 
-#include <memory>
-#include <vector>
-
 #include <Eigen/Core>
+#include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
+#include <vector>
 
 #include "core/base/camera.h"
 #include "core/base/rigid3.h"
@@ -32,7 +32,9 @@ struct CameraGeometry {
 
   static CameraGeometry Create(const PinholeCamera& camera, const RgbdSensorOptions& sensor,
                                const OrbExtractor& extractor);
-  bool InBounds(double u, double v) const { return u >= min_x && u < max_x && v >= min_y && v < max_y; }
+  bool InBounds(double u, double v) const {
+    return u >= min_x && u < max_x && v >= min_y && v < max_y;
+  }
 };
 
 // Uniform grid over the undistorted image for radius queries.
@@ -60,17 +62,18 @@ class Frame {
   // in_dynamic_region (optional, one flag per feature): features inside detection boxes that the
   // filter kept. They are used for tracking against existing map points but never seed new ones.
   Frame(int64_t id, Timestamp stamp, OrbFeatures features, const cv::Mat& depth_m,
-        std::shared_ptr<const CameraGeometry> geometry, std::vector<uint8_t> in_dynamic_region = {});
+        std::shared_ptr<const CameraGeometry> geometry,
+        std::vector<uint8_t> in_dynamic_region = {});
 
   int64_t id = -1;
   Timestamp stamp;
   std::shared_ptr<const CameraGeometry> geometry;
-  std::vector<cv::KeyPoint> keypoints;      // distorted (image) coordinates
-  std::vector<cv::KeyPoint> undistorted;    // undistorted coordinates
+  std::vector<cv::KeyPoint> keypoints;    // distorted (image) coordinates
+  std::vector<cv::KeyPoint> undistorted;  // undistorted coordinates
   std::vector<Descriptor> descriptors;
-  std::vector<float> depth;                 // metres, <= 0: none
-  std::vector<float> u_right;               // virtual right coordinate, < 0: none
-  std::vector<uint8_t> in_dynamic_region;   // 1: never seeds a map point
+  std::vector<float> depth;                // metres, <= 0: none
+  std::vector<float> u_right;              // virtual right coordinate, < 0: none
+  std::vector<uint8_t> in_dynamic_region;  // 1: never seeds a map point
   bool CanSeedPoint(size_t i) const { return depth[i] > 0 && !in_dynamic_region[i]; }
   FeatureGrid grid;
   // Bag of words (empty until ComputeBow): relocalization, reference-keyframe tracking, loops.
@@ -78,7 +81,8 @@ class Frame {
   FeatureVector bow_features;  // direct index at kBowDirectIndexLevel
   static constexpr int kBowDirectIndexLevel = 2;
   void ComputeBow(const Vocabulary& vocabulary) {
-    if (bow_vector.empty()) vocabulary.Transform(descriptors, &bow_vector, &bow_features, kBowDirectIndexLevel);
+    if (bow_vector.empty())
+      vocabulary.Transform(descriptors, &bow_vector, &bow_features, kBowDirectIndexLevel);
   }
   // Gray image, depth and static mask, for the dense fallback estimator (null: none).
   std::shared_ptr<const DenseView> dense;
@@ -88,6 +92,9 @@ class Frame {
   std::vector<uint8_t> outlier;
   bool has_pose = false;
   Rigid3d cam_from_world;
+  // The motion model's prediction of cam_from_world, when the frame follows a tracked one with a
+  // known velocity (a prior of the pose-only optimisation: OptimizerOptions::pose_motion_prior).
+  std::optional<Rigid3d> motion_prior;
 
   size_t size() const { return keypoints.size(); }
   Eigen::Vector3d CameraCenter() const { return cam_from_world.Inverse().translation; }

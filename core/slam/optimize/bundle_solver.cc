@@ -84,9 +84,6 @@ class Problem {
   void SetPrior(const State& s, const Linearization& lin, double sigma_translation,
                 double sigma_rotation) {
     if (sigma_translation <= 0 || sigma_rotation <= 0) return;
-    Vector6d sigma;
-    sigma << Eigen::Vector3d::Constant(sigma_translation),
-        Eigen::Vector3d::Constant(sigma_rotation);
     const std::vector<Matrix6d> blocks = CameraBlocks(lin);
     prior_.clear();
     prior_information_.assign(num_cameras_, Matrix6d::Zero());
@@ -94,15 +91,7 @@ class Problem {
       prior_.emplace_back(s.rotation[k], s.translation[k]);
       const int c = camera_of_pose_[k];
       if (c < 0) continue;
-      const Matrix6d whitened = sigma.asDiagonal() * blocks[c] * sigma.asDiagonal();
-      const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(whitened);
-      Matrix6d weak = Matrix6d::Zero();
-      for (int d = 0; d < 6; ++d) {
-        if (eigen.eigenvalues()(d) < 1.0)
-          weak += eigen.eigenvectors().col(d) * eigen.eigenvectors().col(d).transpose();
-      }
-      const Vector6d inverse_sigma = sigma.cwiseInverse();
-      prior_information_[c] = inverse_sigma.asDiagonal() * weak * inverse_sigma.asDiagonal();
+      prior_information_[c] = PriorInWeakDirections(blocks[c], sigma_translation, sigma_rotation);
     }
   }
 

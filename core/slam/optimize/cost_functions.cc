@@ -1,5 +1,6 @@
 #include "core/slam/optimize/cost_functions.h"
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 
 namespace dygslam {
@@ -80,6 +81,22 @@ Eigen::Matrix<double, 6, 1> PosePriorError(const Rigid3d& cam_from_world, const 
   e.head<3>() = cam_from_world.translation - relative * prior.translation;
   e.tail<3>() = angle_axis.angle() * angle_axis.axis();
   return e;
+}
+
+Eigen::Matrix<double, 6, 6> PriorInWeakDirections(const Eigen::Matrix<double, 6, 6>& information,
+                                                  double sigma_translation, double sigma_rotation) {
+  using Matrix6d = Eigen::Matrix<double, 6, 6>;
+  Eigen::Matrix<double, 6, 1> sigma;
+  sigma << Eigen::Vector3d::Constant(sigma_translation), Eigen::Vector3d::Constant(sigma_rotation);
+  const Matrix6d whitened = sigma.asDiagonal() * information * sigma.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(whitened);
+  Matrix6d weak = Matrix6d::Zero();
+  for (int d = 0; d < 6; ++d) {
+    if (eigen.eigenvalues()(d) < 1.0)
+      weak += eigen.eigenvectors().col(d) * eigen.eigenvectors().col(d).transpose();
+  }
+  const Eigen::Matrix<double, 6, 1> inverse_sigma = sigma.cwiseInverse();
+  return inverse_sigma.asDiagonal() * weak * inverse_sigma.asDiagonal();
 }
 
 void PoseToParameters(const Rigid3d& cam_from_world, double* params7) {

@@ -79,6 +79,13 @@ using StereoBACost = BundleReprojectionCost<3>;
 // pose near its value).
 Eigen::Matrix<double, 6, 1> PosePriorError(const Rigid3d& cam_from_world, const Rigid3d& prior);
 
+// The information matrix of a pose prior (order of PosePriorError: translation, rotation) that
+// acts only in the directions `information` (of the pose's observations) leaves nearly free: the
+// eigen-directions of `information` whitened by the prior's standard deviations whose eigenvalue
+// is below 1 (less information than the prior's) get the prior; the others none.
+Eigen::Matrix<double, 6, 6> PriorInWeakDirections(const Eigen::Matrix<double, 6, 6>& information,
+                                                  double sigma_translation, double sigma_rotation);
+
 // Instantiated once, in cost_functions.cc.
 extern template class PoseReprojectionCost<2>;
 extern template class PoseReprojectionCost<3>;

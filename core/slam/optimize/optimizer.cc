@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 
 #include "core/slam/optimize/bundle_solver.h"
@@ -107,6 +108,7 @@ int OptimizePose(Frame& frame, const OptimizerOptions& options) {
   PoseSolverOptions solver_options;
   solver_options.max_iterations = options.pose_iterations;
   Rigid3d cam_from_world = frame.cam_from_world;
+  const bool use_prior = options.pose_motion_prior && frame.motion_prior.has_value();
   active.assign(observations.size(), 1);
   int inliers = 0;
   for (int round = 0; round < options.pose_rounds; ++round) {
@@ -117,8 +119,17 @@ int OptimizePose(Frame& frame, const OptimizerOptions& options) {
       added += active[k];
     }
     if (added < 3) break;
-    SolvePose(observations, active.data(), model, robust ? delta_mono : 0.0,
-              robust ? delta_stereo : 0.0, solver_options, &cam_from_world);
+    const double delta_m = robust ? delta_mono : 0.0, delta_s = robust ? delta_stereo : 0.0;
+    std::optional<PosePrior> prior;
+    if (use_prior) {
+      prior = PosePrior{*frame.motion_prior};
+      prior->information = PriorInWeakDirections(
+          PoseInformation(observations, active.data(), model, delta_m, delta_s, cam_from_world),
+          options.pose_prior_sigma_translation,
+          options.pose_prior_sigma_rotation_deg * M_PI / 180.0);
+    }
+    SolvePose(observations, active.data(), model, delta_m, delta_s, solver_options, &cam_from_world,
+              prior ? &*prior : nullptr);
     inliers = ClassifyPoseObservations(observations, index, cam_from_world, model, options, frame);
     if (inliers < 10) break;
   }

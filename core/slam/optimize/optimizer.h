@@ -34,6 +34,17 @@ struct OptimizerOptions {
   bool local_ba_pose_prior = true;
   double local_ba_prior_sigma_translation = 0.01;  // metres
   double local_ba_prior_sigma_rotation_deg = 0.2;  // degrees
+  // Pose-only optimisation: a prior at the motion model's prediction (Frame::motion_prior), in
+  // the directions the frame's matches leave nearly free (information below the prior's), as the
+  // local BA's prior above. Where the static features left lie in a strip beside a person filling
+  // the view, yaw and sideways translation explain the same image motion and the matches alone
+  // let the pose slide along that direction. The standard deviations are a loose bound of one
+  // frame of motion-model error for a hand-held camera at 30 Hz: a tighter prior (3 mm, 1 deg,
+  // the dense fallback's) acted on ordinary frames too and made bonn_crowd_part worse; measured
+  // with and without on the benchmark sequences (BENCHMARKS.md).
+  bool pose_motion_prior = true;
+  double pose_prior_sigma_translation = 0.01;  // metres
+  double pose_prior_sigma_rotation_deg = 3.0;  // degrees
   void Check() const {
     DYGSLAM_CHECK_OPTION(pose_rounds >= 1, "Optimizer.pose_rounds");
     DYGSLAM_CHECK_OPTION(pose_iterations >= 1, "Optimizer.pose_iterations");
@@ -41,6 +52,10 @@ struct OptimizerOptions {
                          "Optimizer.local_ba_prior_sigma_translation");
     DYGSLAM_CHECK_OPTION(local_ba_prior_sigma_rotation_deg >= 0,
                          "Optimizer.local_ba_prior_sigma_rotation_deg");
+    DYGSLAM_CHECK_OPTION(pose_prior_sigma_translation > 0,
+                         "Optimizer.pose_prior_sigma_translation");
+    DYGSLAM_CHECK_OPTION(pose_prior_sigma_rotation_deg > 0,
+                         "Optimizer.pose_prior_sigma_rotation_deg");
   }
 };
 

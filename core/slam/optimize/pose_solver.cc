@@ -63,6 +63,7 @@ struct Evaluator {
   const uint8_t* active;
   const ProjectionModel& model;
   double delta_mono, delta_stereo;
+  const PosePrior* prior = nullptr;
 
   // Cost at (q, t); with h and g, also the normal equations (zeroed first).
   double operator()(const Eigen::Quaterniond& q, const Eigen::Vector3d& t, Matrix6d* h,
@@ -78,6 +79,15 @@ struct Evaluator {
       const PoseObservation& o = observations[i];
       cost += o.stereo ? Accumulate<3>(o, rotation, t, model, delta_stereo, h, g)
                        : Accumulate<2>(o, rotation, t, model, delta_mono, h, g);
+    }
+    if (prior) {
+      const Vector6d e = PosePriorError(Rigid3d(q, t), prior->cam_from_world);
+      const Vector6d information_e = prior->information * e;
+      cost += 0.5 * e.dot(information_e);
+      if (h) {
+        *h += prior->information;
+        *g += information_e;
+      }
     }
     return cost;
   }
@@ -105,8 +115,9 @@ void PoseSolverOptions::Check() const {
 PoseSolverSummary SolvePose(const std::vector<PoseObservation>& observations, const uint8_t* active,
                             const ProjectionModel& model, double huber_delta_mono,
                             double huber_delta_stereo, const PoseSolverOptions& options,
-                            Rigid3d* cam_from_world) {
-  const Evaluator evaluate{observations, active, model, huber_delta_mono, huber_delta_stereo};
+                            Rigid3d* cam_from_world, const PosePrior* prior) {
+  const Evaluator evaluate{observations,       active, model, huber_delta_mono,
+                           huber_delta_stereo, prior};
   Eigen::Quaterniond q = cam_from_world->rotation.normalized();
   Eigen::Vector3d t = cam_from_world->translation;
   Matrix6d h, h_new;
@@ -157,6 +168,17 @@ PoseSolverSummary SolvePose(const std::vector<PoseObservation>& observations, co
   summary.final_cost = cost;
   *cam_from_world = Rigid3d(q, t);
   return summary;
+}
+
+Eigen::Matrix<double, 6, 6> PoseInformation(const std::vector<PoseObservation>& observations,
+                                            const uint8_t* active, const ProjectionModel& model,
+                                            double huber_delta_mono, double huber_delta_stereo,
+                                            const Rigid3d& cam_from_world) {
+  const Evaluator evaluate{observations, active, model, huber_delta_mono, huber_delta_stereo};
+  Matrix6d h;
+  Vector6d g;
+  evaluate(cam_from_world.rotation.normalized(), cam_from_world.translation, &h, &g);
+  return h;
 }
 
 }  // namespace dygslam

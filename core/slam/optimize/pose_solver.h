@@ -6,9 +6,9 @@
 // more than the solve itself (measured by profiling). Here the normal equations are a fixed-size
 // 6x6 system accumulated in one pass over the observations, and nothing is allocated per iteration.
 //
-// The model is the one of core/slam/optimize/cost_functions.h (so results match the Ceres version within
-// the solvers' tolerances): residual r = (obs - proj(R X + t)) * sqrt_info, left update
-// T' = [Exp(dtheta) | dt] * T, Huber kernel rho(s) = s for s <= delta^2, 2 delta sqrt(s) - delta^2
+// The model is the one of core/slam/optimize/cost_functions.h (so results match the Ceres version
+// within the solvers' tolerances): residual r = (obs - proj(R X + t)) * sqrt_info, left update T' =
+// [Exp(dtheta) | dt] * T, Huber kernel rho(s) = s for s <= delta^2, 2 delta sqrt(s) - delta^2
 // otherwise, applied as iteratively reweighted least squares. The trust region follows Ceres'
 // Levenberg-Marquardt defaults (damping diag(H) / radius, radius 1e4, accepted when the cost drops,
 // radius grown by 1 / max(1/3, 1 - (2 rho - 1)^3), halved with doubling decrease on a rejection),
@@ -33,6 +33,13 @@ struct PoseObservation {
   bool stereo = false;
 };
 
+// A Gaussian prior on the pose: PosePriorError(cam_from_world, prior) weighted by `information`
+// (translation, rotation order).
+struct PosePrior {
+  Rigid3d cam_from_world;
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+};
+
 struct PoseSolverOptions : TrustRegionOptions {
   void Check() const;
 };
@@ -43,6 +50,13 @@ using PoseSolverSummary = TrustRegionSummary;
 PoseSolverSummary SolvePose(const std::vector<PoseObservation>& observations, const uint8_t* active,
                             const ProjectionModel& model, double huber_delta_mono,
                             double huber_delta_stereo, const PoseSolverOptions& options,
-                            Rigid3d* cam_from_world);
+                            Rigid3d* cam_from_world, const PosePrior* prior = nullptr);
+
+// The information (Gauss-Newton normal matrix, in the solver's tangent order: translation,
+// rotation) of the active observations at `cam_from_world`, with the same kernel weights.
+Eigen::Matrix<double, 6, 6> PoseInformation(const std::vector<PoseObservation>& observations,
+                                            const uint8_t* active, const ProjectionModel& model,
+                                            double huber_delta_mono, double huber_delta_stereo,
+                                            const Rigid3d& cam_from_world);
 
 }  // namespace dygslam

@@ -4,6 +4,7 @@
 #include <ceres/ceres.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "core/base/error.h"
@@ -163,6 +164,58 @@ TEST(PoseSolver, MatchesCeresWithAndWithoutTheKernel) {
       EXPECT_LT(RotationError(converged, converged_reference), 1e-7) << seed << " " << robust;
     }
   }
+}
+
+// Observations of points in a narrow vertical strip at one depth (the static background beside
+// a person filling the view), monocular, with pixel noise: sideways translation and yaw explain
+// nearly the same image motion there.
+std::vector<PoseObservation> StripObservations(const Rigid3d& truth, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> x(0.9, 1.1), y(-1.0, 1.0), z(2.95, 3.05);
+  std::normal_distribution<double> noise(0, 1.0);
+  const Rigid3d world_from_cam = truth.Inverse();
+  std::vector<PoseObservation> out;
+  for (int i = 0; i < 40; ++i) {
+    const Eigen::Vector3d p_cam(x(rng), y(rng), z(rng));
+    PoseObservation o;
+    o.point = world_from_cam * p_cam;
+    o.measurement = Eigen::Vector3d(kModel.fx * p_cam.x() / p_cam.z() + kModel.cx + noise(rng),
+                                    kModel.fy * p_cam.y() / p_cam.z() + kModel.cy + noise(rng), 0);
+    out.push_back(o);
+  }
+  return out;
+}
+
+// The motion prior of tracking (1 cm, 3 deg): none where the observations fix every direction,
+// and where they leave one nearly free (a strip), the pose stays near the prediction along it.
+TEST(PoseSolver, MotionPriorActsOnlyInTheDirectionsTheObservationsLeaveFree) {
+  const double sigma_t = 0.01, sigma_r = 3.0 * M_PI / 180.0;
+  std::vector<uint8_t> wrong;
+  const auto wide = MakeObservations(kTruth, 200, 1.0, 0.0, 3, &wrong);
+  const Eigen::Matrix<double, 6, 6> wide_prior =
+      PriorInWeakDirections(PoseInformation(wide, nullptr, kModel, 0, 0, kTruth), sigma_t, sigma_r);
+  EXPECT_EQ(wide_prior.norm(), 0.0);  // every direction fixed by the points
+
+  // The prediction is 5 mm / 0.2 deg off the truth (a motion model's error).
+  const Rigid3d predicted =
+      Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.0035, Eigen::Vector3d::UnitY())),
+              Eigen::Vector3d(0.005, 0, 0)) *
+      kTruth;
+  double error_without = 0, error_with = 0;
+  for (uint32_t seed = 20; seed < 30; ++seed) {
+    const auto strip = StripObservations(kTruth, seed);
+    PosePrior prior{predicted};
+    prior.information = PriorInWeakDirections(
+        PoseInformation(strip, nullptr, kModel, 0, 0, predicted), sigma_t, sigma_r);
+    EXPECT_GT(prior.information.norm(), 0.0) << seed;
+    Rigid3d without = predicted, with = predicted;
+    SolvePose(strip, nullptr, kModel, 0, 0, PoseSolverOptions{}, &without);
+    SolvePose(strip, nullptr, kModel, 0, 0, PoseSolverOptions{}, &with, &prior);
+    error_without += TranslationError(without, kTruth);
+    error_with += TranslationError(with, kTruth);
+  }
+  // Measured: mean 3.7 cm without the prior, 0.55 cm with it (the prediction is 0.5 cm off).
+  EXPECT_LT(error_with, 0.5 * error_without);
 }
 
 TEST(PoseSolver, OptionsCheckNamesTheField) {

@@ -92,8 +92,9 @@ class Frame {
   std::vector<uint8_t> outlier;
   bool has_pose = false;
   Rigid3d cam_from_world;
-  // The motion model's prediction of cam_from_world, when the frame follows a tracked one with a
-  // known velocity (a prior of the pose-only optimisation: OptimizerOptions::pose_motion_prior).
+  // The motion model's prediction of cam_from_world, when the frame follows one held by features
+  // with a known velocity (a prior of the pose-only optimisation:
+  // OptimizerOptions::pose_motion_prior).
   std::optional<Rigid3d> motion_prior;
 
   size_t size() const { return keypoints.size(); }

@@ -40,8 +40,10 @@ struct OptimizerOptions {
   // the view, yaw and sideways translation explain the same image motion and the matches alone
   // let the pose slide along that direction. The standard deviations are a loose bound of one
   // frame of motion-model error for a hand-held camera at 30 Hz: a tighter prior (3 mm, 1 deg,
-  // the dense fallback's) acted on ordinary frames too and made bonn_crowd_part worse; measured
-  // with and without on the benchmark sequences (BENCHMARKS.md).
+  // the dense fallback's) acted on ordinary frames too and made bonn_crowd_part worse. Tracking
+  // gives no prediction after a dense fallback frame (its motion is no reliable prediction: one
+  // pulled a returning frame 7 cm off). Measured with and without on the benchmark sequences
+  // (BENCHMARKS.md).
   bool pose_motion_prior = true;
   double pose_prior_sigma_translation = 0.01;  // metres
   double pose_prior_sigma_rotation_deg = 3.0;  // degrees

@@ -45,7 +45,8 @@ void Tracker::TrackNext(Frame& frame, TrackResult* result) {
     PrepareLastFrame();
     if (last_frame_.has_pose)
       predicted = velocity_ ? *velocity_ * last_frame_.cam_from_world : last_frame_.cam_from_world;
-    if (last_frame_.has_pose && velocity_ && frame.id > last_relocalization_frame_id_ + 1)
+    if (last_frame_.has_pose && velocity_ && frame.id > last_relocalization_frame_id_ + 1 &&
+        !LastWasFallback())
       frame.motion_prior = predicted;
     if (velocity_ && frame.id > last_relocalization_frame_id_ + 1) ok = TrackWithMotionModel(frame);
     if (!ok) ok = TrackReferenceKeyFrame(frame);

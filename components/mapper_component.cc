@@ -3,6 +3,7 @@
 #include <atomic>
 #include <chrono>
 #include <deque>
+#include <exception>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -360,22 +361,36 @@ MapperStats MapperShell::Run(const StopFlagPtr& stop) {
   // slam's run is done nothing of the pipeline needs the CPU any more and the rest (the backlog,
   // the final map) is what the user waits for: it is finished at the process's own priority
   // (a lowered thread cannot raise itself again, so fresh threads of this one take over).
-  std::thread prepare_thread = StartPreparing(/*background=*/true);
+  // The prepare thread is stopped and joined however the apply loop ends (also by an exception,
+  // which then reaches the caller).
+  struct Preparing {
+    MapperShell* shell;
+    std::thread thread;
+    void Stop() {
+      shell->prepare_stop_ = true;
+      if (thread.joinable()) thread.join();
+    }
+    ~Preparing() { Stop(); }
+  } preparing{this, StartPreparing(/*background=*/true)};
   Loop ended = Loop::kEnded;
+  std::exception_ptr error;
   std::thread background([&] {
     SetCurrentThreadName("map");
     LowerCurrentThreadPriority();
-    ended = ApplyLoop(stop, /*until_slam_done=*/true);
+    try {
+      ended = ApplyLoop(stop, /*until_slam_done=*/true);
+    } catch (...) {
+      error = std::current_exception();
+    }
   });
   background.join();
+  if (error) std::rethrow_exception(error);
   if (ended == Loop::kSlamDone) {
-    prepare_stop_ = true;
-    prepare_thread.join();
-    prepare_thread = StartPreparing(/*background=*/false);
+    preparing.Stop();
+    preparing.thread = StartPreparing(/*background=*/false);
     ApplyLoop(stop, /*until_slam_done=*/false);
   }
-  prepare_stop_ = true;
-  prepare_thread.join();
+  preparing.Stop();
   Finish(stop);
   return stats_;
 }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "core/base/error.h"
 #include "core/slam/optimize/cost_functions.h"
@@ -185,9 +186,8 @@ class Problem {
           const int j = by_point_[b];
           const int cj = camera_of(residuals_[j]);
           if (cj < 0 || cj < ci) continue;
-          const Matrix6d block = w[a - begin] * lin.h_cp[j].transpose();
-          s.block<6, 6>(6 * cj, 6 * ci).noalias() -= block.transpose();
-          if (cj != ci) s.block<6, 6>(6 * ci, 6 * cj).noalias() -= block;
+          // The lower triangle only: the LDLT below reads nothing else.
+          s.block<6, 6>(6 * cj, 6 * ci).noalias() -= lin.h_cp[j] * w[a - begin].transpose();
         }
       }
     }
@@ -333,7 +333,7 @@ BundleSolverSummary SolveBundleProblem(const std::vector<BundleResidual>& residu
   }
   state.points = *points;
   BundleSolverSummary summary;
-  Linearization lin;
+  Linearization lin, candidate_lin;
   double cost = problem.Evaluate(state, &lin);
   if (options.prior_sigma_translation > 0 && options.prior_sigma_rotation > 0) {
     problem.SetPrior(state, lin, options.prior_sigma_translation, options.prior_sigma_rotation);
@@ -366,7 +366,8 @@ BundleSolverSummary SolveBundleProblem(const std::vector<BundleResidual>& residu
         (x_norm + options.parameter_tolerance) * options.parameter_tolerance)
       break;
     State candidate = problem.Apply(state, dc, dp);
-    const double new_cost = problem.Evaluate(candidate, nullptr);
+    // Linearized at once: nearly every step is accepted, and then this is the next linearization.
+    const double new_cost = problem.Evaluate(candidate, &candidate_lin);
     const double model_decrease = -problem.ModelChange(lin, dc, dp);
     const double ratio = model_decrease > 0 ? (cost - new_cost) / model_decrease : -1.0;
     if (!std::isfinite(new_cost) || ratio <= 1e-3) {
@@ -377,7 +378,8 @@ BundleSolverSummary SolveBundleProblem(const std::vector<BundleResidual>& residu
     const double cost_change = cost - new_cost;
     const double old_cost = cost;
     state = std::move(candidate);
-    cost = problem.Evaluate(state, &lin);
+    cost = new_cost;
+    std::swap(lin, candidate_lin);
     ++summary.successful_iterations;
     const double factor = 1.0 - std::pow(2.0 * ratio - 1.0, 3);
     radius = std::min(radius / std::max(1.0 / 3.0, factor), 1e16);

@@ -56,12 +56,14 @@ void TopUpFeatures(const OrbExtractor& extractor, const cv::Mat& gray, const cv:
   cv::Mat excluded_mask = mask.empty() ? cv::Mat::zeros(gray.size(), CV_8UC1) : mask.clone();
   const cv::Rect image(0, 0, gray.cols, gray.rows);
   for (const cv::Rect& r : excluded) excluded_mask(r & image).setTo(255);
-  // Pyramid and corners reused from the first extraction.
-  const OrbFeatures extra = extractor.Extract(gray, excluded_mask, shortfall, cache);
+  // Pyramid and corners reused from the first extraction; corners the first extraction kept are
+  // dropped before they are described.
   const std::vector<cv::KeyPoint> original = kept->keypoints;
   const CornerGrid grid(gray.size(), original);
+  const OrbFeatures extra =
+      extractor.Extract(gray, excluded_mask, shortfall, cache,
+                        [&](const cv::KeyPoint& kp) { return grid.HasNear(kp, original); });
   for (size_t j = 0; j < extra.keypoints.size(); ++j) {
-    if (grid.HasNear(extra.keypoints[j], original)) continue;
     kept->keypoints.push_back(extra.keypoints[j]);
     kept->descriptors.push_back(extra.descriptors[j]);
   }

@@ -346,7 +346,8 @@ void OrbExtractor::Describe(OrbExtractionCache* c, int level, std::vector<cv::Ke
 }
 
 OrbFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& mask, int num_features,
-                                  OrbExtractionCache* cache) const {
+                                  OrbExtractionCache* cache,
+                                  const std::function<bool(const cv::KeyPoint&)>& skip) const {
   CV_Assert(gray.type() == CV_8UC1);
   OrbExtractionCache local;
   OrbExtractionCache& c = cache != nullptr ? *cache : local;
@@ -357,6 +358,19 @@ OrbFeatures OrbExtractor::Extract(const cv::Mat& gray, const cv::Mat& mask, int 
   OrbFeatures out;
   for (int level = 0; level < levels; ++level) {
     std::vector<cv::KeyPoint> kept = SelectCorners(c, level, mask, features_per_level[level]);
+    if (skip) {
+      // Position and level as Describe reports them.
+      const float scale = static_cast<float>(scales_[level]);
+      kept.erase(std::remove_if(kept.begin(), kept.end(),
+                                [&](const cv::KeyPoint& kp) {
+                                  cv::KeyPoint reported = kp;
+                                  reported.pt.x *= scale;
+                                  reported.pt.y *= scale;
+                                  reported.octave = level;
+                                  return skip(reported);
+                                }),
+                 kept.end());
+    }
     if (kept.empty()) continue;
     Orient(c.levels_[level], &kept);
     Describe(&c, level, std::move(kept), &out);

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -68,8 +69,11 @@ class OrbExtractor {
   // gray: CV_8UC1. mask (optional, CV_8UC1): features are not detected where mask != 0.
   // num_features > 0 overrides the options' budget for this call.
   // cache (optional): reused when it holds this image's pyramid, else filled for it.
+  // skip (optional): a selected feature for which it returns true (given its level-0 position and
+  // its level as `octave`) is dropped before it is described.
   OrbFeatures Extract(const cv::Mat& gray, const cv::Mat& mask = cv::Mat(), int num_features = -1,
-                      OrbExtractionCache* cache = nullptr) const;
+                      OrbExtractionCache* cache = nullptr,
+                      const std::function<bool(const cv::KeyPoint&)>& skip = nullptr) const;
 
   const OrbExtractorOptions& options() const { return options_; }
   double scale(int level) const { return scales_[level]; }

@@ -1,12 +1,11 @@
 #include "core/slam/feature/orb_extractor.h"
 
-#include <random>
-
 #include <gtest/gtest.h>
-#include <opencv2/features2d.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include <iostream>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
 
 namespace dygslam {
 namespace {
@@ -94,6 +93,27 @@ TEST(OrbExtractor, CacheReuseGivesIdenticalFeatures) {
   EXPECT_FALSE(cache.IsFor(img));
 }
 
+// A skip predicate drops exactly the features it names, seen as the output reports them (level-0
+// position, level as octave), and leaves the others' descriptors as they were.
+TEST(OrbExtractor, SkippedFeaturesAreDroppedAndTheRestUnchanged) {
+  OrbExtractor extractor(OrbExtractorOptions{});
+  const cv::Mat img = TexturedImage(6);
+  const OrbFeatures all = extractor.Extract(img);
+  const auto skip = [](const cv::KeyPoint& kp) { return kp.pt.x < 320.f || kp.octave == 2; };
+  const OrbFeatures kept = extractor.Extract(img, cv::Mat(), -1, nullptr, skip);
+  std::vector<size_t> expected;
+  for (size_t i = 0; i < all.keypoints.size(); ++i)
+    if (!skip(all.keypoints[i])) expected.push_back(i);
+  ASSERT_GT(expected.size(), 200u);
+  ASSERT_LT(expected.size(), all.keypoints.size() / 2 + 100);
+  ASSERT_EQ(kept.keypoints.size(), expected.size());
+  for (size_t k = 0; k < expected.size(); ++k) {
+    EXPECT_EQ(kept.keypoints[k].pt, all.keypoints[expected[k]].pt);
+    EXPECT_EQ(kept.keypoints[k].octave, all.keypoints[expected[k]].octave);
+    EXPECT_EQ(kept.descriptors[k], all.descriptors[expected[k]]);
+  }
+}
+
 // Steered descriptors are rotation invariant: for keypoints re-detected at the rotated position
 // (same octave), the nearest neighbour among all descriptors of the rotated image is the true
 // partner, and its distance is small.
@@ -109,11 +129,13 @@ TEST(OrbExtractor, DescriptorsAreRotationInvariant) {
     for (size_t i = 0; i < a.keypoints.size(); ++i) {
       const cv::Point2f p = a.keypoints[i].pt;
       if (cv::norm(p - cv::Point2f(400, 300)) > 200) continue;
-      const cv::Point2f e(float(rot.at<double>(0, 0) * p.x + rot.at<double>(0, 1) * p.y + rot.at<double>(0, 2)),
-                          float(rot.at<double>(1, 0) * p.x + rot.at<double>(1, 1) * p.y + rot.at<double>(1, 2)));
+      const cv::Point2f e(
+          float(rot.at<double>(0, 0) * p.x + rot.at<double>(0, 1) * p.y + rot.at<double>(0, 2)),
+          float(rot.at<double>(1, 0) * p.x + rot.at<double>(1, 1) * p.y + rot.at<double>(1, 2)));
       int partner = -1;
       for (size_t j = 0; j < b.keypoints.size(); ++j) {
-        if (b.keypoints[j].octave == a.keypoints[i].octave && cv::norm(b.keypoints[j].pt - e) < 1.5) {
+        if (b.keypoints[j].octave == a.keypoints[i].octave &&
+            cv::norm(b.keypoints[j].pt - e) < 1.5) {
           partner = static_cast<int>(j);
           break;
         }
@@ -130,7 +152,8 @@ TEST(OrbExtractor, DescriptorsAreRotationInvariant) {
       }
       if (best_j == partner) ++nn_correct;
     }
-    std::cout << "angle " << angle << ": " << nn_correct << "/" << pairs << " nearest neighbours correct\n";
+    std::cout << "angle " << angle << ": " << nn_correct << "/" << pairs
+              << " nearest neighbours correct\n";
     ASSERT_GT(pairs, 40);
     EXPECT_GT(double(nn_correct) / pairs, 0.85);
   }

@@ -318,6 +318,18 @@ def score_run(dygslam, groundtruth, out_dir, result, aligned_prefix=None):
         values = [float(r[key]) for r in rows if key in r and r[key] not in ("", None)]
         if values:
             stages[key] = sum(values) / len(values)
+    # Local mapping per keyframe, from the run summary's "local mapping schedule" line.
+    local_mapping = {}
+    m = re.search(r"^local mapping schedule: local BA solve median ([\d.]+) ms, in tracking's thread "
+                  r"median ([\d.]+) ms per keyframe; (\d+) local BAs late \(tracking waited ([\d.]+) "
+                  r"ms in all\), (\d+) landed early", log, re.M)
+    if m:
+        local_mapping = {"solve_ms": float(m.group(1)), "tracking_ms": float(m.group(2)),
+                         "late": int(m.group(3)), "waited_ms": float(m.group(4)),
+                         "early": int(m.group(5))}
+    m = re.search(r"^local mapping: (\d+) keyframes", log, re.M)
+    if m:
+        local_mapping["keyframes"] = int(m.group(1))
     totals = [float(r["total_ms"]) for r in rows if r.get("total_ms")]
     if totals:
         stages["total_median_ms"] = statistics.median(totals)
@@ -333,6 +345,7 @@ def score_run(dygslam, groundtruth, out_dir, result, aligned_prefix=None):
         "wall_s": result["wall_s"],
         "peak_rss_mib": result["peak_rss_mib"],
         "stages": stages,
+        "local_mapping": local_mapping,
         "log": log,
         "aligned": aligned_prefix,
     }
@@ -382,6 +395,7 @@ class Bench:
     def ablation_and_schedule(self):
         a = self.args
         ablation = {c: [] for c in ABLATION}
+        deterministic = []
         dds = []
         rate = []
         decoded = []
@@ -401,6 +415,18 @@ class Bench:
                 say(f"  ATE {fmt(s['ate'])} m (online {fmt(s['online_ate'])}), "
                     f"{s['poses']}/{s['frames']} poses, {fmt(s['fps'], 1)} frames/s")
                 ablation[config].append(s)
+            out = os.path.join(self.work, "ablation", f"deterministic_{k + 1}")
+            shutil.rmtree(out, ignore_errors=True)
+            cmd = [self.dygslam, "run", self.data, "--config", self.config, "--direct",
+                   "--deterministic", "--out", out, "--quiet"] + self.frames
+            commands["deterministic"] = cmd
+            say(f"--deterministic run {k + 1}/{a.runs}")
+            self.record_load()
+            r = run(cmd, out + ".log")
+            s = score_run(self.dygslam, self.groundtruth, out, r)
+            say(f"  ATE {fmt(s['ate'])} m, local BA solve median "
+                f"{fmt(s['local_mapping'].get('solve_ms', float('nan')), 1)} ms")
+            deterministic.append(s)
             if self.dds_ok:
                 out = os.path.join(self.work, "dds", f"default_{k + 1}")
                 shutil.rmtree(out, ignore_errors=True)
@@ -466,7 +492,7 @@ class Bench:
                                 "ate": float(m.group(6)), "poses": int(m.group(7))})
                 say(f"  System {m.group(3)} ms/frame, decoding {m.group(2)} ms/frame")
         self.results.update(ablation=ablation, dds=dds, rate=rate, decoded=decoded,
-                            commands=commands)
+                            deterministic=deterministic, commands=commands)
 
     # memory over a longer run -----------------------------------------------------------------
     def memory(self):
@@ -1148,6 +1174,33 @@ class Bench:
             L.append(cmd(R["commands"]["none"]).replace("--filter none", "--filter METHOD"))
             if dds:
                 L.append(cmd(R["commands"]["dds"]))
+            L.append("```\n")
+        # Local mapping per keyframe.
+        L.append("### Local mapping per keyframe\n")
+        L.append("From the run summary (`local mapping schedule`): the local BA's solve (wall time "
+                 "on the mapping thread, median over the keyframes; in a `--deterministic` run it is "
+                 "solved in tracking's thread with nothing beside it, the cost of the solve alone), "
+                 "the part of local mapping in tracking's thread, and the local BAs not done when "
+                 "their result was due (tracking waited for them; the budget is 2 frame periods) or "
+                 "landed early because the next keyframe came first.\n")
+        L.append("| run | keyframes | local BA solve (ms, median) | in tracking's thread (ms, median) | late | tracking waited (ms, in all) | landed early |")
+        L.append("|---|---|---|---|---|---|---|")
+        lm_rows = [("`--deterministic` (direct)", R.get("deterministic") or []),
+                   ("`full` (direct)", ab.get("full") or []),
+                   ("default (DDS)", dds), ("`--rate 1`", R.get("rate") or [])]
+        for name, runs in lm_rows:
+            runs = [r for r in runs if r.get("local_mapping", {}).get("solve_ms") is not None]
+            if not runs:
+                continue
+            lm = lambda key, digits=1: med_range([r["local_mapping"].get(key, float("nan")) for r in runs], digits)
+            L.append(f"| {name} | {int_range([r['local_mapping'].get('keyframes', 0) for r in runs])} | "
+                     f"{lm('solve_ms')} | {lm('tracking_ms')} | "
+                     f"{int_range([r['local_mapping']['late'] for r in runs])} | {lm('waited_ms', 0)} | "
+                     f"{int_range([r['local_mapping']['early'] for r in runs])} |")
+        L.append("")
+        if "deterministic" in R.get("commands", {}):
+            L.append("```")
+            L.append(cmd(R["commands"]["deterministic"]))
             L.append("```\n")
         decoded = R.get("decoded") or []
         L.append("### CPU per frame on decoded frames (the robot case)\n")

@@ -63,10 +63,9 @@ void TopUpFeatures(const OrbExtractor& extractor, const cv::Mat& gray, const cv:
   const OrbFeatures extra =
       extractor.Extract(gray, excluded_mask, shortfall, cache,
                         [&](const cv::KeyPoint& kp) { return grid.HasNear(kp, original); });
-  for (size_t j = 0; j < extra.keypoints.size(); ++j) {
-    kept->keypoints.push_back(extra.keypoints[j]);
-    kept->descriptors.push_back(extra.descriptors[j]);
-  }
+  kept->keypoints.insert(kept->keypoints.end(), extra.keypoints.begin(), extra.keypoints.end());
+  kept->descriptors.insert(kept->descriptors.end(), extra.descriptors.begin(),
+                           extra.descriptors.end());
 }
 
 }  // namespace dygslam

@@ -392,6 +392,18 @@ class Bench:
         self.load_samples.append(load1())
 
     # accuracy, ablation, speed, DDS against direct, schedule ------------------------------
+    def scored_run(self, commands, key, out, args, label, aligned_prefix=None):
+        """One `dygslam run DATA --config CONFIG ARGS --out OUT --quiet` of the bonn data, its
+        command kept in commands[key], scored (score_run)."""
+        shutil.rmtree(out, ignore_errors=True)
+        cmd = ([self.dygslam, "run", self.data, "--config", self.config] + args +
+               ["--out", out, "--quiet"] + self.frames)
+        commands[key] = cmd
+        say(label)
+        self.record_load()
+        r = run(cmd, out + ".log")
+        return score_run(self.dygslam, self.groundtruth, out, r, aligned_prefix)
+
     def ablation_and_schedule(self):
         a = self.args
         ablation = {c: [] for c in ABLATION}
@@ -402,41 +414,24 @@ class Bench:
         commands = {}
         for k in range(a.runs):
             for config in ABLATION:
-                out = os.path.join(self.work, "ablation", f"{config}_{k + 1}")
-                shutil.rmtree(out, ignore_errors=True)
-                cmd = [self.dygslam, "run", self.data, "--config", self.config, "--filter", config,
-                       "--direct", "--out", out, "--quiet"] + self.frames
-                commands[config] = cmd
-                say(f"ablation {config} run {k + 1}/{a.runs}")
-                self.record_load()
-                r = run(cmd, out + ".log")
-                s = score_run(self.dygslam, self.groundtruth, out, r,
-                              os.path.join(self.work, "ablation", f"{config}_{k + 1}_aligned"))
+                s = self.scored_run(
+                    commands, config, os.path.join(self.work, "ablation", f"{config}_{k + 1}"),
+                    ["--filter", config, "--direct"], f"ablation {config} run {k + 1}/{a.runs}",
+                    os.path.join(self.work, "ablation", f"{config}_{k + 1}_aligned"))
                 say(f"  ATE {fmt(s['ate'])} m (online {fmt(s['online_ate'])}), "
                     f"{s['poses']}/{s['frames']} poses, {fmt(s['fps'], 1)} frames/s")
                 ablation[config].append(s)
-            out = os.path.join(self.work, "ablation", f"deterministic_{k + 1}")
-            shutil.rmtree(out, ignore_errors=True)
-            cmd = [self.dygslam, "run", self.data, "--config", self.config, "--direct",
-                   "--deterministic", "--out", out, "--quiet"] + self.frames
-            commands["deterministic"] = cmd
-            say(f"--deterministic run {k + 1}/{a.runs}")
-            self.record_load()
-            r = run(cmd, out + ".log")
-            s = score_run(self.dygslam, self.groundtruth, out, r)
+            s = self.scored_run(
+                commands, "deterministic",
+                os.path.join(self.work, "ablation", f"deterministic_{k + 1}"),
+                ["--direct", "--deterministic"], f"--deterministic run {k + 1}/{a.runs}")
             say(f"  ATE {fmt(s['ate'])} m, local BA solve median "
                 f"{fmt(s['local_mapping'].get('solve_ms', float('nan')), 1)} ms")
             deterministic.append(s)
             if self.dds_ok:
-                out = os.path.join(self.work, "dds", f"default_{k + 1}")
-                shutil.rmtree(out, ignore_errors=True)
-                cmd = [self.dygslam, "run", self.data, "--config", self.config, "--out", out,
-                       "--quiet"] + self.frames
-                commands["dds"] = cmd
-                say(f"default DDS mode run {k + 1}/{a.runs}")
-                self.record_load()
-                r = run(cmd, out + ".log")
-                s = score_run(self.dygslam, self.groundtruth, out, r)
+                s = self.scored_run(commands, "dds",
+                                    os.path.join(self.work, "dds", f"default_{k + 1}"), [],
+                                    f"default DDS mode run {k + 1}/{a.runs}")
                 say(f"  ATE {fmt(s['ate'])} m (online {fmt(s['online_ate'])}), "
                     f"{s['poses']}/{s['frames']} poses, {fmt(s['fps'], 1)} frames/s")
                 dds.append(s)

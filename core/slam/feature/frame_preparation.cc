@@ -58,7 +58,7 @@ void TopUpFeatures(const OrbExtractor& extractor, const cv::Mat& gray, const cv:
   for (const cv::Rect& r : excluded) excluded_mask(r & image).setTo(255);
   // Pyramid and corners reused from the first extraction; corners the first extraction kept are
   // dropped before they are described.
-  const std::vector<cv::KeyPoint> original = kept->keypoints;
+  const std::vector<cv::KeyPoint>& original = kept->keypoints;  // appended to after Extract
   const CornerGrid grid(gray.size(), original);
   const OrbFeatures extra =
       extractor.Extract(gray, excluded_mask, shortfall, cache,
